@@ -1,0 +1,130 @@
+# The LIE toolchain.  `make demo` and `make test` are the two commands;
+# see README.md.  Objects go to build/<variant>/, binaries to bin/.
+#
+#   make            build bin/lie-render (and the other tools as they land)
+#   make deps       install the Debian packages this project needs (only missing ones)
+#   make demo       deps + build + render tests/scenes/museum1.gltf to out/
+#   make test       unit tests, tool tests, then the same under ASan+UBSan
+#   make bench      benchmarks (prints ratios measured side by side, writes JSON)
+#   make scenes     regenerate the bundled scenes under tests/scenes/
+#   make fuzz       run every fuzz target for a bounded time (clang, libFuzzer)
+#   make test-valgrind  the tool pipeline under valgrind memcheck (slow)
+
+CC       ?= cc
+CXX      ?= c++
+VARIANT  ?= release
+BUILD    := build/$(VARIANT)
+ARCHFLAGS ?= -march=x86-64-v3
+WERROR   ?= -Werror
+WARN     := -Wall -Wextra -Wshadow -Wno-unused-parameter $(WERROR)
+OPT_release := -O3 -g
+OPT_asan    := -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=all
+OPT      := $(OPT_$(VARIANT))
+# -fno-math-errno and -fno-trapping-math let the shading loops vectorise; -ffp-contract=off keeps results identical
+# whichever way a loop is vectorised.  -fopenmp-simd enables `#pragma omp simd` only.
+COMMON   := $(OPT) $(ARCHFLAGS) $(WARN) -DTEST_SCENES=\"$(CURDIR)/tests/scenes\" -fno-math-errno -fno-trapping-math -ffp-contract=off -fopenmp-simd \
+            -D_GNU_SOURCE -Ilib -MMD -MP
+CFLAGS   += -std=c11 $(COMMON)
+CXXFLAGS += -std=c++17 $(COMMON) -I/usr/include/stb -I/usr/include/nlohmann
+LDFLAGS  += $(filter -fsanitize=%,$(OPT))
+LDLIBS   := -lembree3 -lOpenEXRCore-3_1 -lyaml -ltinygltf -lxxhash -lpng -lz -lpthread -lm -lstdc++
+
+LIB_C    := $(sort $(wildcard lib/*/*.c))
+LIB_CXX  := $(sort $(wildcard lib/*/*.cpp))
+LIB_OBJ  := $(LIB_C:%.c=$(BUILD)/%.o) $(LIB_CXX:%.cpp=$(BUILD)/%.o)
+LIB_A    := $(BUILD)/liblie.a
+
+TOOLS    := $(notdir $(wildcard tools/*))
+BINDIR   := $(if $(filter release,$(VARIANT)),bin,$(BUILD)/bin)
+TOOL_BIN := $(TOOLS:%=$(BINDIR)/%)
+
+UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
+UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/tests/%)
+
+.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench scenes fuzz clean
+all: $(TOOL_BIN)
+
+deps:
+	@sh scripts/deps.sh
+
+$(BUILD)/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) -c $< -o $@
+$(BUILD)/%.o: %.cpp
+	@mkdir -p $(dir $@)
+	$(CXX) $(CXXFLAGS) -c $< -o $@
+
+$(LIB_A): $(LIB_OBJ)
+	@rm -f $@
+	ar rcs $@ $^
+
+# A tool links every object of its folder (tools/NAME/*.c).
+TOOL_OBJ = $(patsubst %.c,$(BUILD)/%.o,$(wildcard tools/$(1)/*.c))
+.SECONDEXPANSION:
+$(BINDIR)/%: $$(call TOOL_OBJ,$$*) $(LIB_A)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
+.SECONDARY:
+
+$(BUILD)/tests/%: $(BUILD)/tests/unit/%.o $(LIB_A)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) $^ $(LDLIBS) -lcmocka -o $@
+
+# ---- test helpers (not installed tools) ------------------------------------
+HELPERS  := $(patsubst tests/helpers/%.c,$(BUILD)/tests/%,$(wildcard tests/helpers/*.c))
+$(BUILD)/tests/%: $(BUILD)/tests/helpers/%.o $(LIB_A)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
+
+# ---- scenes -------------------------------------------------------------
+GEN := $(BUILD)/gen_scenes
+$(GEN): $(BUILD)/tests/scenes/gen/gen_scenes.o $(BUILD)/tests/scenes/gen/gen_gltf.o
+	$(CC) $(LDFLAGS) $^ -lpng -lz -lm -o $@
+scenes: $(GEN)
+	$(GEN) tests/scenes
+
+# ---- the two commands -----------------------------------------------------
+demo: deps
+	$(MAKE) -j$(NPROC) all
+	@mkdir -p out
+	bin/lie-build tests/scenes/museum1.gltf -o out/museum1.lie
+	bin/lie-render out/museum1.lie -o out/museum1.exr --stats
+	bin/lie-render out/museum1.lie -o out/museum1.png -q
+	@echo "demo: wrote $(CURDIR)/out/museum1.exr and $(CURDIR)/out/museum1.png (from the LIE cache out/museum1.lie)"
+
+NPROC    := $(shell nproc 2>/dev/null || echo 2)
+
+# Everything the tests need, built in parallel; the tests then run in order.
+build-tests: $(TOOL_BIN) $(UNIT_BIN) $(HELPERS)
+
+test:
+	$(MAKE) -j$(NPROC) build-tests
+	$(MAKE) test-unit test-tools
+	$(MAKE) -j$(NPROC) VARIANT=asan build-tests
+	$(MAKE) VARIANT=asan test-unit test-tools
+
+test-unit: $(UNIT_BIN)
+	@sh tests/run-unit.sh $(UNIT_BIN)
+
+test-tools: $(TOOL_BIN) $(HELPERS)
+	@BINDIR=$(BINDIR) HELPERS=$(BUILD)/tests sh tests/run-tools.sh
+
+test-asan:
+	$(MAKE) -j$(NPROC) VARIANT=asan build-tests
+	$(MAKE) VARIANT=asan test-unit test-tools
+
+bench: all
+	@sh bench/run.sh
+
+fuzz:
+	@sh tests/fuzz/run.sh
+
+# The pipeline lie-build | rst-update | lie-render (and lie-inspect) under
+# valgrind's memcheck: slow, so not part of `make test`.
+test-valgrind: all
+	@BINDIR=bin sh tests/valgrind.sh
+
+clean:
+	rm -rf build bin out
+
+-include $(shell find build -name '*.d' 2>/dev/null)

@@ -1,0 +1,63 @@
+/* Strict parsing of command-line values: "12x" or "" is an error, never 12 or 0. */
+#include "core/core.h"
+
+#include <errno.h>
+#include <stdlib.h>
+
+int lie_parse_long(const char *s, long min, long max, long *out)
+{
+    if (!s || !*s)
+        return 0;
+    char *end;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (errno || *end || v < min || v > max)
+        return 0;
+    *out = v;
+    return 1;
+}
+
+int lie_parse_float(const char *s, float min, float max, float *out)
+{
+    if (!s || !*s)
+        return 0;
+    char *end;
+    errno = 0;
+    float v = strtof(s, &end);
+    if (errno || *end || !isfinite(v) || v < min || v > max)
+        return 0;
+    *out = v;
+    return 1;
+}
+
+int lie_parse_size(const char *s, int max, int *w, int *h)
+{
+    if (!s)
+        return 0;
+    char *end;
+    errno = 0;
+    long a = strtol(s, &end, 10);
+    if (errno || end == s || (*end != 'x' && *end != 'X'))
+        return 0;
+    const char *p = end + 1;
+    long b = strtol(p, &end, 10);
+    if (errno || end == p || *end || a < 1 || b < 1 || a > max || b > max)
+        return 0;
+    *w = (int)a;
+    *h = (int)b;
+    return 1;
+}
+
+void lie_json_string(FILE *fp, const char *s)
+{
+    fputc('"', fp);
+    for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+        if (*p == '"' || *p == '\\')
+            fprintf(fp, "\\%c", *p);
+        else if (*p < 0x20)
+            fprintf(fp, "\\u%04x", *p);
+        else
+            fputc(*p, fp);
+    }
+    fputc('"', fp);
+}

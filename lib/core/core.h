@@ -1,0 +1,223 @@
+/* lib/core: status codes and error messages, small vector math, deterministic
+ * hashing and sampling, a parallel-for over worker threads, timers, progress
+ * bars and atomic file output.  Everything else in lib/ stands on this. */
+#ifndef LIE_CORE_H
+#define LIE_CORE_H
+
+#include <math.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- status and errors (STYLE.md 3) ---------------------------------- */
+
+typedef enum lie_status {
+    LIE_OK = 0,
+    LIE_ERR_IO = -1,          /* a file could not be opened, read or written */
+    LIE_ERR_FORMAT = -2,      /* the input is malformed */
+    LIE_ERR_NOMEM = -3,       /* allocation failed */
+    LIE_ERR_ARG = -4,         /* a caller passed a bad argument or option */
+    LIE_ERR_RT = -5,          /* the ray tracing back end (Embree) failed */
+    LIE_ERR_UNSUPPORTED = -6, /* valid input that this version cannot handle */
+    LIE_ERR_LIMIT = -7,       /* input claims sizes beyond the resource limits */
+    LIE_ERR_NOT_FOUND = -8    /* a named thing (camera, node) does not exist */
+} lie_status;
+
+/* A message for the user.  `file` is the input it concerns (may be empty),
+ * `line`/`col` are 1-based positions in a text input or 0. */
+typedef struct lie_error {
+    lie_status status;
+    int line, col;
+    char file[1024];
+    char msg[1024];
+} lie_error;
+
+/* Short name of a status ("I/O error", ...). */
+const char *lie_status_str(lie_status s);
+
+/* Fill `err` (may be NULL) and return `status`.  `file` may be NULL. */
+lie_status lie_error_set(lie_error *err, lie_status status, const char *file,
+                         const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+lie_status lie_error_set_at(lie_error *err, lie_status status, const char *file,
+                            int line, int col, const char *fmt, ...)
+    __attribute__((format(printf, 6, 7)));
+void lie_error_clear(lie_error *err);
+
+/* Format `err` as one line "file:line:col: msg" (the parts that apply),
+ * without the tool prefix or newline. */
+void lie_error_format(const lie_error *err, char *buf, size_t size);
+
+/* ---- vectors and boxes ------------------------------------------------ */
+
+typedef struct lie_vec3 {
+    float x, y, z;
+} lie_vec3;
+
+typedef struct lie_box3 {
+    lie_vec3 lo, hi;
+} lie_box3;
+
+static inline lie_vec3 lie_v3(float x, float y, float z) { lie_vec3 r = {x, y, z}; return r; }
+static inline lie_vec3 lie_v3_add(lie_vec3 a, lie_vec3 b) { return lie_v3(a.x + b.x, a.y + b.y, a.z + b.z); }
+static inline lie_vec3 lie_v3_sub(lie_vec3 a, lie_vec3 b) { return lie_v3(a.x - b.x, a.y - b.y, a.z - b.z); }
+static inline lie_vec3 lie_v3_mul(lie_vec3 a, lie_vec3 b) { return lie_v3(a.x * b.x, a.y * b.y, a.z * b.z); }
+static inline lie_vec3 lie_v3_scale(lie_vec3 a, float s) { return lie_v3(a.x * s, a.y * s, a.z * s); }
+static inline float lie_v3_dot(lie_vec3 a, lie_vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static inline lie_vec3 lie_v3_cross(lie_vec3 a, lie_vec3 b)
+{
+    return lie_v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+static inline float lie_v3_len(lie_vec3 a) { return sqrtf(lie_v3_dot(a, a)); }
+static inline lie_vec3 lie_v3_norm(lie_vec3 a)
+{
+    float l = lie_v3_len(a);
+    return l > 0.0f ? lie_v3_scale(a, 1.0f / l) : lie_v3(0.0f, 0.0f, 0.0f);
+}
+/* (ternaries, not fminf/fmaxf: those are library calls when NaNs must be honoured) */
+static inline lie_vec3 lie_v3_min(lie_vec3 a, lie_vec3 b)
+{
+    return lie_v3(a.x < b.x ? a.x : b.x, a.y < b.y ? a.y : b.y, a.z < b.z ? a.z : b.z);
+}
+static inline lie_vec3 lie_v3_max(lie_vec3 a, lie_vec3 b)
+{
+    return lie_v3(a.x > b.x ? a.x : b.x, a.y > b.y ? a.y : b.y, a.z > b.z ? a.z : b.z);
+}
+static inline lie_box3 lie_box3_empty(void)
+{
+    lie_box3 b = {{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
+    return b;
+}
+static inline void lie_box3_grow(lie_box3 *b, lie_vec3 p)
+{
+    b->lo = lie_v3_min(b->lo, p);
+    b->hi = lie_v3_max(b->hi, p);
+}
+static inline int lie_box3_is_empty(const lie_box3 *b) { return !(b->lo.x <= b->hi.x); }
+
+/* Orthonormal basis around unit vector n (Duff et al. 2017, branchless). */
+void lie_onb(lie_vec3 n, lie_vec3 *t, lie_vec3 *b);
+
+/* 4x4 matrices in double, column-major as glTF stores them: m[col*4+row]. */
+typedef struct lie_mat4 {
+    double m[16];
+} lie_mat4;
+
+lie_mat4 lie_mat4_identity(void);
+lie_mat4 lie_mat4_mul(const lie_mat4 *a, const lie_mat4 *b);
+/* T * R * S from glTF translation, rotation quaternion (x, y, z, w), scale. */
+lie_mat4 lie_mat4_from_trs(const double t[3], const double q[4], const double s[3]);
+lie_vec3 lie_mat4_point(const lie_mat4 *m, lie_vec3 p);
+lie_vec3 lie_mat4_vector(const lie_mat4 *m, lie_vec3 v);
+/* Normal transform: inverse transpose of the upper 3x3 (not normalised). */
+lie_vec3 lie_mat4_normal(const lie_mat4 *m, lie_vec3 n);
+/* Inverse of an affine transform; returns 0 (and the identity) if singular. */
+int lie_mat4_inverse(const lie_mat4 *m, lie_mat4 *out);
+/* Rotation by `radians` about unit `axis` (Rodrigues). */
+lie_mat4 lie_mat4_rotation(const double axis[3], double radians);
+lie_mat4 lie_mat4_translation(double x, double y, double z);
+/* Determinant of the upper 3x3 (negative: the transform mirrors). */
+double lie_mat4_det3(const lie_mat4 *m);
+
+/* ---- deterministic hashing and sampling (ARCHITECTURE.md decision 2) --- */
+
+/* XXH3-64 of a byte range with a seed. */
+uint64_t lie_hash_bytes(const void *data, size_t size, uint64_t seed);
+/* Hash of a few 64-bit identities (triangle, path, emitter, sample, pixel...). */
+uint64_t lie_hash_u64x4(uint64_t a, uint64_t b, uint64_t c, uint64_t d);
+/* Uniform float in [0, 1) from the top 24 bits of a hash. */
+static inline float lie_hash_to_unit(uint64_t h) { return (float)(h >> 40) * (1.0f / 16777216.0f); }
+
+/* Van der Corput radical inverse in base 2 (Hammersley's second axis). */
+static inline float lie_radical_inverse2(uint32_t i)
+{
+    i = (i << 16) | (i >> 16);
+    i = ((i & 0x00ff00ffu) << 8) | ((i & 0xff00ff00u) >> 8);
+    i = ((i & 0x0f0f0f0fu) << 4) | ((i & 0xf0f0f0f0u) >> 4);
+    i = ((i & 0x33333333u) << 2) | ((i & 0xccccccccu) >> 2);
+    i = ((i & 0x55555555u) << 1) | ((i & 0xaaaaaaaau) >> 1);
+    return (float)(i >> 8) * (1.0f / 16777216.0f);
+}
+
+/* Streaming hash state for content hashes (XXH3-64). */
+typedef struct lie_hasher lie_hasher;
+lie_hasher *lie_hasher_create(uint64_t seed);
+void lie_hasher_update(lie_hasher *h, const void *data, size_t size);
+uint64_t lie_hasher_digest(const lie_hasher *h);
+void lie_hasher_destroy(lie_hasher *h);
+
+/* Uniform point on a triangle from (u1, u2) in [0,1)^2, as barycentrics
+ * (b1, b2) of vertices 1 and 2 (Heitz 2019's low-distortion map would do
+ * too; the square-root map keeps strata contiguous). */
+void lie_sample_triangle(float u1, float u2, float *b1, float *b2);
+
+/* ---- threads ---------------------------------------------------------- */
+
+/* Number of online CPUs (at least 1). */
+int lie_cpu_count(void);
+
+/* Calls fn(ctx, item, worker) for every item in [0, n) on `threads` workers
+ * (0 = all cores), items handed out in order from a shared counter.  fn must
+ * write only to slots owned by `item`, so the result does not depend on the
+ * schedule.  `progress` (may be NULL) is called from worker 0 only, with the
+ * number of items finished so far. */
+typedef void (*lie_parallel_fn)(void *ctx, size_t item, int worker);
+typedef void (*lie_progress_fn)(void *pctx, size_t done, size_t total);
+lie_status lie_parallel_for(size_t n, int threads, lie_parallel_fn fn, void *ctx,
+                            lie_progress_fn progress, void *pctx);
+
+/* ---- time and progress ------------------------------------------------ */
+
+double lie_time_now(void); /* seconds, monotonic */
+
+/* A progress bar on `stream` if it is a terminal and `enabled`, redrawn at
+ * most a few times a second. */
+typedef struct lie_progress {
+    FILE *stream;
+    int active;
+    double last;
+    const char *label;
+} lie_progress;
+void lie_progress_begin(lie_progress *p, FILE *stream, const char *label, int enabled);
+void lie_progress_update(lie_progress *p, size_t done, size_t total);
+void lie_progress_end(lie_progress *p);
+/* Adapter for lie_parallel_for: pctx is a lie_progress. */
+void lie_progress_cb(void *pctx, size_t done, size_t total);
+
+/* ---- atomic output (STYLE.md 15) -------------------------------------- */
+
+/* Writes go to a temporary file in the target's directory; commit fsyncs
+ * and renames it over the target, abort removes it.  Path "-" writes
+ * straight to stdout (commit flushes).  Owns the FILE. */
+typedef struct lie_atomic_file {
+    FILE *fp;
+    char path[4096];
+    char tmp[4096];
+    int is_stdout;
+} lie_atomic_file;
+lie_status lie_atomic_open(lie_atomic_file *af, const char *path, lie_error *err);
+lie_status lie_atomic_commit(lie_atomic_file *af, lie_error *err);
+void lie_atomic_abort(lie_atomic_file *af);
+
+/* Read a whole file ("-" = stdin) into a malloc'd buffer; *size set. */
+lie_status lie_read_file(const char *path, unsigned char **data, size_t *size, lie_error *err);
+
+/* ---- command-line values (shared by the tools) ------------------------ */
+
+/* Strict parses: the whole string must be the number, within [min, max]. */
+int lie_parse_long(const char *s, long min, long max, long *out);
+int lie_parse_float(const char *s, float min, float max, float *out);
+/* Write s as a JSON string literal (with quotes) to fp. */
+void lie_json_string(FILE *fp, const char *s);
+
+/* "WxH" with both in [1, max]. */
+int lie_parse_size(const char *s, int max, int *w, int *h);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,107 @@
+/* lib/image: frame buffers, OpenEXR output through OpenEXR's C API
+ * (openexr.h) with extra channels for AOVs and header attributes, PNG
+ * previews through libpng.  Every writer is atomic (lib/core). */
+#ifndef LIE_IMAGE_H
+#define LIE_IMAGE_H
+
+#include "core/core.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define LIE_AOV_MAX_CHANNELS 4
+
+/* An extra layer of channels, written to EXR as "<name>.<channel>"
+ * (e.g. "complexity.R", "depth.Z"). Interleaved, n_channels per pixel.
+ * An empty name is OpenEXR's default layer: bare channel names ("A", "Z"). */
+typedef struct lie_aov {
+    char name[32];
+    int n_channels;
+    char channel[LIE_AOV_MAX_CHANNELS][8];
+    float *data;
+} lie_aov;
+
+/* A rendered frame: linear RGB radiance, row 0 at the top.  Owns its
+ * buffers. */
+typedef struct lie_frame {
+    int width, height;
+    float *rgb;          /* 3 floats per pixel */
+    lie_aov *aovs;
+    int n_aovs;
+} lie_frame;
+
+/* Zeroed frame; NULL if a size is not positive or memory runs out. */
+lie_frame *lie_frame_create(int width, int height);
+/* Add a zeroed AOV layer; returns its data pointer, or NULL if the name is
+ * taken or too long, n_channels is not 1..LIE_AOV_MAX_CHANNELS, or a
+ * channel name is empty, repeated or too long.  Names are copied. */
+float *lie_frame_add_aov(lie_frame *f, const char *name, int n_channels,
+                         const char *const *channel_names);
+const lie_aov *lie_frame_find_aov(const lie_frame *f, const char *name);
+void lie_frame_destroy(lie_frame *f);
+
+/* Header attributes written to the EXR file. */
+typedef enum lie_attr_type {
+    LIE_ATTR_STRING = 0,
+    LIE_ATTR_FLOAT = 1,
+    LIE_ATTR_INT = 2,
+    LIE_ATTR_V3F = 3,
+    LIE_ATTR_M44F = 4
+} lie_attr_type;
+
+typedef struct lie_attr {
+    const char *name;
+    lie_attr_type type;
+    const char *s;
+    float f;
+    int i;
+    float v[16];          /* v3f: v[0..2]; m44f: 16 floats, row-major as EXR */
+} lie_attr;
+
+/* EXR: RGB as 32-bit float channels "R","G","B" plus every AOV, ZIP
+ * compression, scanline, increasing Y.  Path "-" writes to stdout.
+ * The file is assembled in memory and written atomically.  A channel
+ * name used twice, or an attribute clashing with a standard one
+ * ("compression", ...), is LIE_ERR_ARG. */
+lie_status lie_exr_write(const char *path, const lie_frame *f, const lie_attr *attrs, int n_attrs,
+                         lie_error *err);
+
+/* Read an EXR file written by anyone: every channel as float.  "R","G","B"
+ * go to rgb (missing ones are 0); other channels "layer.chan" become AOVs
+ * grouped by layer in file order (the layer is everything before the last
+ * dot; channels within a layer in file order, but R, G, B, A first).  The
+ * frame covers the data window.  Reads the first part only; tiled, deep or
+ * subsampled images and layers of more than LIE_AOV_MAX_CHANNELS channels
+ * are LIE_ERR_UNSUPPORTED, images over 65536 a side or 2^28 pixels
+ * LIE_ERR_LIMIT.  *out is a new frame on success, NULL on failure. */
+lie_status lie_exr_read(const char *path, lie_frame **out, lie_error *err);
+
+/* Read one string attribute from an EXR header (for tests and tools):
+ * LIE_ERR_NOT_FOUND if absent, LIE_ERR_FORMAT if not a string,
+ * LIE_ERR_LIMIT if it does not fit in `size` bytes with its NUL. */
+lie_status lie_exr_read_string_attr(const char *path, const char *name, char *buf, size_t size,
+                                    lie_error *err);
+
+/* PNG preview: 8-bit RGB, radiance x 2^exposure, clamped, sRGB transfer
+ * curve, with an sRGB chunk.  Written atomically. */
+lie_status lie_png_write(const char *path, const lie_frame *f, float exposure, lie_error *err);
+
+/* 8-bit RGB PNG from raw pixels (for false-colour images and tests). */
+lie_status lie_png_write_rgb8(const char *path, int width, int height, const uint8_t *rgb,
+                              lie_error *err);
+
+/* Write by extension: ".png" (case-insensitive) gives a PNG preview,
+ * anything else (".exr", "-") an EXR. */
+lie_status lie_frame_write(const char *path, const lie_frame *f, const lie_attr *attrs,
+                           int n_attrs, float exposure, lie_error *err);
+
+/* Linear to sRGB-encoded value (IEC 61966-2-1); both clamp to [0, 1] and
+ * map NaN to 0. */
+float lie_linear_to_srgb(float x);
+float lie_srgb_to_linear(float x);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

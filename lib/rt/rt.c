@@ -1,0 +1,398 @@
+/* Embree 3 device and scene, and the queries the renderer and lie-build ask. */
+#include "rt/rt.h"
+
+#include <embree3/rtcore.h>
+#include <stdbool.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct lie_rt {
+    RTCDevice device;
+    RTCScene scene;
+    const lie_scene *s;
+    uint8_t *tri_two_sided; /* per triangle: material is double-sided */
+    float scale;
+    lie_error *pending;     /* where the error callback writes during create */
+};
+
+/* Embree reports errors through a callback; we store the first message. */
+static void on_embree_error(void *user, enum RTCError code, const char *str)
+{
+    lie_rt *rt = user;
+    if (rt->pending && rt->pending->status == LIE_OK)
+        lie_error_set(rt->pending, LIE_ERR_RT, NULL, "Embree error %d: %s", (int)code,
+                      str ? str : "unknown");
+}
+
+/* Query modes carried in an extended intersect context (first member is
+ * Embree's, so the filter can cast back). */
+enum { QUERY_CLOSEST = 0, QUERY_CULL = 1, QUERY_ALL = 2 };
+
+typedef struct query_ctx {
+    struct RTCIntersectContext ctx;
+    int mode;
+    const lie_rt *rt;
+    const uint32_t *exclude;
+    int n_exclude;
+    uint32_t **out;
+    size_t *n, *cap;
+    int nomem;
+} query_ctx;
+
+/* Embree's RTCRayN/RTCHitN accessors are C++ only; in C the layouts are
+ * structures of arrays of N lanes (rtcore_ray.h): ray = org_x, org_y, org_z,
+ * tnear, dir_x, dir_y, dir_z, ...; hit = Ng_x, Ng_y, Ng_z, u, v, primID. */
+#define RAYN_DIR(ray, N, i, k) (((const float *)(ray))[(4 + (k)) * (N) + (i)])
+#define HITN_PRIM(hit, N, i) (((const unsigned *)(hit))[5 * (N) + (i)])
+
+static void intersect_filter(const struct RTCFilterFunctionNArguments *args)
+{
+    query_ctx *q = (query_ctx *)args->context;
+    if (q->mode == QUERY_CLOSEST)
+        return;
+    for (unsigned i = 0; i < args->N; i++) {
+        if (args->valid[i] != -1)
+            continue;
+        unsigned prim = HITN_PRIM(args->hit, args->N, i);
+        if (q->mode == QUERY_CULL) {
+            if (q->rt->tri_two_sided[prim])
+                continue;
+            lie_vec3 ng = q->rt->s->tri_ng[prim];
+            float dx = RAYN_DIR(args->ray, args->N, i, 0);
+            float dy = RAYN_DIR(args->ray, args->N, i, 1);
+            float dz = RAYN_DIR(args->ray, args->N, i, 2);
+            if (ng.x * dx + ng.y * dy + ng.z * dz > 0.0f)
+                args->valid[i] = 0; /* back face of a single-sided surface */
+            continue;
+        }
+        /* QUERY_ALL: record and reject, so traversal continues past it. */
+        args->valid[i] = 0;
+        int skip = 0;
+        for (int k = 0; k < q->n_exclude; k++)
+            if (q->exclude[k] == prim)
+                skip = 1;
+        if (skip || q->nomem)
+            continue;
+        if (*q->n == *q->cap) {
+            size_t nc = *q->cap ? 2 * *q->cap : 16;
+            uint32_t *nb = realloc(*q->out, nc * sizeof **q->out);
+            if (!nb) {
+                q->nomem = 1;
+                continue;
+            }
+            *q->out = nb;
+            *q->cap = nc;
+        }
+        (*q->out)[(*q->n)++] = prim;
+    }
+}
+
+lie_status lie_rt_create(const lie_scene *s, lie_rt **out, lie_error *err)
+{
+    *out = NULL;
+    lie_rt *rt = calloc(1, sizeof *rt);
+    if (!rt)
+        return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
+    lie_error local;
+    lie_error_clear(&local);
+    rt->pending = &local;
+    rt->s = s;
+    rt->device = rtcNewDevice("verbose=0,threads=1");
+    if (!rt->device) {
+        enum RTCError code = rtcGetDeviceError(NULL);
+        free(rt);
+        return lie_error_set(err, LIE_ERR_RT, s->path, "cannot create Embree device (error %d)", (int)code);
+    }
+    rtcSetDeviceErrorFunction(rt->device, on_embree_error, rt);
+    rt->tri_two_sided = malloc((size_t)s->n_tris + 1);
+    if (!rt->tri_two_sided) {
+        lie_rt_destroy(rt);
+        return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
+    }
+    for (uint32_t i = 0; i < s->n_tris; i++)
+        rt->tri_two_sided[i] = (uint8_t)(lie_scene_material(s, s->tri_material[i])->double_sided != 0);
+    lie_vec3 ext = lie_box3_is_empty(&s->bounds) ? lie_v3(1, 1, 1) : lie_v3_sub(s->bounds.hi, s->bounds.lo);
+    rt->scale = fmaxf(1.0f, fmaxf(ext.x, fmaxf(ext.y, ext.z)));
+    /* Robust traversal: watertight triangle tests, so shadows do not leak
+     * through shared edges. */
+    rt->scene = rtcNewScene(rt->device);
+    if (rt->scene) {
+        rtcSetSceneFlags(rt->scene, RTC_SCENE_FLAG_ROBUST);
+        rtcSetSceneBuildQuality(rt->scene, RTC_BUILD_QUALITY_HIGH);
+    }
+    if (rt->scene && s->n_tris > 0) {
+        RTCGeometry g = rtcNewGeometry(rt->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        if (g) {
+            float *vb = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                3 * sizeof(float), 3 * (size_t)s->n_tris);
+            unsigned *ib = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                   3 * sizeof(unsigned), s->n_tris);
+            if (vb && ib) {
+                memcpy(vb, s->tri_p, sizeof(float) * 9 * (size_t)s->n_tris);
+                for (size_t i = 0; i < 3 * (size_t)s->n_tris; i++)
+                    ib[i] = (unsigned)i;
+            }
+            rtcSetGeometryIntersectFilterFunction(g, intersect_filter);
+            rtcCommitGeometry(g);
+            rtcAttachGeometryByID(rt->scene, g, 0);
+            rtcReleaseGeometry(g);
+        }
+    }
+    if (rt->scene)
+        rtcCommitScene(rt->scene);
+    rt->pending = NULL;
+    if (!rt->scene || local.status != LIE_OK) {
+        lie_status st = local.status != LIE_OK ? local.status : LIE_ERR_RT;
+        lie_error_set(err, st, s->path, "%s", local.msg[0] ? local.msg : "cannot build the Embree scene");
+        lie_rt_destroy(rt);
+        return st;
+    }
+    *out = rt;
+    return LIE_OK;
+}
+
+void lie_rt_destroy(lie_rt *rt)
+{
+    if (!rt)
+        return;
+    if (rt->scene)
+        rtcReleaseScene(rt->scene);
+    if (rt->device)
+        rtcReleaseDevice(rt->device);
+    free(rt->tri_two_sided);
+    free(rt);
+}
+
+float lie_rt_scale(const lie_rt *rt) { return rt->scale; }
+
+static void init_ray(struct RTCRay *r, lie_vec3 org, lie_vec3 dir, float tnear, float tfar)
+{
+    r->org_x = org.x;
+    r->org_y = org.y;
+    r->org_z = org.z;
+    r->tnear = tnear;
+    r->dir_x = dir.x;
+    r->dir_y = dir.y;
+    r->dir_z = dir.z;
+    r->time = 0.0f;
+    r->tfar = tfar;
+    r->mask = 0xFFFFFFFFu;
+    r->id = 0;
+    r->flags = 0;
+}
+
+int lie_rt_intersect(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, float tfar,
+                     int cull_backfaces, lie_hit *hit)
+{
+    query_ctx q;
+    memset(&q, 0, sizeof q);
+    rtcInitIntersectContext(&q.ctx);
+    q.mode = cull_backfaces ? QUERY_CULL : QUERY_CLOSEST;
+    q.rt = rt;
+    struct RTCRayHit rh;
+    init_ray(&rh.ray, org, dir, tnear, tfar);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(rt->scene, &q.ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+        hit->tri = LIE_NO_HIT;
+        return 0;
+    }
+    hit->tri = rh.hit.primID;
+    hit->t = rh.ray.tfar;
+    hit->u = rh.hit.u;
+    hit->v = rh.hit.v;
+    return 1;
+}
+
+void lie_rt_intersect8(const lie_rt *rt, lie_vec3 org, const lie_vec3 *dir, int n, int cull_backfaces,
+                       lie_hit *hits)
+{
+    query_ctx q;
+    memset(&q, 0, sizeof q);
+    rtcInitIntersectContext(&q.ctx);
+    q.ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    q.mode = cull_backfaces ? QUERY_CULL : QUERY_CLOSEST;
+    q.rt = rt;
+    struct RTCRayHit8 rh __attribute__((aligned(32)));
+    int valid[8] __attribute__((aligned(32)));
+    for (int k = 0; k < 8; k++) {
+        int ok = k < n;
+        valid[k] = ok ? -1 : 0;
+        rh.ray.org_x[k] = org.x;
+        rh.ray.org_y[k] = org.y;
+        rh.ray.org_z[k] = org.z;
+        rh.ray.tnear[k] = 0.0f;
+        rh.ray.dir_x[k] = ok ? dir[k].x : 0.0f;
+        rh.ray.dir_y[k] = ok ? dir[k].y : 0.0f;
+        rh.ray.dir_z[k] = ok ? dir[k].z : 1.0f;
+        rh.ray.time[k] = 0.0f;
+        rh.ray.tfar[k] = INFINITY;
+        rh.ray.mask[k] = 0xFFFFFFFFu;
+        rh.ray.id[k] = (unsigned)k;
+        rh.ray.flags[k] = 0;
+        rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.primID[k] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+    }
+    rtcIntersect8(valid, rt->scene, &q.ctx, &rh);
+    for (int k = 0; k < n; k++) {
+        if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) {
+            hits[k].tri = LIE_NO_HIT;
+            continue;
+        }
+        hits[k].tri = rh.hit.primID[k];
+        hits[k].t = rh.ray.tfar[k];
+        hits[k].u = rh.hit.u[k];
+        hits[k].v = rh.hit.v[k];
+    }
+}
+
+int lie_rt_occluded(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, float tfar)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    struct RTCRay r;
+    init_ray(&r, org, dir, tnear, tfar);
+    rtcOccluded1(rt->scene, &ctx, &r);
+    return r.tfar < 0.0f;
+}
+
+void lie_rt_occluded_batch(const lie_rt *rt, lie_ray_batch *b, lie_ray_mode mode)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    if (mode == LIE_RAYS_SINGLE) {
+        for (int i = 0; i < b->n; i++) {
+            struct RTCRay r;
+            init_ray(&r, lie_v3(b->ox[i], b->oy[i], b->oz[i]), lie_v3(b->dx[i], b->dy[i], b->dz[i]),
+                     b->tnear[i], b->tfar[i]);
+            rtcOccluded1(rt->scene, &ctx, &r);
+            b->occluded[i] = r.tfar < 0.0f;
+        }
+        return;
+    }
+    if (mode == LIE_RAYS_PACKET) {
+        for (int base = 0; base < b->n; base += 8) {
+            struct RTCRay8 r __attribute__((aligned(32)));
+            int valid[8] __attribute__((aligned(32)));
+            for (int k = 0; k < 8; k++) {
+                int i = base + k;
+                int ok = i < b->n;
+                valid[k] = ok ? -1 : 0;
+                r.org_x[k] = ok ? b->ox[i] : 0.0f;
+                r.org_y[k] = ok ? b->oy[i] : 0.0f;
+                r.org_z[k] = ok ? b->oz[i] : 0.0f;
+                r.dir_x[k] = ok ? b->dx[i] : 0.0f;
+                r.dir_y[k] = ok ? b->dy[i] : 0.0f;
+                r.dir_z[k] = ok ? b->dz[i] : 1.0f;
+                r.tnear[k] = ok ? b->tnear[i] : 0.0f;
+                r.tfar[k] = ok ? b->tfar[i] : 0.0f;
+                r.time[k] = 0.0f;
+                r.mask[k] = 0xFFFFFFFFu;
+                r.id[k] = (unsigned)k;
+                r.flags[k] = 0;
+            }
+            rtcOccluded8(valid, rt->scene, &ctx, &r);
+            for (int k = 0; k < 8 && base + k < b->n; k++)
+                b->occluded[base + k] = r.tfar[k] < 0.0f;
+        }
+        return;
+    }
+    /* Stream: AoS rays in chunks on the stack. */
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    enum { CHUNK = 64 };
+    struct RTCRay rays[CHUNK] __attribute__((aligned(16)));
+    for (int base = 0; base < b->n; base += CHUNK) {
+        int m = b->n - base < CHUNK ? b->n - base : CHUNK;
+        for (int k = 0; k < m; k++) {
+            int i = base + k;
+            init_ray(&rays[k], lie_v3(b->ox[i], b->oy[i], b->oz[i]),
+                     lie_v3(b->dx[i], b->dy[i], b->dz[i]), b->tnear[i], b->tfar[i]);
+        }
+        rtcOccluded1M(rt->scene, &ctx, rays, (unsigned)m, sizeof(struct RTCRay));
+        for (int k = 0; k < m; k++)
+            b->occluded[base + k] = rays[k].tfar < 0.0f;
+    }
+}
+
+lie_status lie_rt_all_hits(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, float tfar,
+                           const uint32_t *exclude, int n_exclude, uint32_t **out, size_t *n,
+                           size_t *cap)
+{
+    query_ctx q;
+    memset(&q, 0, sizeof q);
+    rtcInitIntersectContext(&q.ctx);
+    q.mode = QUERY_ALL;
+    q.rt = rt;
+    q.exclude = exclude;
+    q.n_exclude = n_exclude;
+    q.out = out;
+    q.n = n;
+    q.cap = cap;
+    struct RTCRayHit rh;
+    init_ray(&rh.ray, org, dir, tnear, tfar);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(rt->scene, &q.ctx, &rh);
+    return q.nomem ? LIE_ERR_NOMEM : LIE_OK;
+}
+
+typedef struct box_query {
+    const lie_rt *rt;
+    lie_box3 box;
+    lie_rt_box_fn fn;
+    void *ctx;
+} box_query;
+
+static bool on_point_query(struct RTCPointQueryFunctionArguments *args)
+{
+    box_query *q = args->userPtr;
+    uint32_t t = args->primID;
+    const lie_vec3 *P = &q->rt->s->tri_p[3 * (size_t)t];
+    lie_vec3 lo = lie_v3_min(P[0], lie_v3_min(P[1], P[2]));
+    lie_vec3 hi = lie_v3_max(P[0], lie_v3_max(P[1], P[2]));
+    if (lo.x <= q->box.hi.x && hi.x >= q->box.lo.x && lo.y <= q->box.hi.y && hi.y >= q->box.lo.y &&
+        lo.z <= q->box.hi.z && hi.z >= q->box.lo.z)
+        q->fn(q->ctx, t);
+    return false; /* the query radius never shrinks */
+}
+
+void lie_rt_box_query(const lie_rt *rt, lie_box3 box, lie_rt_box_fn fn, void *ctx)
+{
+    /* Embree's point query visits every primitive whose bounds meet a
+     * sphere; the sphere around the box is a superset, the callback keeps
+     * the triangles whose bounds meet the box itself. */
+    box_query q = {rt, box, fn, ctx};
+    lie_vec3 c = lie_v3_scale(lie_v3_add(box.lo, box.hi), 0.5f);
+    struct RTCPointQuery pq __attribute__((aligned(16)));
+    pq.x = c.x;
+    pq.y = c.y;
+    pq.z = c.z;
+    pq.time = 0.0f;
+    pq.radius = 0.5f * lie_v3_len(lie_v3_sub(box.hi, box.lo)) * 1.0001f + 1e-6f;
+    struct RTCPointQueryContext pctx;
+    rtcInitPointQueryContext(&pctx);
+    rtcPointQuery(rt->scene, &pq, &pctx, on_point_query, &q);
+}
+
+int lie_shadow_segment(lie_vec3 p, lie_vec3 ng, lie_vec3 q, lie_vec3 *org, lie_vec3 *dir,
+                       float *tnear, float *tfar)
+{
+    /* Offset scaled by the coordinates' magnitude (float spacing grows with
+     * it); the segment stops the same relative distance short of q. */
+    float mag = fmaxf(fabsf(p.x), fmaxf(fabsf(p.y), fabsf(p.z)));
+    float eps = 1e-4f * fmaxf(1.0f, mag);
+    lie_vec3 o = lie_v3_add(p, lie_v3_scale(ng, eps));
+    lie_vec3 d = lie_v3_sub(q, o);
+    float len = lie_v3_len(d);
+    if (!(len > 2.0f * eps))
+        return 0;
+    *org = o;
+    *dir = lie_v3_scale(d, 1.0f / len);
+    *tnear = 0.0f;
+    *tfar = len - eps;
+    return 1;
+}

@@ -1,0 +1,91 @@
+/* lib/rt: Embree 3 over the scene's world triangles.  One Embree geometry
+ * holds every triangle, so Embree's primID is the global triangle index.
+ * Queries: closest hit (optionally skipping back faces of single-sided
+ * materials), occlusion over [tnear, tfar] one ray at a time, in 8-wide
+ * packets or as a stream, and every triangle along a segment (lie-build).
+ * Errors from Embree come back as lie_status, never as prints. */
+#ifndef LIE_RT_H
+#define LIE_RT_H
+
+#include "core/core.h"
+#include "scene/scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define LIE_NO_HIT 0xFFFFFFFFu
+
+typedef struct lie_rt lie_rt;
+
+typedef struct lie_hit {
+    uint32_t tri;          /* global triangle index or LIE_NO_HIT */
+    float t;
+    float u, v;            /* barycentrics of vertices 1 and 2 */
+} lie_hit;
+
+/* Rays for batched occlusion, structure of arrays.  On return occluded[i]
+ * is 1 or 0 for i < n.  The caller owns the arrays (capacity >= n). */
+typedef struct lie_ray_batch {
+    float *ox, *oy, *oz, *dx, *dy, *dz, *tnear, *tfar;
+    uint8_t *occluded;
+    int n;
+} lie_ray_batch;
+
+typedef enum lie_ray_mode {
+    LIE_RAYS_SINGLE = 0,   /* rtcOccluded1 per ray */
+    LIE_RAYS_PACKET = 1,   /* rtcOccluded8 packets */
+    LIE_RAYS_STREAM = 2    /* rtcOccluded1M, coherent */
+} lie_ray_mode;
+
+/* Build the Embree scene over s's current world.  s must outlive the rt
+ * (shading reads materials through the scene; rt only needs geometry). */
+lie_status lie_rt_create(const lie_scene *s, lie_rt **out, lie_error *err);
+void lie_rt_destroy(lie_rt *rt);
+
+/* Closest hit along org + t*dir, t in [tnear, tfar].  With cull_backfaces,
+ * hits on the back of triangles whose material is not double-sided are
+ * skipped (glTF's single-sided surfaces are invisible from behind).
+ * Returns 1 on a hit. */
+int lie_rt_intersect(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, float tfar,
+                     int cull_backfaces, lie_hit *hit);
+
+/* Closest hits of up to 8 rays from one origin (an 8-wide packet: coherent
+ * camera rays), t in [0, inf); hits[i].tri is LIE_NO_HIT on a miss. */
+void lie_rt_intersect8(const lie_rt *rt, lie_vec3 org, const lie_vec3 *dir, int n, int cull_backfaces,
+                       lie_hit *hits);
+
+/* 1 if anything lies on the segment [tnear, tfar]. */
+int lie_rt_occluded(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, float tfar);
+
+/* Occlusion for a batch of rays; fills b->occluded. */
+void lie_rt_occluded_batch(const lie_rt *rt, lie_ray_batch *b, lie_ray_mode mode);
+
+/* Every triangle met by the segment [tnear, tfar], except those listed in
+ * `exclude` (sorted or not, n_exclude small).  Appends to out (capacity
+ * *cap, grown with realloc); *n is the count (may contain duplicates).
+ * Returns LIE_ERR_NOMEM if growing fails. */
+lie_status lie_rt_all_hits(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, float tfar,
+                           const uint32_t *exclude, int n_exclude, uint32_t **out, size_t *n,
+                           size_t *cap);
+
+/* Calls fn(ctx, tri) for every triangle whose bounding box overlaps `box`
+ * (each at most once per call is not guaranteed: callers dedupe). */
+typedef void (*lie_rt_box_fn)(void *ctx, uint32_t tri);
+void lie_rt_box_query(const lie_rt *rt, lie_box3 box, lie_rt_box_fn fn, void *ctx);
+
+/* The shadow segment from surface point p (geometric normal ng, facing the
+ * side the segment leaves from) to point q: origin offset off the surface,
+ * end short of q, so neither the receiver nor the emitter's own surface
+ * counts as a blocker.  Shared by the renderer and lie-build so both ask
+ * the same geometric question.  Returns 0 if q is (nearly) at p. */
+int lie_shadow_segment(lie_vec3 p, lie_vec3 ng, lie_vec3 q, lie_vec3 *org, lie_vec3 *dir,
+                       float *tnear, float *tfar);
+
+/* Scene scale used for ray epsilons (largest bounds extent, at least 1). */
+float lie_rt_scale(const lie_rt *rt);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

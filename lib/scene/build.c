@@ -1,0 +1,156 @@
+/* Building a scene's document in memory: for tests, and for edits that
+ * add objects. */
+#include "scene/scene.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+lie_scene *lie_scene_new(const char *path)
+{
+    lie_scene *s = calloc(1, sizeof *s);
+    if (!s)
+        return NULL;
+    s->path = strdup(path ? path : "");
+    if (!s->path) {
+        free(s);
+        return NULL;
+    }
+    return s;
+}
+
+lie_material lie_material_default(void)
+{
+    lie_material m;
+    memset(&m, 0, sizeof m);
+    for (int k = 0; k < 4; k++)
+        m.base_color[k] = 1.0f;
+    m.metallic = 1.0f;
+    m.roughness = 1.0f;
+    m.base_color_tex = m.mr_tex = m.emissive_tex = -1;
+    return m;
+}
+
+/* Grow an array of `size`-byte elements by one; returns the new slot. */
+static void *grow(void **arr, int *n, size_t size)
+{
+    void *na = realloc(*arr, size * ((size_t)*n + 1));
+    if (!na)
+        return NULL;
+    *arr = na;
+    void *slot = (char *)na + size * (size_t)*n;
+    memset(slot, 0, size);
+    (*n)++;
+    return slot;
+}
+
+static char *dup_or_null(const char *s) { return s ? strdup(s) : NULL; }
+
+int lie_scene_add_material(lie_scene *s, const lie_material *m)
+{
+    lie_material *slot = grow((void **)&s->materials, &s->n_materials, sizeof *slot);
+    if (!slot)
+        return -1;
+    *slot = *m;
+    slot->name = dup_or_null(m->name);
+    return s->n_materials - 1;
+}
+
+static void *dup_array(const void *src, size_t bytes)
+{
+    if (!src)
+        return NULL;
+    void *d = malloc(bytes ? bytes : 1);
+    if (d)
+        memcpy(d, src, bytes);
+    return d;
+}
+
+int lie_scene_add_mesh(lie_scene *s, const char *name, const float *pos, const float *nrm,
+                       const float *uv, uint32_t n_verts, const uint32_t *idx, uint32_t n_tris,
+                       int material)
+{
+    lie_primitive p;
+    memset(&p, 0, sizeof p);
+    p.n_verts = n_verts;
+    p.n_tris = n_tris;
+    p.material = material;
+    p.pos = dup_array(pos, sizeof(float) * 3 * n_verts);
+    p.nrm = dup_array(nrm, sizeof(float) * 3 * n_verts);
+    p.uv = dup_array(uv, sizeof(float) * 2 * n_verts);
+    p.idx = dup_array(idx, sizeof(uint32_t) * 3 * n_tris);
+    lie_primitive *prim = malloc(sizeof *prim);
+    if (!p.pos || (nrm && !p.nrm) || (uv && !p.uv) || !p.idx || !prim) {
+        free(p.pos);
+        free(p.nrm);
+        free(p.uv);
+        free(p.idx);
+        free(prim);
+        return -1;
+    }
+    *prim = p;
+    lie_mesh *m = grow((void **)&s->meshes, &s->n_meshes, sizeof *m);
+    if (!m) {
+        free(p.pos);
+        free(p.nrm);
+        free(p.uv);
+        free(p.idx);
+        free(prim);
+        return -1;
+    }
+    m->name = dup_or_null(name);
+    m->prims = prim;
+    m->n_prims = 1;
+    return s->n_meshes - 1;
+}
+
+int lie_scene_add_camera_def(lie_scene *s, const lie_camera_def *c)
+{
+    lie_camera_def *slot = grow((void **)&s->camera_defs, &s->n_camera_defs, sizeof *slot);
+    if (!slot)
+        return -1;
+    *slot = *c;
+    slot->name = dup_or_null(c->name);
+    return s->n_camera_defs - 1;
+}
+
+int lie_scene_add_light_def(lie_scene *s, const lie_light_def *l)
+{
+    lie_light_def *slot = grow((void **)&s->light_defs, &s->n_light_defs, sizeof *slot);
+    if (!slot)
+        return -1;
+    *slot = *l;
+    slot->name = dup_or_null(l->name);
+    return s->n_light_defs - 1;
+}
+
+int lie_scene_add_node(lie_scene *s, const char *name, int parent, const lie_mat4 *local, int mesh,
+                       int camera, int light)
+{
+    if (parent >= s->n_nodes)
+        return -1;
+    int *link;
+    if (parent >= 0) {
+        lie_node *p = &s->nodes[parent];
+        link = grow((void **)&p->children, &p->n_children, sizeof *link);
+    } else {
+        link = grow((void **)&s->roots, &s->n_roots, sizeof *link);
+    }
+    if (!link)
+        return -1;
+    lie_node *n = grow((void **)&s->nodes, &s->n_nodes, sizeof *n);
+    if (!n) {
+        if (parent >= 0)
+            s->nodes[parent].n_children--;
+        else
+            s->n_roots--;
+        return -1;
+    }
+    *link = s->n_nodes - 1;
+    n->name = dup_or_null(name);
+    n->parent = parent;
+    n->local = local ? *local : lie_mat4_identity();
+    n->mesh = mesh;
+    n->camera = camera;
+    n->light = light;
+    return s->n_nodes - 1;
+}

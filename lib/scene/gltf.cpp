@@ -1,0 +1,1871 @@
+/* lib/scene: the glTF 2.0 importer (.gltf and .glb), built on tinygltf.
+ *
+ * Fills the *document* half of a lie_scene (scene.h); lie_scene_flatten
+ * builds the world from it.  This is the trust boundary for scene files
+ * (STYLE.md 6): every index, offset, size and count from the file is checked
+ * here before it is used, so flatten and the renderer can trust the
+ * document.  tinygltf parses the JSON and reads buffers and images through
+ * our file-system callbacks, which refuse URIs leaving the scene's folder
+ * before anything is opened.
+ *
+ * Errors travel inside this file as a C++ exception (ImportError) and leave
+ * lie_gltf_import as a lie_status; no exception escapes.  Every C array is
+ * hung on the scene, with its count, as soon as it is allocated, so
+ * lie_scene_destroy frees a half-built document too. */
+#include "scene/scene.h"
+
+#include <nlohmann/json.hpp> /* the exporter adds its buffer to tinygltf's JSON */
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cerrno>
+#include <climits>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <new>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace {
+
+/* Largest decoded image, in pixels (8192 x 8192); it becomes 16 bytes a
+ * pixel as linear float RGBA. */
+const uint64_t MAX_IMAGE_PIXELS = uint64_t(1) << 26;
+
+/* extensionsRequired we honour; any other required extension is refused. */
+const char *const SUPPORTED_REQUIRED[] = {"KHR_lights_punctual", "KHR_materials_emissive_strength"};
+
+struct ImportError {
+    lie_status status;
+    std::string msg;
+    int line, col;
+};
+
+[[noreturn]] __attribute__((format(printf, 2, 3))) void fail(lie_status status, const char *fmt, ...)
+{
+    char buf[900];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(buf, sizeof buf, fmt, ap);
+    va_end(ap);
+    throw ImportError{status, buf, 0, 0};
+}
+
+/* A string from the file, fit for a one-line message. */
+std::string clean(const std::string &s, size_t max = 160)
+{
+    std::string r;
+    for (char c : s) {
+        if (r.size() >= max) {
+            r += "...";
+            break;
+        }
+        r += (unsigned char)c < 0x20 || c == 0x7f ? '?' : c;
+    }
+    return r;
+}
+
+/* The first non-empty line of a (possibly multi-line) tinygltf message. */
+std::string first_line(const std::string &s)
+{
+    size_t at = 0;
+    while (at < s.size()) {
+        size_t end = s.find('\n', at);
+        if (end == std::string::npos)
+            end = s.size();
+        std::string line = s.substr(at, end - at);
+        size_t b = line.find_first_not_of(" \t\r"), e = line.find_last_not_of(" \t\r.");
+        if (b != std::string::npos && e != std::string::npos && e >= b)
+            return clean(line.substr(b, e - b + 1), 300);
+        at = end + 1;
+    }
+    return std::string();
+}
+
+std::string percent_decode(const std::string &s)
+{
+    std::string r;
+    for (size_t i = 0; i < s.size(); i++) {
+        if (s[i] == '%' && i + 2 < s.size() && isxdigit((unsigned char)s[i + 1]) &&
+            isxdigit((unsigned char)s[i + 2])) {
+            r += (char)strtol(s.substr(i + 1, 2).c_str(), nullptr, 16);
+            i += 2;
+        } else {
+            r += s[i];
+        }
+    }
+    return r;
+}
+
+/* C arrays that lie_scene_destroy can free; n == 0 gives NULL. */
+template <class T> T *alloc_array(size_t n)
+{
+    if (n == 0)
+        return nullptr;
+    void *p = calloc(n, sizeof(T));
+    if (!p)
+        throw std::bad_alloc();
+    return static_cast<T *>(p);
+}
+
+char *dup_name(const std::string &s)
+{
+    if (s.empty())
+        return nullptr;
+    char *p = strdup(s.c_str());
+    if (!p)
+        throw std::bad_alloc();
+    return p;
+}
+
+size_t mul_size(size_t a, size_t b, const char *what)
+{
+    size_t r;
+    if (__builtin_mul_overflow(a, b, &r))
+        fail(LIE_ERR_LIMIT, "%s: size overflows", what);
+    return r;
+}
+
+/* ---- file-system callbacks: the URI policy ------------------------------
+ * tinygltf joins each (percent-decoded) URI to the folder it was given and
+ * then to ".", expands the path, asks FileExists and reads it.  We see the
+ * joined path in ExpandFilePath, recover the URI and decide there, so a
+ * refused URI is never opened.  The "." fallback (the working directory) is
+ * never used: a relative URI means the scene's folder. */
+
+struct FsState {
+    std::string prefix; /* the scene's folder as tinygltf joins it, ending in '/' */
+    bool allow_external;
+    std::string refused, refused_why;            /* first URI refused by policy */
+    std::map<std::string, std::string> missing;  /* URI -> why it could not be opened */
+    std::string last_uri;
+};
+
+/* Does a relative path climb above its starting folder ("a/../../b")? */
+bool path_escapes(const std::string &p)
+{
+    long depth = 0;
+    size_t at = 0;
+    while (at <= p.size()) {
+        size_t end = p.find('/', at);
+        if (end == std::string::npos)
+            end = p.size();
+        std::string seg = p.substr(at, end - at);
+        if (seg == "..") {
+            if (--depth < 0)
+                return true;
+        } else if (!seg.empty() && seg != ".") {
+            depth++;
+        }
+        at = end + 1;
+    }
+    return false;
+}
+
+void fs_refuse(FsState &fs, const std::string &uri, const char *why)
+{
+    if (fs.refused.empty()) {
+        fs.refused = uri.empty() ? std::string("(empty)") : uri;
+        fs.refused_why = why;
+    }
+}
+
+std::string fs_expand(const std::string &joined, void *user)
+{
+    FsState &fs = *static_cast<FsState *>(user);
+    fs.last_uri.clear();
+    if (joined.compare(0, fs.prefix.size(), fs.prefix) != 0)
+        return std::string(); /* tinygltf's second search path, the working directory */
+    std::string uri = joined.substr(fs.prefix.size());
+    fs.last_uri = uri;
+    const char *outside = "leaves the scene's folder (allow_external_uris permits it)";
+
+    size_t colon = uri.find(':');
+    if (colon != std::string::npos && colon > 0 && isalpha((unsigned char)uri[0]) &&
+        uri.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+-.") ==
+            colon) {
+        std::string scheme = uri.substr(0, colon);
+        for (char &c : scheme)
+            c = (char)tolower((unsigned char)c);
+        if (scheme != "file") {
+            fs_refuse(fs, uri, "has an unsupported scheme (only data: and relative paths)");
+            return std::string();
+        }
+        if (!fs.allow_external) {
+            fs_refuse(fs, uri, outside);
+            return std::string();
+        }
+        std::string p = uri.substr(colon + 1);
+        if (p.compare(0, 2, "//") == 0) { /* file://host/path: only an empty host or localhost */
+            size_t slash = p.find('/', 2);
+            std::string host = p.substr(2, slash == std::string::npos ? std::string::npos : slash - 2);
+            if (slash == std::string::npos || !(host.empty() || host == "localhost")) {
+                fs_refuse(fs, uri, "names a remote host");
+                return std::string();
+            }
+            p = p.substr(slash);
+        }
+        return !p.empty() && p[0] == '/' ? p : fs.prefix + p;
+    }
+    if (!uri.empty() && uri[0] == '/') {
+        if (!fs.allow_external) {
+            fs_refuse(fs, uri, outside);
+            return std::string();
+        }
+        return uri;
+    }
+    if (path_escapes(uri) && !fs.allow_external) {
+        fs_refuse(fs, uri, outside);
+        return std::string();
+    }
+    return joined;
+}
+
+bool fs_exists(const std::string &path, void *user)
+{
+    FsState &fs = *static_cast<FsState *>(user);
+    if (path.empty())
+        return false;
+    struct stat st;
+    const char *why = nullptr;
+    if (stat(path.c_str(), &st) != 0)
+        why = strerror(errno);
+    else if (!S_ISREG(st.st_mode))
+        why = "not a regular file";
+    if (why) {
+        if (!fs.last_uri.empty() && !fs.missing.count(fs.last_uri))
+            fs.missing[fs.last_uri] = why;
+        return false;
+    }
+    return true;
+}
+
+bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *)
+{
+    FILE *f = fopen(path.c_str(), "rb");
+    if (!f) {
+        if (err)
+            *err = strerror(errno);
+        return false;
+    }
+    out->clear();
+    unsigned char buf[65536];
+    size_t n;
+    while ((n = fread(buf, 1, sizeof buf, f)) > 0)
+        out->insert(out->end(), buf, buf + n);
+    bool ok = !ferror(f);
+    if (!ok && err)
+        *err = strerror(errno);
+    fclose(f);
+    return ok;
+}
+
+bool fs_write(std::string *err, const std::string &, const std::vector<unsigned char> &, void *)
+{
+    if (err)
+        *err = "the importer never writes";
+    return false;
+}
+
+/* ---- images ---------------------------------------------------------------
+ * tinygltf hands an image stored in a bufferView to the decoder without
+ * checking the view's range against its buffer, so this loader checks it
+ * first, and refuses images beyond MAX_IMAGE_PIXELS from the PNG or JPEG
+ * header before stb allocates them. */
+
+struct ImageState {
+    const tinygltf::Model *model;
+    std::string limit_msg;
+};
+
+uint32_t be16(const unsigned char *p) { return uint32_t(p[0]) << 8 | p[1]; }
+uint32_t be32(const unsigned char *p) { return be16(p) << 16 | be16(p + 2); }
+
+/* Width and height from a PNG or JPEG header; false when not found. */
+bool image_header_size(const unsigned char *b, size_t n, uint32_t *w, uint32_t *h)
+{
+    if (n >= 24 && memcmp(b, "\x89PNG\r\n\x1a\n", 8) == 0 && memcmp(b + 12, "IHDR", 4) == 0) {
+        *w = be32(b + 16);
+        *h = be32(b + 20);
+        return true;
+    }
+    if (n >= 4 && b[0] == 0xff && b[1] == 0xd8) {
+        size_t at = 2;
+        while (at + 9 <= n) {
+            if (b[at] != 0xff)
+                return false;
+            unsigned m = b[at + 1];
+            if (m == 0xff) { /* fill byte */
+                at++;
+                continue;
+            }
+            if (m >= 0xc0 && m <= 0xcf && m != 0xc4 && m != 0xc8 && m != 0xcc) { /* SOFn */
+                *h = be16(b + at + 5);
+                *w = be16(b + at + 7);
+                return true;
+            }
+            at += 2 + be16(b + at + 2);
+        }
+    }
+    return false;
+}
+
+bool image_load(tinygltf::Image *image, const int index, std::string *err, std::string *warn, int req_w,
+                int req_h, const unsigned char *bytes, int size, void *user)
+{
+    ImageState &st = *static_cast<ImageState *>(user);
+    if (image->bufferView >= 0) {
+        const tinygltf::Model &m = *st.model;
+        bool ok = size_t(image->bufferView) < m.bufferViews.size();
+        if (ok) {
+            const tinygltf::BufferView &bv = m.bufferViews[size_t(image->bufferView)];
+            ok = bv.buffer >= 0 && size_t(bv.buffer) < m.buffers.size() &&
+                 bv.byteOffset <= m.buffers[size_t(bv.buffer)].data.size() &&
+                 bv.byteLength <= m.buffers[size_t(bv.buffer)].data.size() - bv.byteOffset &&
+                 bv.byteLength <= size_t(INT_MAX);
+        }
+        if (!ok) {
+            if (err)
+                *err += "image " + std::to_string(index) + ": bufferView lies outside its buffer\n";
+            return false;
+        }
+    }
+    if (size <= 0) {
+        if (err)
+            *err += "image " + std::to_string(index) + " is empty\n";
+        return false;
+    }
+    uint32_t w, h;
+    if (image_header_size(bytes, size_t(size), &w, &h) && uint64_t(w) * h > MAX_IMAGE_PIXELS) {
+        st.limit_msg = "image " + std::to_string(index) + " is " + std::to_string(w) + "x" +
+                       std::to_string(h) + ", beyond the limit of " + std::to_string(MAX_IMAGE_PIXELS) +
+                       " pixels";
+        if (err)
+            *err += st.limit_msg + "\n";
+        return false;
+    }
+    /* stb decoding, expanded to 8- or 16-bit RGBA (tinygltf's default options) */
+    return tinygltf::LoadImageData(image, index, err, warn, req_w, req_h, bytes, size, nullptr);
+}
+
+/* ---- loading the file -------------------------------------------------- */
+
+std::vector<unsigned char> read_input(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        fail(LIE_ERR_IO, "cannot open: %s", strerror(errno));
+    std::vector<unsigned char> data;
+    unsigned char buf[65536];
+    size_t n;
+    while ((n = fread(buf, 1, sizeof buf, f)) > 0) {
+        data.insert(data.end(), buf, buf + n);
+        if (data.size() > UINT32_MAX - 1) {
+            fclose(f);
+            fail(LIE_ERR_LIMIT, "file is 4 GiB or more");
+        }
+    }
+    if (ferror(f)) {
+        int e = errno;
+        fclose(f);
+        fail(LIE_ERR_IO, "cannot read: %s", strerror(e));
+    }
+    fclose(f);
+    if (data.empty())
+        fail(LIE_ERR_FORMAT, "empty file");
+    return data;
+}
+
+/* The GLB container (glTF 2.0 §4.4), checked before tinygltf sees it: its own
+ * check lets a BIN chunk run 8 bytes past the end of the data. */
+uint32_t glb_check(const std::vector<unsigned char> &d)
+{
+    auto le32 = [&](size_t at) {
+        return uint32_t(d[at]) | uint32_t(d[at + 1]) << 8 | uint32_t(d[at + 2]) << 16 | uint32_t(d[at + 3]) << 24;
+    };
+    if (d.size() < 20)
+        fail(LIE_ERR_FORMAT, "truncated GLB: %zu bytes, the header alone needs 20", d.size());
+    uint32_t version = le32(4), length = le32(8), json_len = le32(12), json_type = le32(16);
+    if (version != 2)
+        fail(LIE_ERR_UNSUPPORTED, "GLB version %u (only 2 is supported)", version);
+    if (length > d.size())
+        fail(LIE_ERR_FORMAT, "truncated GLB: header says %u bytes, file has %zu", length, d.size());
+    if (json_type != 0x4E4F534Au || json_len == 0)
+        fail(LIE_ERR_FORMAT, "GLB: first chunk is not JSON");
+    uint64_t at = 20 + uint64_t(json_len);
+    if (at > length)
+        fail(LIE_ERR_FORMAT, "truncated GLB: JSON chunk of %u bytes runs past the end", json_len);
+    if (at < length) {
+        if (at + 8 > length)
+            fail(LIE_ERR_FORMAT, "truncated GLB: incomplete chunk header after JSON");
+        uint32_t bin_len = le32(size_t(at)), bin_type = le32(size_t(at) + 4);
+        if (bin_type == 0x004E4942u && at + 8 + bin_len > length)
+            fail(LIE_ERR_FORMAT, "truncated GLB: BIN chunk of %u bytes runs past the end", bin_len);
+    }
+    return length;
+}
+
+/* A tinygltf failure as one line; nlohmann parse errors carry a position. */
+[[noreturn]] void fail_parse(const std::string &msg, const FsState &fs)
+{
+    std::string line = first_line(msg);
+    if (line.empty())
+        line = "tinygltf rejected the file";
+    const char *nf = "File not found : ";
+    if (line.compare(0, strlen(nf), nf) == 0) {
+        std::string uri = line.substr(strlen(nf));
+        auto it = fs.missing.find(uri);
+        fail(LIE_ERR_IO, "cannot open '%s': %s", uri.c_str(),
+             it != fs.missing.end() ? it->second.c_str() : "not found");
+    }
+    if (line.compare(0, 17, "File read error :") == 0)
+        fail(LIE_ERR_IO, "%s", line.c_str());
+    ImportError e{LIE_ERR_FORMAT, line, 0, 0};
+    size_t at = line.find(" at line ");
+    if (at != std::string::npos && sscanf(line.c_str() + at, " at line %d, column %d", &e.line, &e.col) != 2)
+        e.line = e.col = 0;
+    throw e;
+}
+
+/* Parse the file into `model`; `image_errors` gets why external images that
+ * tinygltf skipped (with a warning) could not be opened. */
+void load_model(tinygltf::Model &model, const char *path, const lie_scene_options &opt,
+                std::map<int, std::string> &image_errors)
+{
+    std::vector<unsigned char> data = read_input(path);
+
+    FsState fs;
+    std::string p(path);
+    size_t slash = p.rfind('/');
+    /* the folder as tinygltf will join URIs to it ("dir/" + uri, "/" + uri) */
+    std::string base = slash == std::string::npos ? std::string(".") : p.substr(0, slash == 0 ? 1 : slash);
+    fs.prefix = base.back() == '/' ? base : base + "/";
+    fs.allow_external = opt.allow_external_uris != 0;
+
+    ImageState images{&model, std::string()};
+    tinygltf::TinyGLTF loader;
+    tinygltf::FsCallbacks cb;
+    cb.FileExists = fs_exists;
+    cb.ExpandFilePath = fs_expand;
+    cb.ReadWholeFile = fs_read;
+    cb.WriteWholeFile = fs_write;
+    cb.user_data = &fs;
+    loader.SetFsCallbacks(cb);
+    loader.SetImageLoader(image_load, &images);
+
+    std::string err, warn;
+    bool ok;
+    if (data.size() >= 4 && memcmp(data.data(), "glTF", 4) == 0) {
+        uint32_t length = glb_check(data);
+        ok = loader.LoadBinaryFromMemory(&model, &err, &warn, data.data(), length, base);
+    } else {
+        ok = loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char *>(data.data()),
+                                        (unsigned)data.size(), base);
+    }
+    if (!fs.refused.empty())
+        fail(LIE_ERR_UNSUPPORTED, "URI '%s' %s", clean(fs.refused).c_str(), fs.refused_why.c_str());
+    if (!images.limit_msg.empty())
+        fail(LIE_ERR_LIMIT, "%s", images.limit_msg.c_str());
+    /* tinygltf's result decides; it also puts notes on problems it tolerated
+     * in err.  An external image it could not open is only a warning: that is
+     * an error where the image is used (texture_for). */
+    if (!ok)
+        fail_parse(err.empty() ? warn : err, fs);
+
+    for (size_t i = 0; i < model.images.size(); i++) {
+        const tinygltf::Image &im = model.images[i];
+        if (im.image.empty() && !im.uri.empty()) {
+            auto it = fs.missing.find(percent_decode(im.uri));
+            image_errors[int(i)] = "'" + clean(im.uri) + "': cannot open: " +
+                                   (it != fs.missing.end() ? it->second : std::string("not loaded"));
+        }
+    }
+}
+
+/* ---- accessors ------------------------------------------------------------
+ * An accessor is checked completely (views, buffers, ranges, sparse parts)
+ * before any element is read; reading then trusts it. */
+
+size_t component_size(int ctype)
+{
+    switch (ctype) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
+    case TINYGLTF_COMPONENT_TYPE_SHORT:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
+    default: return 0;
+    }
+}
+
+size_t type_components(int type)
+{
+    switch (type) {
+    case TINYGLTF_TYPE_SCALAR: return 1;
+    case TINYGLTF_TYPE_VEC2: return 2;
+    case TINYGLTF_TYPE_VEC3: return 3;
+    case TINYGLTF_TYPE_VEC4: return 4;
+    default: return 0;
+    }
+}
+
+struct Accessor {
+    size_t count, ncomp, csize, stride;
+    int ctype;
+    bool normalized;
+    const unsigned char *data;  /* element 0, or NULL: all zeros (no bufferView) */
+    size_t sparse_count;
+    int sparse_itype;
+    const unsigned char *sparse_idx, *sparse_val;
+};
+
+/* The bytes of a buffer view, range-checked against its buffer. */
+const unsigned char *view_bytes(const tinygltf::Model &m, int view, size_t *length, const std::string &what)
+{
+    if (view < 0 || size_t(view) >= m.bufferViews.size())
+        fail(LIE_ERR_FORMAT, "%s: bufferView %d out of range", what.c_str(), view);
+    const tinygltf::BufferView &bv = m.bufferViews[size_t(view)];
+    if (bv.buffer < 0 || size_t(bv.buffer) >= m.buffers.size())
+        fail(LIE_ERR_FORMAT, "%s: bufferView %d: buffer %d out of range", what.c_str(), view, bv.buffer);
+    const std::vector<unsigned char> &b = m.buffers[size_t(bv.buffer)].data;
+    if (bv.byteOffset > b.size() || bv.byteLength > b.size() - bv.byteOffset)
+        fail(LIE_ERR_FORMAT, "%s: bufferView %d (offset %zu, length %zu) lies outside buffer %d of %zu bytes",
+             what.c_str(), view, bv.byteOffset, bv.byteLength, bv.buffer, b.size());
+    *length = bv.byteLength;
+    return b.data() + bv.byteOffset;
+}
+
+/* Is [offset, offset + stride * (count - 1) + elem) inside [0, length)? */
+bool range_fits(size_t offset, size_t stride, size_t count, size_t elem, size_t length)
+{
+    if (count == 0)
+        return offset <= length;
+    size_t span, end;
+    if (__builtin_mul_overflow(stride, count - 1, &span) || __builtin_add_overflow(span, elem, &span) ||
+        __builtin_add_overflow(offset, span, &end))
+        return false;
+    return end <= length;
+}
+
+Accessor check_accessor(const tinygltf::Model &m, int index, const std::string &what)
+{
+    if (index < 0 || size_t(index) >= m.accessors.size())
+        fail(LIE_ERR_FORMAT, "%s: accessor %d out of range", what.c_str(), index);
+    const tinygltf::Accessor &a = m.accessors[size_t(index)];
+    std::string w = what + ": accessor " + std::to_string(index);
+    Accessor r{};
+    r.count = a.count;
+    r.ctype = a.componentType;
+    r.normalized = a.normalized;
+    r.csize = component_size(a.componentType);
+    r.ncomp = type_components(a.type);
+    if (!r.csize || !r.ncomp)
+        fail(LIE_ERR_FORMAT, "%s has an unsupported type or componentType", w.c_str());
+    size_t elem = r.csize * r.ncomp;
+    r.stride = elem;
+    if (a.bufferView >= 0) {
+        size_t length;
+        const unsigned char *base = view_bytes(m, a.bufferView, &length, w);
+        size_t bs = m.bufferViews[size_t(a.bufferView)].byteStride;
+        if (bs != 0) {
+            if (bs < elem)
+                fail(LIE_ERR_FORMAT, "%s: byteStride %zu is less than its element size %zu", w.c_str(), bs, elem);
+            r.stride = bs;
+        }
+        if (!range_fits(a.byteOffset, r.stride, r.count, elem, length))
+            fail(LIE_ERR_FORMAT, "%s: %zu elements from offset %zu run past its bufferView of %zu bytes",
+                 w.c_str(), r.count, a.byteOffset, length);
+        r.data = base + a.byteOffset;
+    } else if (a.byteOffset != 0) {
+        fail(LIE_ERR_FORMAT, "%s has a byteOffset but no bufferView", w.c_str());
+    }
+    if (a.sparse.isSparse) {
+        const auto &sp = a.sparse;
+        if (sp.count < 1 || size_t(sp.count) > r.count)
+            fail(LIE_ERR_FORMAT, "%s: sparse count %d not in [1, %zu]", w.c_str(), sp.count, r.count);
+        r.sparse_count = size_t(sp.count);
+        r.sparse_itype = sp.indices.componentType;
+        size_t isize = component_size(r.sparse_itype);
+        if (r.sparse_itype != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+            r.sparse_itype != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+            r.sparse_itype != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+            fail(LIE_ERR_FORMAT, "%s: sparse indices must be unsigned integers", w.c_str());
+        size_t ilen, vlen;
+        const unsigned char *ib = view_bytes(m, sp.indices.bufferView, &ilen, w + " sparse indices");
+        const unsigned char *vb = view_bytes(m, sp.values.bufferView, &vlen, w + " sparse values");
+        if (sp.indices.byteOffset < 0 || !range_fits(size_t(sp.indices.byteOffset), isize, r.sparse_count, isize, ilen))
+            fail(LIE_ERR_FORMAT, "%s: sparse indices run past their bufferView", w.c_str());
+        if (sp.values.byteOffset < 0 || !range_fits(size_t(sp.values.byteOffset), elem, r.sparse_count, elem, vlen))
+            fail(LIE_ERR_FORMAT, "%s: sparse values run past their bufferView", w.c_str());
+        r.sparse_idx = ib + sp.indices.byteOffset;
+        r.sparse_val = vb + sp.values.byteOffset;
+        for (size_t k = 0; k < r.sparse_count; k++) {
+            const unsigned char *p = r.sparse_idx + k * isize;
+            uint32_t i = isize == 1 ? p[0] : isize == 2 ? uint32_t(p[0]) | uint32_t(p[1]) << 8
+                                                         : uint32_t(p[0]) | uint32_t(p[1]) << 8 |
+                                                               uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
+            if (i >= r.count)
+                fail(LIE_ERR_FORMAT, "%s: sparse index %u beyond its count %zu", w.c_str(), i, r.count);
+        }
+    }
+    return r;
+}
+
+/* One component as a number (glTF is little-endian, as is every target we
+ * build for; memcpy keeps unaligned reads defined). */
+double component(const unsigned char *p, int ctype, bool normalized)
+{
+    switch (ctype) {
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: {
+        float f;
+        memcpy(&f, p, 4);
+        return f;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalized ? p[0] / 255.0 : p[0];
+    case TINYGLTF_COMPONENT_TYPE_BYTE: {
+        int8_t v;
+        memcpy(&v, p, 1);
+        return normalized ? fmax(v / 127.0, -1.0) : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+        uint16_t v;
+        memcpy(&v, p, 2);
+        return normalized ? v / 65535.0 : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_SHORT: {
+        int16_t v;
+        memcpy(&v, p, 2);
+        return normalized ? fmax(v / 32767.0, -1.0) : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
+        uint32_t v;
+        memcpy(&v, p, 4);
+        return v;
+    }
+    default: return 0.0;
+    }
+}
+
+/* Element i of the dense part or, for sparse entries, of the values. */
+template <class F> void accessor_each(const Accessor &a, F put)
+{
+    for (size_t i = 0; i < a.count; i++)
+        for (size_t c = 0; c < a.ncomp; c++)
+            put(i, c, a.data ? component(a.data + i * a.stride + c * a.csize, a.ctype, a.normalized) : 0.0);
+    size_t isize = component_size(a.sparse_itype);
+    for (size_t k = 0; k < a.sparse_count; k++) {
+        size_t i = size_t(component(a.sparse_idx + k * isize, a.sparse_itype, false));
+        for (size_t c = 0; c < a.ncomp; c++)
+            put(i, c, component(a.sparse_val + (k * a.ncomp + c) * a.csize, a.ctype, a.normalized));
+    }
+}
+
+void read_floats(const Accessor &a, float *dst, const std::string &what)
+{
+    bool finite = true;
+    accessor_each(a, [&](size_t i, size_t c, double v) {
+        dst[i * a.ncomp + c] = float(v);
+        finite = finite && std::isfinite(float(v));
+    });
+    if (!finite)
+        fail(LIE_ERR_FORMAT, "%s has a value that is not a finite number", what.c_str());
+}
+
+/* ---- meshes ---------------------------------------------------------------- */
+
+struct PrimPlan {
+    bool skip;                   /* points or lines */
+    int mode;
+    Accessor pos, nrm, uv, idx;
+    bool has_nrm, has_uv, has_idx;
+    size_t n_verts, n_idx, n_tris;
+};
+
+int attribute(const tinygltf::Primitive &p, const char *name)
+{
+    auto it = p.attributes.find(name);
+    return it == p.attributes.end() ? -1 : it->second;
+}
+
+/* Check a primitive and count its triangles; nothing is allocated yet. */
+PrimPlan plan_primitive(const tinygltf::Model &m, int mi, int pi, lie_scene *s)
+{
+    const tinygltf::Primitive &p = m.meshes[size_t(mi)].primitives[size_t(pi)];
+    std::string what = "mesh " + std::to_string(mi) + " primitive " + std::to_string(pi);
+    PrimPlan pl{};
+    if (p.material >= 0 && size_t(p.material) >= m.materials.size())
+        fail(LIE_ERR_FORMAT, "%s: material %d out of range", what.c_str(), p.material);
+    pl.mode = p.mode < 0 ? TINYGLTF_MODE_TRIANGLES : p.mode;
+    switch (pl.mode) {
+    case TINYGLTF_MODE_POINTS:
+        s->stats.points_skipped++;
+        pl.skip = true;
+        return pl;
+    case TINYGLTF_MODE_LINE:
+    case TINYGLTF_MODE_LINE_LOOP:
+    case TINYGLTF_MODE_LINE_STRIP:
+        s->stats.lines_skipped++;
+        pl.skip = true;
+        return pl;
+    case TINYGLTF_MODE_TRIANGLES:
+    case TINYGLTF_MODE_TRIANGLE_STRIP:
+    case TINYGLTF_MODE_TRIANGLE_FAN: break;
+    default: fail(LIE_ERR_FORMAT, "%s: unknown mode %d", what.c_str(), p.mode);
+    }
+    if (p.material < 0)
+        s->stats.prims_without_material++;
+
+    int ap = attribute(p, "POSITION");
+    if (ap < 0)
+        fail(LIE_ERR_FORMAT, "%s has no POSITION", what.c_str());
+    pl.pos = check_accessor(m, ap, what + " POSITION");
+    if (pl.pos.ctype != TINYGLTF_COMPONENT_TYPE_FLOAT || pl.pos.ncomp != 3)
+        fail(LIE_ERR_FORMAT, "%s: POSITION must be VEC3 FLOAT", what.c_str());
+    pl.n_verts = pl.pos.count;
+
+    int an = attribute(p, "NORMAL");
+    if ((pl.has_nrm = an >= 0)) {
+        pl.nrm = check_accessor(m, an, what + " NORMAL");
+        if (pl.nrm.ctype != TINYGLTF_COMPONENT_TYPE_FLOAT || pl.nrm.ncomp != 3)
+            fail(LIE_ERR_FORMAT, "%s: NORMAL must be VEC3 FLOAT", what.c_str());
+        if (pl.nrm.count != pl.n_verts)
+            fail(LIE_ERR_FORMAT, "%s: NORMAL has %zu elements, POSITION %zu", what.c_str(), pl.nrm.count,
+                 pl.n_verts);
+    }
+    int at = attribute(p, "TEXCOORD_0");
+    if ((pl.has_uv = at >= 0)) {
+        pl.uv = check_accessor(m, at, what + " TEXCOORD_0");
+        bool ok = pl.uv.ncomp == 2 &&
+                  (pl.uv.ctype == TINYGLTF_COMPONENT_TYPE_FLOAT ||
+                   (pl.uv.normalized && (pl.uv.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                                         pl.uv.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT)));
+        if (!ok)
+            fail(LIE_ERR_FORMAT, "%s: TEXCOORD_0 must be VEC2 FLOAT or normalized UNSIGNED_BYTE/SHORT",
+                 what.c_str());
+        if (pl.uv.count != pl.n_verts)
+            fail(LIE_ERR_FORMAT, "%s: TEXCOORD_0 has %zu elements, POSITION %zu", what.c_str(), pl.uv.count,
+                 pl.n_verts);
+    }
+    if ((pl.has_idx = p.indices >= 0)) {
+        pl.idx = check_accessor(m, p.indices, what + " indices");
+        bool ok = pl.idx.ncomp == 1 && (pl.idx.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                                        pl.idx.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ||
+                                        pl.idx.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT);
+        if (!ok)
+            fail(LIE_ERR_FORMAT, "%s: indices must be SCALAR UNSIGNED_BYTE/SHORT/INT", what.c_str());
+        pl.n_idx = pl.idx.count;
+    } else {
+        pl.n_idx = pl.n_verts;
+    }
+    if (pl.mode == TINYGLTF_MODE_TRIANGLES) {
+        if (pl.n_idx % 3 != 0)
+            fail(LIE_ERR_FORMAT, "%s: %zu vertices do not make whole triangles", what.c_str(), pl.n_idx);
+        pl.n_tris = pl.n_idx / 3;
+    } else {
+        pl.n_tris = pl.n_idx >= 3 ? pl.n_idx - 2 : 0;
+    }
+    return pl;
+}
+
+/* Read a planned primitive into `out` (attached to the scene already). */
+void read_primitive(const PrimPlan &pl, int mi, int pi, lie_primitive *out)
+{
+    std::string what = "mesh " + std::to_string(mi) + " primitive " + std::to_string(pi);
+    out->n_verts = uint32_t(pl.n_verts);
+    out->pos = alloc_array<float>(mul_size(pl.n_verts, 3, what.c_str()));
+    read_floats(pl.pos, out->pos, what + " POSITION");
+    if (pl.has_nrm) {
+        out->nrm = alloc_array<float>(pl.n_verts * 3);
+        read_floats(pl.nrm, out->nrm, what + " NORMAL");
+    }
+    if (pl.has_uv) {
+        out->uv = alloc_array<float>(pl.n_verts * 2);
+        read_floats(pl.uv, out->uv, what + " TEXCOORD_0");
+    }
+
+    std::vector<uint32_t> v(pl.n_idx);
+    if (pl.has_idx) {
+        accessor_each(pl.idx, [&](size_t i, size_t, double x) { v[i] = uint32_t(x); });
+        for (uint32_t i : v)
+            if (i >= pl.n_verts)
+                fail(LIE_ERR_FORMAT, "%s: index %u beyond vertex count %zu", what.c_str(), i, pl.n_verts);
+    } else {
+        for (size_t i = 0; i < pl.n_idx; i++)
+            v[i] = uint32_t(i);
+    }
+
+    out->idx = alloc_array<uint32_t>(mul_size(pl.n_tris, 3, what.c_str()));
+    uint32_t *t = out->idx;
+    for (size_t k = 0; k < pl.n_tris; k++, t += 3) {
+        /* glTF 2.0 §3.7.2.1: strip p_k = {v_k, v_k+1+k%2, v_k+2-k%2} keeps
+         * every triangle's winding; fan p_k = {v_k+1, v_k+2, v_0} */
+        if (pl.mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+            t[0] = v[k];
+            t[1] = v[k + 1 + k % 2];
+            t[2] = v[k + 2 - k % 2];
+        } else if (pl.mode == TINYGLTF_MODE_TRIANGLE_FAN) {
+            t[0] = v[k + 1];
+            t[1] = v[k + 2];
+            t[2] = v[0];
+        } else {
+            t[0] = v[3 * k];
+            t[1] = v[3 * k + 1];
+            t[2] = v[3 * k + 2];
+        }
+    }
+    out->n_tris = uint32_t(pl.n_tris);
+}
+
+/* ---- textures and materials -------------------------------------------- */
+
+struct Import {
+    const tinygltf::Model &m;
+    lie_scene *s;
+    const std::map<int, std::string> &image_errors; /* from load_model */
+    std::map<int, int> texture_of; /* glTF texture * 2 + srgb -> s->textures index */
+};
+
+lie_wrap wrap_mode(int mode, const std::string &what)
+{
+    switch (mode) {
+    case TINYGLTF_TEXTURE_WRAP_REPEAT: return LIE_WRAP_REPEAT;
+    case TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE: return LIE_WRAP_CLAMP;
+    case TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT: return LIE_WRAP_MIRROR;
+    default: fail(LIE_ERR_FORMAT, "%s: unknown wrap mode %d", what.c_str(), mode);
+    }
+}
+
+double srgb_to_linear(double c) { return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4); }
+
+/* The value of code i of an image with `levels` code values; the exporter
+ * inverts exactly this. */
+float code_value(size_t i, size_t levels, bool srgb)
+{
+    double c = double(i) / double(levels - 1);
+    return float(srgb ? srgb_to_linear(c) : c);
+}
+
+/* The lie_texture for glTF texture `ti` in a colour space, made on first use. */
+int texture_for(Import &im, int ti, bool srgb, const std::string &what)
+{
+    const tinygltf::Model &m = im.m;
+    if (ti < 0 || size_t(ti) >= m.textures.size())
+        fail(LIE_ERR_FORMAT, "%s: texture %d out of range", what.c_str(), ti);
+    auto found = im.texture_of.find(ti * 2 + srgb);
+    if (found != im.texture_of.end())
+        return found->second;
+
+    const tinygltf::Texture &tex = m.textures[size_t(ti)];
+    std::string tw = "texture " + std::to_string(ti);
+    if (tex.source < 0)
+        fail(LIE_ERR_UNSUPPORTED, "%s has no image source (only PNG/JPEG sources are supported)", tw.c_str());
+    if (size_t(tex.source) >= m.images.size())
+        fail(LIE_ERR_FORMAT, "%s: image %d out of range", tw.c_str(), tex.source);
+    const tinygltf::Image &img = m.images[size_t(tex.source)];
+    std::string iw = "image " + std::to_string(tex.source);
+    if (img.image.empty() || img.width <= 0 || img.height <= 0) {
+        auto e = im.image_errors.find(tex.source);
+        if (e != im.image_errors.end())
+            fail(LIE_ERR_IO, "%s %s", iw.c_str(), e->second.c_str());
+        fail(LIE_ERR_FORMAT, "%s has no decoded pixels", iw.c_str());
+    }
+    size_t bytes = img.bits == 8 ? 1 : img.bits == 16 ? 2 : 0;
+    if (!bytes || img.component < 1 || img.component > 4)
+        fail(LIE_ERR_UNSUPPORTED, "%s: %d-bit, %d-channel images are not supported", iw.c_str(), img.bits,
+             img.component);
+    size_t w = size_t(img.width), h = size_t(img.height), nc = size_t(img.component);
+    if (uint64_t(w) * h > MAX_IMAGE_PIXELS)
+        fail(LIE_ERR_LIMIT, "%s is %zux%zu, beyond the limit of %llu pixels", iw.c_str(), w, h,
+             (unsigned long long)MAX_IMAGE_PIXELS);
+    if (img.image.size() != w * h * nc * bytes)
+        fail(LIE_ERR_FORMAT, "%s: decoded size does not match %zux%zu", iw.c_str(), w, h);
+
+    lie_wrap ws = LIE_WRAP_REPEAT, wt = LIE_WRAP_REPEAT;
+    if (tex.sampler >= 0) {
+        if (size_t(tex.sampler) >= m.samplers.size())
+            fail(LIE_ERR_FORMAT, "%s: sampler %d out of range", tw.c_str(), tex.sampler);
+        const tinygltf::Sampler &sm = m.samplers[size_t(tex.sampler)];
+        std::string sw = "sampler " + std::to_string(tex.sampler);
+        ws = wrap_mode(sm.wrapS, sw);
+        wt = wrap_mode(sm.wrapT, sw);
+    }
+
+    /* colour channels through the sRGB transfer function when asked, alpha
+     * always linear; a table over every code value */
+    size_t levels = bytes == 1 ? 256 : 65536;
+    std::vector<float> lin(levels), enc(levels);
+    for (size_t i = 0; i < levels; i++) {
+        lin[i] = code_value(i, levels, false);
+        enc[i] = code_value(i, levels, srgb);
+    }
+    float *rgba = alloc_array<float>(w * h * 4); /* w * h <= MAX_IMAGE_PIXELS */
+    lie_texture &t = im.s->textures[im.s->n_textures];
+    t.width = int(w);
+    t.height = int(h);
+    t.rgba = rgba;
+    t.wrap_s = ws;
+    t.wrap_t = wt;
+    int index = im.s->n_textures++;
+    im.texture_of[ti * 2 + srgb] = index;
+
+    const unsigned char *src = img.image.data();
+    for (size_t i = 0; i < w * h; i++, src += nc * bytes) {
+        size_t code[4];
+        for (size_t c = 0; c < nc; c++)
+            code[c] = bytes == 1 ? src[c] : (size_t(src[2 * c]) | size_t(src[2 * c + 1]) << 8);
+        float *d = rgba + 4 * i;
+        switch (nc) { /* grey, grey + alpha, RGB, RGBA */
+        case 1: d[0] = d[1] = d[2] = enc[code[0]]; d[3] = 1.0f; break;
+        case 2: d[0] = d[1] = d[2] = enc[code[0]]; d[3] = lin[code[1]]; break;
+        case 3: d[0] = enc[code[0]]; d[1] = enc[code[1]]; d[2] = enc[code[2]]; d[3] = 1.0f; break;
+        default: d[0] = enc[code[0]]; d[1] = enc[code[1]]; d[2] = enc[code[2]]; d[3] = lin[code[3]]; break;
+        }
+    }
+    return index;
+}
+
+float unit_factor(double v, const std::string &what)
+{
+    if (!std::isfinite(v))
+        fail(LIE_ERR_FORMAT, "%s is not a finite number", what.c_str());
+    return float(fmin(fmax(v, 0.0), 1.0)); /* spec range [0, 1]; exporters overshoot by rounding */
+}
+
+/* A textureInfo's texture; texCoord other than 0 still samples TEXCOORD_0,
+ * the only set the importer reads. */
+int texture_info(Import &im, const tinygltf::TextureInfo &ti, bool srgb, const std::string &what)
+{
+    return ti.index < 0 ? -1 : texture_for(im, ti.index, srgb, what);
+}
+
+void import_materials(Import &im)
+{
+    const tinygltf::Model &m = im.m;
+    lie_scene *s = im.s;
+    if (m.textures.size() > size_t(INT_MAX / 2) || m.materials.size() > size_t(INT_MAX))
+        fail(LIE_ERR_LIMIT, "too many materials or textures");
+    s->textures = alloc_array<lie_texture>(m.textures.size() * 2); /* at most one per colour space */
+    s->materials = alloc_array<lie_material>(m.materials.size());
+    s->n_materials = int(m.materials.size());
+    for (size_t i = 0; i < m.materials.size(); i++) {
+        const tinygltf::Material &g = m.materials[i];
+        const tinygltf::PbrMetallicRoughness &pbr = g.pbrMetallicRoughness;
+        lie_material &mt = s->materials[i];
+        std::string w = "material " + std::to_string(i);
+        mt.name = dup_name(g.name);
+        if (pbr.baseColorFactor.size() != 4)
+            fail(LIE_ERR_FORMAT, "%s: baseColorFactor needs 4 numbers", w.c_str());
+        for (int c = 0; c < 4; c++)
+            mt.base_color[c] = unit_factor(pbr.baseColorFactor[size_t(c)], w + " baseColorFactor");
+        mt.base_color_tex = texture_info(im, pbr.baseColorTexture, true, w + " baseColorTexture");
+        mt.metallic = unit_factor(pbr.metallicFactor, w + " metallicFactor");
+        mt.roughness = unit_factor(pbr.roughnessFactor, w + " roughnessFactor");
+        mt.mr_tex = texture_info(im, pbr.metallicRoughnessTexture, false, w + " metallicRoughnessTexture");
+
+        double strength = 1.0;
+        auto ext = g.extensions.find("KHR_materials_emissive_strength");
+        if (ext != g.extensions.end() && ext->second.IsObject() && ext->second.Has("emissiveStrength")) {
+            const tinygltf::Value &v = ext->second.Get("emissiveStrength");
+            if (!v.IsNumber() || !std::isfinite(v.GetNumberAsDouble()) || v.GetNumberAsDouble() < 0.0)
+                fail(LIE_ERR_FORMAT, "%s: emissiveStrength must be a number >= 0", w.c_str());
+            strength = v.GetNumberAsDouble();
+        }
+        if (!g.emissiveFactor.empty() && g.emissiveFactor.size() != 3)
+            fail(LIE_ERR_FORMAT, "%s: emissiveFactor needs 3 numbers", w.c_str());
+        for (size_t c = 0; c < 3; c++) {
+            double e = g.emissiveFactor.empty() ? 0.0 : g.emissiveFactor[c];
+            if (!std::isfinite(e) || e < 0.0)
+                fail(LIE_ERR_FORMAT, "%s: emissiveFactor must be numbers >= 0", w.c_str());
+            mt.emissive[c] = float(e * strength);
+        }
+        mt.emissive_tex = texture_info(im, g.emissiveTexture, true, w + " emissiveTexture");
+        mt.double_sided = g.doubleSided ? 1 : 0;
+    }
+}
+
+/* ---- nodes and scenes ------------------------------------------------------ */
+
+lie_mat4 node_local(const tinygltf::Node &n, const std::string &w)
+{
+    auto finite = [&](const std::vector<double> &v, const char *what) {
+        for (double x : v)
+            if (!std::isfinite(x))
+                fail(LIE_ERR_FORMAT, "%s: %s has a value that is not a finite number", w.c_str(), what);
+    };
+    if (!n.matrix.empty()) {
+        if (n.matrix.size() != 16)
+            fail(LIE_ERR_FORMAT, "%s: matrix needs 16 numbers", w.c_str());
+        finite(n.matrix, "matrix");
+        lie_mat4 r;
+        for (int k = 0; k < 16; k++)
+            r.m[k] = n.matrix[size_t(k)]; /* both column-major */
+        return r;
+    }
+    double t[3] = {0, 0, 0}, q[4] = {0, 0, 0, 1}, sc[3] = {1, 1, 1};
+    if (!n.translation.empty()) {
+        if (n.translation.size() != 3)
+            fail(LIE_ERR_FORMAT, "%s: translation needs 3 numbers", w.c_str());
+        finite(n.translation, "translation");
+        for (int k = 0; k < 3; k++)
+            t[k] = n.translation[size_t(k)];
+    }
+    if (!n.rotation.empty()) {
+        if (n.rotation.size() != 4)
+            fail(LIE_ERR_FORMAT, "%s: rotation needs 4 numbers", w.c_str());
+        finite(n.rotation, "rotation");
+        double len = sqrt(n.rotation[0] * n.rotation[0] + n.rotation[1] * n.rotation[1] +
+                          n.rotation[2] * n.rotation[2] + n.rotation[3] * n.rotation[3]);
+        if (!(len > 0.0))
+            fail(LIE_ERR_FORMAT, "%s: rotation is not a unit quaternion", w.c_str());
+        for (int k = 0; k < 4; k++) /* exporters round; the spec asks for unit length */
+            q[k] = n.rotation[size_t(k)] / len;
+    }
+    if (!n.scale.empty()) {
+        if (n.scale.size() != 3)
+            fail(LIE_ERR_FORMAT, "%s: scale needs 3 numbers", w.c_str());
+        finite(n.scale, "scale");
+        for (int k = 0; k < 3; k++)
+            sc[k] = n.scale[size_t(k)];
+    }
+    return lie_mat4_from_trs(t, q, sc);
+}
+
+int node_light(const tinygltf::Model &m, const tinygltf::Node &n, const std::string &w)
+{
+    auto ext = n.extensions.find("KHR_lights_punctual");
+    if (ext == n.extensions.end())
+        return -1;
+    const tinygltf::Value &v = ext->second;
+    if (!v.IsObject() || !v.Has("light") || !v.Get("light").IsInt())
+        fail(LIE_ERR_FORMAT, "%s: KHR_lights_punctual needs an integer light", w.c_str());
+    int li = v.Get("light").GetNumberAsInt();
+    if (li < 0 || size_t(li) >= m.lights.size())
+        fail(LIE_ERR_FORMAT, "%s: light %d out of range", w.c_str(), li);
+    return li;
+}
+
+void import_nodes(const tinygltf::Model &m, lie_scene *s)
+{
+    size_t nn = m.nodes.size();
+    if (nn > size_t(INT_MAX))
+        fail(LIE_ERR_LIMIT, "too many nodes");
+    s->nodes = alloc_array<lie_node>(nn);
+    s->n_nodes = int(nn);
+    for (size_t i = 0; i < nn; i++) { /* parents first, so partial nodes stay consistent */
+        s->nodes[i].parent = -1;
+        s->nodes[i].mesh = s->nodes[i].camera = s->nodes[i].light = -1;
+        s->nodes[i].local = lie_mat4_identity();
+    }
+    for (size_t i = 0; i < nn; i++) {
+        const tinygltf::Node &g = m.nodes[i];
+        lie_node &n = s->nodes[i];
+        std::string w = "node " + std::to_string(i);
+        n.name = dup_name(g.name);
+        n.local = node_local(g, w);
+        if (g.mesh >= 0 && size_t(g.mesh) >= m.meshes.size())
+            fail(LIE_ERR_FORMAT, "%s: mesh %d out of range", w.c_str(), g.mesh);
+        if (g.camera >= 0 && size_t(g.camera) >= m.cameras.size())
+            fail(LIE_ERR_FORMAT, "%s: camera %d out of range", w.c_str(), g.camera);
+        n.mesh = g.mesh < 0 ? -1 : g.mesh;
+        n.camera = g.camera < 0 ? -1 : g.camera;
+        n.light = node_light(m, g, w);
+        n.children = alloc_array<int>(g.children.size());
+        n.n_children = int(g.children.size());
+        for (size_t k = 0; k < g.children.size(); k++) {
+            int c = g.children[k];
+            if (c < 0 || size_t(c) >= nn)
+                fail(LIE_ERR_FORMAT, "%s: child %d out of range", w.c_str(), c);
+            if (size_t(c) == i)
+                fail(LIE_ERR_FORMAT, "%s is its own child", w.c_str());
+            if (s->nodes[c].parent >= 0)
+                fail(LIE_ERR_FORMAT, "node %d has two parents (nodes %d and %zu)", c, s->nodes[c].parent, i);
+            s->nodes[c].parent = int(i);
+            n.children[k] = c;
+        }
+    }
+    /* With one parent each, a node not reachable from a parentless node sits
+     * on (or under) a cycle. */
+    std::vector<char> seen(nn, 0);
+    std::vector<int> stack;
+    for (size_t i = 0; i < nn; i++)
+        if (s->nodes[i].parent < 0)
+            stack.push_back(int(i));
+    while (!stack.empty()) {
+        int i = stack.back();
+        stack.pop_back();
+        seen[size_t(i)] = 1;
+        for (int k = 0; k < s->nodes[i].n_children; k++)
+            stack.push_back(s->nodes[i].children[k]);
+    }
+    for (size_t i = 0; i < nn; i++)
+        if (!seen[i])
+            fail(LIE_ERR_FORMAT, "node %zu is part of a cycle of children", i);
+}
+
+void import_roots(const tinygltf::Model &m, lie_scene *s)
+{
+    std::vector<int> roots;
+    int scene = m.defaultScene >= 0 ? m.defaultScene : (m.scenes.empty() ? -1 : 0);
+    if (scene >= 0) {
+        if (size_t(scene) >= m.scenes.size())
+            fail(LIE_ERR_FORMAT, "default scene %d out of range", scene);
+        std::vector<char> used(m.nodes.size(), 0);
+        for (int r : m.scenes[size_t(scene)].nodes) {
+            if (r < 0 || size_t(r) >= m.nodes.size())
+                fail(LIE_ERR_FORMAT, "scene %d: node %d out of range", scene, r);
+            if (s->nodes[r].parent >= 0)
+                fail(LIE_ERR_FORMAT, "scene %d: node %d is not a root (its parent is node %d)", scene, r,
+                     s->nodes[r].parent);
+            if (used[size_t(r)]++)
+                fail(LIE_ERR_FORMAT, "scene %d lists node %d twice", scene, r);
+            roots.push_back(r);
+        }
+    } else {
+        for (int i = 0; i < s->n_nodes; i++)
+            if (s->nodes[i].parent < 0)
+                roots.push_back(i);
+    }
+    s->roots = alloc_array<int>(roots.size());
+    s->n_roots = int(roots.size());
+    if (!roots.empty())
+        memcpy(s->roots, roots.data(), roots.size() * sizeof(int));
+}
+
+/* ---- cameras and lights -------------------------------------------------- */
+
+void import_cameras(const tinygltf::Model &m, lie_scene *s)
+{
+    s->camera_defs = alloc_array<lie_camera_def>(m.cameras.size());
+    s->n_camera_defs = int(m.cameras.size());
+    for (size_t i = 0; i < m.cameras.size(); i++) {
+        const tinygltf::Camera &g = m.cameras[i];
+        lie_camera_def &c = s->camera_defs[i];
+        c.name = dup_name(g.name);
+        if (g.type == "perspective") {
+            const tinygltf::PerspectiveCamera &p = g.perspective;
+            if (!(p.yfov > 0.0 && p.yfov < M_PI) || !(p.aspectRatio >= 0.0) || !std::isfinite(p.aspectRatio) ||
+                !(p.znear >= 0.0) || !std::isfinite(p.znear))
+                fail(LIE_ERR_FORMAT, "camera %zu: yfov must be in (0, pi), aspectRatio and znear >= 0", i);
+            c.yfov = float(p.yfov);
+            c.aspect = float(p.aspectRatio);
+            c.znear = float(p.znear);
+        } else if (g.type == "orthographic") {
+            /* kept so camera indices stay the file's; yfov 0 marks it unusable */
+            c.yfov = 0.0f;
+            c.aspect = 0.0f;
+            c.znear = std::isfinite(g.orthographic.znear) ? float(g.orthographic.znear) : 0.0f;
+        } else {
+            fail(LIE_ERR_FORMAT, "camera %zu: unknown type '%s'", i, clean(g.type).c_str());
+        }
+    }
+}
+
+void import_lights(const tinygltf::Model &m, lie_scene *s)
+{
+    s->light_defs = alloc_array<lie_light_def>(m.lights.size());
+    s->n_light_defs = int(m.lights.size());
+    for (size_t i = 0; i < m.lights.size(); i++) {
+        const tinygltf::Light &g = m.lights[i];
+        lie_light_def &l = s->light_defs[i];
+        std::string w = "light " + std::to_string(i);
+        l.name = dup_name(g.name);
+        if (g.type == "point")
+            l.type = LIE_LIGHT_POINT;
+        else if (g.type == "spot")
+            l.type = LIE_LIGHT_SPOT;
+        else if (g.type == "directional")
+            l.type = LIE_LIGHT_DIRECTIONAL;
+        else
+            fail(LIE_ERR_FORMAT, "%s: unknown type '%s'", w.c_str(), clean(g.type).c_str());
+        if (!g.color.empty() && g.color.size() != 3)
+            fail(LIE_ERR_FORMAT, "%s: color needs 3 numbers", w.c_str());
+        for (size_t c = 0; c < 3; c++) {
+            double v = g.color.empty() ? 1.0 : g.color[c];
+            if (!std::isfinite(v) || v < 0.0)
+                fail(LIE_ERR_FORMAT, "%s: color must be numbers >= 0", w.c_str());
+            l.color[c] = float(v);
+        }
+        if (!std::isfinite(g.intensity) || g.intensity < 0.0)
+            fail(LIE_ERR_FORMAT, "%s: intensity must be a number >= 0", w.c_str());
+        if (!std::isfinite(g.range) || g.range < 0.0)
+            fail(LIE_ERR_FORMAT, "%s: range must be a number >= 0", w.c_str());
+        l.intensity = float(g.intensity);
+        l.range = float(g.range);
+        l.inner_cone = 0.0f;
+        l.outer_cone = float(M_PI / 4.0);
+        if (l.type == LIE_LIGHT_SPOT) {
+            double in = g.spot.innerConeAngle, out = g.spot.outerConeAngle;
+            if (!(in >= 0.0 && in < out && out <= M_PI / 2.0 + 1e-6))
+                fail(LIE_ERR_FORMAT, "%s: spot cones need 0 <= inner < outer <= pi/2", w.c_str());
+            l.inner_cone = float(in);
+            l.outer_cone = float(fmin(out, M_PI / 2.0));
+        }
+    }
+}
+
+/* ---- the whole document ----------------------------------------------------- */
+
+void import_document(const tinygltf::Model &m, lie_scene *s, const lie_scene_options &opt)
+{
+    if (m.asset.version.compare(0, 2, "2.") != 0 && m.asset.version != "2")
+        fail(LIE_ERR_UNSUPPORTED, "glTF version '%s' (only 2.x is supported)", clean(m.asset.version).c_str());
+    for (const std::string &e : m.extensionsRequired) {
+        bool ok = false;
+        for (const char *sup : SUPPORTED_REQUIRED)
+            ok = ok || e == sup;
+        if (!ok)
+            fail(LIE_ERR_UNSUPPORTED, "requires extension %s", clean(e).c_str());
+    }
+    if (m.meshes.size() > size_t(INT_MAX) || m.cameras.size() > size_t(INT_MAX) ||
+        m.lights.size() > size_t(INT_MAX))
+        fail(LIE_ERR_LIMIT, "too many meshes, cameras or lights");
+
+    uint64_t limit = opt.max_triangles ? opt.max_triangles : LIE_SCENE_MAX_TRIANGLES_DEFAULT;
+    if (limit > UINT32_MAX) /* triangle and vertex indices are 32-bit */
+        limit = UINT32_MAX;
+
+    /* check every primitive and count before allocating geometry */
+    std::vector<std::vector<PrimPlan>> plans(m.meshes.size());
+    std::vector<uint64_t> mesh_tris(m.meshes.size(), 0);
+    uint64_t verts = 0, tris = 0;
+    for (size_t mi = 0; mi < m.meshes.size(); mi++) {
+        const tinygltf::Mesh &g = m.meshes[mi];
+        if (g.primitives.size() > size_t(INT_MAX))
+            fail(LIE_ERR_LIMIT, "mesh %zu: too many primitives", mi);
+        for (size_t pi = 0; pi < g.primitives.size(); pi++) {
+            plans[mi].push_back(plan_primitive(m, int(mi), int(pi), s));
+            const PrimPlan &pl = plans[mi].back();
+            if (pl.n_verts > limit || pl.n_tris > limit)
+                fail(LIE_ERR_LIMIT, "mesh %zu primitive %zu: %zu vertices, %zu triangles, beyond the limit of %llu",
+                     mi, pi, pl.n_verts, pl.n_tris, (unsigned long long)limit);
+            verts += pl.n_verts;
+            tris += pl.n_tris;
+            mesh_tris[mi] += pl.n_tris;
+        }
+    }
+    if (verts > limit || tris > limit)
+        fail(LIE_ERR_LIMIT, "%llu vertices and %llu triangles, beyond the limit of %llu",
+             (unsigned long long)verts, (unsigned long long)tris, (unsigned long long)limit);
+
+    import_nodes(m, s);
+    import_roots(m, s);
+    /* Instancing multiplies triangles: count what flatten will make.  The
+     * nodes form a forest (checked above), so each is reached at most once. */
+    uint64_t world_tris = 0;
+    std::vector<int> stack(s->roots, s->roots + s->n_roots);
+    while (!stack.empty()) {
+        const lie_node &n = s->nodes[stack.back()];
+        stack.pop_back();
+        if (n.mesh >= 0)
+            world_tris += mesh_tris[size_t(n.mesh)];
+        if (world_tris > limit)
+            fail(LIE_ERR_LIMIT, "instancing makes more than %llu triangles", (unsigned long long)limit);
+        stack.insert(stack.end(), n.children, n.children + n.n_children);
+    }
+
+    s->meshes = alloc_array<lie_mesh>(m.meshes.size());
+    s->n_meshes = int(m.meshes.size());
+    for (size_t mi = 0; mi < m.meshes.size(); mi++) {
+        lie_mesh &mesh = s->meshes[mi];
+        mesh.name = dup_name(m.meshes[mi].name);
+        mesh.prims = alloc_array<lie_primitive>(plans[mi].size());
+        mesh.n_prims = int(plans[mi].size());
+        for (size_t pi = 0; pi < plans[mi].size(); pi++) {
+            const PrimPlan &pl = plans[mi][pi];
+            lie_primitive &p = mesh.prims[pi];
+            int mat = m.meshes[mi].primitives[pi].material;
+            p.material = mat < 0 ? -1 : mat;
+            if (!pl.skip) /* points and lines stay as empty primitives: indices keep the file's */
+                read_primitive(pl, int(mi), int(pi), &p);
+        }
+    }
+}
+
+} // namespace
+
+extern "C" lie_status lie_gltf_import(lie_scene *s, const char *path, const lie_scene_options *opt,
+                                      lie_error *err)
+{
+    if (!s || !path)
+        return lie_error_set(err, LIE_ERR_ARG, path, "lie_gltf_import: NULL scene or path");
+    if (s->nodes || s->meshes || s->materials || s->textures || s->camera_defs || s->light_defs || s->roots)
+        return lie_error_set(err, LIE_ERR_ARG, path, "lie_gltf_import: the scene's document is not empty");
+    lie_scene_options o = opt ? *opt : lie_scene_options_default();
+    try {
+        tinygltf::Model model;
+        std::map<int, std::string> image_errors;
+        load_model(model, path, o, image_errors);
+        s->stats.points_skipped = s->stats.lines_skipped = s->stats.prims_without_material = 0;
+        import_document(model, s, o);
+        Import im{model, s, image_errors, {}};
+        import_materials(im);
+        import_cameras(model, s);
+        import_lights(model, s);
+        return LIE_OK;
+    } catch (const ImportError &e) {
+        if (e.line > 0)
+            return lie_error_set_at(err, e.status, path, e.line, e.col, "%s", e.msg.c_str());
+        return lie_error_set(err, e.status, path, "%s", e.msg.c_str());
+    } catch (const std::bad_alloc &) {
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    } catch (const std::exception &e) {
+        return lie_error_set(err, LIE_ERR_FORMAT, path, "%s", first_line(e.what()).c_str());
+    } catch (...) {
+        return lie_error_set(err, LIE_ERR_FORMAT, path, "unexpected error while importing");
+    }
+}
+
+/* ==== the exporter ============================================================
+ * lie_gltf_export builds a tinygltf::Model from the document, lets tinygltf
+ * serialise it, and adds the one external buffer itself (tinygltf's stream
+ * writer embeds buffers as data URIs).  Everything the world hash covers
+ * travels exactly: vertex data as the same floats; matrices as the same
+ * doubles (nlohmann prints a double so that it reads back bit for bit);
+ * float fields as the shortest decimal the importer turns back into the
+ * same float; texture pixels as the code values they were decoded from. */
+
+namespace {
+
+struct Png {
+    std::string path; /* where it goes */
+    int width, height, bits, channels;
+    std::vector<uint8_t> b8;
+    std::vector<uint16_t> b16;
+};
+
+/* The importer's code values (code_value) for 8 and 16 bits, linear and sRGB. */
+struct CodeTables {
+    std::vector<float> t[2][2]; /* [16-bit][srgb] */
+    const std::vector<float> &get(bool sixteen, bool srgb)
+    {
+        std::vector<float> &v = t[sixteen][srgb];
+        if (v.empty()) {
+            size_t levels = sixteen ? 65536 : 256;
+            v.resize(levels);
+            for (size_t i = 0; i < levels; i++)
+                v[i] = code_value(i, levels, srgb);
+        }
+        return v;
+    }
+};
+
+/* The code whose value is nearest to v (tables rise strictly); *exact when
+ * it is v itself. */
+size_t nearest_code(const std::vector<float> &t, float v, bool *exact)
+{
+    size_t i = size_t(std::lower_bound(t.begin(), t.end(), v) - t.begin());
+    if (i == t.size())
+        i = t.size() - 1;
+    else if (i > 0 && v - t[i - 1] <= t[i] - v)
+        i--;
+    *exact = t[i] == v;
+    return i;
+}
+
+/* Texture t as PNG codes for a slot decoded in `srgb`: 8-bit when every
+ * value is an 8-bit code's value (so the importer gives back the same
+ * floats), else 16-bit, the nearest codes.  Colour through the table of the
+ * colour space, alpha always linear; RGB when alpha is 1 everywhere. */
+void encode_texture(const lie_texture &t, bool srgb, CodeTables &tables, Png &out)
+{
+    size_t n = size_t(t.width) * size_t(t.height);
+    out.width = t.width;
+    out.height = t.height;
+    bool opaque = true;
+    for (size_t i = 0; i < n; i++)
+        opaque = opaque && t.rgba[4 * i + 3] == 1.0f;
+    out.channels = opaque ? 3 : 4;
+    size_t nc = size_t(out.channels);
+    for (int sixteen = 0; sixteen < 2; sixteen++) {
+        const std::vector<float> &col = tables.get(sixteen, srgb), &alpha = tables.get(sixteen, false);
+        std::vector<uint16_t> codes(n * nc);
+        bool all_exact = true;
+        for (size_t i = 0; i < n; i++)
+            for (size_t c = 0; c < nc; c++) {
+                bool exact;
+                codes[i * nc + c] = uint16_t(nearest_code(c < 3 ? col : alpha, t.rgba[4 * i + c], &exact));
+                all_exact = all_exact && exact;
+            }
+        if (!sixteen && !all_exact)
+            continue;
+        out.bits = sixteen ? 16 : 8;
+        if (sixteen)
+            out.b16.swap(codes);
+        else
+            out.b8.assign(codes.begin(), codes.end());
+        return;
+    }
+}
+
+/* A file name as a URI path segment (RFC 3986 unreserved characters kept). */
+std::string uri_escape(const std::string &name)
+{
+    static const char hex[] = "0123456789ABCDEF";
+    std::string r;
+    for (unsigned char c : name) {
+        if (isalnum(c) || c == '-' || c == '.' || c == '_' || c == '~') {
+            r += char(c);
+        } else {
+            r += '%';
+            r += hex[c >> 4];
+            r += hex[c & 15];
+        }
+    }
+    return r;
+}
+
+/* The double with the fewest significant decimal digits near `exact` that
+ * `ok` accepts, else `exact`: JSON stays readable (0.1, not
+ * 0.10000000149011612) and reads back to what the importer must compute. */
+template <class F> double shortest(double exact, F ok)
+{
+    for (int digits = 1; digits <= 17; digits++) {
+        char buf[64];
+        std::to_chars_result r = std::to_chars(buf, buf + sizeof buf, exact, std::chars_format::general, digits);
+        double d;
+        if (r.ec == std::errc() && std::from_chars(buf, r.ptr, d).ec == std::errc() && ok(d))
+            return d;
+    }
+    return exact;
+}
+
+/* A float field: the importer's float() of the value is f again. */
+double short_float(float f)
+{
+    return shortest(double(f), [f](double d) { return float(d) == f; });
+}
+
+int gl_wrap(lie_wrap w)
+{
+    switch (w) {
+    case LIE_WRAP_CLAMP: return TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE;
+    case LIE_WRAP_MIRROR: return TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT;
+    default: return TINYGLTF_TEXTURE_WRAP_REPEAT;
+    }
+}
+
+struct Export {
+    const lie_scene &s;
+    std::string dir, stem; /* "DIR/" (or ""), NAME */
+    tinygltf::Model m;
+    std::vector<unsigned char> bin;
+    std::vector<Png> pngs;
+};
+
+/* Append bytes as a new bufferView (4-byte aligned); returns its index. */
+int add_view(Export &ex, const void *data, size_t bytes, int target)
+{
+    while (ex.bin.size() % 4)
+        ex.bin.push_back(0);
+    tinygltf::BufferView bv;
+    bv.buffer = 0;
+    bv.byteOffset = ex.bin.size();
+    bv.byteLength = bytes;
+    bv.target = target;
+    const unsigned char *p = static_cast<const unsigned char *>(data);
+    ex.bin.insert(ex.bin.end(), p, p + bytes);
+    ex.m.bufferViews.push_back(bv);
+    return int(ex.m.bufferViews.size() - 1);
+}
+
+int add_accessor(Export &ex, const void *data, size_t count, int type, int ctype, int target)
+{
+    size_t ncomp = type_components(type), bytes = mul_size(count, ncomp * 4, "accessor");
+    tinygltf::Accessor a;
+    a.bufferView = add_view(ex, data, bytes, target);
+    a.byteOffset = 0;
+    a.componentType = ctype;
+    a.type = type;
+    a.count = count;
+    ex.m.accessors.push_back(a);
+    return int(ex.m.accessors.size() - 1);
+}
+
+tinygltf::Primitive export_primitive(Export &ex, const lie_primitive &p)
+{
+    tinygltf::Primitive g;
+    g.mode = TINYGLTF_MODE_TRIANGLES;
+    g.material = p.material >= 0 && p.material < ex.s.n_materials ? p.material : -1;
+    int ap = add_accessor(ex, p.pos, p.n_verts, TINYGLTF_TYPE_VEC3, TINYGLTF_COMPONENT_TYPE_FLOAT,
+                          TINYGLTF_TARGET_ARRAY_BUFFER);
+    /* glTF 2.0 §3.7.2.1: POSITION needs min and max */
+    tinygltf::Accessor &a = ex.m.accessors[size_t(ap)];
+    a.minValues.assign(3, 0.0);
+    a.maxValues.assign(3, 0.0);
+    for (uint32_t v = 0; v < p.n_verts; v++)
+        for (size_t c = 0; c < 3; c++) {
+            double x = short_float(p.pos[3 * size_t(v) + c]);
+            if (v == 0 || x < a.minValues[c])
+                a.minValues[c] = x;
+            if (v == 0 || x > a.maxValues[c])
+                a.maxValues[c] = x;
+        }
+    g.attributes["POSITION"] = ap;
+    if (p.nrm)
+        g.attributes["NORMAL"] = add_accessor(ex, p.nrm, p.n_verts, TINYGLTF_TYPE_VEC3,
+                                              TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TARGET_ARRAY_BUFFER);
+    if (p.uv)
+        g.attributes["TEXCOORD_0"] = add_accessor(ex, p.uv, p.n_verts, TINYGLTF_TYPE_VEC2,
+                                                  TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TARGET_ARRAY_BUFFER);
+    g.indices = add_accessor(ex, p.idx, size_t(p.n_tris) * 3, TINYGLTF_TYPE_SCALAR,
+                             TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+    return g;
+}
+
+bool mesh_has_triangles(const lie_mesh &mesh)
+{
+    for (int i = 0; i < mesh.n_prims; i++)
+        if (mesh.prims[i].n_tris > 0 && mesh.prims[i].pos && mesh.prims[i].idx)
+            return true;
+    return false;
+}
+
+/* Textures: one glTF texture (and PNG) per (lie_texture, colour space) that
+ * a material uses, in texture order, sRGB before linear.  Returns the map
+ * texture * 2 + srgb -> glTF texture. */
+std::map<int, int> export_textures(Export &ex)
+{
+    const lie_scene &s = ex.s;
+    std::vector<char> used(size_t(s.n_textures) * 2, 0);
+    auto mark = [&](int t, bool srgb) {
+        if (t >= 0 && t < s.n_textures)
+            used[size_t(t) * 2 + srgb] = 1;
+    };
+    for (int i = 0; i < s.n_materials; i++) {
+        mark(s.materials[i].base_color_tex, true);
+        mark(s.materials[i].mr_tex, false);
+        mark(s.materials[i].emissive_tex, true);
+    }
+    std::map<int, int> gl_texture;
+    std::map<std::pair<int, int>, int> sampler_of;
+    CodeTables tables;
+    for (int t = 0; t < s.n_textures; t++)
+        for (int srgb = 1; srgb >= 0; srgb--) {
+            if (!used[size_t(t) * 2 + size_t(srgb)])
+                continue;
+            const lie_texture &lt = s.textures[t];
+            std::pair<int, int> wrap(gl_wrap(lt.wrap_s), gl_wrap(lt.wrap_t));
+            auto found = sampler_of.find(wrap);
+            if (found == sampler_of.end()) {
+                tinygltf::Sampler sm;
+                sm.wrapS = wrap.first;
+                sm.wrapT = wrap.second;
+                ex.m.samplers.push_back(sm);
+                found = sampler_of.emplace(wrap, int(ex.m.samplers.size() - 1)).first;
+            }
+            int image = int(ex.m.images.size());
+            std::string name = ex.stem + "_tex" + std::to_string(image) + ".png";
+            tinygltf::Image im;
+            im.uri = uri_escape(name);
+            im.mimeType = "image/png";
+            ex.m.images.push_back(im);
+            Png png;
+            png.path = ex.dir + name;
+            encode_texture(lt, srgb != 0, tables, png);
+            ex.pngs.push_back(std::move(png));
+            tinygltf::Texture tx;
+            tx.sampler = found->second;
+            tx.source = image;
+            ex.m.textures.push_back(tx);
+            gl_texture[t * 2 + srgb] = int(ex.m.textures.size() - 1);
+        }
+    return gl_texture;
+}
+
+void export_materials(Export &ex, const std::map<int, int> &gl_texture)
+{
+    auto tex = [&](int t, bool srgb) {
+        auto it = gl_texture.find(t * 2 + srgb);
+        return it == gl_texture.end() ? -1 : it->second;
+    };
+    bool strength_used = false;
+    for (int i = 0; i < ex.s.n_materials; i++) {
+        const lie_material &mt = ex.s.materials[i];
+        tinygltf::Material g;
+        if (mt.name)
+            g.name = mt.name;
+        tinygltf::PbrMetallicRoughness &pbr = g.pbrMetallicRoughness;
+        pbr.baseColorFactor.assign(4, 0.0);
+        for (int c = 0; c < 4; c++)
+            pbr.baseColorFactor[size_t(c)] = short_float(mt.base_color[c]);
+        pbr.baseColorTexture.index = tex(mt.base_color_tex, true);
+        pbr.metallicFactor = short_float(mt.metallic);
+        pbr.roughnessFactor = short_float(mt.roughness);
+        pbr.metallicRoughnessTexture.index = tex(mt.mr_tex, false);
+        /* emissive = emissiveFactor x emissiveStrength (what the importer
+         * computes, in double, then rounds to float): when the emission is
+         * brighter than 1, the strength is its peak and the factor's largest
+         * component 1.  A factor e / strength in double comes back as e (the
+         * product is within 2^-52 of e); a shorter decimal is used when it
+         * comes back as e too. */
+        float peak = fmaxf(mt.emissive[0], fmaxf(mt.emissive[1], mt.emissive[2]));
+        double strength = short_float(peak);
+        g.emissiveFactor.assign(3, 0.0);
+        for (int c = 0; c < 3; c++) {
+            float e = mt.emissive[c];
+            double f = short_float(e);
+            if (peak > 1.0f)
+                f = e == peak ? 1.0 : shortest(double(e) / strength, [e, strength](double d) {
+                    return d <= 1.0 && float(d * strength) == e;
+                });
+            g.emissiveFactor[size_t(c)] = f;
+        }
+        if (peak > 1.0f) {
+            tinygltf::Value::Object o;
+            o["emissiveStrength"] = tinygltf::Value(strength);
+            g.extensions["KHR_materials_emissive_strength"] = tinygltf::Value(o);
+            strength_used = true;
+        }
+        g.emissiveTexture.index = tex(mt.emissive_tex, true);
+        g.doubleSided = mt.double_sided != 0;
+        ex.m.materials.push_back(g);
+    }
+    if (strength_used)
+        ex.m.extensionsUsed.push_back("KHR_materials_emissive_strength");
+}
+
+void export_document(Export &ex)
+{
+    const lie_scene &s = ex.s;
+    tinygltf::Model &m = ex.m;
+    m.asset.version = "2.0";
+    m.asset.generator = "lie";
+
+    /* kept nodes in depth-first pre-order from the default scene's roots, as
+     * lie_scene_flatten walks them; a removed node takes its subtree along */
+    std::vector<int> order, new_index(size_t(s.n_nodes), -1), stack;
+    for (int r = s.n_roots - 1; r >= 0; r--)
+        stack.push_back(s.roots[r]);
+    while (!stack.empty()) {
+        int nd = stack.back();
+        stack.pop_back();
+        if (nd < 0 || nd >= s.n_nodes || s.nodes[nd].removed || new_index[size_t(nd)] >= 0)
+            continue;
+        new_index[size_t(nd)] = int(order.size());
+        order.push_back(nd);
+        for (int c = s.nodes[nd].n_children - 1; c >= 0; c--)
+            stack.push_back(s.nodes[nd].children[c]);
+    }
+
+    /* meshes, cameras and lights the kept nodes use, in their own order */
+    std::vector<int> mesh_map(size_t(s.n_meshes), -1), camera_map(size_t(s.n_camera_defs), -1),
+        light_map(size_t(s.n_light_defs), -1);
+    for (int nd : order) {
+        const lie_node &n = s.nodes[nd];
+        if (n.mesh >= 0 && n.mesh < s.n_meshes && mesh_has_triangles(s.meshes[n.mesh]))
+            mesh_map[size_t(n.mesh)] = 0;
+        if (n.camera >= 0 && n.camera < s.n_camera_defs && s.camera_defs[n.camera].yfov > 0.0f)
+            camera_map[size_t(n.camera)] = 0;
+        if (n.light >= 0 && n.light < s.n_light_defs)
+            light_map[size_t(n.light)] = 0;
+    }
+
+    std::map<int, int> gl_texture = export_textures(ex);
+    export_materials(ex, gl_texture);
+
+    for (int i = 0; i < s.n_meshes; i++) {
+        if (mesh_map[size_t(i)] < 0)
+            continue;
+        const lie_mesh &mesh = s.meshes[i];
+        tinygltf::Mesh g;
+        if (mesh.name)
+            g.name = mesh.name;
+        for (int p = 0; p < mesh.n_prims; p++) /* points and lines were kept as empty primitives */
+            if (mesh.prims[p].n_tris > 0 && mesh.prims[p].pos && mesh.prims[p].idx)
+                g.primitives.push_back(export_primitive(ex, mesh.prims[p]));
+        mesh_map[size_t(i)] = int(m.meshes.size());
+        m.meshes.push_back(g);
+    }
+    for (int i = 0; i < s.n_camera_defs; i++) {
+        if (camera_map[size_t(i)] < 0)
+            continue;
+        const lie_camera_def &c = s.camera_defs[i];
+        tinygltf::Camera g;
+        if (c.name)
+            g.name = c.name;
+        g.type = "perspective";
+        g.perspective.yfov = short_float(c.yfov);
+        g.perspective.aspectRatio = short_float(c.aspect);
+        g.perspective.znear = short_float(c.znear);
+        g.perspective.zfar = 0.0; /* infinite: taken out of the JSON below */
+        camera_map[size_t(i)] = int(m.cameras.size());
+        m.cameras.push_back(g);
+    }
+    for (int i = 0; i < s.n_light_defs; i++) {
+        if (light_map[size_t(i)] < 0)
+            continue;
+        const lie_light_def &l = s.light_defs[i];
+        tinygltf::Light g;
+        if (l.name)
+            g.name = l.name;
+        g.type = l.type == LIE_LIGHT_SPOT ? "spot" : l.type == LIE_LIGHT_DIRECTIONAL ? "directional" : "point";
+        g.color.assign(3, 0.0);
+        for (int c = 0; c < 3; c++)
+            g.color[size_t(c)] = short_float(l.color[c]);
+        g.intensity = short_float(l.intensity);
+        g.range = short_float(l.range);
+        if (l.type == LIE_LIGHT_SPOT) {
+            g.spot.innerConeAngle = short_float(l.inner_cone);
+            g.spot.outerConeAngle = short_float(l.outer_cone);
+        }
+        light_map[size_t(i)] = int(m.lights.size());
+        m.lights.push_back(g);
+    }
+
+    const lie_mat4 identity = lie_mat4_identity();
+    for (int nd : order) {
+        const lie_node &n = s.nodes[nd];
+        tinygltf::Node g;
+        if (n.name)
+            g.name = n.name;
+        /* bit for bit: an identity with a -0 is written, to come back as it is */
+        if (memcmp(&n.local, &identity, sizeof identity) != 0)
+            g.matrix.assign(n.local.m, n.local.m + 16);
+        if (n.mesh >= 0 && n.mesh < s.n_meshes)
+            g.mesh = mesh_map[size_t(n.mesh)];
+        if (n.camera >= 0 && n.camera < s.n_camera_defs)
+            g.camera = camera_map[size_t(n.camera)];
+        if (n.light >= 0 && n.light < s.n_light_defs) {
+            tinygltf::Value::Object o;
+            o["light"] = tinygltf::Value(light_map[size_t(n.light)]);
+            g.extensions["KHR_lights_punctual"] = tinygltf::Value(o);
+        }
+        for (int c = 0; c < n.n_children; c++) {
+            int ch = n.children[c];
+            if (ch >= 0 && ch < s.n_nodes && new_index[size_t(ch)] >= 0)
+                g.children.push_back(new_index[size_t(ch)]);
+        }
+        m.nodes.push_back(g);
+    }
+    tinygltf::Scene scene;
+    for (int r = 0; r < s.n_roots; r++)
+        if (s.roots[r] >= 0 && s.roots[r] < s.n_nodes && new_index[size_t(s.roots[r])] >= 0)
+            scene.nodes.push_back(new_index[size_t(s.roots[r])]);
+    m.scenes.push_back(scene);
+    m.defaultScene = 0;
+}
+
+/* The glTF JSON: tinygltf's serialisation plus the external buffer. */
+std::string export_json(Export &ex)
+{
+    tinygltf::TinyGLTF writer;
+    writer.SetImageWriter(nullptr, nullptr); /* images keep their uri; we write the PNGs */
+    std::ostringstream os;
+    if (!writer.WriteGltfSceneToStream(&ex.m, os, false, false))
+        fail(LIE_ERR_FORMAT, "tinygltf could not serialise the scene");
+    nlohmann::json j = nlohmann::json::parse(os.str());
+    if (!ex.bin.empty()) {
+        nlohmann::json buffer;
+        buffer["byteLength"] = uint64_t(ex.bin.size());
+        buffer["uri"] = uri_escape(ex.stem + ".bin");
+        j["buffers"] = nlohmann::json::array({buffer});
+    }
+    /* tinygltf writes an object with nothing but defaults (a node with
+     * identity transform and no mesh, a scene without nodes) as null */
+    for (auto &top : j.items())
+        if (top.value().is_array())
+            for (auto &e : top.value())
+                if (e.is_null())
+                    e = nlohmann::json::object();
+    if (j.contains("cameras"))
+        for (auto &c : j["cameras"])
+            if (c.contains("perspective"))
+                c["perspective"].erase("zfar");
+    return j.dump(2) + "\n";
+}
+
+/* Write one output through a temporary file; `body` fills it. */
+template <class F> lie_status write_atomic(const std::string &path, lie_error *err, F body)
+{
+    lie_atomic_file af;
+    lie_status st = lie_atomic_open(&af, path.c_str(), err);
+    if (st != LIE_OK)
+        return st;
+    st = body(af.fp);
+    if (st != LIE_OK) {
+        lie_atomic_abort(&af);
+        return st;
+    }
+    return lie_atomic_commit(&af, err);
+}
+
+lie_status write_bytes(FILE *fp, const std::string &path, const void *data, size_t n, lie_error *err)
+{
+    if (n && fwrite(data, 1, n, fp) != n)
+        return lie_error_set(err, LIE_ERR_IO, path.c_str(), "write failed: %s", strerror(errno));
+    return LIE_OK;
+}
+
+} // namespace
+
+extern "C" lie_status lie_gltf_export(const lie_scene *s, const char *path, lie_error *err)
+{
+    if (!s || !path || !*path)
+        return lie_error_set(err, LIE_ERR_ARG, path, "lie_gltf_export: NULL scene or empty path");
+    if (strcmp(path, "-") == 0)
+        return lie_error_set(err, LIE_ERR_ARG, path,
+                             "a glTF export is several files (.gltf, .bin, textures): it cannot go to stdout");
+    std::string p(path);
+    size_t slash = p.rfind('/');
+    std::string dir = slash == std::string::npos ? std::string() : p.substr(0, slash + 1);
+    std::string base = p.substr(dir.size());
+    size_t dot = base.rfind('.');
+    std::string stem = dot == std::string::npos || dot == 0 ? base : base.substr(0, dot);
+    if (base.empty() || base == "." || base == "..")
+        return lie_error_set(err, LIE_ERR_ARG, path, "not a file name");
+    if (base == stem + ".bin" || (base.compare(0, stem.size() + 4, stem + "_tex") == 0 &&
+                                  base.size() > 4 && base.compare(base.size() - 4, 4, ".png") == 0))
+        return lie_error_set(err, LIE_ERR_ARG, path, "the glTF would share its name with its .bin or a texture");
+
+    std::vector<std::string> done; /* files already renamed into place */
+    lie_status st = LIE_OK;
+    try {
+        Export ex{*s, dir, stem, tinygltf::Model(), {}, {}};
+        export_document(ex);
+        std::string json = export_json(ex);
+        /* the side files first, the .gltf last: a .gltf never names a missing file */
+        for (const Png &png : ex.pngs) {
+            st = write_atomic(png.path, err, [&](FILE *fp) {
+                const void *codes = png.bits == 16 ? static_cast<const void *>(png.b16.data())
+                                                   : static_cast<const void *>(png.b8.data());
+                return lie_scene_png_write(fp, png.path.c_str(), png.width, png.height, png.bits, png.channels,
+                                           codes, err);
+            });
+            if (st != LIE_OK)
+                break;
+            done.push_back(png.path);
+        }
+        std::string bin_path = dir + stem + ".bin";
+        if (st == LIE_OK && !ex.bin.empty()) {
+            st = write_atomic(bin_path, err,
+                              [&](FILE *fp) { return write_bytes(fp, bin_path, ex.bin.data(), ex.bin.size(), err); });
+            if (st == LIE_OK)
+                done.push_back(bin_path);
+        }
+        if (st == LIE_OK)
+            st = write_atomic(p, err, [&](FILE *fp) { return write_bytes(fp, p, json.data(), json.size(), err); });
+    } catch (const ImportError &e) {
+        st = lie_error_set(err, e.status, path, "%s", e.msg.c_str());
+    } catch (const std::bad_alloc &) {
+        st = lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    } catch (const std::exception &e) {
+        st = lie_error_set(err, LIE_ERR_FORMAT, path, "%s", first_line(e.what()).c_str());
+    } catch (...) {
+        st = lie_error_set(err, LIE_ERR_FORMAT, path, "unexpected error while exporting");
+    }
+    if (st != LIE_OK)
+        for (const std::string &f : done)
+            unlink(f.c_str());
+    return st;
+}

@@ -1,0 +1,555 @@
+/* The scene: loading (through the glTF importer), flattening the node
+ * hierarchy into world-space triangles, emitters and cameras, and the
+ * content hash that caches refer to. */
+#include "scene/scene.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static const lie_material default_material = {
+    /* glTF 2.0 §3.9.6: the default material is white, metallic 1, roughness 1. */
+    NULL, {1.0f, 1.0f, 1.0f, 1.0f}, -1, 1.0f, 1.0f, -1, {0.0f, 0.0f, 0.0f}, -1, 0};
+
+lie_scene_options lie_scene_options_default(void)
+{
+    lie_scene_options o;
+    memset(&o, 0, sizeof o);
+    o.max_triangles = LIE_SCENE_MAX_TRIANGLES_DEFAULT;
+    return o;
+}
+
+const lie_material *lie_scene_material(const lie_scene *s, int32_t index)
+{
+    return index >= 0 && index < s->n_materials ? &s->materials[index] : &default_material;
+}
+
+static void free_world(lie_scene *s)
+{
+    free(s->instances);
+    free(s->tri_p);
+    free(s->tri_n);
+    free(s->tri_uv);
+    free(s->tri_ng);
+    free(s->tri_area);
+    free(s->tri_material);
+    free(s->tri_instance);
+    free(s->tri_removed);
+    free(s->tri_emitter);
+    for (int i = 0; i < s->n_emitters; i++)
+        free(s->emitters[i].tri_cdf);
+    free(s->emitters);
+    for (int i = 0; i < s->n_cameras; i++)
+        free(s->cameras[i].name);
+    free(s->cameras);
+    s->instances = NULL;
+    s->n_instances = 0;
+    s->tri_p = s->tri_n = s->tri_ng = NULL;
+    s->tri_uv = s->tri_area = NULL;
+    s->tri_material = NULL;
+    s->tri_instance = NULL;
+    s->tri_removed = NULL;
+    s->tri_emitter = NULL;
+    s->emitters = NULL;
+    s->n_emitters = 0;
+    s->cameras = NULL;
+    s->n_cameras = 0;
+    s->n_tris = 0;
+}
+
+void lie_scene_destroy(lie_scene *s)
+{
+    if (!s)
+        return;
+    free_world(s);
+    for (int i = 0; i < s->n_nodes; i++) {
+        free(s->nodes[i].name);
+        free(s->nodes[i].children);
+    }
+    free(s->nodes);
+    free(s->roots);
+    for (int i = 0; i < s->n_meshes; i++) {
+        lie_mesh *m = &s->meshes[i];
+        for (int p = 0; p < m->n_prims; p++) {
+            free(m->prims[p].pos);
+            free(m->prims[p].nrm);
+            free(m->prims[p].uv);
+            free(m->prims[p].idx);
+        }
+        free(m->prims);
+        free(m->name);
+    }
+    free(s->meshes);
+    for (int i = 0; i < s->n_materials; i++)
+        free(s->materials[i].name);
+    free(s->materials);
+    for (int i = 0; i < s->n_textures; i++)
+        free(s->textures[i].rgba);
+    free(s->textures);
+    for (int i = 0; i < s->n_camera_defs; i++)
+        free(s->camera_defs[i].name);
+    free(s->camera_defs);
+    for (int i = 0; i < s->n_light_defs; i++)
+        free(s->light_defs[i].name);
+    free(s->light_defs);
+    free(s->path);
+    free(s);
+}
+
+lie_status lie_scene_load(const char *path, const lie_scene_options *opt, lie_scene **out,
+                          lie_error *err)
+{
+    *out = NULL;
+    lie_scene_options def = lie_scene_options_default();
+    if (!opt)
+        opt = &def;
+    lie_scene *s = calloc(1, sizeof *s);
+    if (!s)
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    s->path = strdup(path);
+    if (!s->path) {
+        free(s);
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    }
+    lie_status st = lie_gltf_import(s, path, opt, err);
+    if (st == LIE_OK)
+        st = lie_scene_flatten(s, err);
+    if (st != LIE_OK) {
+        lie_scene_destroy(s);
+        return st;
+    }
+    *out = s;
+    return LIE_OK;
+}
+
+/* ---- flattening ------------------------------------------------------- */
+
+typedef struct visit {
+    int node;
+    int dead;
+    lie_mat4 world;
+} visit;
+
+/* Depth-first pre-order over the default scene's roots; calls back per node
+ * with its world matrix and whether it (or an ancestor) was removed.  The
+ * importer has rejected cycles. */
+typedef void (*visit_fn)(lie_scene *s, int node, const lie_mat4 *world, int dead, void *ctx);
+
+static lie_status walk(lie_scene *s, visit_fn fn, void *ctx)
+{
+    size_t cap = (size_t)s->n_nodes + 1, n = 0;
+    visit *stack = malloc(cap * sizeof *stack);
+    if (!stack)
+        return LIE_ERR_NOMEM;
+    for (int r = 0; r < s->n_roots; r++) {
+        int nd = s->roots[r];
+        if (nd < 0 || nd >= s->n_nodes)
+            continue;
+        stack[n].node = nd;
+        stack[n].dead = s->nodes[nd].removed != 0;
+        stack[n].world = s->nodes[nd].local;
+        n++;
+        while (n > 0) {
+            visit v = stack[--n];
+            const lie_node *node = &s->nodes[v.node];
+            fn(s, v.node, &v.world, v.dead, ctx);
+            for (int c = node->n_children - 1; c >= 0; c--) {
+                int ch = node->children[c];
+                if (ch < 0 || ch >= s->n_nodes)
+                    continue;
+                if (n == cap) {
+                    visit *ns = realloc(stack, 2 * cap * sizeof *stack);
+                    if (!ns) {
+                        free(stack);
+                        return LIE_ERR_NOMEM;
+                    }
+                    stack = ns;
+                    cap *= 2;
+                }
+                stack[n].node = ch;
+                stack[n].dead = v.dead || s->nodes[ch].removed != 0;
+                stack[n].world = lie_mat4_mul(&v.world, &s->nodes[ch].local);
+                n++;
+            }
+        }
+    }
+    free(stack);
+    return LIE_OK;
+}
+
+typedef struct count_ctx {
+    uint64_t tris;
+    int instances, lights, cameras;
+} count_ctx;
+
+static void count_node(lie_scene *s, int nd, const lie_mat4 *world, int dead, void *p)
+{
+    count_ctx *c = p;
+    const lie_node *node = &s->nodes[nd];
+    if (node->mesh >= 0 && node->mesh < s->n_meshes) {
+        const lie_mesh *m = &s->meshes[node->mesh];
+        for (int i = 0; i < m->n_prims; i++) {
+            if (m->prims[i].n_tris == 0)
+                continue;
+            c->tris += m->prims[i].n_tris;
+            c->instances++;
+        }
+    }
+    if (node->light >= 0 && node->light < s->n_light_defs)
+        c->lights++;
+    if (node->camera >= 0 && node->camera < s->n_camera_defs)
+        c->cameras++;
+}
+
+static int material_emits(const lie_material *m)
+{
+    return m->emissive[0] > 0.0f || m->emissive[1] > 0.0f || m->emissive[2] > 0.0f;
+}
+
+typedef struct fill_ctx {
+    uint32_t tri;
+    lie_status status;
+} fill_ctx;
+
+static void fill_node(lie_scene *s, int nd, const lie_mat4 *world, int dead, void *p)
+{
+    fill_ctx *f = p;
+    const lie_node *node = &s->nodes[nd];
+    if (node->mesh >= 0 && node->mesh < s->n_meshes) {
+        const lie_mesh *m = &s->meshes[node->mesh];
+        /* glTF §3.7.4: a negative determinant flips the winding; we swap two
+         * vertices so every world triangle is counter-clockwise seen from its
+         * front. */
+        int mirror = lie_mat4_det3(world) < 0.0;
+        for (int pi = 0; pi < m->n_prims; pi++) {
+            const lie_primitive *pr = &m->prims[pi];
+            if (pr->n_tris == 0)
+                continue;
+            lie_instance *in = &s->instances[s->n_instances];
+            in->node = nd;
+            in->mesh = node->mesh;
+            in->prim = pi;
+            in->material = pr->material;
+            in->first_tri = f->tri;
+            in->n_tris = pr->n_tris;
+            in->world = *world;
+            uint32_t inst = (uint32_t)s->n_instances++;
+            for (uint32_t t = 0; t < pr->n_tris; t++) {
+                uint32_t g = f->tri++;
+                uint32_t v[3] = {pr->idx[3 * t], pr->idx[3 * t + 1], pr->idx[3 * t + 2]};
+                if (mirror) {
+                    uint32_t x = v[1];
+                    v[1] = v[2];
+                    v[2] = x;
+                }
+                lie_vec3 *P = &s->tri_p[3 * (size_t)g];
+                s->tri_removed[g] = (uint8_t)dead;
+                for (int k = 0; k < 3; k++) {
+                    const float *q = &pr->pos[3 * (size_t)v[k]];
+                    /* a removed node's slots: empty triangles at the origin */
+                    P[k] = dead ? lie_v3(0.0f, 0.0f, 0.0f) : lie_mat4_point(world, lie_v3(q[0], q[1], q[2]));
+                }
+                lie_vec3 c = lie_v3_cross(lie_v3_sub(P[1], P[0]), lie_v3_sub(P[2], P[0]));
+                float len = lie_v3_len(c);
+                s->tri_area[g] = 0.5f * len;
+                if (len > 0.0f && isfinite(len)) {
+                    s->tri_ng[g] = lie_v3_scale(c, 1.0f / len);
+                } else {
+                    s->tri_ng[g] = lie_v3(0.0f, 0.0f, 1.0f);
+                    s->tri_area[g] = 0.0f;
+                    s->stats.degenerate_tris += (uint32_t)!dead;
+                }
+                for (int k = 0; k < 3; k++) {
+                    lie_vec3 n = s->tri_ng[g];
+                    if (pr->nrm) {
+                        const float *q = &pr->nrm[3 * (size_t)v[k]];
+                        lie_vec3 w = lie_v3_norm(lie_mat4_normal(world, lie_v3(q[0], q[1], q[2])));
+                        if (lie_v3_dot(w, w) > 0.5f)
+                            n = w;
+                    }
+                    s->tri_n[3 * (size_t)g + k] = n;
+                    float *uv = &s->tri_uv[6 * (size_t)g + 2 * k];
+                    if (pr->uv) {
+                        uv[0] = pr->uv[2 * (size_t)v[k]];
+                        uv[1] = pr->uv[2 * (size_t)v[k] + 1];
+                    } else {
+                        uv[0] = uv[1] = 0.0f;
+                    }
+                }
+                s->tri_material[g] = pr->material;
+                s->tri_instance[g] = inst;
+                s->tri_emitter[g] = -1;
+            }
+            const lie_material *mat = lie_scene_material(s, pr->material);
+            if (!dead && material_emits(mat)) {
+                lie_emitter *e = &s->emitters[s->n_emitters];
+                memset(e, 0, sizeof *e);
+                e->type = LIE_EMITTER_AREA;
+                e->node = nd;
+                e->instance = (int)inst;
+                e->first_tri = in->first_tri;
+                e->n_tris = in->n_tris;
+                e->tri_cdf = malloc(sizeof(float) * in->n_tris);
+                if (!e->tri_cdf) {
+                    f->status = LIE_ERR_NOMEM;
+                    return;
+                }
+                double acc = 0.0;
+                for (uint32_t t = 0; t < in->n_tris; t++) {
+                    acc += s->tri_area[in->first_tri + t];
+                    e->tri_cdf[t] = (float)acc;
+                }
+                e->area = (float)acc;
+                memcpy(e->radiance, mat->emissive, sizeof e->radiance);
+                e->double_sided = mat->double_sided;
+                e->cos_inner = e->cos_outer = -2.0f;
+                if (e->area > 0.0f) {
+                    for (uint32_t t = 0; t < in->n_tris; t++)
+                        s->tri_emitter[in->first_tri + t] = s->n_emitters;
+                    s->n_emitters++;
+                } else {
+                    free(e->tri_cdf); /* an emitter of zero area emits nothing */
+                    e->tri_cdf = NULL;
+                }
+            }
+        }
+    }
+    if (dead)
+        return;
+    if (node->light >= 0 && node->light < s->n_light_defs) {
+        const lie_light_def *l = &s->light_defs[node->light];
+        lie_emitter *e = &s->emitters[s->n_emitters++];
+        memset(e, 0, sizeof *e);
+        e->type = l->type == LIE_LIGHT_DIRECTIONAL ? LIE_EMITTER_DIRECTIONAL : LIE_EMITTER_POINT;
+        e->node = nd;
+        e->instance = -1;
+        e->position = lie_mat4_point(world, lie_v3(0.0f, 0.0f, 0.0f));
+        /* KHR_lights_punctual: spot and directional lights point down local -Z. */
+        e->direction = lie_v3_norm(lie_mat4_vector(world, lie_v3(0.0f, 0.0f, -1.0f)));
+        for (int k = 0; k < 3; k++)
+            e->intensity[k] = l->color[k] * l->intensity;
+        e->range = l->range;
+        if (l->type == LIE_LIGHT_SPOT) {
+            e->cos_inner = cosf(l->inner_cone);
+            e->cos_outer = cosf(l->outer_cone);
+        } else {
+            e->cos_inner = e->cos_outer = -2.0f;
+        }
+    }
+    if (node->camera >= 0 && node->camera < s->n_camera_defs) {
+        const lie_camera_def *cd = &s->camera_defs[node->camera];
+        lie_camera *c = &s->cameras[s->n_cameras];
+        const char *name = node->name ? node->name : cd->name;
+        c->name = name ? strdup(name) : NULL;
+        c->eye = lie_mat4_point(world, lie_v3(0.0f, 0.0f, 0.0f));
+        c->forward = lie_v3_norm(lie_mat4_vector(world, lie_v3(0.0f, 0.0f, -1.0f)));
+        lie_vec3 up = lie_mat4_vector(world, lie_v3(0.0f, 1.0f, 0.0f));
+        up = lie_v3_sub(up, lie_v3_scale(c->forward, lie_v3_dot(up, c->forward)));
+        c->up = lie_v3_norm(up);
+        c->yfov = cd->yfov;
+        c->aspect = cd->aspect;
+        /* orthographic cameras come with yfov 0: not supported, skipped */
+        if (cd->yfov > 0.0f && lie_v3_dot(c->forward, c->forward) > 0.5f && lie_v3_dot(c->up, c->up) > 0.5f)
+            s->n_cameras++;
+        else
+            free(c->name); /* a degenerate transform: no usable camera */
+    }
+}
+
+static void hash_world(lie_scene *s, lie_hasher *h)
+{
+    uint64_t n = s->n_tris;
+    lie_hasher_update(h, "lie-scene-1", 11);
+    lie_hasher_update(h, &n, sizeof n);
+    lie_hasher_update(h, s->tri_p, sizeof(lie_vec3) * 3 * n);
+    lie_hasher_update(h, s->tri_n, sizeof(lie_vec3) * 3 * n);
+    lie_hasher_update(h, s->tri_uv, sizeof(float) * 6 * n);
+    lie_hasher_update(h, s->tri_material, sizeof(int32_t) * n);
+    lie_hasher_update(h, s->tri_removed, n);
+    int32_t nm = s->n_materials, nt = s->n_textures, ne = s->n_emitters;
+    lie_hasher_update(h, &nm, sizeof nm);
+    for (int i = 0; i < s->n_materials; i++) {
+        const lie_material *m = &s->materials[i];
+        float f[10] = {m->base_color[0], m->base_color[1], m->base_color[2], m->base_color[3],
+                       m->metallic,      m->roughness,     m->emissive[0],   m->emissive[1],
+                       m->emissive[2],   (float)m->double_sided};
+        int32_t t[3] = {m->base_color_tex, m->mr_tex, m->emissive_tex};
+        lie_hasher_update(h, f, sizeof f);
+        lie_hasher_update(h, t, sizeof t);
+    }
+    lie_hasher_update(h, &nt, sizeof nt);
+    for (int i = 0; i < s->n_textures; i++) {
+        const lie_texture *t = &s->textures[i];
+        int32_t d[4] = {t->width, t->height, (int32_t)t->wrap_s, (int32_t)t->wrap_t};
+        lie_hasher_update(h, d, sizeof d);
+        lie_hasher_update(h, t->rgba, sizeof(float) * 4 * (size_t)t->width * (size_t)t->height);
+    }
+    lie_hasher_update(h, &ne, sizeof ne);
+    for (int i = 0; i < s->n_emitters; i++) {
+        const lie_emitter *e = &s->emitters[i];
+        int32_t d[4] = {(int32_t)e->type, (int32_t)e->first_tri, (int32_t)e->n_tris, e->double_sided};
+        float f[15] = {e->radiance[0],  e->radiance[1],  e->radiance[2], e->position.x, e->position.y,
+                       e->position.z,   e->direction.x,  e->direction.y, e->direction.z, e->intensity[0],
+                       e->intensity[1], e->intensity[2], e->cos_inner,   e->cos_outer,  e->range};
+        lie_hasher_update(h, d, sizeof d);
+        lie_hasher_update(h, f, sizeof f);
+    }
+}
+
+lie_status lie_scene_flatten(lie_scene *s, lie_error *err)
+{
+    const char *path = s->path ? s->path : "";
+    free_world(s);
+    s->stats.degenerate_tris = 0;
+    count_ctx c = {0, 0, 0, 0};
+    if (walk(s, count_node, &c) != LIE_OK)
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    if (c.tris > 0xFFFFFFF0u)
+        return lie_error_set(err, LIE_ERR_LIMIT, path, "%llu triangles: more than this build supports",
+                             (unsigned long long)c.tris);
+    size_t n = (size_t)c.tris;
+    s->instances = calloc((size_t)c.instances + 1, sizeof *s->instances);
+    s->tri_p = malloc(sizeof(lie_vec3) * 3 * n + 1);
+    s->tri_n = malloc(sizeof(lie_vec3) * 3 * n + 1);
+    s->tri_uv = malloc(sizeof(float) * 6 * n + 1);
+    s->tri_ng = malloc(sizeof(lie_vec3) * n + 1);
+    s->tri_area = malloc(sizeof(float) * n + 1);
+    s->tri_material = malloc(sizeof(int32_t) * n + 1);
+    s->tri_instance = malloc(sizeof(uint32_t) * n + 1);
+    s->tri_removed = malloc(n + 1);
+    s->tri_emitter = malloc(sizeof(int32_t) * n + 1);
+    s->emitters = calloc((size_t)c.instances + (size_t)c.lights + 1, sizeof *s->emitters);
+    s->cameras = calloc((size_t)c.cameras + 1, sizeof *s->cameras);
+    if (!s->instances || !s->tri_p || !s->tri_n || !s->tri_uv || !s->tri_ng || !s->tri_area ||
+        !s->tri_material || !s->tri_instance || !s->tri_removed || !s->tri_emitter || !s->emitters ||
+        !s->cameras) {
+        free_world(s);
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory for %zu triangles", n);
+    }
+    s->n_tris = (uint32_t)n;
+    fill_ctx f = {0, LIE_OK};
+    if (walk(s, fill_node, &f) != LIE_OK || f.status != LIE_OK) {
+        free_world(s);
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    }
+    s->bounds = lie_box3_empty();
+    s->max_tri_area = 0.0f;
+    for (size_t i = 0; i < 3 * n; i++)
+        if (!s->tri_removed[i / 3])
+            lie_box3_grow(&s->bounds, s->tri_p[i]);
+    for (size_t i = 0; i < n; i++)
+        s->max_tri_area = fmaxf(s->max_tri_area, s->tri_area[i]);
+    for (size_t i = 0; i < 3 * n; i++) {
+        lie_vec3 p = s->tri_p[i];
+        if (!isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z)) {
+            free_world(s);
+            return lie_error_set(err, LIE_ERR_FORMAT, path, "triangle %zu has a non-finite vertex", i / 3);
+        }
+    }
+    lie_hasher *h = lie_hasher_create(0);
+    if (!h) {
+        free_world(s);
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    }
+    hash_world(s, h);
+    s->hash = lie_hasher_digest(h);
+    lie_hasher_destroy(h);
+    return LIE_OK;
+}
+
+/* ---- emitter sampling ------------------------------------------------- */
+
+/* Index of the triangle whose CDF interval holds a (binary search). */
+static uint32_t cdf_find(const float *cdf, uint32_t n, float a)
+{
+    uint32_t lo = 0, hi = n - 1;
+    while (lo < hi) {
+        uint32_t mid = (lo + hi) / 2;
+        if (a < cdf[mid])
+            hi = mid;
+        else
+            lo = mid + 1;
+    }
+    return lo;
+}
+
+uint32_t lie_emitter_point(const lie_scene *s, int e, float u1, float u2, lie_vec3 *p, lie_vec3 *n,
+                           float *b1, float *b2)
+{
+    const lie_emitter *em = &s->emitters[e];
+    float a = u1 * em->area;
+    uint32_t t = cdf_find(em->tri_cdf, em->n_tris, a);
+    float lo = t > 0 ? em->tri_cdf[t - 1] : 0.0f;
+    float ta = em->tri_cdf[t] - lo;
+    float ru = ta > 0.0f ? (a - lo) / ta : 0.5f;
+    ru = fminf(fmaxf(ru, 0.0f), 0.99999994f);
+    lie_sample_triangle(ru, u2, b1, b2);
+    uint32_t g = em->first_tri + t;
+    const lie_vec3 *P = &s->tri_p[3 * (size_t)g];
+    float b0 = 1.0f - *b1 - *b2;
+    *p = lie_v3_add(lie_v3_add(lie_v3_scale(P[0], b0), lie_v3_scale(P[1], *b1)), lie_v3_scale(P[2], *b2));
+    *n = s->tri_ng[g];
+    return g;
+}
+
+/* ---- cameras ---------------------------------------------------------- */
+
+lie_camera lie_scene_default_camera(const lie_scene *s)
+{
+    lie_camera c;
+    memset(&c, 0, sizeof c);
+    c.yfov = 45.0f * (float)M_PI / 180.0f;
+    c.aspect = 0.0f;
+    lie_vec3 lo = s->bounds.lo, hi = s->bounds.hi;
+    if (lie_box3_is_empty(&s->bounds))
+        lo = hi = lie_v3(0.0f, 0.0f, 0.0f);
+    lie_vec3 centre = lie_v3_scale(lie_v3_add(lo, hi), 0.5f);
+    float radius = 0.5f * lie_v3_len(lie_v3_sub(hi, lo));
+    if (!(radius > 0.0f))
+        radius = 1.0f;
+    /* From the +z side, raised 30 degrees, far enough that the bounding
+     * sphere fits the vertical field of view. */
+    lie_vec3 dir = lie_v3_norm(lie_v3(0.0f, 0.5f, 0.8660254f));
+    float dist = radius / sinf(0.5f * c.yfov);
+    c.eye = lie_v3_add(centre, lie_v3_scale(dir, dist));
+    c.forward = lie_v3_scale(dir, -1.0f);
+    lie_vec3 up = lie_v3(0.0f, 1.0f, 0.0f);
+    c.up = lie_v3_norm(lie_v3_sub(up, lie_v3_scale(c.forward, lie_v3_dot(up, c.forward))));
+    return c;
+}
+
+lie_status lie_scene_camera(const lie_scene *s, const char *spec, lie_camera *out, lie_error *err)
+{
+    const char *path = s->path ? s->path : "";
+    if (!spec || !*spec) {
+        *out = s->n_cameras > 0 ? s->cameras[0] : lie_scene_default_camera(s);
+        return LIE_OK;
+    }
+    const char *num = spec[0] == '#' ? spec + 1 : spec;
+    char *end = NULL;
+    long idx = strtol(num, &end, 10);
+    if (*num && end && *end == '\0') {
+        if (idx < 0 || idx >= s->n_cameras)
+            return lie_error_set(err, LIE_ERR_NOT_FOUND, path, "camera %ld: the scene has %d camera%s",
+                                 idx, s->n_cameras, s->n_cameras == 1 ? "" : "s");
+        *out = s->cameras[idx];
+        return LIE_OK;
+    }
+    for (int i = 0; i < s->n_cameras; i++)
+        if (s->cameras[i].name && strcmp(s->cameras[i].name, spec) == 0) {
+            *out = s->cameras[i];
+            return LIE_OK;
+        }
+    /* Also by the glTF camera object's name. */
+    for (int i = 0; i < s->n_nodes; i++) {
+        const lie_node *nd = &s->nodes[i];
+        if (nd->camera >= 0 && nd->camera < s->n_camera_defs && s->camera_defs[nd->camera].name &&
+            strcmp(s->camera_defs[nd->camera].name, spec) == 0 && nd->name) {
+            for (int k = 0; k < s->n_cameras; k++)
+                if (s->cameras[k].name && strcmp(s->cameras[k].name, nd->name) == 0) {
+                    *out = s->cameras[k];
+                    return LIE_OK;
+                }
+        }
+    }
+    return lie_error_set(err, LIE_ERR_NOT_FOUND, path, "no camera named '%s'", spec);
+}

@@ -1,0 +1,258 @@
+/* lib/scene: the in-memory scene.
+ *
+ * Two layers live in one lie_scene:
+ *  - the *document*: what the glTF file says (nodes with local transforms,
+ *    meshes in local space, materials, textures, cameras, punctual lights).
+ *    The glTF importer (gltf.cpp, the one C++ file) fills it; edits
+ *    (rst-update) change it.
+ *  - the *world*: the document flattened by lie_scene_flatten() into
+ *    world-space triangles with a stable global index in scene order
+ *    (default scene's roots in order, depth-first pre-order, each node's
+ *    mesh primitives in order), emitters, world cameras, bounds and the
+ *    content hash.
+ * The scene owns every array it points to. */
+#ifndef LIE_SCENE_H
+#define LIE_SCENE_H
+
+#include "core/core.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define LIE_MIRROR_ROUGHNESS 0.02f /* metallic = 1, roughness <= this: perfect mirror */
+
+/* ---- document --------------------------------------------------------- */
+
+typedef enum lie_wrap { LIE_WRAP_REPEAT = 0, LIE_WRAP_CLAMP = 1, LIE_WRAP_MIRROR = 2 } lie_wrap;
+
+/* A decoded texture: linear RGBA floats, row 0 at v = 0 (glTF's top). */
+typedef struct lie_texture {
+    int width, height;
+    float *rgba;  /* width * height * 4 */
+    lie_wrap wrap_s, wrap_t;
+} lie_texture;
+
+typedef struct lie_material {
+    char *name;            /* may be NULL */
+    float base_color[4];   /* baseColorFactor (linear) */
+    int base_color_tex;    /* texture index (sRGB-decoded at import) or -1 */
+    float metallic, roughness;
+    int mr_tex;            /* metallicRoughnessTexture: G roughness, B metallic; or -1 */
+    float emissive[3];     /* emissiveFactor x KHR_materials_emissive_strength, nits */
+    int emissive_tex;      /* sRGB-decoded, or -1 */
+    int double_sided;
+} lie_material;
+
+typedef struct lie_primitive {
+    uint32_t n_verts;
+    float *pos;            /* 3 per vertex, local space */
+    float *nrm;            /* 3 per vertex or NULL (flat normals then) */
+    float *uv;             /* 2 per vertex (TEXCOORD_0) or NULL */
+    uint32_t n_tris;
+    uint32_t *idx;         /* 3 per triangle; strips and fans already converted */
+    int material;          /* material index, or -1 for glTF's default material */
+} lie_primitive;
+
+typedef struct lie_mesh {
+    char *name;
+    lie_primitive *prims;
+    int n_prims;
+} lie_mesh;
+
+typedef struct lie_camera_def {
+    char *name;
+    float yfov;            /* radians */
+    float aspect;          /* 0 when the file gives none */
+    float znear;
+} lie_camera_def;
+
+typedef enum lie_light_type {
+    LIE_LIGHT_POINT = 0,
+    LIE_LIGHT_SPOT = 1,
+    LIE_LIGHT_DIRECTIONAL = 2
+} lie_light_type;
+
+typedef struct lie_light_def {
+    char *name;
+    lie_light_type type;
+    float color[3];
+    float intensity;       /* candela (point, spot) or lux (directional) */
+    float range;           /* 0 = infinite */
+    float inner_cone, outer_cone; /* radians, spot only */
+} lie_light_def;
+
+typedef struct lie_node {
+    char *name;            /* may be NULL */
+    int parent;            /* -1 for a root */
+    lie_mat4 local;        /* TRS or matrix, as the file gives */
+    int mesh, camera, light; /* indices or -1 */
+    int *children;
+    int n_children;
+    int removed;           /* set by an edit: the node and its subtree are gone, but keep
+                              their triangle slots (empty) so other indices never move */
+} lie_node;
+
+/* ---- world ------------------------------------------------------------ */
+
+/* One (node instance, primitive): its triangles are contiguous. */
+typedef struct lie_instance {
+    int node, mesh, prim, material;
+    uint32_t first_tri, n_tris;
+    lie_mat4 world;
+} lie_instance;
+
+typedef enum lie_emitter_type {
+    LIE_EMITTER_AREA = 0,
+    LIE_EMITTER_POINT = 1,     /* KHR_lights_punctual point and spot */
+    LIE_EMITTER_DIRECTIONAL = 2
+} lie_emitter_type;
+
+typedef struct lie_emitter {
+    lie_emitter_type type;
+    int node;              /* node it comes from */
+    int instance;          /* area: the instance; else -1 */
+    /* area */
+    uint32_t first_tri, n_tris;
+    float area;
+    float *tri_cdf;        /* n_tris, cumulative area (last = area) */
+    float radiance[3];     /* emissive (before any emissive texture), nits */
+    int double_sided;
+    /* punctual */
+    lie_vec3 position;
+    lie_vec3 direction;    /* where the light points (spot, directional), unit */
+    float intensity[3];    /* colour x intensity: cd (point/spot) or lux (directional) */
+    float cos_inner, cos_outer; /* spot cone; point: both -2 (no cone) */
+    float range;           /* 0 = infinite */
+} lie_emitter;
+
+typedef struct lie_camera {
+    char *name;            /* node name, else camera name; may be NULL */
+    lie_vec3 eye, forward, up; /* unit forward and up, orthogonal */
+    float yfov;            /* radians */
+    float aspect;          /* 0 = the image's */
+} lie_camera;
+
+typedef struct lie_scene_stats {
+    uint32_t points_skipped, lines_skipped; /* primitives of these modes */
+    uint32_t prims_without_material;
+    uint32_t degenerate_tris;  /* zero-area triangles (kept, never lit) */
+    uint32_t normals_generated; /* primitives with flat normals */
+} lie_scene_stats;
+
+typedef struct lie_scene {
+    char *path;            /* as given to lie_scene_load */
+    /* document */
+    lie_node *nodes;          int n_nodes;
+    int *roots;               int n_roots;   /* default scene's root nodes */
+    lie_mesh *meshes;         int n_meshes;
+    lie_material *materials;  int n_materials;
+    lie_texture *textures;    int n_textures;
+    lie_camera_def *camera_defs; int n_camera_defs;
+    lie_light_def *light_defs;   int n_light_defs;
+    /* world (lie_scene_flatten) */
+    lie_instance *instances;  int n_instances;
+    uint32_t n_tris;
+    lie_vec3 *tri_p;          /* 3 per triangle: world positions, CCW = front */
+    lie_vec3 *tri_n;          /* 3 per triangle: unit shading normals */
+    float *tri_uv;            /* 6 per triangle */
+    lie_vec3 *tri_ng;         /* unit geometric normal (front side) */
+    float *tri_area;
+    int32_t *tri_material;    /* -1: default material (see lie_scene_material) */
+    uint32_t *tri_instance;
+    uint8_t *tri_removed;     /* 1: slot of a removed node (an empty triangle) */
+    lie_emitter *emitters;    int n_emitters;
+    int32_t *tri_emitter;     /* area emitter of each triangle, or -1 */
+    lie_camera *cameras;      int n_cameras;
+    lie_box3 bounds;
+    float max_tri_area;
+    uint64_t hash;            /* content hash of the world (geometry, materials, emitters) */
+    lie_scene_stats stats;
+} lie_scene;
+
+typedef struct lie_scene_options {
+    int allow_external_uris; /* let URIs leave the scene's folder */
+    uint64_t max_triangles;  /* refuse larger scenes before allocating */
+} lie_scene_options;
+#define LIE_SCENE_MAX_TRIANGLES_DEFAULT 50000000u
+lie_scene_options lie_scene_options_default(void);
+
+/* Load a .gltf or .glb (by content, not extension) and flatten it.
+ * On success *out is owned by the caller (lie_scene_destroy). */
+lie_status lie_scene_load(const char *path, const lie_scene_options *opt, lie_scene **out,
+                          lie_error *err);
+void lie_scene_destroy(lie_scene *s);
+
+/* (Re)compute the world from the document: instances, triangles, normals,
+ * emitters, cameras, bounds, hash.  Called by lie_scene_load and after edits. */
+lie_status lie_scene_flatten(lie_scene *s, lie_error *err);
+
+/* The material of a triangle (glTF's default material for -1). */
+const lie_material *lie_scene_material(const lie_scene *s, int32_t index);
+
+/* A point on area emitter e from (u1, u2) in [0,1)^2: a triangle picked in
+ * proportion to area (u1's position inside its CDF interval reused, so
+ * strata stay strata), then an area-uniform point on it.  Returns the
+ * triangle; writes position, unit front normal and barycentrics. */
+uint32_t lie_emitter_point(const lie_scene *s, int e, float u1, float u2, lie_vec3 *p, lie_vec3 *n,
+                           float *b1, float *b2);
+
+/* Bilinear lookup with the texture's wrap modes; rgba out. */
+void lie_texture_sample(const lie_texture *t, float u, float v, float rgba[4]);
+
+/* Camera by name (node or camera name) or by "#index"/decimal index into
+ * s->cameras; NULL or "" gives the first camera, or the default camera when
+ * the scene has none. */
+lie_status lie_scene_camera(const lie_scene *s, const char *spec, lie_camera *out, lie_error *err);
+/* The default camera: looks at the bounds' centre from +z+y of the box,
+ * 45 degree vertical fov, framing the whole bounding sphere. */
+lie_camera lie_scene_default_camera(const lie_scene *s);
+
+/* ---- building scenes in memory (tests, edits that add objects) -------- */
+
+/* An empty scene; `path` (may be NULL) names it in messages. */
+lie_scene *lie_scene_new(const char *path);
+/* Each returns the new element's index, or -1 when out of memory.  Arrays
+ * and strings are copied.  The world is stale until lie_scene_flatten(). */
+int lie_scene_add_material(lie_scene *s, const lie_material *m);
+int lie_scene_add_mesh(lie_scene *s, const char *name, const float *pos, const float *nrm,
+                       const float *uv, uint32_t n_verts, const uint32_t *idx, uint32_t n_tris,
+                       int material);
+int lie_scene_add_camera_def(lie_scene *s, const lie_camera_def *c);
+int lie_scene_add_light_def(lie_scene *s, const lie_light_def *l);
+/* parent -1 makes a root of the default scene. */
+int lie_scene_add_node(lie_scene *s, const char *name, int parent, const lie_mat4 *local, int mesh,
+                       int camera, int light);
+/* A material with glTF's defaults (white, metallic 1, roughness 1). */
+lie_material lie_material_default(void);
+
+/* ---- writing scenes ------------------------------------------------------ */
+
+/* Write the document as glTF 2.0, which lie_scene_load reads back into the
+ * same world (the same hash when no node was removed).  Path
+ * "DIR/NAME.gltf" also gets DIR/NAME.bin (every vertex and index) and
+ * DIR/NAME_texN.png (image N), each written atomically, the .gltf last; on
+ * failure the files this call already put in place are removed again.
+ * Left out: removed nodes with their subtrees, nodes outside the default
+ * scene, unused meshes, cameras and lights, textures no material uses, and
+ * orthographic cameras (the importer keeps none).  Every material is
+ * written, so material indices stay.  Texture pixels go back to the code
+ * values they were decoded from (8-bit when every value is an 8-bit code's,
+ * else 16-bit), in the colour space of the slot that uses them.  "-"
+ * (stdout) is refused: the output is several files. */
+lie_status lie_gltf_export(const lie_scene *s, const char *path, lie_error *err);
+
+/* Internal to lib/scene: the importer (gltf.cpp) fills the document. */
+lie_status lie_gltf_import(lie_scene *s, const char *path, const lie_scene_options *opt,
+                           lie_error *err);
+/* Internal to lib/scene: the exporter's PNG writer (export_png.c).  `codes`
+ * holds height rows of width pixels of `channels` (3 or 4) samples of
+ * `bits` (8: uint8_t, 16: uint16_t in host order), row 0 first; `path`
+ * names the file in messages. */
+lie_status lie_scene_png_write(FILE *fp, const char *path, int width, int height, int bits, int channels,
+                               const void *codes, lie_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,72 @@
+/* lib/scene: bilinear texture lookup with glTF's sampler wrap modes.
+ *
+ * Texel (i, j) has its centre at ((i + 0.5) / w, (j + 0.5) / h); row 0 is
+ * v = 0, the first row of the image (glTF's top).  The four texels around
+ * (u, v) are wrapped one by one, so a lookup near an edge blends with the
+ * texel the wrap mode puts across it (the opposite edge for REPEAT, the
+ * edge texel itself for CLAMP_TO_EDGE and MIRRORED_REPEAT). */
+#include "scene/scene.h"
+
+#include <math.h>
+
+/* Reduce a coordinate to the range where the wrap repeats, so the texel
+ * positions below stay small integers even for u = 1e9. */
+static float texture_reduce(float u, lie_wrap wrap)
+{
+    if (!isfinite(u))
+        return 0.0f;
+    switch (wrap) {
+    case LIE_WRAP_CLAMP:
+        return fminf(fmaxf(u, 0.0f), 1.0f);
+    case LIE_WRAP_MIRROR:
+        return u - 2.0f * floorf(0.5f * u); /* [0, 2): one mirrored period */
+    case LIE_WRAP_REPEAT:
+    default:
+        return u - floorf(u);
+    }
+}
+
+/* Texel index i (possibly -1 or up to 2n - 1 after reduction) to [0, n). */
+static int texture_wrap_index(int i, int n, lie_wrap wrap)
+{
+    switch (wrap) {
+    case LIE_WRAP_CLAMP:
+        return i < 0 ? 0 : (i >= n ? n - 1 : i);
+    case LIE_WRAP_MIRROR: {
+        int m = i % (2 * n);
+        if (m < 0)
+            m += 2 * n;
+        return m < n ? m : 2 * n - 1 - m;
+    }
+    case LIE_WRAP_REPEAT:
+    default: {
+        int m = i % n;
+        return m < 0 ? m + n : m;
+    }
+    }
+}
+
+void lie_texture_sample(const lie_texture *t, float u, float v, float rgba[4])
+{
+    if (!t || !t->rgba || t->width <= 0 || t->height <= 0) {
+        rgba[0] = rgba[1] = rgba[2] = rgba[3] = 1.0f;
+        return;
+    }
+    int w = t->width, h = t->height;
+    float x = texture_reduce(u, t->wrap_s) * (float)w - 0.5f;
+    float y = texture_reduce(v, t->wrap_t) * (float)h - 0.5f;
+    float x0f = floorf(x), y0f = floorf(y);
+    float fx = x - x0f, fy = y - y0f;
+    int x0 = (int)x0f, y0 = (int)y0f;
+    int xa = texture_wrap_index(x0, w, t->wrap_s), xb = texture_wrap_index(x0 + 1, w, t->wrap_s);
+    int ya = texture_wrap_index(y0, h, t->wrap_t), yb = texture_wrap_index(y0 + 1, h, t->wrap_t);
+    const float *p00 = t->rgba + ((size_t)ya * (size_t)w + (size_t)xa) * 4;
+    const float *p10 = t->rgba + ((size_t)ya * (size_t)w + (size_t)xb) * 4;
+    const float *p01 = t->rgba + ((size_t)yb * (size_t)w + (size_t)xa) * 4;
+    const float *p11 = t->rgba + ((size_t)yb * (size_t)w + (size_t)xb) * 4;
+    for (int c = 0; c < 4; c++) {
+        float top = p00[c] + fx * (p10[c] - p00[c]);
+        float bottom = p01[c] + fx * (p11[c] - p01[c]);
+        rgba[c] = top + fy * (bottom - top);
+    }
+}

@@ -1,0 +1,73 @@
+/* --camera values: a scene camera by name or index, or an explicit
+ * "eye=X,Y,Z,target=X,Y,Z[,up=X,Y,Z][,fov=DEG]". */
+#include "shade/shade.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static int parse_floats(const char **p, float *v, int n)
+{
+    for (int i = 0; i < n; i++) {
+        char *end;
+        v[i] = strtof(*p, &end);
+        if (end == *p || !isfinite(v[i]))
+            return 0;
+        *p = end;
+        if (i + 1 < n) {
+            if (**p != ',')
+                return 0;
+            (*p)++;
+        }
+    }
+    return 1;
+}
+
+lie_status lie_camera_parse(const lie_scene *s, const char *spec, lie_camera *out, lie_error *err)
+{
+    if (!spec || !strchr(spec, '='))
+        return lie_scene_camera(s, spec, out, err);
+    lie_camera c;
+    memset(&c, 0, sizeof c);
+    float eye[3], target[3], up[3] = {0.0f, 1.0f, 0.0f}, fov = 45.0f;
+    int have_eye = 0, have_target = 0;
+    const char *p = spec;
+    while (*p) {
+        const char *eq = strchr(p, '=');
+        if (!eq)
+            return lie_error_set(err, LIE_ERR_ARG, NULL, "--camera: expected key=value at '%s'", p);
+        size_t klen = (size_t)(eq - p);
+        const char *v = eq + 1;
+        int ok;
+        if (klen == 3 && strncmp(p, "eye", 3) == 0) {
+            ok = parse_floats(&v, eye, 3);
+            have_eye = 1;
+        } else if (klen == 6 && strncmp(p, "target", 6) == 0) {
+            ok = parse_floats(&v, target, 3);
+            have_target = 1;
+        } else if (klen == 2 && strncmp(p, "up", 2) == 0) {
+            ok = parse_floats(&v, up, 3);
+        } else if (klen == 3 && strncmp(p, "fov", 3) == 0) {
+            ok = parse_floats(&v, &fov, 1) && fov > 0.0f && fov < 180.0f;
+        } else {
+            return lie_error_set(err, LIE_ERR_ARG, NULL, "--camera: unknown key '%.*s'", (int)klen, p);
+        }
+        if (!ok || (*v && *v != ','))
+            return lie_error_set(err, LIE_ERR_ARG, NULL, "--camera: bad value for '%.*s'", (int)klen, p);
+        p = *v ? v + 1 : v;
+    }
+    if (!have_eye || !have_target)
+        return lie_error_set(err, LIE_ERR_ARG, NULL, "--camera: needs both eye= and target=");
+    c.eye = lie_v3(eye[0], eye[1], eye[2]);
+    lie_vec3 f = lie_v3_sub(lie_v3(target[0], target[1], target[2]), c.eye);
+    if (lie_v3_len(f) <= 0.0f)
+        return lie_error_set(err, LIE_ERR_ARG, NULL, "--camera: eye and target coincide");
+    c.forward = lie_v3_norm(f);
+    lie_vec3 u = lie_v3(up[0], up[1], up[2]);
+    u = lie_v3_sub(u, lie_v3_scale(c.forward, lie_v3_dot(u, c.forward)));
+    if (lie_v3_len(u) <= 1e-6f)
+        return lie_error_set(err, LIE_ERR_ARG, NULL, "--camera: up is parallel to the view direction");
+    c.up = lie_v3_norm(u);
+    c.yfov = fov * (float)M_PI / 180.0f;
+    *out = c;
+    return LIE_OK;
+}

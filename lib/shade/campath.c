@@ -1,0 +1,273 @@
+/* Camera paths: keyframes read from YAML (libyaml's document API, which
+ * keeps line and column marks for every node), interpolated linearly or
+ * with a uniform Catmull-Rom spline. */
+#include "shade/shade.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <yaml.h>
+
+#define MAX_FRAMES 1000000
+
+typedef struct parse_ctx {
+    yaml_document_t *doc;
+    const char *name;
+    lie_error *err;
+} parse_ctx;
+
+static lie_status node_error(parse_ctx *p, const yaml_node_t *n, const char *key, const char *what)
+{
+    return lie_error_set_at(p->err, LIE_ERR_FORMAT, p->name, (int)n->start_mark.line + 1,
+                            (int)n->start_mark.column + 1, "%s: %s", key, what);
+}
+
+static int scalar_is(const yaml_node_t *n, const char *s)
+{
+    return n->type == YAML_SCALAR_NODE && strcmp((const char *)n->data.scalar.value, s) == 0;
+}
+
+static lie_status get_number(parse_ctx *p, const yaml_node_t *n, const char *key, double *out)
+{
+    if (n->type != YAML_SCALAR_NODE || n->data.scalar.style != YAML_PLAIN_SCALAR_STYLE)
+        return node_error(p, n, key, "expected a number");
+    const char *s = (const char *)n->data.scalar.value;
+    char *end;
+    double v = strtod(s, &end);
+    if (!*s || *end || !isfinite(v) || strpbrk(s, "xXnNiI"))
+        return node_error(p, n, key, "expected a number");
+    *out = v;
+    return LIE_OK;
+}
+
+static lie_status get_vec3(parse_ctx *p, const yaml_node_t *n, const char *key, lie_vec3 *out)
+{
+    if (n->type != YAML_SEQUENCE_NODE ||
+        n->data.sequence.items.top - n->data.sequence.items.start != 3)
+        return node_error(p, n, key, "expected a sequence of 3 numbers");
+    double v[3];
+    for (int i = 0; i < 3; i++) {
+        yaml_node_t *item = yaml_document_get_node(p->doc, n->data.sequence.items.start[i]);
+        if (!item)
+            return node_error(p, n, key, "malformed sequence");
+        lie_status st = get_number(p, item, key, &v[i]);
+        if (st != LIE_OK)
+            return st;
+    }
+    *out = lie_v3((float)v[0], (float)v[1], (float)v[2]);
+    return LIE_OK;
+}
+
+static lie_status parse_key(parse_ctx *p, const yaml_node_t *n, int index, float prev_fov, lie_camera_key *k)
+{
+    char key[64];
+    snprintf(key, sizeof key, "keys[%d]", index);
+    if (n->type != YAML_MAPPING_NODE)
+        return node_error(p, n, key, "expected a mapping with eye, target, up, fov, frames");
+    int have_eye = 0, have_target = 0;
+    k->up = lie_v3(0.0f, 1.0f, 0.0f);
+    k->fov_deg = prev_fov;
+    k->frames = 1;
+    for (yaml_node_pair_t *pr = n->data.mapping.pairs.start; pr < n->data.mapping.pairs.top; pr++) {
+        yaml_node_t *kn = yaml_document_get_node(p->doc, pr->key);
+        yaml_node_t *vn = yaml_document_get_node(p->doc, pr->value);
+        if (!kn || !vn || kn->type != YAML_SCALAR_NODE)
+            return node_error(p, n, key, "keys must be plain names");
+        char sub[128];
+        snprintf(sub, sizeof sub, "%s.%s", key, (const char *)kn->data.scalar.value);
+        lie_status st = LIE_OK;
+        if (scalar_is(kn, "eye")) {
+            st = get_vec3(p, vn, sub, &k->eye);
+            have_eye = 1;
+        } else if (scalar_is(kn, "target")) {
+            st = get_vec3(p, vn, sub, &k->target);
+            have_target = 1;
+        } else if (scalar_is(kn, "up")) {
+            st = get_vec3(p, vn, sub, &k->up);
+        } else if (scalar_is(kn, "fov")) {
+            double f = 0.0; /* converted below even when get_number fails */
+            st = get_number(p, vn, sub, &f);
+            if (st == LIE_OK && !(f > 0.0 && f < 180.0))
+                return node_error(p, vn, sub, "expected a number in (0, 180)");
+            k->fov_deg = (float)f;
+        } else if (scalar_is(kn, "frames")) {
+            double f = 0.0; /* converted below even when get_number fails */
+            st = get_number(p, vn, sub, &f);
+            if (st == LIE_OK && !(f >= 1.0 && f <= MAX_FRAMES && f == floor(f)))
+                return node_error(p, vn, sub, "expected an integer in 1..1000000");
+            k->frames = (int)f;
+        } else {
+            return node_error(p, kn, sub, "unknown key (expected eye, target, up, fov or frames)");
+        }
+        if (st != LIE_OK)
+            return st;
+    }
+    if (!have_eye)
+        return node_error(p, n, key, "missing eye");
+    if (!have_target)
+        return node_error(p, n, key, "missing target");
+    lie_vec3 f = lie_v3_sub(k->target, k->eye);
+    if (!(lie_v3_len(f) > 0.0f))
+        return node_error(p, n, key, "eye and target coincide");
+    if (!(lie_v3_len(lie_v3_cross(lie_v3_norm(f), k->up)) > 1e-6f))
+        return node_error(p, n, key, "up is parallel to the view direction");
+    return LIE_OK;
+}
+
+lie_status lie_camera_path_parse(const unsigned char *text, size_t size, const char *name,
+                                 lie_camera_path **out, lie_error *err)
+{
+    *out = NULL;
+    yaml_parser_t parser;
+    yaml_document_t doc;
+    if (!yaml_parser_initialize(&parser))
+        return lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory");
+    yaml_parser_set_input_string(&parser, text, size);
+    if (!yaml_parser_load(&parser, &doc)) {
+        lie_status st = lie_error_set_at(err, LIE_ERR_FORMAT, name, (int)parser.problem_mark.line + 1,
+                                         (int)parser.problem_mark.column + 1, "YAML: %s",
+                                         parser.problem ? parser.problem : "syntax error");
+        yaml_parser_delete(&parser);
+        return st;
+    }
+    yaml_parser_delete(&parser);
+    parse_ctx p = {&doc, name, err};
+    lie_status st = LIE_OK;
+    lie_camera_path *cp = calloc(1, sizeof *cp);
+    yaml_node_t *root = yaml_document_get_root_node(&doc);
+    if (!cp) {
+        st = lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory");
+    } else if (!root) {
+        st = lie_error_set(err, LIE_ERR_FORMAT, name, "empty document: expected a mapping with keys");
+    } else if (root->type != YAML_MAPPING_NODE) {
+        st = node_error(&p, root, "document", "expected a mapping with keys and interpolation");
+    }
+    if (cp)
+        cp->smooth = 1;
+    const yaml_node_t *keys = NULL;
+    for (yaml_node_pair_t *pr = st == LIE_OK ? root->data.mapping.pairs.start : NULL;
+         st == LIE_OK && pr < root->data.mapping.pairs.top; pr++) {
+        yaml_node_t *kn = yaml_document_get_node(&doc, pr->key);
+        yaml_node_t *vn = yaml_document_get_node(&doc, pr->value);
+        if (!kn || !vn || kn->type != YAML_SCALAR_NODE)
+            st = node_error(&p, root, "document", "keys must be plain names");
+        else if (scalar_is(kn, "keys"))
+            keys = vn;
+        else if (scalar_is(kn, "interpolation")) {
+            if (scalar_is(vn, "linear"))
+                cp->smooth = 0;
+            else if (scalar_is(vn, "smooth"))
+                cp->smooth = 1;
+            else
+                st = node_error(&p, vn, "interpolation", "expected linear or smooth");
+        } else {
+            char k[128];
+            snprintf(k, sizeof k, "%s", (const char *)kn->data.scalar.value);
+            st = node_error(&p, kn, k, "unknown key (expected keys or interpolation)");
+        }
+    }
+    if (st == LIE_OK && !keys)
+        st = node_error(&p, root, "keys", "missing");
+    if (st == LIE_OK && (keys->type != YAML_SEQUENCE_NODE || keys->data.sequence.items.top == keys->data.sequence.items.start))
+        st = node_error(&p, keys, "keys", "expected a sequence of at least one key");
+    if (st == LIE_OK) {
+        int n = (int)(keys->data.sequence.items.top - keys->data.sequence.items.start);
+        cp->keys = calloc((size_t)n, sizeof *cp->keys);
+        if (!cp->keys)
+            st = lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory");
+        float fov = 45.0f;
+        long frames = 0;
+        for (int i = 0; st == LIE_OK && i < n; i++) {
+            yaml_node_t *kn = yaml_document_get_node(&doc, keys->data.sequence.items.start[i]);
+            if (!kn) {
+                st = node_error(&p, keys, "keys", "malformed sequence");
+                break;
+            }
+            st = parse_key(&p, kn, i, fov, &cp->keys[i]);
+            if (st != LIE_OK)
+                break;
+            cp->n_keys = i + 1;
+            fov = cp->keys[i].fov_deg;
+            frames += i + 1 < n ? cp->keys[i].frames : 1;
+            if (frames > MAX_FRAMES)
+                st = node_error(&p, kn, "keys", "more than 1000000 frames");
+        }
+        cp->n_frames = (int)frames;
+    }
+    yaml_document_delete(&doc);
+    if (st != LIE_OK) {
+        lie_camera_path_destroy(cp);
+        return st;
+    }
+    *out = cp;
+    return LIE_OK;
+}
+
+lie_status lie_camera_path_read(const char *path, lie_camera_path **out, lie_error *err)
+{
+    unsigned char *data;
+    size_t size;
+    lie_status st = lie_read_file(path, &data, &size, err);
+    if (st != LIE_OK)
+        return st;
+    st = lie_camera_path_parse(data, size, path, out, err);
+    free(data);
+    return st;
+}
+
+void lie_camera_path_destroy(lie_camera_path *p)
+{
+    if (!p)
+        return;
+    free(p->keys);
+    free(p);
+}
+
+/* Uniform Catmull-Rom through p1..p2 with neighbours p0, p3. */
+static float catmull_rom(float p0, float p1, float p2, float p3, float t)
+{
+    float t2 = t * t, t3 = t2 * t;
+    return 0.5f * (2.0f * p1 + (p2 - p0) * t + (2.0f * p0 - 5.0f * p1 + 4.0f * p2 - p3) * t2 +
+                   (3.0f * p1 - p0 - 3.0f * p2 + p3) * t3);
+}
+
+static lie_vec3 interp3(const lie_camera_path *p, int i, float t, size_t offset)
+{
+    int n = p->n_keys;
+    int i0 = i > 0 ? i - 1 : 0, i2 = i + 1 < n ? i + 1 : n - 1, i3 = i + 2 < n ? i + 2 : n - 1;
+    const lie_vec3 *a = (const lie_vec3 *)((const char *)&p->keys[i0] + offset);
+    const lie_vec3 *b = (const lie_vec3 *)((const char *)&p->keys[i] + offset);
+    const lie_vec3 *c = (const lie_vec3 *)((const char *)&p->keys[i2] + offset);
+    const lie_vec3 *d = (const lie_vec3 *)((const char *)&p->keys[i3] + offset);
+    if (!p->smooth)
+        return lie_v3_add(lie_v3_scale(*b, 1.0f - t), lie_v3_scale(*c, t));
+    return lie_v3(catmull_rom(a->x, b->x, c->x, d->x, t), catmull_rom(a->y, b->y, c->y, d->y, t),
+                  catmull_rom(a->z, b->z, c->z, d->z, t));
+}
+
+lie_camera lie_camera_path_frame(const lie_camera_path *p, int frame)
+{
+    int i = 0;
+    float t = 0.0f;
+    int f = frame;
+    while (i + 1 < p->n_keys && f >= p->keys[i].frames) {
+        f -= p->keys[i].frames;
+        i++;
+    }
+    if (i + 1 < p->n_keys)
+        t = (float)f / (float)p->keys[i].frames;
+    lie_vec3 eye = interp3(p, i, t, offsetof(lie_camera_key, eye));
+    lie_vec3 target = interp3(p, i, t, offsetof(lie_camera_key, target));
+    lie_vec3 up = interp3(p, i, t, offsetof(lie_camera_key, up));
+    int i2 = i + 1 < p->n_keys ? i + 1 : i;
+    float fov = p->keys[i].fov_deg * (1.0f - t) + p->keys[i2].fov_deg * t;
+    lie_camera c;
+    memset(&c, 0, sizeof c);
+    c.eye = eye;
+    c.forward = lie_v3_norm(lie_v3_sub(target, eye));
+    lie_vec3 u = lie_v3_sub(up, lie_v3_scale(c.forward, lie_v3_dot(up, c.forward)));
+    if (!(lie_v3_len(u) > 1e-6f))
+        u = fabsf(c.forward.y) < 0.9f ? lie_v3(0, 1, 0) : lie_v3(1, 0, 0);
+    c.up = lie_v3_norm(lie_v3_sub(u, lie_v3_scale(c.forward, lie_v3_dot(u, c.forward))));
+    c.yfov = fov * (float)M_PI / 180.0f;
+    return c;
+}

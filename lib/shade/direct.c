@@ -1,0 +1,342 @@
+/* Direct lighting: for each emitter, the unshadowed contribution of every
+ * light sample is computed in one branch-free loop over structure-of-arrays
+ * samples (vectorised by the compiler), then visibility is answered by the
+ * chosen strategy and the visible contributions are summed.
+ *
+ *   L_direct = sum_e sum_i  f(wi, wo) cos(theta_i) cos(theta_e) / d^2 * Le * A_e / n * V_i
+ *
+ * (area emitters; point lights: I cos(theta_i) / d^2, directional: E cos). */
+#include "shade/internal.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+lie_status lie_shade_scratch_init(lie_shade_scratch *sc, int cap, int max_blockers)
+{
+    memset(sc, 0, sizeof *sc);
+    if (cap < 1)
+        cap = 1;
+    size_t stride = ((size_t)cap + 15) & ~(size_t)15;
+    float *block = aligned_alloc(64, sizeof(float) * 15 * stride);
+    sc->occ = aligned_alloc(64, sizeof *sc->occ * stride);
+    sc->idx = malloc(sizeof(int) * stride);
+    if (!block || !sc->occ || !sc->idx) {
+        free(block);
+        free(sc->occ);
+        free(sc->idx);
+        memset(sc, 0, sizeof *sc);
+        return LIE_ERR_NOMEM;
+    }
+    memset(block, 0, sizeof(float) * 15 * stride);
+    float **arr[15] = {&sc->wr, &sc->wg, &sc->wb, &sc->dx, &sc->dy, &sc->dz, &sc->dist,
+                       &sc->batch.ox, &sc->batch.oy, &sc->batch.oz, &sc->batch.dx,
+                       &sc->batch.dy, &sc->batch.dz, &sc->batch.tnear, &sc->batch.tfar};
+    for (int k = 0; k < 15; k++)
+        *arr[k] = block + (size_t)k * stride;
+    sc->batch.occluded = malloc(stride);
+    sc->blockers = malloc(sizeof *sc->blockers * ((size_t)(max_blockers > 0 ? max_blockers : 0) + 1));
+    if (!sc->batch.occluded || !sc->blockers || lie_light_samples_alloc(&sc->rotated, cap) != LIE_OK) {
+        lie_shade_scratch_free(sc);
+        return LIE_ERR_NOMEM;
+    }
+    sc->cap = cap;
+    return LIE_OK;
+}
+
+void lie_shade_scratch_free(lie_shade_scratch *sc)
+{
+    if (!sc)
+        return;
+    free(sc->wr);
+    free(sc->occ);
+    free(sc->idx);
+    free(sc->batch.occluded);
+    free(sc->blockers);
+    lie_light_samples_free(&sc->rotated);
+    memset(sc, 0, sizeof *sc);
+}
+
+/* Unshadowed contributions of an area emitter's samples, seen from origin o
+ * (the surface point lifted off the surface).  Branch-free: invalid samples
+ * get weight 0 by selection, so NaNs from degenerate geometry never leak. */
+static void kernel_area(const lie_surface *sf, lie_vec3 o, const lie_light_samples *ls, int two_sided,
+                        lie_shade_scratch *sc)
+{
+    const int n = ls->n;
+    const float px = o.x, py = o.y, pz = o.z;
+    const float nx = sf->n.x, ny = sf->n.y, nz = sf->n.z;
+    const float gx = sf->ng.x, gy = sf->ng.y, gz = sf->ng.z;
+    const float *restrict lx = ls->x, *restrict ly = ls->y, *restrict lz = ls->z;
+    const float *restrict lnx = ls->nx, *restrict lny = ls->ny, *restrict lnz = ls->nz;
+    const float *restrict lr = ls->r, *restrict lg = ls->g, *restrict lb = ls->b;
+    float *restrict wr = sc->wr, *restrict wg = sc->wg, *restrict wb = sc->wb;
+    const float sgn = two_sided ? -1.0f : 1.0f; /* two-sided: |cos| via max(c, -c) */
+    if (sf->lambert && ls->uniform) {
+        /* The common case: a Lambert receiver and an emitter of one colour.
+         * Only the geometric term varies per sample; colour is applied
+         * once, to the sum (sc->scalar). */
+        float *restrict G_out = sc->wr;
+#pragma omp simd
+        for (int i = 0; i < n; i++) {
+            float dx = lx[i] - px, dy = ly[i] - py, dz = lz[i] - pz;
+            float d2 = dx * dx + dy * dy + dz * dz;
+            float inv = 1.0f / sqrtf(d2);
+            float cr = (nx * dx + ny * dy + nz * dz) * inv;
+            float cg = gx * dx + gy * dy + gz * dz;
+            float ce = -(lnx[i] * dx + lny[i] * dy + lnz[i] * dz) * inv;
+            ce = ce > sgn * ce ? ce : sgn * ce;
+            int ok = (cr > 0.0f) & (cg > 0.0f) & (ce > 0.0f) & (d2 > 0.0f);
+            float G = cr * ce * (inv * inv);
+            G_out[i] = ok ? G : 0.0f;
+        }
+        sc->scalar = 1;
+        sc->scale[0] = lr[0] * sf->diffuse[0] * (float)M_1_PI;
+        sc->scale[1] = lg[0] * sf->diffuse[1] * (float)M_1_PI;
+        sc->scale[2] = lb[0] * sf->diffuse[2] * (float)M_1_PI;
+        return;
+    }
+    sc->scalar = 0;
+    if (sf->lambert) {
+        const float kr = sf->diffuse[0] * (float)M_1_PI, kg = sf->diffuse[1] * (float)M_1_PI,
+                    kb = sf->diffuse[2] * (float)M_1_PI;
+#pragma omp simd
+        for (int i = 0; i < n; i++) {
+            float dx = lx[i] - px, dy = ly[i] - py, dz = lz[i] - pz;
+            float d2 = dx * dx + dy * dy + dz * dz;
+            float inv = 1.0f / sqrtf(d2);
+            float cr = (nx * dx + ny * dy + nz * dz) * inv;
+            float cg = gx * dx + gy * dy + gz * dz;
+            float ce = -(lnx[i] * dx + lny[i] * dy + lnz[i] * dz) * inv;
+            ce = ce > sgn * ce ? ce : sgn * ce;
+            int ok = (cr > 0.0f) & (cg > 0.0f) & (ce > 0.0f) & (d2 > 0.0f);
+            float G = cr * ce * (inv * inv);
+            G = ok ? G : 0.0f;
+            wr[i] = lr[i] * G * kr;
+            wg[i] = lg[i] * G * kg;
+            wb[i] = lb[i] * G * kb;
+        }
+        return;
+    }
+    /* glTF metallic-roughness BRDF (spec Appendix B): GGX D, height-
+     * correlated Smith V, Schlick F with F0 = mix(0.04, base, metallic). */
+    const float vx = sf->wo.x, vy = sf->wo.y, vz = sf->wo.z;
+    const float nv = fmaxf(nx * vx + ny * vy + nz * vz, 1e-4f);
+    const float a2 = sf->alpha * sf->alpha;
+    const float nv_term = sqrtf(nv * nv * (1.0f - a2) + a2);
+    const float cdr = sf->diffuse[0] * (float)M_1_PI, cdg = sf->diffuse[1] * (float)M_1_PI,
+                cdb = sf->diffuse[2] * (float)M_1_PI;
+    const float f0r = sf->f0[0], f0g = sf->f0[1], f0b = sf->f0[2];
+    const float inv_pi = (float)M_1_PI;
+#pragma omp simd
+    for (int i = 0; i < n; i++) {
+        float dx = lx[i] - px, dy = ly[i] - py, dz = lz[i] - pz;
+        float d2 = dx * dx + dy * dy + dz * dz;
+        float inv = 1.0f / sqrtf(d2);
+        float wx = dx * inv, wy = dy * inv, wz = dz * inv;
+        float cr = nx * wx + ny * wy + nz * wz;
+        float cg = gx * wx + gy * wy + gz * wz;
+        float ce = -(lnx[i] * wx + lny[i] * wy + lnz[i] * wz);
+        ce = ce > sgn * ce ? ce : sgn * ce;
+        float G = cr * ce * (inv * inv);
+        int ok = (cr > 0.0f) & (cg > 0.0f) & (ce > 0.0f) & (d2 > 0.0f);
+        float hx = wx + vx, hy = wy + vy, hz = wz + vz;
+        float h2 = hx * hx + hy * hy + hz * hz;
+        float hinv = 1.0f / sqrtf(h2 > 1e-12f ? h2 : 1e-12f);
+        float nh = (nx * hx + ny * hy + nz * hz) * hinv;
+        nh = nh > 0.0f ? nh : 0.0f;
+        float vh = (vx * hx + vy * hy + vz * hz) * hinv;
+        vh = vh > 0.0f ? vh : 0.0f;
+        float dd = nh * nh * (a2 - 1.0f) + 1.0f;
+        float D = a2 * inv_pi / (dd * dd);
+        float nl = cr > 1e-6f ? cr : 1e-6f;
+        float V = 0.5f / (nl * nv_term + nv * sqrtf(nl * nl * (1.0f - a2) + a2));
+        float x = 1.0f - vh, x2 = x * x, s5 = x2 * x2 * x;
+        float spec = D * V;
+        float Fr = f0r + (1.0f - f0r) * s5, Fg = f0g + (1.0f - f0g) * s5, Fb = f0b + (1.0f - f0b) * s5;
+        float fr = cdr * (1.0f - Fr) + Fr * spec;
+        float fg = cdg * (1.0f - Fg) + Fg * spec;
+        float fb = cdb * (1.0f - Fb) + Fb * spec;
+        G = ok ? G : 0.0f;
+        wr[i] = lr[i] * G * fr;
+        wg[i] = lg[i] * G * fg;
+        wb[i] = lb[i] * G * fb;
+    }
+}
+
+/* One punctual sample (point, spot or directional), scalar. */
+static void kernel_punctual(const lie_shade_ctx *c, const lie_surface *sf, lie_vec3 o, const lie_emitter *em,
+                            lie_shade_scratch *sc)
+{
+    lie_vec3 wi;
+    float atten, dist;
+    if (em->type == LIE_EMITTER_DIRECTIONAL) {
+        wi = lie_v3_scale(em->direction, -1.0f);
+        atten = 1.0f;
+        dist = c->ray_far;
+    } else {
+        lie_vec3 d = lie_v3_sub(em->position, o);
+        float d2 = lie_v3_dot(d, d);
+        dist = sqrtf(d2);
+        wi = dist > 0.0f ? lie_v3_scale(d, 1.0f / dist) : lie_v3(0.0f, 0.0f, 1.0f);
+        atten = d2 > 0.0f ? 1.0f / d2 : 0.0f;
+        if (em->cos_outer > -1.5f) {
+            /* KHR_lights_punctual's recommended spot falloff. */
+            float scale = 1.0f / fmaxf(0.001f, em->cos_inner - em->cos_outer);
+            float cd = -lie_v3_dot(em->direction, wi);
+            float a = fminf(fmaxf((cd - em->cos_outer) * scale, 0.0f), 1.0f);
+            atten *= a * a;
+        }
+        if (em->range > 0.0f) {
+            float r = dist / em->range, r4 = r * r * r * r;
+            atten *= fminf(fmaxf(1.0f - r4, 0.0f), 1.0f);
+        }
+    }
+    float f[3] = {0.0f, 0.0f, 0.0f};
+    if (lie_v3_dot(sf->ng, wi) > 0.0f)
+        lie_brdf_eval_cos(sf, wi, f);
+    sc->wr[0] = em->intensity[0] * atten * f[0];
+    sc->wg[0] = em->intensity[1] * atten * f[1];
+    sc->wb[0] = em->intensity[2] * atten * f[2];
+    sc->dx[0] = wi.x;
+    sc->dy[0] = wi.y;
+    sc->dz[0] = wi.z;
+    sc->dist[0] = dist;
+    sc->scalar = 0;
+}
+
+void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pixel, int depth,
+                      lie_shade_scratch *sc, float rgb[3])
+{
+    const lie_scene *s = c->s;
+    const lie_render_options *opt = c->opt;
+    if (sf->mirror)
+        return; /* a delta BRDF sees area lights only through reflection rays */
+    /* Shadow rays leave from the surface lifted along the geometric normal
+     * (as lie_shadow_segment does) and stop as far short of the emitter. */
+    float ax = fabsf(sf->p.x), ay = fabsf(sf->p.y), az = fabsf(sf->p.z);
+    float mag = ax > ay ? ax : ay;
+    mag = mag > az ? mag : az;
+    float eps = 1e-4f * (mag > 1.0f ? mag : 1.0f);
+    lie_vec3 o = lie_v3_add(sf->p, lie_v3_scale(sf->ng, eps));
+    for (int e = 0; e < s->n_emitters; e++) {
+        const lie_emitter *em = &s->emitters[e];
+        if (em->type == LIE_EMITTER_AREA && em->first_tri <= sf->tri && sf->tri < em->first_tri + em->n_tris)
+            continue; /* an emitter does not light itself */
+        lie_vis_class cls = LIE_VISCLASS_TEST_ALL;
+        const void *pair = NULL;
+        int n_blockers = 0;
+        if (opt->visibility == LIE_VIS_LIE && opt->oracle) {
+            cls = opt->oracle->classify(opt->oracle->ctx, sf, e, &pair);
+            if (cls == LIE_VISCLASS_OCCLUDED) {
+                sc->stats.shadow_rays_skipped += (uint64_t)(em->type == LIE_EMITTER_AREA ? opt->light_samples : 1);
+                continue;
+            }
+            if (cls == LIE_VISCLASS_BLOCKERS) {
+                /* of the patch's blockers, those this point's segments can meet */
+                n_blockers = opt->oracle->select(opt->oracle->ctx, pair, e, o, sc->blockers);
+                if (n_blockers == 0)
+                    cls = LIE_VISCLASS_VISIBLE;
+            }
+        } else if (opt->visibility == LIE_VIS_NONE) {
+            cls = LIE_VISCLASS_VISIBLE;
+        }
+        int n;
+        const lie_light_samples *ls = NULL;
+        if (em->type == LIE_EMITTER_AREA) {
+            ls = &c->fixed[e];
+            if (opt->pattern == LIE_PATTERN_ROTATED) {
+                uint64_t h = lie_hash_u64x4(pixel, (uint64_t)e, (uint64_t)depth, 0x726f74ull);
+                lie_light_samples_generate(s, e, opt->light_samples, lie_hash_to_unit(h),
+                                           lie_hash_to_unit(h << 24), &sc->rotated);
+                ls = &sc->rotated;
+            }
+            kernel_area(sf, o, ls, em->double_sided, sc);
+            n = ls->n;
+        } else {
+            kernel_punctual(c, sf, o, em, sc);
+            n = 1;
+        }
+        sc->stats.light_samples += (uint64_t)n;
+        memset(sc->occ, 0, sizeof *sc->occ * (size_t)n);
+        if (cls != LIE_VISCLASS_VISIBLE) {
+            /* Each shadow ray is the segment o -> o + d_i, d_i the vector to
+             * the sample shortened by eps: the same segments for Embree and
+             * for blocker lists. */
+            float *restrict sdx = sc->dx, *restrict sdy = sc->dy, *restrict sdz = sc->dz;
+            if (ls) {
+                const float *restrict lx = ls->x, *restrict ly = ls->y, *restrict lz = ls->z;
+                const float ox = o.x, oy = o.y, oz = o.z;
+#pragma omp simd
+                for (int i = 0; i < n; i++) {
+                    float dx = lx[i] - ox, dy = ly[i] - oy, dz = lz[i] - oz;
+                    float d2 = dx * dx + dy * dy + dz * dz;
+                    float k = d2 > 0.0f ? 1.0f - eps / sqrtf(d2) : 0.0f;
+                    sdx[i] = dx * k;
+                    sdy[i] = dy * k;
+                    sdz[i] = dz * k;
+                }
+            } else {
+                float len = sc->dist[0] - eps;
+                sdx[0] *= len;
+                sdy[0] *= len;
+                sdz[0] *= len;
+            }
+            if (cls == LIE_VISCLASS_BLOCKERS) {
+                /* short lists: test every sample, no compaction */
+                opt->oracle->occluded(opt->oracle->ctx, sc->blockers, n_blockers, o, sdx, sdy, sdz, n, sc->occ);
+                sc->stats.shadow_rays_skipped += (uint64_t)n;
+            } else {
+                /* Embree: rays only for samples that would contribute */
+                lie_ray_batch *b = &sc->batch;
+                int m = 0;
+                for (int i = 0; i < n; i++) {
+                    float w = sc->scalar ? sc->wr[i] : sc->wr[i] + sc->wg[i] + sc->wb[i];
+                    if (!(w > 0.0f))
+                        continue;
+                    b->ox[m] = o.x;
+                    b->oy[m] = o.y;
+                    b->oz[m] = o.z;
+                    b->dx[m] = sdx[i];
+                    b->dy[m] = sdy[i];
+                    b->dz[m] = sdz[i];
+                    b->tnear[m] = 0.0f;
+                    b->tfar[m] = 1.0f;
+                    sc->idx[m] = i;
+                    m++;
+                }
+                b->n = m;
+                if (m > 0) {
+                    lie_rt_occluded_batch(c->rt, b, opt->rays);
+                    for (int k = 0; k < m; k++)
+                        sc->occ[sc->idx[k]] = b->occluded[k] ? ~0u : 0u;
+                }
+                sc->stats.shadow_rays += (uint64_t)m;
+            }
+        } else {
+            sc->stats.shadow_rays_skipped += (uint64_t)n;
+        }
+        const float *restrict wr = sc->wr, *restrict wg = sc->wg, *restrict wb = sc->wb;
+        const uint32_t *restrict occ = sc->occ;
+        if (sc->scalar) {
+            float sum = 0.0f;
+#pragma omp simd reduction(+ : sum)
+            for (int i = 0; i < n; i++)
+                sum += occ[i] ? 0.0f : wr[i];
+            rgb[0] += sum * sc->scale[0];
+            rgb[1] += sum * sc->scale[1];
+            rgb[2] += sum * sc->scale[2];
+            continue;
+        }
+        float sr = 0.0f, sg = 0.0f, sb = 0.0f;
+#pragma omp simd reduction(+ : sr, sg, sb)
+        for (int i = 0; i < n; i++) {
+            float v = occ[i] ? 0.0f : 1.0f;
+            sr += wr[i] * v;
+            sg += wg[i] * v;
+            sb += wb[i] * v;
+        }
+        rgb[0] += sr;
+        rgb[1] += sg;
+        rgb[2] += sb;
+    }
+}

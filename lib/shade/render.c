@@ -1,0 +1,338 @@
+/* The renderer: eye rays through pixel centres (or stratified sub-pixel
+ * positions), direct lighting at the first hit, perfect mirrors traced
+ * recursively, in 16x16 tiles over worker threads.  Each pixel's value
+ * depends only on its own rays, so any thread count gives the same bytes. */
+#include "lie/lie.h"
+#include "shade/internal.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+lie_render_options lie_render_options_default(void)
+{
+    lie_render_options o;
+    memset(&o, 0, sizeof o);
+    o.width = LIE_RENDER_WIDTH_DEFAULT;
+    o.height = LIE_RENDER_HEIGHT_DEFAULT;
+    o.spp = 1;
+    o.light_samples = LIE_LIGHT_SAMPLES_DEFAULT;
+    o.max_depth = LIE_MAX_DEPTH_DEFAULT;
+    o.threads = 0;
+    o.pattern = LIE_PATTERN_FIXED;
+    o.rays = LIE_RAYS_STREAM;
+    o.visibility = LIE_VIS_FULL;
+    o.aov_emitter = -1;
+    return o;
+}
+
+typedef struct render_job {
+    lie_shade_ctx sc;
+    const lie_camera *cam;
+    lie_frame *frame;
+    float *albedo, *normal, *depth, *complexity, *patch;
+    lie_vec3 right, up, fwd;
+    float tan_y, tan_x;
+    int tiles_x;
+    lie_shade_scratch *scratch; /* one per worker */
+} render_job;
+
+/* Radiance along a ray: emission at the hit, direct lighting, and for a
+ * mirror the reflected ray (Schlick-weighted) up to max_depth bounces. */
+static void shade_hit(const render_job *j, const lie_hit *hitp, lie_vec3 dir, int depth, uint64_t pixel,
+                      lie_shade_scratch *sc, float rgb[3], lie_surface *first);
+
+static void trace(const render_job *j, lie_vec3 org, lie_vec3 dir, int depth, uint64_t pixel,
+                  lie_shade_scratch *sc, float rgb[3], lie_surface *first)
+{
+    lie_hit hit;
+    if (lie_rt_intersect(j->sc.rt, org, dir, 0.0f, INFINITY, 1, &hit))
+        shade_hit(j, &hit, dir, depth, pixel, sc, rgb, first);
+}
+
+static void shade_hit(const render_job *j, const lie_hit *hitp, lie_vec3 dir, int depth, uint64_t pixel,
+                      lie_shade_scratch *sc, float rgb[3], lie_surface *first)
+{
+    const lie_scene *s = j->sc.s;
+    lie_hit hit = *hitp;
+    lie_surface sf;
+    lie_surface_from_hit(s, &hit, dir, &sf);
+    if (first)
+        *first = sf;
+    sc->stats.shading_points++;
+    for (int k = 0; k < 3; k++)
+        rgb[k] += sf.emission[k];
+    if (j->sc.opt->eye_only)
+        return;
+    if (sf.mirror) {
+        if (depth >= j->sc.opt->max_depth)
+            return;
+        float dn = lie_v3_dot(dir, sf.n);
+        lie_vec3 r = lie_v3_norm(lie_v3_sub(dir, lie_v3_scale(sf.n, 2.0f * dn)));
+        if (lie_v3_dot(r, sf.ng) <= 0.0f)
+            return; /* shading normal bent the reflection below the surface */
+        float cosv = fminf(fmaxf(-dn, 0.0f), 1.0f);
+        float x = 1.0f - cosv, s5 = x * x * x * x * x;
+        float mag = fmaxf(fabsf(sf.p.x), fmaxf(fabsf(sf.p.y), fabsf(sf.p.z)));
+        lie_vec3 o = lie_v3_add(sf.p, lie_v3_scale(sf.ng, 1e-4f * fmaxf(1.0f, mag)));
+        float sub[3] = {0.0f, 0.0f, 0.0f};
+        sc->stats.reflection_rays++;
+        trace(j, o, r, depth + 1, pixel, sc, sub, NULL);
+        for (int k = 0; k < 3; k++) {
+            float F = sf.f0[k] + (1.0f - sf.f0[k]) * s5;
+            rgb[k] += F * sub[k];
+        }
+        return;
+    }
+    lie_shade_direct(&j->sc, &sf, pixel, depth, sc, rgb);
+}
+
+/* Complexity and patch AOVs: the LIE of the surface seen through the pixel
+ * centre (the paper's Figure 10). */
+static void describe_pixel(const render_job *j, int x, int y, size_t pi)
+{
+    const lie_render_options *opt = j->sc.opt;
+    const lie_frame *f = j->frame;
+    float ndc_x = (2.0f * ((float)x + 0.5f) / (float)f->width - 1.0f) * j->tan_x;
+    float ndc_y = (1.0f - 2.0f * ((float)y + 0.5f) / (float)f->height) * j->tan_y;
+    lie_vec3 d = lie_v3_norm(lie_v3_add(j->fwd, lie_v3_add(lie_v3_scale(j->right, ndc_x), lie_v3_scale(j->up, ndc_y))));
+    lie_hit hit;
+    float rgb[3] = {0.0f, 0.0f, 0.0f}, prgb[3] = {0.0f, 0.0f, 0.0f};
+    if (lie_rt_intersect(j->sc.rt, j->cam->eye, d, 0.0f, INFINITY, 1, &hit)) {
+        lie_surface sf;
+        lie_surface_from_hit(j->sc.s, &hit, d, &sf);
+        int ne = j->sc.s->n_emitters;
+        int e0 = opt->aov_emitter >= 0 ? opt->aov_emitter : 0;
+        int e1 = opt->aov_emitter >= 0 ? opt->aov_emitter + 1 : ne;
+        int cls[64];
+        uint32_t cnt[64];
+        uint64_t id = 0;
+        int n = 0, lit = 0;
+        for (int e = e0; e < e1; e++) {
+            int c;
+            uint32_t k;
+            uint64_t pid;
+            opt->oracle->describe(opt->oracle->ctx, &sf, e, &c, &k, &pid);
+            if (n < 64) {
+                cls[n] = c;
+                cnt[n] = k;
+                n++;
+            } else if (c == LIE_CLASS_COMPLEX || c > LIE_CLASS_SPLIT) {
+                cls[63] = c; /* more than 64 emitters: keep the red */
+            }
+            if (!lit && c != LIE_CLASS_UNLIT) {
+                id = pid; /* the first lit emitter's patch */
+                lit = 1;
+            }
+        }
+        if (opt->aov_emitter >= 0)
+            lie_complexity_colour(cls[0], cnt[0], rgb);
+        else
+            lie_complexity_colour_all(cls, cnt, n, rgb);
+        prgb[0] = lie_hash_to_unit(id);
+        prgb[1] = lie_hash_to_unit(id << 20);
+        prgb[2] = lie_hash_to_unit(id << 40);
+    }
+    for (int q = 0; q < 3; q++) {
+        if (j->complexity)
+            j->complexity[3 * pi + q] = rgb[q];
+        if (j->patch)
+            j->patch[3 * pi + q] = prgb[q];
+    }
+}
+
+static void render_tile(void *ctx, size_t item, int worker)
+{
+    render_job *j = ctx;
+    lie_frame *f = j->frame;
+    const lie_render_options *opt = j->sc.opt;
+    lie_shade_scratch *sc = &j->scratch[worker];
+    int tx = (int)(item % (size_t)j->tiles_x), ty = (int)(item / (size_t)j->tiles_x);
+    int x0 = tx * LIE_TILE, y0 = ty * LIE_TILE;
+    int x1 = x0 + LIE_TILE < f->width ? x0 + LIE_TILE : f->width;
+    int y1 = y0 + LIE_TILE < f->height ? y0 + LIE_TILE : f->height;
+    int spp = opt->spp > 0 ? opt->spp : 1;
+    /* One eye ray per pixel: coherent camera rays go to Embree as 8-wide
+     * packets, a row of a tile at a time. */
+    lie_hit row_hits[LIE_TILE];
+    lie_vec3 row_dirs[LIE_TILE];
+    for (int y = y0; y < y1; y++) {
+        if (spp == 1) {
+            int n = x1 - x0;
+            for (int i = 0; i < n; i++) {
+                float ndc_x = (2.0f * ((float)(x0 + i) + 0.5f) / (float)f->width - 1.0f) * j->tan_x;
+                float ndc_y = (1.0f - 2.0f * ((float)y + 0.5f) / (float)f->height) * j->tan_y;
+                row_dirs[i] = lie_v3_norm(lie_v3_add(j->fwd, lie_v3_add(lie_v3_scale(j->right, ndc_x),
+                                                                        lie_v3_scale(j->up, ndc_y))));
+            }
+            for (int i = 0; i < n; i += 8)
+                lie_rt_intersect8(j->sc.rt, j->cam->eye, row_dirs + i, n - i < 8 ? n - i : 8, 1, row_hits + i);
+        }
+        for (int x = x0; x < x1; x++) {
+            uint64_t pixel = (uint64_t)y * (uint64_t)f->width + (uint64_t)x;
+            float acc[3] = {0.0f, 0.0f, 0.0f};
+            float alb[3] = {0.0f, 0.0f, 0.0f}, nrm[3] = {0.0f, 0.0f, 0.0f}, dep = 0.0f;
+            int first_hits = 0;
+            uint64_t h = lie_hash_u64x4(pixel, 0x706978656cull, 0, 0);
+            float shx = lie_hash_to_unit(h), shy = lie_hash_to_unit(h << 24);
+            for (int k = 0; k < spp; k++) {
+                float sx = 0.5f, sy = 0.5f;
+                if (spp > 1) {
+                    /* Stratified: a Hammersley set shifted per pixel. */
+                    sx = ((float)k + 0.5f) / (float)spp + shx;
+                    sy = lie_radical_inverse2((uint32_t)k) + shy;
+                    sx -= floorf(sx);
+                    sy -= floorf(sy);
+                }
+                float ndc_x = (2.0f * ((float)x + sx) / (float)f->width - 1.0f) * j->tan_x;
+                float ndc_y = (1.0f - 2.0f * ((float)y + sy) / (float)f->height) * j->tan_y;
+                lie_vec3 d = lie_v3_norm(lie_v3_add(j->fwd, lie_v3_add(lie_v3_scale(j->right, ndc_x),
+                                                                        lie_v3_scale(j->up, ndc_y))));
+                lie_surface first = {0};
+                first.tri = LIE_NO_HIT;
+                float c[3] = {0.0f, 0.0f, 0.0f};
+                sc->stats.eye_rays++;
+                if (spp == 1) {
+                    if (row_hits[x - x0].tri != LIE_NO_HIT)
+                        shade_hit(j, &row_hits[x - x0], row_dirs[x - x0], 0, pixel, sc, c, &first);
+                } else {
+                    trace(j, j->cam->eye, d, 0, pixel, sc, c, &first);
+                }
+                for (int q = 0; q < 3; q++)
+                    acc[q] += c[q];
+                if (first.tri != LIE_NO_HIT) {
+                    first_hits++;
+                    for (int q = 0; q < 3; q++)
+                        alb[q] += first.base_color[q];
+                    nrm[0] += first.n.x;
+                    nrm[1] += first.n.y;
+                    nrm[2] += first.n.z;
+                    dep += lie_v3_dot(lie_v3_sub(first.p, j->cam->eye), j->fwd);
+                }
+            }
+            size_t pi = (size_t)pixel;
+            float inv = 1.0f / (float)spp;
+            for (int q = 0; q < 3; q++)
+                f->rgb[3 * pi + q] = acc[q] * inv;
+            if (j->albedo)
+                for (int q = 0; q < 3; q++)
+                    j->albedo[3 * pi + q] = alb[q] * inv;
+            if (j->normal)
+                for (int q = 0; q < 3; q++)
+                    j->normal[3 * pi + q] = nrm[q] * inv;
+            if (j->depth)
+                j->depth[pi] = first_hits ? dep / (float)first_hits : INFINITY;
+            if (j->complexity || j->patch)
+                describe_pixel(j, x, y, pi);
+        }
+    }
+}
+
+lie_status lie_render(const lie_scene *s, const lie_rt *rt, const lie_camera *cam,
+                      const lie_render_options *opt, lie_frame **out, lie_render_stats *stats,
+                      lie_error *err)
+{
+    *out = NULL;
+    const char *path = s->path ? s->path : "";
+    if (opt->width < 1 || opt->height < 1 || opt->width > 65536 || opt->height > 65536)
+        return lie_error_set(err, LIE_ERR_ARG, path, "image size %dx%d out of range", opt->width, opt->height);
+    if (opt->light_samples < 1 || opt->light_samples > 1000000)
+        return lie_error_set(err, LIE_ERR_ARG, path, "light samples %d out of range", opt->light_samples);
+    if (opt->visibility == LIE_VIS_LIE && !opt->oracle)
+        return lie_error_set(err, LIE_ERR_ARG, path, "LIE visibility needs a cache");
+    if ((opt->aovs & (LIE_AOV_COMPLEXITY | LIE_AOV_PATCH)) && (!opt->oracle || !opt->oracle->describe))
+        return lie_error_set(err, LIE_ERR_ARG, path, "complexity and patch AOVs need a cache");
+    if (opt->aov_emitter >= s->n_emitters)
+        return lie_error_set(err, LIE_ERR_ARG, path, "emitter %d: the scene has %d", opt->aov_emitter,
+                             s->n_emitters);
+    double t0 = lie_time_now();
+    render_job j;
+    memset(&j, 0, sizeof j);
+    j.sc.s = s;
+    j.sc.rt = rt;
+    j.sc.opt = opt;
+    j.sc.ray_far = lie_ray_far(s);
+    if (!isfinite(j.sc.ray_far))
+        j.sc.ray_far = 1e30f;
+    j.cam = cam;
+    j.fwd = lie_v3_norm(cam->forward);
+    j.right = lie_v3_norm(lie_v3_cross(j.fwd, cam->up));
+    j.up = lie_v3_cross(j.right, j.fwd);
+    float yfov = cam->yfov > 0.0f && cam->yfov < (float)M_PI ? cam->yfov : 0.7853982f;
+    /* The image's aspect ratio wins over the camera's, so pixels stay square. */
+    j.tan_y = tanf(0.5f * yfov);
+    j.tan_x = j.tan_y * (float)opt->width / (float)opt->height;
+    lie_frame *f = lie_frame_create(opt->width, opt->height);
+    if (!f)
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory for a %dx%d frame", opt->width, opt->height);
+    j.frame = f;
+    static const char *const rgb_names[3] = {"R", "G", "B"};
+    static const char *const xyz_names[3] = {"X", "Y", "Z"};
+    static const char *const z_name[1] = {"Z"};
+    if (opt->aovs & LIE_AOV_ALBEDO)
+        j.albedo = lie_frame_add_aov(f, "albedo", 3, rgb_names);
+    if (opt->aovs & LIE_AOV_NORMAL)
+        j.normal = lie_frame_add_aov(f, "normal", 3, xyz_names);
+    if (opt->aovs & LIE_AOV_DEPTH)
+        j.depth = lie_frame_add_aov(f, "depth", 1, z_name);
+    if (opt->aovs & LIE_AOV_COMPLEXITY)
+        j.complexity = lie_frame_add_aov(f, "complexity", 3, rgb_names);
+    if (opt->aovs & LIE_AOV_PATCH)
+        j.patch = lie_frame_add_aov(f, "patch", 3, rgb_names);
+    if (((opt->aovs & LIE_AOV_ALBEDO) && !j.albedo) || ((opt->aovs & LIE_AOV_NORMAL) && !j.normal) ||
+        ((opt->aovs & LIE_AOV_DEPTH) && !j.depth)) {
+        lie_frame_destroy(f);
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    }
+    int threads = opt->threads > 0 ? opt->threads : lie_cpu_count();
+    lie_light_samples *fixed = calloc((size_t)s->n_emitters + 1, sizeof *fixed);
+    j.scratch = aligned_alloc(128, sizeof *j.scratch * (size_t)threads);
+    if (j.scratch)
+        memset(j.scratch, 0, sizeof *j.scratch * (size_t)threads);
+    lie_status st = fixed && j.scratch ? LIE_OK : LIE_ERR_NOMEM;
+    for (int e = 0; st == LIE_OK && e < s->n_emitters; e++) {
+        int n = s->emitters[e].type == LIE_EMITTER_AREA ? opt->light_samples : 1;
+        st = lie_light_samples_alloc(&fixed[e], n);
+        if (st == LIE_OK) {
+            float su, sv;
+            lie_light_pattern_shift(e, &su, &sv);
+            lie_light_samples_generate(s, e, n, su, sv, &fixed[e]);
+        }
+    }
+    for (int t = 0; st == LIE_OK && t < threads; t++)
+        st = lie_shade_scratch_init(&j.scratch[t], opt->light_samples, opt->oracle ? opt->oracle->max_blockers : 0);
+    j.sc.fixed = fixed;
+    if (st == LIE_OK) {
+        j.tiles_x = (opt->width + LIE_TILE - 1) / LIE_TILE;
+        int tiles_y = (opt->height + LIE_TILE - 1) / LIE_TILE;
+        lie_progress prog;
+        lie_progress_begin(&prog, stderr, "render", opt->progress);
+        st = lie_parallel_for((size_t)j.tiles_x * (size_t)tiles_y, threads, render_tile, &j,
+                              lie_progress_cb, &prog);
+        lie_progress_end(&prog);
+    }
+    if (stats) {
+        memset(stats, 0, sizeof *stats);
+        for (int t = 0; j.scratch && t < threads; t++) {
+            const lie_render_stats *w = &j.scratch[t].stats;
+            stats->eye_rays += w->eye_rays;
+            stats->reflection_rays += w->reflection_rays;
+            stats->shadow_rays += w->shadow_rays;
+            stats->shadow_rays_skipped += w->shadow_rays_skipped;
+            stats->shading_points += w->shading_points;
+            stats->light_samples += w->light_samples;
+        }
+        stats->seconds = lie_time_now() - t0;
+    }
+    for (int t = 0; j.scratch && t < threads; t++)
+        lie_shade_scratch_free(&j.scratch[t]);
+    free(j.scratch);
+    for (int e = 0; fixed && e < s->n_emitters; e++)
+        lie_light_samples_free(&fixed[e]);
+    free(fixed);
+    if (st != LIE_OK) {
+        lie_frame_destroy(f);
+        return lie_error_set(err, st, path, "%s", lie_status_str(st));
+    }
+    *out = f;
+    return LIE_OK;
+}

@@ -1,0 +1,207 @@
+/* lib/shade: BRDFs (Lambert; GGX as glTF's metallic-roughness BRDF; perfect
+ * mirror), emitter sample patterns and the direct-lighting renderer.
+ *
+ * ARCHITECTURE.md decision 1: there is one shading code.  Visibility
+ * strategies differ only in how a shadow ray is answered: `full` asks Embree
+ * over the whole scene (the reference), `lie` (lib/lie) asks the patch's
+ * local illumination environment. */
+#ifndef LIE_SHADE_H
+#define LIE_SHADE_H
+
+#include "core/core.h"
+#include "image/image.h"
+#include "rt/rt.h"
+#include "scene/scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- emitter sample patterns ----------------------------------------- */
+
+/* Per emitter, `n` samples as structure of arrays: position, emitter normal
+ * (area emitters), and radiance weight Le * area / n (area; so the estimate
+ * is the plain sum of weight * G * f * V) or the intensity (punctual). */
+typedef struct lie_light_samples {
+    int n;
+    float *x, *y, *z, *nx, *ny, *nz, *r, *g, *b;
+    int uniform;           /* every sample has the same weight (no emissive texture) */
+} lie_light_samples;
+
+/* Samples of emitter e: a Hammersley point set over the unit square,
+ * Cranley-Patterson shifted by (su, sv), mapped through the triangle area CDF
+ * onto the emitter.  `out` arrays must hold `n` floats each (see
+ * lie_light_samples_alloc).  Punctual emitters produce exactly one sample. */
+void lie_light_samples_generate(const lie_scene *s, int e, int n, float su, float sv,
+                                lie_light_samples *out);
+lie_status lie_light_samples_alloc(lie_light_samples *ls, int n);
+void lie_light_samples_free(lie_light_samples *ls);
+/* The fixed per-emitter shift (the paper's "same sample points every time"). */
+void lie_light_pattern_shift(int e, float *su, float *sv);
+
+/* ---- surfaces --------------------------------------------------------- */
+
+/* Everything the integrator needs about a hit point. */
+typedef struct lie_surface {
+    uint32_t tri;
+    float b1, b2;          /* barycentrics of vertices 1 and 2 */
+    lie_vec3 p;            /* position */
+    lie_vec3 ng, n;        /* geometric and shading normal, on the side of wo */
+    lie_vec3 wo;           /* unit direction towards the viewer */
+    float diffuse[3];      /* c_diff = baseColor * (1 - metallic) */
+    float f0[3];           /* mix(0.04, baseColor, metallic) */
+    float alpha;           /* GGX alpha = roughness^2 */
+    int mirror;            /* perfect specular */
+    int lambert;           /* metallic == 0 and roughness == 1: pure Lambert fast path */
+    float base_color[3];
+    float emission[3];     /* emitted radiance towards wo */
+} lie_surface;
+
+/* Fill a surface from a ray hit. */
+void lie_surface_from_hit(const lie_scene *s, const lie_hit *hit, lie_vec3 ray_dir, lie_surface *sf);
+
+/* glTF metallic-roughness BRDF f(wi, wo) * cos(theta_i) (Appendix B of the
+ * glTF 2.0 specification: GGX D, height-correlated Smith V, Schlick F). */
+void lie_brdf_eval_cos(const lie_surface *sf, lie_vec3 wi, float out[3]);
+
+/* ---- visibility strategies ------------------------------------------- */
+
+typedef enum lie_visibility_mode {
+    LIE_VIS_FULL = 0,      /* Embree over the whole scene: the reference */
+    LIE_VIS_LIE = 1,       /* local illumination environments (lib/lie) */
+    LIE_VIS_NONE = 2       /* no shadows at all (benchmarks: shading cost alone) */
+} lie_visibility_mode;
+
+/* How a (shading point, emitter) pair is to be answered. */
+typedef enum lie_vis_class {
+    LIE_VISCLASS_TEST_ALL = 0,   /* cast every shadow ray against the whole scene */
+    LIE_VISCLASS_VISIBLE = 1,    /* no ray needed: fully visible */
+    LIE_VISCLASS_OCCLUDED = 2,   /* no contribution */
+    LIE_VISCLASS_BLOCKERS = 3    /* test rays against a blocker list only */
+} lie_vis_class;
+
+/* A visibility oracle other than Embree-over-everything.  classify() looks
+ * up the pair; for LIE_VISCLASS_BLOCKERS, select() keeps the pair's
+ * blockers that can matter from origin o (writing at most max_blockers
+ * triangle indices; none left means the point sees the emitter whole) and
+ * occluded() answers n shadow segments o -> o + d_i against them
+ * (occ[i] = ~0 if blocked, 0 if free). */
+typedef struct lie_vis_oracle {
+    void *ctx;
+    int max_blockers;
+    lie_vis_class (*classify)(void *ctx, const lie_surface *sf, int emitter, const void **pair);
+    int (*select)(void *ctx, const void *pair, int emitter, lie_vec3 o, uint32_t *out);
+    void (*occluded)(void *ctx, const uint32_t *blockers, int n_blockers, lie_vec3 o, const float *dx,
+                     const float *dy, const float *dz, int n, uint32_t *occ);
+    /* For AOVs: the pair's class (lie_class), list length and a patch id. */
+    void (*describe)(void *ctx, const lie_surface *sf, int emitter, int *cls, uint32_t *count,
+                     uint64_t *patch_id);
+} lie_vis_oracle;
+
+/* The LIE strategy (§4.2): the hit's patch finds its leaf per emitter;
+ * visible pairs need no ray, occluded and unlit ones contribute nothing,
+ * partial ones test their rays against the blocker list only (compact
+ * precomputed triangles, a loop the compiler vectorises over rays), and
+ * complex pairs ask Embree.  `env` must match the scene. */
+typedef struct lie_env lie_env;
+typedef struct lie_lie_vis lie_lie_vis;
+lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vis **out, lie_error *err);
+const lie_vis_oracle *lie_lie_vis_oracle(const lie_lie_vis *v);
+void lie_lie_vis_destroy(lie_lie_vis *v);
+
+/* ---- the renderer ------------------------------------------------------ */
+
+typedef enum lie_pattern { LIE_PATTERN_FIXED = 0, LIE_PATTERN_ROTATED = 1 } lie_pattern;
+
+enum {
+    LIE_AOV_ALBEDO = 1 << 0,
+    LIE_AOV_NORMAL = 1 << 1,
+    LIE_AOV_DEPTH = 1 << 2,
+    LIE_AOV_COMPLEXITY = 1 << 3, /* Figure 10 colours (needs an oracle) */
+    LIE_AOV_PATCH = 1 << 4       /* a colour per leaf patch (needs an oracle) */
+};
+
+/* Figure 10's colour code for one pair: green visible, blue occluded, grey
+ * from black (1 blocker) to white (>= 10) for partial, red complex or not
+ * covered, black unlit.  `cls` is a lie_class (or -1: not covered). */
+void lie_complexity_colour(int cls, uint32_t count, float rgb[3]);
+/* Over all emitters: red if any pair is complex, else grey by the summed
+ * blocker count if any is partial, else the mix of green (visible) and blue
+ * (occluded) over the lit emitters, black if none is lit. */
+void lie_complexity_colour_all(const int *cls, const uint32_t *count, int n, float rgb[3]);
+
+typedef struct lie_render_options {
+    int width, height;
+    int spp;               /* eye rays per pixel, stratified; 1 = pixel centre */
+    int light_samples;     /* shadow rays per area emitter per shading point */
+    int max_depth;         /* mirror bounces */
+    int threads;           /* 0 = all cores */
+    lie_pattern pattern;
+    lie_ray_mode rays;     /* how full visibility batches shadow rays */
+    lie_visibility_mode visibility;
+    const lie_vis_oracle *oracle; /* for LIE_VIS_LIE */
+    unsigned aovs;         /* LIE_AOV_* bits */
+    int aov_emitter;       /* complexity/patch AOVs for this emitter; -1 = all */
+    int eye_only;          /* trace eye rays only (benchmark baseline) */
+    int progress;          /* progress bar on stderr if a terminal */
+} lie_render_options;
+
+#define LIE_RENDER_WIDTH_DEFAULT 512
+#define LIE_RENDER_HEIGHT_DEFAULT 512
+#define LIE_LIGHT_SAMPLES_DEFAULT 100
+#define LIE_MAX_DEPTH_DEFAULT 2
+#define LIE_TILE 16
+lie_render_options lie_render_options_default(void);
+
+typedef struct lie_render_stats {
+    uint64_t eye_rays, reflection_rays, shadow_rays, shadow_rays_skipped;
+    uint64_t shading_points, light_samples;
+    double seconds;
+} lie_render_stats;
+
+/* Render the scene from camera `cam` into a new frame (RGB + requested AOVs).
+ * The result is a function of the inputs only: any thread count gives the
+ * same bytes. */
+lie_status lie_render(const lie_scene *s, const lie_rt *rt, const lie_camera *cam,
+                      const lie_render_options *opt, lie_frame **out, lie_render_stats *stats,
+                      lie_error *err);
+
+/* Parse a --camera value: a camera name or index in the scene, or
+ * "eye=X,Y,Z,target=X,Y,Z[,up=X,Y,Z][,fov=DEG]". */
+lie_status lie_camera_parse(const lie_scene *s, const char *spec, lie_camera *out, lie_error *err);
+
+/* Mark in mask (n_tris entries, not cleared) every triangle seen from the
+ * cameras through a width x height image (2 x 2 rays per pixel) and through
+ * up to max_depth mirror bounces: the patches lie-build --view builds (§4.3.1:
+ * only what the user looks at). */
+lie_status lie_visible_triangles(const lie_scene *s, const lie_rt *rt, const lie_camera *cams, int n_cams,
+                                 int width, int height, int max_depth, uint8_t *mask, lie_error *err);
+
+/* ---- camera paths (formats/camera-path.md) ---------------------------- */
+
+typedef struct lie_camera_key {
+    lie_vec3 eye, target, up;
+    float fov_deg;
+    int frames;
+} lie_camera_key;
+
+typedef struct lie_camera_path {
+    lie_camera_key *keys;
+    int n_keys;
+    int smooth;            /* Catmull-Rom (1) or linear (0) */
+    int n_frames;
+} lie_camera_path;
+
+/* Parse a camera path from YAML text; `name` is used in messages, which
+ * carry line:col and the key.  On success *out is owned by the caller. */
+lie_status lie_camera_path_parse(const unsigned char *text, size_t size, const char *name,
+                                 lie_camera_path **out, lie_error *err);
+lie_status lie_camera_path_read(const char *path, lie_camera_path **out, lie_error *err);
+/* The camera of frame `frame` (0 .. n_frames - 1). */
+lie_camera lie_camera_path_frame(const lie_camera_path *p, int frame);
+void lie_camera_path_destroy(lie_camera_path *p);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

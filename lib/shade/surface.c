@@ -1,0 +1,100 @@
+/* Surfaces at ray hits, and the glTF metallic-roughness BRDF in scalar form
+ * (the vectorised form used for shading lives in direct.c; tests hold the
+ * two to each other). */
+#include "shade/shade.h"
+
+#include <string.h>
+
+void lie_surface_from_hit(const lie_scene *s, const lie_hit *hit, lie_vec3 ray_dir, lie_surface *sf)
+{
+    uint32_t g = hit->tri;
+    float b1 = hit->u, b2 = hit->v, b0 = 1.0f - b1 - b2;
+    const lie_vec3 *P = &s->tri_p[3 * (size_t)g];
+    const lie_vec3 *N = &s->tri_n[3 * (size_t)g];
+    const float *uv = &s->tri_uv[6 * (size_t)g];
+    sf->tri = g;
+    sf->b1 = b1;
+    sf->b2 = b2;
+    sf->p = lie_v3_add(lie_v3_add(lie_v3_scale(P[0], b0), lie_v3_scale(P[1], b1)), lie_v3_scale(P[2], b2));
+    sf->wo = lie_v3_scale(ray_dir, -1.0f);
+    lie_vec3 ng = s->tri_ng[g];
+    lie_vec3 n = lie_v3_norm(lie_v3_add(lie_v3_add(lie_v3_scale(N[0], b0), lie_v3_scale(N[1], b1)),
+                                        lie_v3_scale(N[2], b2)));
+    if (lie_v3_dot(n, n) < 0.5f)
+        n = ng;
+    int front = lie_v3_dot(ng, sf->wo) >= 0.0f;
+    if (!front) {
+        /* Seen from behind (double-sided, or a ray that was not culled):
+         * shade the side the viewer is on. */
+        ng = lie_v3_scale(ng, -1.0f);
+        n = lie_v3_scale(n, -1.0f);
+    }
+    sf->ng = ng;
+    sf->n = n;
+    float tu = b0 * uv[0] + b1 * uv[2] + b2 * uv[4];
+    float tv = b0 * uv[1] + b1 * uv[3] + b2 * uv[5];
+    const lie_material *m = lie_scene_material(s, s->tri_material[g]);
+    float base[4] = {m->base_color[0], m->base_color[1], m->base_color[2], m->base_color[3]};
+    float metallic = m->metallic, roughness = m->roughness;
+    if (m->base_color_tex >= 0 && m->base_color_tex < s->n_textures) {
+        float t[4];
+        lie_texture_sample(&s->textures[m->base_color_tex], tu, tv, t);
+        for (int k = 0; k < 4; k++)
+            base[k] *= t[k];
+    }
+    if (m->mr_tex >= 0 && m->mr_tex < s->n_textures) {
+        float t[4];
+        lie_texture_sample(&s->textures[m->mr_tex], tu, tv, t);
+        roughness *= t[1];
+        metallic *= t[2];
+    }
+    metallic = fminf(fmaxf(metallic, 0.0f), 1.0f);
+    roughness = fminf(fmaxf(roughness, 0.0f), 1.0f);
+    for (int k = 0; k < 3; k++) {
+        sf->base_color[k] = base[k];
+        sf->diffuse[k] = base[k] * (1.0f - metallic);
+        sf->f0[k] = 0.04f * (1.0f - metallic) + base[k] * metallic;
+    }
+    /* alpha is clamped so D stays finite; roughness below ~0.03 on a
+     * non-mirror is shaded as slightly rough. */
+    sf->alpha = fmaxf(roughness * roughness, 1e-3f);
+    sf->mirror = metallic >= 1.0f && roughness <= LIE_MIRROR_ROUGHNESS;
+    sf->lambert = metallic <= 0.0f && roughness >= 1.0f;
+    int emits = m->emissive[0] > 0.0f || m->emissive[1] > 0.0f || m->emissive[2] > 0.0f;
+    if (emits && (front || m->double_sided)) {
+        float e[4] = {1.0f, 1.0f, 1.0f, 1.0f};
+        if (m->emissive_tex >= 0 && m->emissive_tex < s->n_textures)
+            lie_texture_sample(&s->textures[m->emissive_tex], tu, tv, e);
+        for (int k = 0; k < 3; k++)
+            sf->emission[k] = m->emissive[k] * e[k];
+    } else {
+        memset(sf->emission, 0, sizeof sf->emission);
+    }
+}
+
+void lie_brdf_eval_cos(const lie_surface *sf, lie_vec3 wi, float out[3])
+{
+    float nl = lie_v3_dot(sf->n, wi);
+    if (nl <= 0.0f || sf->mirror) {
+        out[0] = out[1] = out[2] = 0.0f;
+        return;
+    }
+    if (sf->lambert) {
+        for (int k = 0; k < 3; k++)
+            out[k] = sf->diffuse[k] * (float)M_1_PI * nl;
+        return;
+    }
+    float nv = fmaxf(lie_v3_dot(sf->n, sf->wo), 1e-4f);
+    lie_vec3 h = lie_v3_norm(lie_v3_add(wi, sf->wo));
+    float nh = fmaxf(lie_v3_dot(sf->n, h), 0.0f);
+    float vh = fmaxf(lie_v3_dot(sf->wo, h), 0.0f);
+    float a2 = sf->alpha * sf->alpha;
+    float dd = nh * nh * (a2 - 1.0f) + 1.0f;
+    float D = a2 / ((float)M_PI * dd * dd);
+    float V = 0.5f / (nl * sqrtf(nv * nv * (1.0f - a2) + a2) + nv * sqrtf(nl * nl * (1.0f - a2) + a2));
+    float x = 1.0f - vh, s5 = x * x * x * x * x;
+    for (int k = 0; k < 3; k++) {
+        float F = sf->f0[k] + (1.0f - sf->f0[k]) * s5;
+        out[k] = (sf->diffuse[k] * (float)M_1_PI * (1.0f - F) + F * D * V) * nl;
+    }
+}

@@ -1,0 +1,39 @@
+/* The triangles a camera sees, directly or in mirrors (lie-build --view). */
+#include "shade/shade.h"
+
+lie_status lie_visible_triangles(const lie_scene *s, const lie_rt *rt, const lie_camera *cams, int n_cams,
+                                 int width, int height, int max_depth, uint8_t *mask, lie_error *err)
+{
+    if (width < 1 || height < 1)
+        return lie_error_set(err, LIE_ERR_ARG, s->path, "view size %dx%d out of range", width, height);
+    for (int c = 0; c < n_cams; c++) {
+        const lie_camera *cam = &cams[c];
+        lie_vec3 fwd = lie_v3_norm(cam->forward);
+        lie_vec3 right = lie_v3_norm(lie_v3_cross(fwd, cam->up));
+        lie_vec3 up = lie_v3_cross(right, fwd);
+        float yfov = cam->yfov > 0.0f && cam->yfov < (float)M_PI ? cam->yfov : 0.7853982f;
+        float ty = tanf(0.5f * yfov), tx = ty * (float)width / (float)height;
+        for (int y = 0; y < 2 * height; y++)
+            for (int x = 0; x < 2 * width; x++) {
+                float nx = (2.0f * ((float)x + 0.5f) / (float)(2 * width) - 1.0f) * tx;
+                float ny = (1.0f - 2.0f * ((float)y + 0.5f) / (float)(2 * height)) * ty;
+                lie_vec3 org = cam->eye;
+                lie_vec3 d = lie_v3_norm(lie_v3_add(fwd, lie_v3_add(lie_v3_scale(right, nx), lie_v3_scale(up, ny))));
+                for (int depth = 0; depth <= max_depth; depth++) {
+                    lie_hit hit;
+                    if (!lie_rt_intersect(rt, org, d, 0.0f, INFINITY, 1, &hit))
+                        break;
+                    mask[hit.tri] = 1;
+                    lie_surface sf;
+                    lie_surface_from_hit(s, &hit, d, &sf);
+                    if (!sf.mirror)
+                        break;
+                    float dn = lie_v3_dot(d, sf.n);
+                    d = lie_v3_norm(lie_v3_sub(d, lie_v3_scale(sf.n, 2.0f * dn)));
+                    float mag = fmaxf(fabsf(sf.p.x), fmaxf(fabsf(sf.p.y), fabsf(sf.p.z)));
+                    org = lie_v3_add(sf.p, lie_v3_scale(sf.ng, 1e-4f * fmaxf(1.0f, mag)));
+                }
+            }
+    }
+    return LIE_OK;
+}

@@ -1,0 +1,426 @@
+#!/usr/bin/env python3
+"""Writes the glTF fixtures of tests/unit/test_gltf.c into this folder.
+
+The outputs are committed; run this only to change them:
+    python3 tests/data/gltf/gen_fixtures.py
+Deterministic: the same script writes the same bytes.
+"""
+import base64
+import json
+import math
+import os
+import struct
+import zlib
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+FLOAT, UBYTE, USHORT, UINT = 5126, 5121, 5123, 5125
+
+
+def data_uri(b):
+    return "data:application/octet-stream;base64," + base64.b64encode(b).decode()
+
+
+def f32(*v):
+    return struct.pack("<%df" % len(v), *v)
+
+
+def png(width, height, pixels, channels=4, bits=8):
+    """pixels: rows of tuples of `channels` values."""
+    color_type = {1: 0, 2: 4, 3: 2, 4: 6}[channels]
+    raw = b""
+    for row in pixels:
+        raw += b"\x00"
+        for px in row:
+            for c in px:
+                raw += struct.pack(">H", c) if bits == 16 else bytes([c])
+
+    def chunk(kind, body):
+        return (struct.pack(">I", len(body)) + kind + body +
+                struct.pack(">I", zlib.crc32(kind + body) & 0xffffffff))
+
+    ihdr = struct.pack(">IIBBBBB", width, height, bits, color_type, 0, 0, 0)
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) +
+            chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
+
+
+class Doc:
+    """A glTF document with one growing binary buffer."""
+
+    def __init__(self):
+        self.bin = b""
+        self.g = {"asset": {"version": "2.0", "generator": "gen_fixtures.py"},
+                  "buffers": [], "bufferViews": [], "accessors": []}
+
+    def view(self, data, stride=None):
+        while len(self.bin) % 4:
+            self.bin += b"\x00"
+        v = {"buffer": 0, "byteOffset": len(self.bin), "byteLength": len(data)}
+        if stride:
+            v["byteStride"] = stride
+        self.bin += data
+        self.g["bufferViews"].append(v)
+        return len(self.g["bufferViews"]) - 1
+
+    def accessor(self, data, ctype, type_, count, normalized=False, **extra):
+        a = {"bufferView": self.view(data), "componentType": ctype, "count": count, "type": type_}
+        if normalized:
+            a["normalized"] = True
+        a.update(extra)
+        self.g["accessors"].append(a)
+        return len(self.g["accessors"]) - 1
+
+    def positions(self, pts):
+        flat = [c for p in pts for c in p]
+        lo = [min(p[i] for p in pts) for i in range(3)]
+        hi = [max(p[i] for p in pts) for i in range(3)]
+        return self.accessor(f32(*flat), FLOAT, "VEC3", len(pts), min=lo, max=hi)
+
+    def indices(self, idx, ctype=USHORT):
+        fmt = {UBYTE: "B", USHORT: "H", UINT: "I"}[ctype]
+        return self.accessor(struct.pack("<%d%s" % (len(idx), fmt), *idx), ctype, "SCALAR", len(idx))
+
+    def finish(self, uri=None):
+        b = {"byteLength": len(self.bin)}
+        if uri is not None:
+            b["uri"] = uri
+        self.g["buffers"] = [b]
+        return self.g
+
+    def embedded(self):
+        return self.finish(data_uri(self.bin))
+
+
+def write(name, obj):
+    with open(os.path.join(HERE, name), "w") as f:
+        json.dump(obj, f, indent=1, sort_keys=True)
+        f.write("\n")
+
+
+def write_bytes(name, data):
+    with open(os.path.join(HERE, name), "wb") as f:
+        f.write(data)
+
+
+def glb(gltf, bin_data):
+    js = json.dumps(gltf, sort_keys=True, separators=(",", ":")).encode()
+    js += b" " * (-len(js) % 4)
+    bin_data += b"\x00" * (-len(bin_data) % 4)
+    body = struct.pack("<II", len(js), 0x4E4F534A) + js + struct.pack("<II", len(bin_data), 0x004E4942) + bin_data
+    return struct.pack("<4sII", b"glTF", 2, 12 + len(body)) + body
+
+
+TRI = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]
+QUAD = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (1, 1, 0)]
+
+
+def one_triangle():
+    d = Doc()
+    pos = d.positions(TRI)
+    d.g["meshes"] = [{"primitives": [{"attributes": {"POSITION": pos}}]}]
+    d.g["nodes"] = [{"mesh": 0}]
+    d.g["scenes"] = [{"nodes": [0]}]
+    d.g["scene"] = 0
+    return d
+
+
+def modes():
+    """Strip, fan, then the skipped points/lines/line loop/line strip."""
+    d = Doc()
+    strip = d.positions(QUAD)  # 0,1,2,3: two CCW triangles as a strip
+    fan = d.positions([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)])
+    prims = [{"attributes": {"POSITION": strip}, "mode": 5},
+             {"attributes": {"POSITION": fan}, "mode": 6}]
+    for mode in (0, 1, 2, 3):
+        prims.append({"attributes": {"POSITION": strip}, "mode": mode})
+    d.g["meshes"] = [{"name": "modes", "primitives": prims}]
+    d.g["nodes"] = [{"mesh": 0}]
+    d.g["scenes"] = [{"nodes": [0]}]
+    write("modes.gltf", d.embedded())
+
+
+def indices():
+    """The same quad as u8, u16 and u32 indices and without indices."""
+    d = Doc()
+    pos = d.positions(QUAD)
+    tri = [0, 1, 2, 1, 3, 2]
+    flat = d.positions([QUAD[i] for i in tri])
+    prims = [{"attributes": {"POSITION": pos}, "indices": d.indices(tri, c)} for c in (UBYTE, USHORT, UINT)]
+    prims.append({"attributes": {"POSITION": flat}})
+    d.g["meshes"] = [{"primitives": prims}]
+    d.g["nodes"] = [{"mesh": 0}]
+    d.g["scenes"] = [{"nodes": [0]}]
+    write("indices.gltf", d.embedded())
+
+
+def hierarchy():
+    """Root: TRS (t = (10,0,0), 90 deg about z, scale 2); child: a matrix
+    translating by (0,1,0) holding a triangle; a second root, a plain
+    instance of the same mesh; node 3 is in no scene."""
+    d = Doc()
+    pos = d.positions(TRI)
+    s = math.sqrt(0.5)
+    d.g["meshes"] = [{"name": "tri", "primitives": [{"attributes": {"POSITION": pos}}]}]
+    d.g["nodes"] = [
+        {"name": "root", "translation": [10, 0, 0], "rotation": [0, 0, s, s], "scale": [2, 2, 2],
+         "children": [1]},
+        {"name": "child", "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 1, 0, 1], "mesh": 0},
+        {"name": "plain", "mesh": 0},
+        {"name": "elsewhere", "mesh": 0},
+    ]
+    d.g["scenes"] = [{"nodes": [3]}, {"nodes": [0, 2]}]
+    d.g["scene"] = 1
+    write("hierarchy.gltf", d.embedded())
+
+
+def no_scene():
+    d = Doc()
+    pos = d.positions(TRI)
+    d.g["meshes"] = [{"primitives": [{"attributes": {"POSITION": pos}}]}]
+    d.g["nodes"] = [{"children": [2]}, {"mesh": 0}, {"mesh": 0}, {}]
+    write("no_scene.gltf", d.embedded())
+
+
+PIXELS = [[(128, 64, 255, 255), (0, 255, 32, 128)],
+          [(255, 255, 255, 0), (10, 20, 30, 40)]]
+
+
+def materials():
+    """Material 0 uses one 2x2 RGBA texture as base colour (sRGB), metallic-
+    roughness (linear) and emission (sRGB): two lie_textures.  Material 1 has
+    the defaults plus a 1x1 16-bit grey texture.  UVs are normalized u8."""
+    d = Doc()
+    pos = d.positions(TRI)
+    nrm = d.accessor(f32(0, 0, 1, 0, 0, 1, 0, 0, 1), FLOAT, "VEC3", 3)
+    uv = d.accessor(bytes([0, 0, 255, 0, 0, 255, 0, 0]), UBYTE, "VEC2", 3, normalized=True)
+    d.g["meshes"] = [{"primitives": [
+        {"attributes": {"POSITION": pos, "NORMAL": nrm, "TEXCOORD_0": uv}, "material": 0},
+        {"attributes": {"POSITION": pos}, "material": 1},
+        {"attributes": {"POSITION": pos}}]}]
+    d.g["nodes"] = [{"mesh": 0}]
+    d.g["scenes"] = [{"nodes": [0]}]
+    img16 = d.view(png(1, 1, [[(40000,)]], channels=1, bits=16))
+    d.g["images"] = [{"uri": "data:image/png;base64," + base64.b64encode(png(2, 2, PIXELS)).decode()},
+                     {"bufferView": img16, "mimeType": "image/png"}]
+    d.g["samplers"] = [{"wrapS": 33071, "wrapT": 33648}]
+    d.g["textures"] = [{"source": 0, "sampler": 0}, {"source": 1}]
+    d.g["materials"] = [
+        {"name": "textured",
+         "pbrMetallicRoughness": {"baseColorFactor": [0.5, 1, 1, 1], "baseColorTexture": {"index": 0},
+                                  "metallicFactor": 0.25, "roughnessFactor": 0.75,
+                                  "metallicRoughnessTexture": {"index": 0}},
+         "emissiveFactor": [1, 0.5, 0], "emissiveTexture": {"index": 0},
+         "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4}},
+         "doubleSided": True},
+        {"pbrMetallicRoughness": {"baseColorTexture": {"index": 1}}},
+    ]
+    d.g["extensionsUsed"] = ["KHR_materials_emissive_strength"]
+    write("materials.gltf", d.embedded())
+
+
+def lights_cameras():
+    d = one_triangle()
+    d.g["extensionsUsed"] = ["KHR_lights_punctual"]
+    d.g["extensions"] = {"KHR_lights_punctual": {"lights": [
+        {"type": "point", "name": "bulb", "color": [1, 0.5, 0.25], "intensity": 10, "range": 5},
+        {"type": "spot", "spot": {}},
+        {"type": "directional", "intensity": 3}]}}
+    d.g["cameras"] = [
+        {"type": "perspective", "name": "persp", "perspective": {"yfov": 0.5, "aspectRatio": 1.5, "znear": 0.1}},
+        {"type": "perspective", "perspective": {"yfov": 0.7, "znear": 0.01}},
+        {"type": "orthographic", "orthographic": {"xmag": 1, "ymag": 1, "znear": 0.1, "zfar": 10}}]
+    d.g["nodes"] += [
+        {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0, 2, 0]},
+        {"extensions": {"KHR_lights_punctual": {"light": 1}}},
+        {"extensions": {"KHR_lights_punctual": {"light": 2}}},
+        {"camera": 0, "translation": [0, 0, 5]}, {"camera": 1}, {"camera": 2}]
+    d.g["scenes"] = [{"nodes": [0, 1, 2, 3, 4, 5, 6]}]
+    write("lights_cameras.gltf", d.embedded())
+
+
+def sparse():
+    """POSITION: the triangle with vertex 2 replaced through a sparse
+    accessor; NORMAL: no bufferView (zeros) with vertex 1 set sparsely."""
+    d = Doc()
+    base = d.view(f32(*[c for p in TRI for c in p]))
+    sidx = d.view(struct.pack("<H", 2) + b"\x00\x00")
+    sval = d.view(f32(0, 3, 0))
+    nidx = d.view(bytes([1, 0, 0, 0]))
+    nval = d.view(f32(0, 0, 1))
+    d.g["accessors"] = [
+        {"bufferView": base, "componentType": FLOAT, "count": 3, "type": "VEC3",
+         "sparse": {"count": 1, "indices": {"bufferView": sidx, "componentType": USHORT},
+                    "values": {"bufferView": sval}}},
+        {"componentType": FLOAT, "count": 3, "type": "VEC3",
+         "sparse": {"count": 1, "indices": {"bufferView": nidx, "componentType": UBYTE},
+                    "values": {"bufferView": nval}}}]
+    d.g["meshes"] = [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}}]}]
+    d.g["nodes"] = [{"mesh": 0}]
+    d.g["scenes"] = [{"nodes": [0]}]
+    write("sparse.gltf", d.embedded())
+
+
+def binary():
+    """A .glb: triangle and an image in the BIN chunk; the same bytes under a
+    .gltf name, and a JSON glTF under a .glb name."""
+    d = one_triangle()
+    img = d.view(png(2, 2, PIXELS))
+    d.g["images"] = [{"bufferView": img, "mimeType": "image/png"}]
+    d.g["textures"] = [{"source": 0}]
+    d.g["materials"] = [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]
+    d.g["meshes"][0]["primitives"][0]["material"] = 0
+    g = d.finish()
+    data = glb(g, d.bin)
+    write_bytes("triangle.glb", data)
+    write_bytes("glb_named.gltf", data)
+    write_bytes("truncated.glb", data[:len(data) - 40])
+    # BIN chunk header claims 8 bytes more than the file (tinygltf's own check misses this)
+    js_len = struct.unpack("<I", data[12:16])[0]
+    at = 20 + js_len
+    bad = bytearray(data)
+    struct.pack_into("<I", bad, at, struct.unpack("<I", data[at:at + 4])[0] + 4)
+    write_bytes("bin_overrun.glb", bytes(bad))
+    # an image bufferView beyond the BIN chunk (tinygltf decodes it unchecked)
+    g2 = json.loads(json.dumps(g))
+    g2["bufferViews"][img]["byteOffset"] = 4096
+    write_bytes("image_view_oob.glb", glb(g2, d.bin))
+    write("json_named.glb", one_triangle().embedded())
+
+
+def external():
+    """External .bin and .png next to the .gltf, with a space in a name."""
+    d = one_triangle()
+    uv = d.accessor(f32(0, 0, 1, 0, 0, 1), FLOAT, "VEC2", 3)
+    d.g["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = uv
+    d.g["images"] = [{"uri": "ext%20image.png"}]
+    d.g["textures"] = [{"source": 0}]
+    d.g["materials"] = [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]
+    d.g["meshes"][0]["primitives"][0]["material"] = 0
+    write("external.gltf", d.finish("external.bin"))
+    write_bytes("external.bin", d.bin)
+    write_bytes("ext image.png", png(2, 2, PIXELS))
+    g = json.loads(json.dumps(d.g))
+    g["images"] = [{"uri": "no_such_image.png"}]
+    write("missing_image.gltf", g)
+    g = json.loads(json.dumps(d.g))
+    g["buffers"][0]["uri"] = "no_such.bin"
+    write("missing_bin.gltf", g)
+    # a folder whose file reaches back out for its buffer
+    os.makedirs(os.path.join(HERE, "escape"), exist_ok=True)
+    g = json.loads(json.dumps(d.g))
+    g["buffers"][0]["uri"] = "../external.bin"
+    g["images"][0]["uri"] = "../ext%20image.png"
+    write("escape/escape.gltf", g)
+    g = json.loads(json.dumps(d.g))
+    g["buffers"][0]["uri"] = "sub/../external.bin"
+    os.makedirs(os.path.join(HERE, "sub"), exist_ok=True)
+    write_bytes("sub/.keep", b"")
+    write("inside_dotdot.gltf", g)
+
+
+def limits():
+    """A 2-triangle mesh instanced by three nodes: 2 in the document, 6 in the world."""
+    d = Doc()
+    pos = d.positions(QUAD)
+    d.g["meshes"] = [{"primitives": [{"attributes": {"POSITION": pos}, "indices": d.indices([0, 1, 2, 1, 3, 2])}]}]
+    d.g["nodes"] = [{"mesh": 0}, {"mesh": 0, "translation": [2, 0, 0]}, {"mesh": 0, "translation": [4, 0, 0]}]
+    d.g["scenes"] = [{"nodes": [0, 1, 2]}]
+    write("instanced.gltf", d.embedded())
+
+
+def bad():
+    write_bytes("bad_json.gltf", b'{\n  "asset": {"version": "2.0"},\n  "nodes": [ {"mesh": 0,, } ]\n}\n')
+    write_bytes("empty.gltf", b"")
+
+    d = one_triangle()
+    d.g["accessors"][0]["count"] = 4  # 48 bytes from a 36-byte view
+    write("accessor_oob.gltf", d.embedded())
+
+    d = one_triangle()
+    d.g["accessors"][0]["byteOffset"] = 4
+    write("accessor_offset_oob.gltf", d.embedded())
+
+    d = one_triangle()
+    d.g["bufferViews"][0]["byteLength"] = 400  # beyond the buffer
+    g = d.embedded()
+    g["buffers"][0]["byteLength"] = len(d.bin)
+    write("view_oob.gltf", g)
+
+    d = one_triangle()
+    d.g["meshes"][0]["primitives"][0]["indices"] = d.indices([0, 1, 7])
+    write("index_oob.gltf", d.embedded())
+
+    d = one_triangle()
+    nrm = d.accessor(f32(0, 0, 1, 0, 0, 1), FLOAT, "VEC3", 2)
+    d.g["meshes"][0]["primitives"][0]["attributes"]["NORMAL"] = nrm
+    write("normal_count.gltf", d.embedded())
+
+    d = one_triangle()
+    d.g["meshes"][0]["primitives"][0]["attributes"] = {"NORMAL": 0}
+    write("no_position.gltf", d.embedded())
+
+    d = one_triangle()
+    d.accessor(struct.pack("<3H", 0, 0, 0) + b"\x00\x00", USHORT, "VEC3", 1)
+    d.g["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 1
+    write("position_type.gltf", d.embedded())
+
+    d = one_triangle()
+    d.g["nodes"] = [{"children": [1]}, {"children": [0], "mesh": 0}]
+    d.g["scenes"] = [{"nodes": []}]
+    write("cycle.gltf", d.embedded())
+
+    d = one_triangle()
+    d.g["nodes"] = [{"children": [2]}, {"children": [2]}, {"mesh": 0}]
+    d.g["scenes"] = [{"nodes": [0, 1]}]
+    write("two_parents.gltf", d.embedded())
+
+    d = one_triangle()
+    d.g["nodes"] = [{"children": [5]}]
+    write("child_oob.gltf", d.embedded())
+
+    d = one_triangle()
+    d.g["nodes"] = [{"mesh": 3}]
+    write("mesh_oob.gltf", d.embedded())
+
+    d = one_triangle()
+    d.g["meshes"][0]["primitives"][0]["material"] = 2
+    write("material_oob.gltf", d.embedded())
+
+    d = one_triangle()
+    d.g["materials"] = [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 4}}}]
+    d.g["meshes"][0]["primitives"][0]["material"] = 0
+    write("texture_oob.gltf", d.embedded())
+
+    d = one_triangle()
+    d.g["extensionsRequired"] = ["KHR_draco_mesh_compression"]
+    d.g["extensionsUsed"] = ["KHR_draco_mesh_compression"]
+    write("required_ext.gltf", d.embedded())
+
+    d = one_triangle()
+    d.g["accessors"][0]["sparse"] = {"count": 1, "indices": {"bufferView": 0, "componentType": UBYTE},
+                                     "values": {"bufferView": 0}}
+    g = d.embedded()  # the sparse index (9) sits in a view of its own, past the 3 vertices
+    sidx = len(d.bin)
+    binary = d.bin + bytes([9, 0, 0, 0])
+    g["bufferViews"].append({"buffer": 0, "byteOffset": sidx, "byteLength": 4})
+    g["accessors"][0]["sparse"]["indices"]["bufferView"] = len(g["bufferViews"]) - 1
+    g["buffers"] = [{"byteLength": len(binary), "uri": data_uri(binary)}]
+    write("sparse_index_oob.gltf", g)
+
+
+def main():
+    modes()
+    indices()
+    hierarchy()
+    no_scene()
+    materials()
+    lights_cameras()
+    sparse()
+    binary()
+    external()
+    limits()
+    bad()
+
+
+if __name__ == "__main__":
+    main()

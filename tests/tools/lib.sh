@@ -1,0 +1,40 @@
+# Helpers for tool tests (sourced).  Each check prints "ok N - what" or
+# "not ok N - what" with the evidence; the script exits 1 if any failed.
+set -u
+n=0
+failures=0
+TMP=$(mktemp -d "${TMPDIR:-/tmp}/lie-test.XXXXXX")
+trap 'rm -rf "$TMP"' EXIT
+B="$BINDIR_ABS"
+H="$HELPERS_ABS"
+S="$ROOT/tests/scenes"
+D="$ROOT/tests/data"
+
+ok() { n=$((n + 1)); echo "ok $n - $1"; }
+not_ok() { n=$((n + 1)); failures=$((failures + 1)); echo "not ok $n - $1"; }
+
+# run CMD...: runs with stdout/stderr captured to $TMP/out, $TMP/err; sets rc
+run() { "$@" >"$TMP/out" 2>"$TMP/err"; rc=$?; }
+
+# expect_rc CODE WHAT
+expect_rc() {
+    if [ "$rc" -eq "$1" ]; then ok "$2 (exit $rc)"; else
+        not_ok "$2: expected exit $1, got $rc"; sed 's/^/# /' "$TMP/err" | head -5; fi
+}
+
+# expect_one_error_line PREFIX WHAT: stderr is exactly one line starting with PREFIX
+expect_one_error_line() {
+    lines=$(wc -l <"$TMP/err")
+    if [ "$lines" -eq 1 ] && head -1 "$TMP/err" | grep -qF -- "$1"; then ok "$2: $(cat "$TMP/err")"; else
+        not_ok "$2: expected one line starting '$1', got $lines:"; sed 's/^/# /' "$TMP/err" | head -5; fi
+}
+
+expect_file() { if [ -s "$1" ]; then ok "$2"; else not_ok "$2: $1 missing or empty"; fi; }
+expect_no_file() { if [ ! -e "$1" ]; then ok "$2"; else not_ok "$2: $1 exists"; fi; }
+# no temporary files left in a directory
+expect_no_temp() {
+    if ls -a "$1" | grep -q '\.tmp'; then not_ok "$2: temporary file left in $1"; else ok "$2"; fi
+}
+expect_same() { if cmp -s "$1" "$2"; then ok "$3"; else not_ok "$3: $1 and $2 differ"; fi; }
+
+finish() { [ "$failures" -eq 0 ]; exit $?; }

@@ -1,0 +1,451 @@
+/* lie-render: render frames with direct lighting.
+ *   lie-render CACHE|SCENE.gltf|SCENE.glb|- -o OUT.exr|OUT.png|- [options]
+ * From a cache (lie-build), shadow rays are answered by the local
+ * illumination environments (--visibility=lie, the default); from a scene,
+ * or with --visibility=full, by Embree over the whole scene: the reference. */
+#include "lie.h"
+
+#include <getopt.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *prog = "lie-render";
+
+static void usage(FILE *fp)
+{
+    lie_render_options d = lie_render_options_default();
+    fprintf(fp,
+            "usage: %s CACHE|SCENE.gltf|SCENE.glb|- -o OUT.exr|OUT.png|- [options]\n"
+            "\n"
+            "Render direct lighting with soft shadows, from a LIE cache (lie-build) or a\n"
+            "scene.  The output format follows the extension: .png is an sRGB preview,\n"
+            "anything else (and -) is OpenEXR.  An input of - reads a cache from stdin.\n"
+            "\n"
+            "  -o, --output FILE       output image (required); - writes EXR to stdout\n"
+            "      --scene S           with a cache: load the scene from S instead of the path\n"
+            "                          the cache records (its content hash must match)\n"
+            "      --camera SPEC       a camera name or index in the scene, or\n"
+            "                          eye=X,Y,Z,target=X,Y,Z[,up=X,Y,Z][,fov=DEG]\n"
+            "                          (default: the scene's first camera)\n"
+            "      --path PATH.yaml    a camera path (formats/camera-path.md): one frame per\n"
+            "                          step, -o must hold a %%d conversion (frame_%%04d.exr)\n"
+            "      --size WxH          image size (default %dx%d)\n"
+            "      --spp N             eye rays per pixel, stratified (default %d: pixel centre)\n"
+            "      --light-samples N   shadow rays per area emitter per shading point\n"
+            "                          (default %d; 0 = eye rays only)\n"
+            "      --pattern P         fixed (default: the same emitter samples everywhere)\n"
+            "                          | rotated (a per-pixel rotation of the pattern)\n"
+            "      --visibility MODE   lie (default with a cache: blocker lists only)\n"
+            "                          | full (default with a scene: Embree over the whole scene)\n"
+            "                          | none (no shadows: measures shading alone)\n"
+            "      --rays MODE         how full visibility casts shadow rays: stream (default),\n"
+            "                          packet (8-wide) or single\n"
+            "      --max-depth D       mirror reflection depth (default %d)\n"
+            "      --aov LIST          extra EXR layers, comma-separated: albedo, normal, depth,\n"
+            "                          complexity (the paper's Figure 10 colours), patch\n"
+            "                          (a colour per leaf patch); the last two need a cache\n"
+            "      --emitter K         complexity and patch layers for emitter K only\n"
+            "      --exposure EV       PNG exposure in stops (default 0)\n"
+            "      --threads N         worker threads (default: all cores)\n"
+            "      --allow-external-uris  let the glTF reference files outside its folder\n"
+            "      --stats[=json]      print statistics to stderr\n"
+            "  -q, --quiet             no progress bar\n"
+            "  -h, --help              this help\n"
+            "      --version           print the version\n",
+            prog, d.width, d.height, d.spp, d.light_samples, d.max_depth);
+}
+
+static int usage_error(const char *fmt, const char *arg)
+{
+    fprintf(stderr, "%s: ", prog);
+    fprintf(stderr, fmt, arg);
+    fprintf(stderr, " (see --help)\n");
+    return 2;
+}
+
+static int fail(const lie_error *err)
+{
+    char line[2200];
+    lie_error_format(err, line, sizeof line);
+    fprintf(stderr, "%s: %s\n", prog, line);
+    return 1;
+}
+
+enum {
+    OPT_CAMERA = 256, OPT_SIZE, OPT_SPP, OPT_LIGHT_SAMPLES, OPT_PATTERN, OPT_VISIBILITY, OPT_RAYS,
+    OPT_MAX_DEPTH, OPT_AOV, OPT_EXPOSURE, OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_SCENE,
+    OPT_EMITTER, OPT_PATH
+};
+
+static const struct option long_opts[] = {
+    {"output", required_argument, NULL, 'o'},
+    {"scene", required_argument, NULL, OPT_SCENE},
+    {"path", required_argument, NULL, OPT_PATH},
+    {"emitter", required_argument, NULL, OPT_EMITTER},
+    {"camera", required_argument, NULL, OPT_CAMERA},
+    {"size", required_argument, NULL, OPT_SIZE},
+    {"spp", required_argument, NULL, OPT_SPP},
+    {"light-samples", required_argument, NULL, OPT_LIGHT_SAMPLES},
+    {"pattern", required_argument, NULL, OPT_PATTERN},
+    {"visibility", required_argument, NULL, OPT_VISIBILITY},
+    {"rays", required_argument, NULL, OPT_RAYS},
+    {"max-depth", required_argument, NULL, OPT_MAX_DEPTH},
+    {"aov", required_argument, NULL, OPT_AOV},
+    {"exposure", required_argument, NULL, OPT_EXPOSURE},
+    {"threads", required_argument, NULL, OPT_THREADS},
+    {"allow-external-uris", no_argument, NULL, OPT_EXTERNAL},
+    {"stats", optional_argument, NULL, OPT_STATS},
+    {"quiet", no_argument, NULL, 'q'},
+    {"help", no_argument, NULL, 'h'},
+    {"version", no_argument, NULL, OPT_VERSION},
+    {NULL, 0, NULL, 0},
+};
+
+static int parse_aovs(const char *list, unsigned *bits)
+{
+    char buf[256];
+    snprintf(buf, sizeof buf, "%s", list);
+    for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+        if (strcmp(tok, "albedo") == 0)
+            *bits |= LIE_AOV_ALBEDO;
+        else if (strcmp(tok, "normal") == 0)
+            *bits |= LIE_AOV_NORMAL;
+        else if (strcmp(tok, "depth") == 0)
+            *bits |= LIE_AOV_DEPTH;
+        else if (strcmp(tok, "complexity") == 0)
+            *bits |= LIE_AOV_COMPLEXITY;
+        else if (strcmp(tok, "patch") == 0)
+            *bits |= LIE_AOV_PATCH;
+        else
+            return 0;
+    }
+    return 1;
+}
+
+/* Does the buffer hold glTF (JSON or GLB) rather than a cache? */
+static int looks_like_gltf(const unsigned char *d, size_t n)
+{
+    size_t i = 0;
+    if (n >= 4 && memcmp(d, "glTF", 4) == 0)
+        return 1;
+    if (n >= 3 && d[0] == 0xEF && d[1] == 0xBB && d[2] == 0xBF)
+        i = 3; /* UTF-8 byte order mark */
+    while (i < n && (d[i] == ' ' || d[i] == '\t' || d[i] == '\r' || d[i] == '\n'))
+        i++;
+    return i < n && d[i] == '{';
+}
+
+/* Load a scene, or a cache and the scene it was built for. */
+static lie_status load_input(const char *input, const char *override, const lie_scene_options *so,
+                             lie_scene **scene, lie_cache **cache, lie_error *err)
+{
+    *scene = NULL;
+    *cache = NULL;
+    unsigned char *data = NULL;
+    size_t size = 0;
+    lie_status st = lie_read_file(input, &data, &size, err);
+    if (st != LIE_OK)
+        return st;
+    if (looks_like_gltf(data, size)) {
+        free(data);
+        if (strcmp(input, "-") == 0)
+            return lie_error_set(err, LIE_ERR_UNSUPPORTED, input, "a glTF scene cannot be read from stdin");
+        return lie_scene_load(input, so, scene, err);
+    }
+    st = lie_cache_decode(data, size, input, cache, err);
+    free(data);
+    if (st != LIE_OK)
+        return st;
+    st = lie_cache_load_scene(*cache, input, override, so, scene, err);
+    if (st != LIE_OK) {
+        lie_cache_destroy(*cache);
+        *cache = NULL;
+    }
+    return st;
+}
+
+/* A printf pattern with exactly one integer conversion: %d, %5d, %05d. */
+static int frame_pattern_ok(const char *s)
+{
+    int convs = 0;
+    for (const char *p = s; *p; p++) {
+        if (*p != '%')
+            continue;
+        if (p[1] == '%') {
+            p++;
+            continue;
+        }
+        p++;
+        if (*p == '0')
+            p++;
+        int digits = 0;
+        while (*p >= '0' && *p <= '9' && digits < 2) {
+            p++;
+            digits++;
+        }
+        if (*p != 'd')
+            return 0;
+        convs++;
+    }
+    return convs == 1;
+}
+
+static const char *vis_name(lie_visibility_mode m)
+{
+    return m == LIE_VIS_FULL ? "full" : m == LIE_VIS_LIE ? "lie" : "none";
+}
+static const char *rays_name(lie_ray_mode m)
+{
+    return m == LIE_RAYS_SINGLE ? "single" : m == LIE_RAYS_PACKET ? "packet" : "stream";
+}
+
+int main(int argc, char **argv)
+{
+    lie_render_options ro = lie_render_options_default();
+    lie_scene_options so = lie_scene_options_default();
+    const char *output = NULL, *camera = NULL, *scene_override = NULL, *path_file = NULL;
+    int visibility_set = 0;
+    float exposure = 0.0f;
+    int stats = 0, quiet = 0; /* stats: 1 human, 2 json */
+    long v;
+    int c;
+    opterr = 0;
+    while ((c = getopt_long(argc, argv, ":o:qh", long_opts, NULL)) != -1) {
+        switch (c) {
+        case 'o': output = optarg; break;
+        case OPT_CAMERA: camera = optarg; break;
+        case OPT_SIZE:
+            if (!lie_parse_size(optarg, 65536, &ro.width, &ro.height))
+                return usage_error("--size: expected WxH, got '%s'", optarg);
+            break;
+        case OPT_SPP:
+            if (!lie_parse_long(optarg, 1, 65536, &v))
+                return usage_error("--spp: expected an integer in 1..65536, got '%s'", optarg);
+            ro.spp = (int)v;
+            break;
+        case OPT_LIGHT_SAMPLES:
+            if (!lie_parse_long(optarg, 0, 1000000, &v))
+                return usage_error("--light-samples: expected an integer in 0..1000000, got '%s'", optarg);
+            ro.light_samples = (int)v;
+            break;
+        case OPT_PATTERN:
+            if (strcmp(optarg, "fixed") == 0) ro.pattern = LIE_PATTERN_FIXED;
+            else if (strcmp(optarg, "rotated") == 0) ro.pattern = LIE_PATTERN_ROTATED;
+            else return usage_error("--pattern: expected fixed or rotated, got '%s'", optarg);
+            break;
+        case OPT_VISIBILITY:
+            visibility_set = 1;
+            if (strcmp(optarg, "full") == 0) ro.visibility = LIE_VIS_FULL;
+            else if (strcmp(optarg, "none") == 0) ro.visibility = LIE_VIS_NONE;
+            else if (strcmp(optarg, "lie") == 0) ro.visibility = LIE_VIS_LIE;
+            else return usage_error("--visibility: expected full, lie or none, got '%s'", optarg);
+            break;
+        case OPT_RAYS:
+            if (strcmp(optarg, "stream") == 0) ro.rays = LIE_RAYS_STREAM;
+            else if (strcmp(optarg, "packet") == 0) ro.rays = LIE_RAYS_PACKET;
+            else if (strcmp(optarg, "single") == 0) ro.rays = LIE_RAYS_SINGLE;
+            else return usage_error("--rays: expected stream, packet or single, got '%s'", optarg);
+            break;
+        case OPT_MAX_DEPTH:
+            if (!lie_parse_long(optarg, 0, 64, &v))
+                return usage_error("--max-depth: expected an integer in 0..64, got '%s'", optarg);
+            ro.max_depth = (int)v;
+            break;
+        case OPT_AOV:
+            if (!parse_aovs(optarg, &ro.aovs))
+                return usage_error("--aov: expected a list of albedo, normal, depth, complexity, patch, got '%s'",
+                                   optarg);
+            break;
+        case OPT_EXPOSURE:
+            if (!lie_parse_float(optarg, -64.0f, 64.0f, &exposure))
+                return usage_error("--exposure: expected a number of stops, got '%s'", optarg);
+            break;
+        case OPT_THREADS:
+            if (!lie_parse_long(optarg, 0, 4096, &v))
+                return usage_error("--threads: expected an integer in 0..4096, got '%s'", optarg);
+            ro.threads = (int)v;
+            break;
+        case OPT_EXTERNAL: so.allow_external_uris = 1; break;
+        case OPT_SCENE: scene_override = optarg; break;
+        case OPT_PATH: path_file = optarg; break;
+        case OPT_EMITTER:
+            if (!lie_parse_long(optarg, 0, 1 << 30, &v))
+                return usage_error("--emitter: expected an emitter index, got '%s'", optarg);
+            ro.aov_emitter = (int)v;
+            break;
+        case OPT_STATS:
+            if (!optarg) stats = 1;
+            else if (strcmp(optarg, "json") == 0) stats = 2;
+            else return usage_error("--stats: expected --stats or --stats=json, got '%s'", optarg);
+            break;
+        case 'q': quiet = 1; break;
+        case 'h': usage(stdout); return 0;
+        case OPT_VERSION: printf("%s %s\n", prog, LIE_VERSION); return 0;
+        case ':': return usage_error("%s: missing value", argv[optind - 1]);
+        default: return usage_error("unknown option '%s'", argv[optind - 1]);
+        }
+    }
+    if (optind >= argc)
+        return usage_error("%s", "missing input scene");
+    if (optind + 1 < argc)
+        return usage_error("unexpected argument '%s'", argv[optind + 1]);
+    if (!output)
+        return usage_error("%s", "missing -o OUTPUT");
+    const char *input = argv[optind];
+    if (path_file && !frame_pattern_ok(output))
+        return usage_error("--path: -o must hold one %%d conversion (e.g. frame_%%04d.exr), got '%s'", output);
+    if (path_file && camera)
+        return usage_error("%s", "--path and --camera exclude each other");
+    if (ro.light_samples == 0) {
+        ro.eye_only = 1;
+        ro.light_samples = 1;
+    }
+    ro.progress = !quiet;
+
+    lie_error err;
+    lie_error_clear(&err);
+    double t0 = lie_time_now();
+    lie_scene *scene = NULL;
+    lie_cache *cache = NULL;
+    lie_lie_vis *lv = NULL;
+    if (load_input(input, scene_override, &so, &scene, &cache, &err) != LIE_OK)
+        return fail(&err);
+    double t1 = lie_time_now();
+    if (!visibility_set)
+        ro.visibility = cache ? LIE_VIS_LIE : LIE_VIS_FULL;
+    if (!cache && (ro.visibility == LIE_VIS_LIE || (ro.aovs & (LIE_AOV_COMPLEXITY | LIE_AOV_PATCH)))) {
+        lie_scene_destroy(scene);
+        return usage_error("%s: --visibility=lie and the complexity and patch layers need a cache", input);
+    }
+    if (cache) {
+        if (lie_lie_vis_create(scene, cache->env, &lv, &err) != LIE_OK) {
+            lie_cache_destroy(cache);
+            lie_scene_destroy(scene);
+            return fail(&err);
+        }
+        ro.oracle = lie_lie_vis_oracle(lv);
+    }
+    if (ro.aov_emitter >= scene->n_emitters) {
+        lie_error_set(&err, LIE_ERR_ARG, input, "--emitter %d: the scene has %d emitters", ro.aov_emitter,
+                      scene->n_emitters);
+        lie_lie_vis_destroy(lv);
+        lie_cache_destroy(cache);
+        lie_scene_destroy(scene);
+        return fail(&err);
+    }
+    lie_camera cam;
+    lie_camera_path *cpath = NULL;
+    lie_status cst = path_file ? lie_camera_path_read(path_file, &cpath, &err) : lie_camera_parse(scene, camera, &cam, &err);
+    if (cst != LIE_OK) {
+        if (!err.file[0])
+            snprintf(err.file, sizeof err.file, "%s", input);
+        lie_lie_vis_destroy(lv);
+        lie_cache_destroy(cache);
+        lie_scene_destroy(scene);
+        return fail(&err);
+    }
+    lie_rt *rt = NULL;
+    if (lie_rt_create(scene, &rt, &err) != LIE_OK) {
+        lie_camera_path_destroy(cpath);
+        lie_lie_vis_destroy(lv);
+        lie_cache_destroy(cache);
+        lie_scene_destroy(scene);
+        return fail(&err);
+    }
+    double t2 = lie_time_now();
+    char hash[32], size[32];
+    snprintf(hash, sizeof hash, "%016llx", (unsigned long long)scene->hash);
+    snprintf(size, sizeof size, "%dx%d", ro.width, ro.height);
+    int n_frames = cpath ? cpath->n_frames : 1;
+    lie_render_stats rs;
+    memset(&rs, 0, sizeof rs);
+    double t_render = 0.0, t_write = 0.0;
+    lie_status st = LIE_OK;
+    for (int fi = 0; fi < n_frames && st == LIE_OK; fi++) {
+        lie_camera fc = cpath ? lie_camera_path_frame(cpath, fi) : cam;
+        char name[4096];
+        if (cpath)
+            snprintf(name, sizeof name, output, fi);
+        else
+            snprintf(name, sizeof name, "%s", output);
+        double ta = lie_time_now();
+        lie_frame *frame = NULL;
+        lie_render_stats fs;
+        st = lie_render(scene, rt, &fc, &ro, &frame, &fs, &err);
+        if (st != LIE_OK)
+            break;
+        double tb = lie_time_now();
+        rs.eye_rays += fs.eye_rays;
+        rs.reflection_rays += fs.reflection_rays;
+        rs.shadow_rays += fs.shadow_rays;
+        rs.shadow_rays_skipped += fs.shadow_rays_skipped;
+        rs.shading_points += fs.shading_points;
+        rs.light_samples += fs.light_samples;
+        float yfov_deg = fc.yfov * 180.0f / (float)M_PI;
+        lie_attr attrs[] = {
+            {.name = "software", .type = LIE_ATTR_STRING, .s = "lie-render " LIE_VERSION},
+            {.name = "lie.input", .type = LIE_ATTR_STRING, .s = input},
+            {.name = "lie.sceneHash", .type = LIE_ATTR_STRING, .s = hash},
+            {.name = "lie.visibility", .type = LIE_ATTR_STRING, .s = vis_name(ro.visibility)},
+            {.name = "lie.pattern", .type = LIE_ATTR_STRING, .s = ro.pattern == LIE_PATTERN_FIXED ? "fixed" : "rotated"},
+            {.name = "lie.lightSamples", .type = LIE_ATTR_INT, .i = ro.eye_only ? 0 : ro.light_samples},
+            {.name = "lie.spp", .type = LIE_ATTR_INT, .i = ro.spp},
+            {.name = "lie.maxDepth", .type = LIE_ATTR_INT, .i = ro.max_depth},
+            {.name = "lie.frame", .type = LIE_ATTR_INT, .i = fi},
+            {.name = "lie.cameraEye", .type = LIE_ATTR_V3F, .v = {fc.eye.x, fc.eye.y, fc.eye.z}},
+            {.name = "lie.cameraForward", .type = LIE_ATTR_V3F, .v = {fc.forward.x, fc.forward.y, fc.forward.z}},
+            {.name = "lie.cameraUp", .type = LIE_ATTR_V3F, .v = {fc.up.x, fc.up.y, fc.up.z}},
+            {.name = "lie.cameraYFovDegrees", .type = LIE_ATTR_FLOAT, .f = yfov_deg},
+        };
+        st = lie_frame_write(name, frame, attrs, (int)(sizeof attrs / sizeof attrs[0]), exposure, &err);
+        lie_frame_destroy(frame);
+        t_render += tb - ta;
+        t_write += lie_time_now() - tb;
+    }
+    double t3 = t2 + t_render, t4 = t3 + t_write;
+    int threads = ro.threads > 0 ? ro.threads : lie_cpu_count();
+    if (st == LIE_OK && stats) {
+        double render = t_render;
+        double mrays = render > 0.0 ? (double)rs.shadow_rays / render * 1e-6 : 0.0;
+        if (stats == 2) {
+            fprintf(stderr, "{\"tool\":\"lie-render\",\"input\":");
+            lie_json_string(stderr, input);
+            fprintf(stderr,
+                    ",\"frames\":%d,\"triangles\":%u,\"emitters\":%d,"
+                    "\"width\":%d,\"height\":%d,\"spp\":%d,\"light_samples\":%d,\"visibility\":\"%s\","
+                    "\"rays\":\"%s\",\"threads\":%d,\"eye_rays\":%llu,\"reflection_rays\":%llu,"
+                    "\"shadow_rays\":%llu,\"shading_points\":%llu,\"seconds_load\":%.6f,"
+                    "\"seconds_bvh\":%.6f,\"seconds_render\":%.6f,\"seconds_write\":%.6f,"
+                    "\"shadow_mrays_per_second\":%.3f,\"shadow_tests_without_embree\":%llu,"
+                    "\"light_samples_total\":%llu}\n",
+                    n_frames, scene->n_tris, scene->n_emitters, ro.width, ro.height, ro.spp,
+                    ro.eye_only ? 0 : ro.light_samples, vis_name(ro.visibility), rays_name(ro.rays), threads,
+                    (unsigned long long)rs.eye_rays, (unsigned long long)rs.reflection_rays,
+                    (unsigned long long)rs.shadow_rays, (unsigned long long)rs.shading_points, t1 - t0,
+                    t2 - t1, render, t4 - t3, mrays, (unsigned long long)rs.shadow_rays_skipped,
+                    (unsigned long long)rs.light_samples);
+        } else {
+            fprintf(stderr,
+                    "%s: %s: %u triangles, %d emitters, %d points and %d lines skipped\n"
+                    "  image %s, %d spp, %d light samples, visibility %s, rays %s, %d threads\n"
+                    "  %d frame%s; rays: %llu eye, %llu reflection, %llu shadow (Embree); %llu light samples\n"
+                    "  answered without Embree: %llu (visible pairs, blocker lists, or no shadows)\n"
+                    "  time: load %.3f s, bvh %.3f s, render %.3f s, write %.3f s\n"
+                    "  %.1f million Embree shadow rays per second of render time\n",
+                    prog, input, scene->n_tris, scene->n_emitters, scene->stats.points_skipped,
+                    scene->stats.lines_skipped, size, ro.spp, ro.eye_only ? 0 : ro.light_samples,
+                    vis_name(ro.visibility), rays_name(ro.rays), threads, n_frames, n_frames == 1 ? "" : "s",
+                    (unsigned long long)rs.eye_rays, (unsigned long long)rs.reflection_rays,
+                    (unsigned long long)rs.shadow_rays, (unsigned long long)rs.light_samples,
+                    (unsigned long long)rs.shadow_rays_skipped, t1 - t0, t2 - t1, render, t4 - t3, mrays);
+        }
+    }
+    lie_camera_path_destroy(cpath);
+    lie_rt_destroy(rt);
+    lie_lie_vis_destroy(lv);
+    lie_cache_destroy(cache);
+    lie_scene_destroy(scene);
+    if (st != LIE_OK)
+        return fail(&err);
+    return 0;
+}
