@@ -1,0 +1,269 @@
+/* Writing caches (formats/lie-cache.md): a header, a section table, the
+ * sections in a fixed order, each 8-byte aligned with zero padding, and a
+ * trailing XXH3-64 over everything before it.  Every byte is a function of
+ * the cache's content. */
+#include "cache/internal.h"
+
+#include <errno.h>
+#include <limits.h>
+#include <stdlib.h>
+
+void lie_cache_destroy(lie_cache *c)
+{
+    if (!c)
+        return;
+    free(c->scene_path);
+    free(c->emitters);
+    for (int i = 0; c->edits && i < c->n_edits; i++) {
+        free(c->edits[i].name);
+        free(c->edits[i].text);
+    }
+    free(c->edits);
+    lie_env_destroy(c->env);
+    free(c);
+}
+
+void lie_cache_section_name(uint32_t id, char name[16])
+{
+    static const struct {
+        uint32_t id;
+        const char *name;
+    } known[] = {
+        {LIE_CACHE_ID_META, "META"},         {LIE_CACHE_ID_PARAMS, "PARAMS"}, {LIE_CACHE_ID_EDITS, "EDITS"},
+        {LIE_CACHE_ID_EMITTERS, "EMITTERS"}, {LIE_CACHE_ID_ROOTS, "ROOTS"},   {LIE_CACHE_ID_NODES, "NODES"},
+        {LIE_CACHE_ID_POOL, "POOL"},         {LIE_CACHE_ID_RST, "RST"},
+    };
+    for (size_t i = 0; i < sizeof known / sizeof known[0]; i++) {
+        if (known[i].id == id) {
+            snprintf(name, 16, "%s", known[i].name);
+            return;
+        }
+    }
+    unsigned char b[4] = {(unsigned char)id, (unsigned char)(id >> 8), (unsigned char)(id >> 16),
+                          (unsigned char)(id >> 24)};
+    int printable = 1;
+    for (int k = 0; k < 4; k++)
+        printable &= b[k] >= 0x21 && b[k] <= 0x7e;
+    if (printable)
+        snprintf(name, 16, "%c%c%c%c", b[0], b[1], b[2], b[3]);
+    else
+        snprintf(name, 16, "0x%08x", id);
+}
+
+/* ---- encoding ------------------------------------------------------------ */
+
+enum { S_META, S_PARAMS, S_EDITS, S_EMITTERS, S_ROOTS, S_NODES, S_POOL, S_COUNT };
+
+static const uint32_t section_ids[S_COUNT] = {
+    LIE_CACHE_ID_META, LIE_CACHE_ID_PARAMS, LIE_CACHE_ID_EDITS, LIE_CACHE_ID_EMITTERS,
+    LIE_CACHE_ID_ROOTS, LIE_CACHE_ID_NODES, LIE_CACHE_ID_POOL,
+};
+
+/* Everything a reader would reject is refused here too, so a cache that
+ * encodes always decodes. */
+static lie_status check_cache(const lie_cache *c, const char *name, lie_error *err)
+{
+    if (!c || !c->env)
+        return lie_error_set(err, LIE_ERR_ARG, name, "refusing to write a cache without an env");
+    const lie_env *env = c->env;
+    if (!c->scene_path)
+        return lie_error_set(err, LIE_ERR_ARG, name, "refusing to write a cache without a scene path");
+    if (strlen(c->scene_path) > UINT32_MAX)
+        return lie_error_set(err, LIE_ERR_ARG, name, "scene path too long");
+    if (c->n_emitters < 0 || c->n_edits < 0 || (c->n_emitters > 0 && !c->emitters) ||
+        (c->n_edits > 0 && !c->edits))
+        return lie_error_set(err, LIE_ERR_ARG, name, "refusing to write a cache with bad emitter or edit arrays");
+    if (c->n_tris != env->n_tris || c->n_emitters != env->n_emitters)
+        return lie_error_set(err, LIE_ERR_ARG, name,
+                             "refusing to write a cache whose env has %u triangles and %d emitters, not %u and %d",
+                             env->n_tris, env->n_emitters, c->n_tris, c->n_emitters);
+    if (env->scene_hash != c->state_hash)
+        return lie_error_set(err, LIE_ERR_ARG, name,
+                             "refusing to write a cache whose env was built for scene state %016llx, not %016llx",
+                             (unsigned long long)env->scene_hash, (unsigned long long)c->state_hash);
+    lie_error perr;
+    if (lie_build_params_check(&env->params, &perr) != LIE_OK)
+        return lie_error_set(err, LIE_ERR_ARG, name, "refusing to write a cache with bad parameters: %s", perr.msg);
+    for (int e = 0; e < c->n_emitters; e++) {
+        const char *why = lie_cache_check_emitter(&c->emitters[e], c->n_tris);
+        if (why)
+            return lie_error_set(err, LIE_ERR_ARG, name, "refusing to write a cache: emitter %d: %s", e, why);
+    }
+    for (int i = 0; i < c->n_edits; i++) {
+        const lie_cache_edit *ed = &c->edits[i];
+        if (!ed->name || strlen(ed->name) > UINT32_MAX || ed->size > UINT32_MAX || (ed->size && !ed->text))
+            return lie_error_set(err, LIE_ERR_ARG, name, "refusing to write a cache: edit %d is malformed", i);
+    }
+    if (!env->root || !env->nodes || (env->n_pool && !env->pool))
+        return lie_error_set(err, LIE_ERR_ARG, name, "refusing to write a cache: env arrays missing");
+    return lie_cache_check_env(env, LIE_ERR_ARG, name, "refusing to write an invalid env: ", err);
+}
+
+/* `name` (the output path, or NULL) is used in messages. */
+static lie_status encode(const lie_cache *c, const char *name, unsigned char **data, size_t *size, lie_error *err)
+{
+    *data = NULL;
+    *size = 0;
+    lie_status st = check_cache(c, name, err);
+    if (st != LIE_OK)
+        return st;
+    const lie_env *env = c->env;
+    const uint64_t path_len = strlen(c->scene_path);
+    const uint64_t n_units = (uint64_t)env->n_tris * (uint64_t)env->n_emitters;
+
+    uint64_t sz[S_COUNT], off[S_COUNT];
+    sz[S_META] = LIE_CACHE_META_FIXED + path_len;
+    sz[S_PARAMS] = LIE_CACHE_PARAMS_SIZE;
+    sz[S_EDITS] = 4;
+    for (int i = 0; i < c->n_edits; i++)
+        sz[S_EDITS] += 8 + (uint64_t)strlen(c->edits[i].name) + c->edits[i].size;
+    sz[S_EMITTERS] = LIE_CACHE_EMITTER_SIZE * (uint64_t)c->n_emitters;
+    sz[S_ROOTS] = 4 * n_units;
+    sz[S_NODES] = LIE_CACHE_NODE_SIZE * (uint64_t)env->n_nodes;
+    sz[S_POOL] = 4 * (uint64_t)env->n_pool;
+    uint64_t pos = LIE_CACHE_HEADER_SIZE + LIE_CACHE_ENTRY_SIZE * S_COUNT;
+    for (int s = 0; s < S_COUNT; s++) {
+        off[s] = pos;
+        pos = lie_cache_align8(pos + sz[s]);
+    }
+    const uint64_t total = pos + 8;
+    if (total > SIZE_MAX / 2)
+        return lie_error_set(err, LIE_ERR_LIMIT, name, "a %llu-byte cache is beyond this machine",
+                             (unsigned long long)total);
+    unsigned char *buf = calloc(1, (size_t)total);
+    if (!buf)
+        return lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory for a %llu-byte cache",
+                             (unsigned long long)total);
+
+    /* header */
+    memcpy(buf, LIE_CACHE_MAGIC, 8);
+    lie_cache_put_u32(buf + 8, LIE_CACHE_VERSION);
+    lie_cache_put_u32(buf + 12, 0); /* required flags */
+    lie_cache_put_u32(buf + 16, 0); /* optional flags */
+    lie_cache_put_u32(buf + 20, S_COUNT);
+    lie_cache_put_u64(buf + 24, total);
+
+    /* META */
+    unsigned char *p = buf + off[S_META];
+    lie_cache_put_u64(p + 0, c->scene_hash);
+    lie_cache_put_u64(p + 8, c->state_hash);
+    lie_cache_put_u32(p + 16, env->n_tris);
+    lie_cache_put_u32(p + 20, (uint32_t)env->n_emitters);
+    lie_cache_put_u64(p + 24, n_units);
+    lie_cache_put_u32(p + 32, env->n_nodes);
+    lie_cache_put_u32(p + 36, env->n_pool);
+    lie_cache_put_u32(p + 40, (uint32_t)path_len);
+    lie_cache_put_u32(p + 44, 0);
+    memcpy(p + LIE_CACHE_META_FIXED, c->scene_path, (size_t)path_len);
+
+    /* PARAMS */
+    p = buf + off[S_PARAMS];
+    lie_cache_put_u32(p + 0, env->params.samples);
+    lie_cache_put_u32(p + 4, env->params.max_samples);
+    lie_cache_put_u32(p + 8, env->params.max_blockers);
+    lie_cache_put_u32(p + 12, env->params.complex_cap);
+    lie_cache_put_u32(p + 16, lie_cache_f32_bits(env->params.min_patch));
+    lie_cache_put_u32(p + 20, (uint32_t)env->params.mode);
+
+    /* EDITS */
+    p = buf + off[S_EDITS];
+    lie_cache_put_u32(p, (uint32_t)c->n_edits);
+    p += 4;
+    for (int i = 0; i < c->n_edits; i++) {
+        const lie_cache_edit *ed = &c->edits[i];
+        size_t nl = strlen(ed->name);
+        lie_cache_put_u32(p, (uint32_t)nl);
+        lie_cache_put_u32(p + 4, (uint32_t)ed->size);
+        memcpy(p + 8, ed->name, nl);
+        if (ed->size)
+            memcpy(p + 8 + nl, ed->text, ed->size);
+        p += 8 + nl + ed->size;
+    }
+
+    /* EMITTERS */
+    p = buf + off[S_EMITTERS];
+    for (int e = 0; e < c->n_emitters; e++, p += LIE_CACHE_EMITTER_SIZE) {
+        const lie_cache_emitter *em = &c->emitters[e];
+        lie_cache_put_u32(p + 0, em->type);
+        lie_cache_put_u32(p + 4, (uint32_t)em->node);
+        lie_cache_put_u32(p + 8, em->first_tri);
+        lie_cache_put_u32(p + 12, em->n_tris);
+    }
+
+    /* ROOTS, NODES, POOL */
+    p = buf + off[S_ROOTS];
+    for (uint64_t u = 0; u < n_units; u++, p += 4)
+        lie_cache_put_u32(p, env->root[u]);
+    p = buf + off[S_NODES];
+    for (uint32_t i = 0; i < env->n_nodes; i++, p += LIE_CACHE_NODE_SIZE) {
+        const lie_pnode *x = &env->nodes[i];
+        lie_cache_put_u32(p + 0, x->child);
+        lie_cache_put_u32(p + 4, x->cls);
+        lie_cache_put_u32(p + 8, x->quality);
+        lie_cache_put_u32(p + 12, x->list);
+        lie_cache_put_u32(p + 16, x->count);
+    }
+    p = buf + off[S_POOL];
+    for (uint32_t i = 0; i < env->n_pool; i++, p += 4)
+        lie_cache_put_u32(p, env->pool[i]);
+
+    /* section table, then the file checksum over everything before it */
+    for (int s = 0; s < S_COUNT; s++) {
+        unsigned char *t = buf + LIE_CACHE_HEADER_SIZE + LIE_CACHE_ENTRY_SIZE * (size_t)s;
+        lie_cache_put_u32(t + 0, section_ids[s]);
+        lie_cache_put_u32(t + 4, 0);
+        lie_cache_put_u64(t + 8, off[s]);
+        lie_cache_put_u64(t + 16, sz[s]);
+        lie_cache_put_u64(t + 24, lie_hash_bytes(buf + off[s], (size_t)sz[s], 0));
+    }
+    lie_cache_put_u64(buf + total - 8, lie_hash_bytes(buf, (size_t)total - 8, 0));
+    *data = buf;
+    *size = (size_t)total;
+    return LIE_OK;
+}
+
+lie_status lie_cache_encode(const lie_cache *c, unsigned char **data, size_t *size, lie_error *err)
+{
+    return encode(c, NULL, data, size, err);
+}
+
+lie_status lie_cache_write(const char *path, const lie_cache *c, size_t *bytes, lie_error *err)
+{
+    unsigned char *data = NULL;
+    size_t size = 0;
+    if (bytes)
+        *bytes = 0;
+    lie_status st = encode(c, path, &data, &size, err);
+    if (st != LIE_OK)
+        return st;
+    lie_atomic_file af;
+    st = lie_atomic_open(&af, path, err);
+    if (st != LIE_OK) {
+        free(data);
+        return st;
+    }
+    if (fwrite(data, 1, size, af.fp) != size) {
+        int e = errno;
+        lie_atomic_abort(&af);
+        free(data);
+        return lie_error_set(err, LIE_ERR_IO, path, "write failed: %s", strerror(e ? e : EIO));
+    }
+    free(data);
+    st = lie_atomic_commit(&af, err);
+    if (st == LIE_OK && bytes)
+        *bytes = size;
+    return st;
+}
+
+lie_status lie_cache_read(const char *path, lie_cache **out, lie_error *err)
+{
+    *out = NULL;
+    unsigned char *data = NULL;
+    size_t size = 0;
+    lie_status st = lie_read_file(path, &data, &size, err);
+    if (st != LIE_OK)
+        return st;
+    st = lie_cache_decode(data, size, path, out, err);
+    free(data);
+    return st;
+}

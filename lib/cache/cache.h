@@ -1,0 +1,89 @@
+/* lib/cache: the versioned cache file (.lie) that lie-build writes and the
+ * other tools read.  Byte layout: formats/lie-cache.md.
+ *
+ * A cache records the scene by path and content hash (never a copy), every
+ * build parameter, the edit log (empty after lie-build; rst-update appends),
+ * a summary of the emitters, and the local illumination environments.  The
+ * same scene and parameters always give the same bytes. */
+#ifndef LIE_CACHE_H
+#define LIE_CACHE_H
+
+#include "core/core.h"
+#include "lie/lie.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define LIE_CACHE_VERSION 1u
+
+/* What the cache knows of each emitter, to check it against a scene. */
+typedef struct lie_cache_emitter {
+    uint32_t type;       /* lie_emitter_type */
+    int32_t node;        /* glTF node index */
+    uint32_t first_tri, n_tris;
+} lie_cache_emitter;
+
+/* One applied edit: the edit file's name as given and its full text
+ * (`size` bytes; a decoded cache adds a terminating 0 not counted in size). */
+typedef struct lie_cache_edit {
+    char *name;
+    unsigned char *text;
+    size_t size;
+} lie_cache_edit;
+
+typedef struct lie_cache {
+    char *scene_path;        /* as given to lie-build */
+    uint64_t scene_hash;     /* content hash of the scene as loaded from the file */
+    uint64_t state_hash;     /* content hash after the edit log (what env was built for) */
+    uint32_t n_tris;
+    lie_cache_emitter *emitters;
+    int n_emitters;
+    lie_cache_edit *edits;
+    int n_edits;
+    lie_env *env;            /* owned; env->params are the build parameters */
+} lie_cache;
+
+/* Free everything the cache owns (env included); NULL is fine. */
+void lie_cache_destroy(lie_cache *c);
+
+/* Serialise to a malloc'd buffer (caller frees).  A cache that a reader
+ * would reject (inconsistent counts, bad parameters, a malformed env) is
+ * refused with LIE_ERR_ARG, so whatever encodes also decodes. */
+lie_status lie_cache_encode(const lie_cache *c, unsigned char **data, size_t *size, lie_error *err);
+/* Encode and write atomically (temporary file, fsync, rename); "-" = stdout.
+ * *bytes (may be NULL) receives the size written. */
+lie_status lie_cache_write(const char *path, const lie_cache *c, size_t *bytes, lie_error *err);
+
+/* Parse and validate a whole cache held in memory: magic, version, section
+ * table, every size and offset, every checksum, then the structure (tree
+ * links, classes, list ranges, triangle indices) — before trusting a byte.
+ * `name` is used in messages.  On success *out is owned by the caller. */
+lie_status lie_cache_decode(const unsigned char *data, size_t size, const char *name, lie_cache **out,
+                            lie_error *err);
+/* Read a file ("-" = stdin) and decode it. */
+lie_status lie_cache_read(const char *path, lie_cache **out, lie_error *err);
+
+/* Section table of a valid encoding, for `lie-inspect summary`. */
+typedef struct lie_cache_section {
+    uint32_t id;
+    char name[16];
+    uint64_t offset, size;
+} lie_cache_section;
+#define LIE_CACHE_MAX_SECTIONS 32
+lie_status lie_cache_sections(const unsigned char *data, size_t size, const char *name,
+                              lie_cache_section *out, int *n, lie_error *err);
+
+/* Load the scene the cache describes: its glTF file (`override`, or the
+ * recorded path as given, or that path relative to the cache's folder),
+ * checked against scene_hash, with the edit log replayed and the result
+ * checked against state_hash.  `cache_path` (may be NULL) names the cache
+ * in messages. */
+#include "scene/scene.h"
+lie_status lie_cache_load_scene(const lie_cache *c, const char *cache_path, const char *override,
+                                const lie_scene_options *so, lie_scene **out, lie_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

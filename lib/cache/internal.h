@@ -1,0 +1,87 @@
+/* lib/cache internals shared by the encoder and the decoder: section ids,
+ * little-endian field access, the layout arithmetic of formats/lie-cache.md
+ * and the structural check of an env. */
+#ifndef LIE_CACHE_INTERNAL_H
+#define LIE_CACHE_INTERNAL_H
+
+#include "cache/cache.h"
+
+#include <string.h>
+
+#define LIE_CACHE_MAGIC "LIECACHE"
+#define LIE_CACHE_HEADER_SIZE 32u
+#define LIE_CACHE_ENTRY_SIZE 32u
+#define LIE_CACHE_META_FIXED 48u
+#define LIE_CACHE_PARAMS_SIZE 24u
+#define LIE_CACHE_EMITTER_SIZE 16u
+#define LIE_CACHE_NODE_SIZE 20u
+
+/* A section id: its four ASCII bytes read as a little-endian u32. */
+#define LIE_CACHE_ID(a, b, c, d) \
+    ((uint32_t)(a) | ((uint32_t)(b) << 8) | ((uint32_t)(c) << 16) | ((uint32_t)(d) << 24))
+#define LIE_CACHE_ID_META LIE_CACHE_ID('M', 'E', 'T', 'A')
+#define LIE_CACHE_ID_PARAMS LIE_CACHE_ID('P', 'A', 'R', 'M')
+#define LIE_CACHE_ID_EDITS LIE_CACHE_ID('E', 'D', 'I', 'T')
+#define LIE_CACHE_ID_EMITTERS LIE_CACHE_ID('E', 'M', 'I', 'T')
+#define LIE_CACHE_ID_ROOTS LIE_CACHE_ID('R', 'O', 'O', 'T')
+#define LIE_CACHE_ID_NODES LIE_CACHE_ID('N', 'O', 'D', 'E')
+#define LIE_CACHE_ID_POOL LIE_CACHE_ID('P', 'O', 'O', 'L')
+#define LIE_CACHE_ID_RST LIE_CACHE_ID('R', 'S', 'T', 'S') /* reserved for rst-update */
+
+static inline void lie_cache_put_u32(unsigned char *p, uint32_t v)
+{
+    p[0] = (unsigned char)v;
+    p[1] = (unsigned char)(v >> 8);
+    p[2] = (unsigned char)(v >> 16);
+    p[3] = (unsigned char)(v >> 24);
+}
+
+static inline void lie_cache_put_u64(unsigned char *p, uint64_t v)
+{
+    lie_cache_put_u32(p, (uint32_t)v);
+    lie_cache_put_u32(p + 4, (uint32_t)(v >> 32));
+}
+
+static inline uint32_t lie_cache_get_u32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
+}
+
+static inline uint64_t lie_cache_get_u64(const unsigned char *p)
+{
+    return (uint64_t)lie_cache_get_u32(p) | ((uint64_t)lie_cache_get_u32(p + 4) << 32);
+}
+
+static inline uint32_t lie_cache_f32_bits(float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    return u;
+}
+
+static inline float lie_cache_bits_f32(uint32_t u)
+{
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+/* Round up to the next multiple of 8 (x well below 2^64). */
+static inline uint64_t lie_cache_align8(uint64_t x) { return (x + 7u) & ~(uint64_t)7u; }
+
+/* The display name of a section id ("NODES"; unknown ids as their four
+ * characters or in hex). */
+void lie_cache_section_name(uint32_t id, char name[16]);
+
+/* Check env's patch trees against the structural rules of
+ * formats/lie-cache.md ("What a reader must reject", 15).  env->n_tris,
+ * n_emitters, n_nodes, n_pool must describe the arrays.  Failures are
+ * reported with `status`, file `name` and `prefix` before the message. */
+lie_status lie_cache_check_env(const lie_env *env, lie_status status, const char *name, const char *prefix,
+                               lie_error *err);
+
+/* Check one emitter record against a scene of n_tris triangles; returns a
+ * static description of the problem, or NULL when the record is valid. */
+const char *lie_cache_check_emitter(const lie_cache_emitter *e, uint32_t n_tris);
+
+#endif

@@ -1,0 +1,62 @@
+/* The scene a cache was built for: its glTF file plus the edit log. */
+#include "cache/cache.h"
+#include "edit/edit.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+lie_status lie_cache_load_scene(const lie_cache *c, const char *cache_path, const char *override,
+                                const lie_scene_options *so, lie_scene **out, lie_error *err)
+{
+    *out = NULL;
+    const char *path = override ? override : c->scene_path;
+    char alt[4096];
+    /* a relative path that does not resolve from here: try it relative to
+     * the cache's folder (caches travel with their scenes) */
+    if (!override && c->scene_path[0] != '/' && access(path, F_OK) != 0 && cache_path) {
+        const char *slash = strrchr(cache_path, '/');
+        if (slash && (size_t)(slash - cache_path) + strlen(path) + 2 < sizeof alt) {
+            snprintf(alt, sizeof alt, "%.*s/%s", (int)(slash - cache_path), cache_path, path);
+            if (access(alt, F_OK) == 0)
+                path = alt;
+        }
+    }
+    lie_scene *s = NULL;
+    lie_status st = lie_scene_load(path, so, &s, err);
+    if (st != LIE_OK)
+        return st;
+    if (s->hash != c->scene_hash) {
+        lie_error_set(err, LIE_ERR_FORMAT, cache_path,
+                      "scene %s has content hash %016llx, the cache was built for %016llx", path,
+                      (unsigned long long)s->hash, (unsigned long long)c->scene_hash);
+        lie_scene_destroy(s);
+        return LIE_ERR_FORMAT;
+    }
+    for (int i = 0; i < c->n_edits; i++) {
+        lie_edit *e = NULL;
+        st = lie_edit_parse(c->edits[i].text, c->edits[i].size, c->edits[i].name, &e, err);
+        if (st == LIE_OK)
+            st = lie_edit_apply(s, e, so, NULL, err);
+        lie_edit_destroy(e);
+        if (st != LIE_OK) {
+            lie_scene_destroy(s);
+            return st;
+        }
+    }
+    if (s->hash != c->state_hash) {
+        lie_error_set(err, LIE_ERR_FORMAT, cache_path,
+                      "the scene after the edit log has content hash %016llx, the cache expects %016llx",
+                      (unsigned long long)s->hash, (unsigned long long)c->state_hash);
+        lie_scene_destroy(s);
+        return LIE_ERR_FORMAT;
+    }
+    if (s->n_tris != c->n_tris || s->n_emitters != c->n_emitters) {
+        lie_error_set(err, LIE_ERR_FORMAT, cache_path, "the scene has %u triangles and %d emitters, the cache %u and %d",
+                      s->n_tris, s->n_emitters, c->n_tris, c->n_emitters);
+        lie_scene_destroy(s);
+        return LIE_ERR_FORMAT;
+    }
+    *out = s;
+    return LIE_OK;
+}

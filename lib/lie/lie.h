@@ -1,0 +1,164 @@
+/* lib/lie: local illumination environments (§4).
+ *
+ * For every triangle t and emitter e there is one *unit*: a patch tree over
+ * t (lib/patch) whose leaves each hold one patch–emitter pair's class —
+ * unlit, visible, occluded, partial with a blocker list, or complex.  Trees
+ * are per (triangle, emitter), so a pair's subdivision depends on that pair
+ * alone and rebuilding one unit gives exactly what a full build gives
+ * (rst-update relies on this).
+ *
+ * Storage is flat: node arrays and a pooled array of blocker triangle
+ * indices, units in the order u = t * n_emitters + e. */
+#ifndef LIE_LIE_H
+#define LIE_LIE_H
+
+#include "core/core.h"
+#include "patch/patch.h"
+#include "rt/rt.h"
+#include "scene/scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum lie_class {
+    LIE_CLASS_UNLIT = 0,    /* cannot interact: emitter behind the patch or patch behind the emitter */
+    LIE_CLASS_VISIBLE = 1,  /* every sampled segment free */
+    LIE_CLASS_OCCLUDED = 2, /* every sampled segment blocked */
+    LIE_CLASS_PARTIAL = 3,  /* some blocked: test the blocker list */
+    LIE_CLASS_COMPLEX = 4,  /* list too long even at the smallest size: use the whole scene */
+    LIE_CLASS_SPLIT = 5,    /* interior node: see the four children */
+    LIE_CLASS_NONE = 6      /* not built (lie-build --view): the renderer uses the whole scene */
+} lie_class;
+#define LIE_CLASS_COUNT 7
+const char *lie_class_name(lie_class c);
+
+typedef enum lie_blocker_mode {
+    LIE_BLOCKERS_SAMPLED = 0,      /* §4.1: shadow segments sampled between patch and emitter */
+    LIE_BLOCKERS_CONSERVATIVE = 1  /* §4.1.2 shaft culling: every triangle meeting the hull */
+} lie_blocker_mode;
+
+typedef struct lie_build_params {
+    uint32_t samples;      /* segments in the first round (--samples) */
+    uint32_t max_samples;  /* adaptive rounds stop here (--max-samples) */
+    uint32_t max_blockers; /* subdivide when a list is longer (--max-blockers) */
+    uint32_t complex_cap;  /* a leaf list longer than this is complex (--complex-cap) */
+    float min_patch;       /* smallest patch area / largest triangle area (--min-patch) */
+    lie_blocker_mode mode;
+    int threads;           /* not stored in caches: results never depend on it */
+} lie_build_params;
+
+#define LIE_SAMPLES_DEFAULT 128u
+#define LIE_MAX_SAMPLES_DEFAULT 512u
+#define LIE_MAX_BLOCKERS_DEFAULT 8u
+#define LIE_COMPLEX_CAP_DEFAULT 64u
+#define LIE_MIN_PATCH_DEFAULT 1e-4f
+lie_build_params lie_build_params_default(void);
+/* Check ranges; fills err with which parameter is wrong. */
+lie_status lie_build_params_check(const lie_build_params *p, lie_error *err);
+
+/* A node of a patch tree.  Leaves have child == 0 (a child is never node 0
+ * of the whole array: node 0 is the first unit's root). */
+typedef struct lie_pnode {
+    uint32_t child;   /* first of four consecutive children, or 0 */
+    uint32_t cls;     /* lie_class */
+    uint32_t quality; /* segments sampled for this pair (0 for unlit / conservative) */
+    uint32_t list;    /* partial: offset of the blocker list in the pool */
+    uint32_t count;   /* partial: blockers; complex: blockers found before giving up */
+} lie_pnode;
+
+typedef struct lie_env {
+    uint32_t n_tris;
+    int n_emitters;
+    uint32_t *root;       /* per unit: its root node */
+    lie_pnode *nodes;
+    uint32_t n_nodes;
+    uint32_t *pool;       /* blocker lists, each sorted and unique */
+    uint32_t n_pool;
+    lie_build_params params;
+    uint64_t scene_hash;
+} lie_env;
+
+typedef struct lie_build_stats {
+    uint64_t pairs[LIE_CLASS_COUNT];   /* leaf pairs per class */
+    uint64_t patches_per_depth[LIE_PATCH_MAX_DEPTH + 1];
+    uint64_t list_hist[18];            /* leaf partial lists: 1,2,3-4,5-8,...,>2^16 */
+    uint64_t segments;                 /* shadow segments cast */
+    uint64_t blocker_total;            /* sum of partial list lengths */
+    double seconds;
+} lie_build_stats;
+
+/* Build every unit of the scene.  Deterministic: the same scene and
+ * parameters give the same env for any thread count.  `progress` may be
+ * NULL. */
+lie_status lie_env_build(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                         lie_progress *progress, lie_env **out, lie_build_stats *stats, lie_error *err);
+
+/* The same, building only the triangles with tri_mask[t] set (NULL: all);
+ * the others' units are single LIE_CLASS_NONE nodes. */
+lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                                const uint8_t *tri_mask, lie_progress *progress, lie_env **out,
+                                lie_build_stats *stats, lie_error *err);
+
+/* Rebuild the listed units (sorted, unique) in place, with env's own
+ * parameters, exactly as lie_env_build would.  Used by rst-update. */
+lie_status lie_env_rebuild_units(lie_env *env, const lie_scene *s, const lie_rt *rt,
+                                 const uint32_t *units, size_t n_units, int threads,
+                                 lie_build_stats *stats, lie_error *err);
+
+/* How far shadow segments towards directional emitters reach. */
+float lie_ray_far(const lie_scene *s);
+/* The renderer's largest shadow-ray offset on triangle tri. */
+float lie_pair_eps(const lie_scene *s, uint32_t tri);
+/* The hull of a pair, as lie-build and the ray segment trees see it: the
+ * patch's corners V, lifted by lie_pair_eps on the side(s) it is shaded
+ * from, and the emitter's points (vertices; a point light's position; for a
+ * directional light the patch moved lie_ray_far towards it).  `out` must
+ * hold lie_pair_hull_cap(s, e) points; returns how many were written. */
+int lie_pair_hull_cap(const lie_scene *s, int e);
+int lie_pair_hull_points(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], int e, lie_vec3 *out);
+
+/* Update env for scene s (its state after edits).  old_unit has one entry
+ * per unit of s: the unit of env it continues (copied, or updated where
+ * node_flags marks env nodes to recompute), or -1 to build it afresh.  The
+ * result is exactly what lie_env_build gives for s, provided every node
+ * whose shaft an edit touched is flagged, and every unit whose patch or
+ * emitter changed is built afresh. */
+lie_status lie_env_update(lie_env *env, const lie_scene *s, const lie_rt *rt, const int32_t *old_unit,
+                          const uint8_t *node_flags, int threads, lie_build_stats *stats, lie_error *err);
+
+/* Statistics of an existing env (no build time). */
+void lie_env_stats(const lie_env *env, lie_build_stats *stats);
+
+void lie_env_destroy(lie_env *env);
+
+/* The leaf of unit (tri, e) holding local point (b1, b2): the renderer's
+ * hot path, a few steps down a quad-tree. */
+static inline const lie_pnode *lie_env_find_leaf(const lie_env *env, uint32_t tri, int e, float b1,
+                                                 float b2)
+{
+    const lie_pnode *n = &env->nodes[env->root[(size_t)tri * (size_t)env->n_emitters + (size_t)e]];
+    while (n->child)
+        n = &env->nodes[n->child + (uint32_t)lie_patch_descend(&b1, &b2)];
+    return n;
+}
+
+/* The same, also giving the leaf's patch path. */
+static inline const lie_pnode *lie_env_find_leaf_path(const lie_env *env, uint32_t tri, int e, float b1,
+                                                      float b2, lie_patch_path *path)
+{
+    const lie_pnode *n = &env->nodes[env->root[(size_t)tri * (size_t)env->n_emitters + (size_t)e]];
+    lie_patch_path p = lie_patch_root();
+    while (n->child) {
+        int d = lie_patch_descend(&b1, &b2);
+        p = lie_patch_child(p, d);
+        n = &env->nodes[n->child + (uint32_t)d];
+    }
+    *path = p;
+    return n;
+}
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,64 @@
+#!/bin/sh
+# lie-build: caches from the bundled scenes, determinism across thread
+# counts and runs, stdout, statistics, bad input.
+. "$ROOT/tests/tools/lib.sh"
+
+run "$B/lie-build" --help
+expect_rc 0 "--help exits 0"
+if grep -q -- '--max-blockers' "$TMP/out"; then ok "--help lists the options"; else not_ok "--help"; fi
+
+run "$B/lie-build" "$S/cornell.gltf" -q -o "$TMP/c1.lie" --threads 1
+expect_rc 0 "build cornell"
+expect_file "$TMP/c1.lie" "cache written"
+run "$B/lie-build" "$S/cornell.gltf" -q -o "$TMP/c2.lie" --threads 2
+expect_same "$TMP/c1.lie" "$TMP/c2.lie" "cornell: identical caches for 1 and 2 threads"
+run "$B/lie-build" "$S/museum1.gltf" -q -o "$TMP/m1a.lie" --threads 1 --min-patch 1e-2
+run "$B/lie-build" "$S/museum1.gltf" -q -o "$TMP/m1b.lie" --threads 2 --min-patch 1e-2
+expect_same "$TMP/m1a.lie" "$TMP/m1b.lie" "museum1: identical caches for 1 and 2 threads"
+run "$B/lie-build" "$S/museum1.gltf" -q -o "$TMP/m1c.lie" --threads 2 --min-patch 1e-2 --blockers conservative
+expect_rc 0 "conservative build"
+"$B/lie-build" "$S/cornell.gltf" -q -o - >"$TMP/stdout.lie" 2>"$TMP/err"; rc=$?
+expect_rc 0 "cache to stdout"
+expect_same "$TMP/c1.lie" "$TMP/stdout.lie" "stdout cache equals file cache"
+
+run "$B/lie-build" "$S/cornell.gltf" -q -o "$TMP/s.lie" --stats=json
+if [ "$(wc -l <"$TMP/err")" -eq 1 ] && grep -q '"pairs":{"unlit"' "$TMP/err" && grep -q '"bytes":' "$TMP/err"; then
+    ok "--stats=json: one JSON line with pairs and bytes"; else not_ok "--stats=json"; sed 's/^/# /' "$TMP/err"; fi
+run "$B/lie-build" "$S/cornell.gltf" -q -o "$TMP/s.lie" --stats
+if grep -q 'patches per depth' "$TMP/err" && grep -q 'time:' "$TMP/err"; then ok "--stats human"; else not_ok "--stats"; fi
+
+# --view: only what the camera sees is built; the rest is 'none' and renders with full visibility.
+run "$B/lie-build" "$S/museum2.gltf" -q --view Camera --view-size 128x128 --stats=json -o "$TMP/view.lie"
+expect_rc 0 "--view Camera"
+if grep -q '"none":[1-9]' "$TMP/err"; then ok "--view leaves unseen triangles unbuilt"; else not_ok "--view: no 'none' pairs"; sed 's/^/# /' "$TMP/err"; fi
+run "$B/lie-inspect" verify "$TMP/view.lie"
+expect_rc 0 "a view-limited cache verifies"
+run "$B/lie-render" "$TMP/view.lie" -q --size 64x64 -o "$TMP/view.exr"
+run "$B/lie-render" "$S/museum2.gltf" -q --size 64x64 -o "$TMP/viewref.exr"
+if "$H/exr-compare" "$TMP/viewref.exr" "$TMP/view.exr" 1 0.002 >"$TMP/cmp"; then ok "view-limited cache renders like the reference: $(cat "$TMP/cmp")"; else
+    not_ok "view-limited render: $(cat "$TMP/cmp")"; fi
+run "$B/lie-build" "$S/museum2.gltf" -q --view NoSuchCamera -o "$TMP/view2.lie"
+expect_rc 1 "--view with an unknown camera"
+expect_no_file "$TMP/view2.lie" "--view with an unknown camera: no cache"
+
+# Bad input: one line, exit 1, nothing written.
+run "$B/lie-build" "$TMP/nope.gltf" -q -o "$TMP/bad.lie"
+expect_rc 1 "missing scene"
+expect_one_error_line "lie-build: $TMP/nope.gltf:" "missing scene: one line"
+expect_no_file "$TMP/bad.lie" "missing scene: no cache"
+run "$B/lie-build" "$D/gltf/bad_json.gltf" -q -o "$TMP/bad.lie"
+expect_rc 1 "invalid glTF"
+expect_no_file "$TMP/bad.lie" "invalid glTF: no cache"
+cp "$TMP/c1.lie" "$TMP/keep.lie"
+run "$B/lie-build" "$D/gltf/bad_json.gltf" -q -o "$TMP/keep.lie"
+expect_same "$TMP/c1.lie" "$TMP/keep.lie" "a failed build leaves the previous cache untouched"
+expect_no_temp "$TMP" "no temporary files left"
+for bad in "--samples 0" "--samples x" "--min-patch 0" "--min-patch 2" "--blockers some" "--max-blockers -1" "--threads many"; do
+    # shellcheck disable=SC2086
+    run "$B/lie-build" "$S/cornell.gltf" -q -o "$TMP/u.lie" $bad
+    expect_rc 2 "usage error: $bad"
+done
+run "$B/lie-build" "$S/cornell.gltf"
+expect_rc 2 "missing -o"
+expect_no_file "$TMP/u.lie" "no cache after usage errors"
+finish

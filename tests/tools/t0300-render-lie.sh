@@ -1,0 +1,100 @@
+#!/bin/sh
+# lie-render from caches: the oracle (conservative caches give the reference
+# image; sampled ones within the stated tolerance), thread-count
+# determinism, stdin, --scene, complexity layers, camera paths, errors.
+. "$ROOT/tests/tools/lib.sh"
+SIZE=${LIE_TEST_SIZE:-160x160}
+
+compare() { # A B MAXFRAC_ANY MAXFRAC_2PCT WHAT
+    if "$H/exr-compare" "$1" "$2" "$3" "$4" >"$TMP/cmp" 2>&1; then ok "$5: $(cat "$TMP/cmp")"; else
+        not_ok "$5: $(cat "$TMP/cmp")"; fi
+}
+
+for scene in museum1 museum2 museum3 cornell; do
+    run "$B/lie-build" "$S/$scene.gltf" -q -o "$TMP/$scene-c.lie" --blockers conservative
+    expect_rc 0 "$scene: conservative build"
+    run "$B/lie-build" "$S/$scene.gltf" -q -o "$TMP/$scene-s.lie"
+    expect_rc 0 "$scene: sampled build"
+    run "$B/lie-render" "$S/$scene.gltf" -q --size $SIZE --visibility=full -o "$TMP/$scene-full.exr"
+    expect_rc 0 "$scene: reference render"
+    run "$B/lie-render" "$TMP/$scene-c.lie" -q --size $SIZE -o "$TMP/$scene-c.exr"
+    expect_rc 0 "$scene: render from the conservative cache"
+    compare "$TMP/$scene-full.exr" "$TMP/$scene-c.exr" 0.0001 0.0001 "$scene: conservative LIE image = reference (<= 0.01% pixels differ)"
+    run "$B/lie-render" "$TMP/$scene-s.lie" -q --size $SIZE -o "$TMP/$scene-s.exr"
+    expect_rc 0 "$scene: render from the sampled cache"
+    compare "$TMP/$scene-full.exr" "$TMP/$scene-s.exr" 1 0.001 "$scene: sampled LIE image within 2% on >= 99.9% of pixels"
+    run "$B/lie-render" "$TMP/$scene-c.lie" -q --size $SIZE --visibility=full -o "$TMP/$scene-cf.exr"
+    compare "$TMP/$scene-full.exr" "$TMP/$scene-cf.exr" 0 0 "$scene: --visibility=full from a cache = from the scene, pixel for pixel"
+done
+
+run "$B/lie-render" "$TMP/museum1-s.lie" -q --size 96x64 --threads 1 -o "$TMP/t1.exr"
+run "$B/lie-render" "$TMP/museum1-s.lie" -q --size 96x64 --threads 2 -o "$TMP/t2.exr"
+expect_same "$TMP/t1.exr" "$TMP/t2.exr" "LIE frames identical for 1 and 2 threads"
+"$B/lie-render" - -q --size 96x64 --threads 2 -o "$TMP/t3.exr" <"$TMP/museum1-s.lie" 2>"$TMP/err"; rc=$?
+expect_rc 0 "cache from stdin"
+compare "$TMP/t1.exr" "$TMP/t3.exr" 0 0 "stdin cache renders the same pixels"
+"$B/lie-build" "$S/cornell.gltf" -q -o - | "$B/lie-render" - -q --size 32x32 -o "$TMP/pipe.png" 2>"$TMP/err"; rc=$?
+expect_rc 0 "lie-build | lie-render pipeline"
+
+# --scene: the right scene elsewhere works, a different scene is refused naming both hashes
+cp "$S/cornell.gltf" "$S/cornell.bin" "$TMP/"
+run "$B/lie-render" "$TMP/cornell-s.lie" --scene "$TMP/cornell.gltf" -q --size 32x32 -o "$TMP/sc.exr"
+expect_rc 0 "--scene with the same content"
+run "$B/lie-render" "$TMP/cornell-s.lie" --scene "$S/museum1.gltf" -q --size 32x32 -o "$TMP/wrong.exr"
+expect_rc 1 "--scene with another scene"
+if grep -q "content hash" "$TMP/err" && [ "$(wc -l <"$TMP/err")" -eq 1 ]; then ok "hash mismatch: one line naming the hashes"; else not_ok "hash mismatch message"; sed 's/^/# /' "$TMP/err"; fi
+expect_no_file "$TMP/wrong.exr" "hash mismatch: no image"
+
+# AOVs
+run "$B/lie-render" "$TMP/museum1-s.lie" -q --size 48x48 --aov complexity,patch,albedo -o "$TMP/aov.exr"
+expect_rc 0 "complexity and patch layers"
+if grep -a -q 'complexity.R' "$TMP/aov.exr" && grep -a -q 'patch.G' "$TMP/aov.exr"; then ok "complexity/patch channels present"; else not_ok "complexity channels"; fi
+run "$B/lie-render" "$TMP/museum3-s.lie" -q --size 32x32 --aov complexity --emitter 5 -o "$TMP/aov5.exr"
+expect_rc 0 "--emitter 5 on museum3"
+run "$B/lie-render" "$TMP/museum1-s.lie" -q --size 32x32 --aov complexity --emitter 3 -o "$TMP/aov3.exr"
+expect_rc 1 "--emitter beyond the emitters"
+run "$B/lie-render" "$S/museum1.gltf" -q --size 32x32 --aov complexity -o "$TMP/x.exr"
+expect_rc 2 "complexity layer without a cache"
+
+# Camera paths
+cat >"$TMP/path.yaml" <<'YAML'
+interpolation: smooth
+keys:
+  - eye: [3.5, 1.6, 2.9]
+    target: [-0.6, 0.45, -0.5]
+    fov: 50
+    frames: 2
+  - eye: [0.0, 2.0, 3.5]
+    target: [0.0, 0.5, 0.0]
+    frames: 2
+  - eye: [-3.0, 1.6, 2.5]
+    target: [0.5, 0.4, -0.5]
+YAML
+run "$B/lie-render" "$TMP/museum1-s.lie" -q --size 32x32 --path "$TMP/path.yaml" -o "$TMP/frame_%03d.exr"
+expect_rc 0 "camera path renders"
+n=$(ls "$TMP"/frame_*.exr 2>/dev/null | wc -l)
+if [ "$n" -eq 5 ]; then ok "camera path: 5 frames"; else not_ok "camera path: $n frames, expected 5"; fi
+run "$B/lie-render" "$TMP/museum1-s.lie" -q --size 32x32 --path "$TMP/path.yaml" -o "$TMP/frame.exr"
+expect_rc 2 "camera path without %d in -o"
+printf 'keys:\n  - eye: [1, 2, 3]\n    target: [0, 0, 0]\n    zoom: 3\n' >"$TMP/bad.yaml"
+run "$B/lie-render" "$TMP/museum1-s.lie" -q --size 32x32 --path "$TMP/bad.yaml" -o "$TMP/bad_%d.exr"
+expect_rc 1 "camera path with an unknown key"
+expect_one_error_line "lie-render: $TMP/bad.yaml:4:5: keys[0].zoom" "unknown key: file:line:col and the key"
+printf 'keys:\n  - eye: [1, 2]\n    target: [0, 0, 0]\n' >"$TMP/bad2.yaml"
+run "$B/lie-render" "$TMP/museum1-s.lie" -q --size 32x32 --path "$TMP/bad2.yaml" -o "$TMP/bad_%d.exr"
+expect_one_error_line "lie-render: $TMP/bad2.yaml:2:10: keys[0].eye" "short vector: file:line:col and the key"
+printf 'keys: [\n' >"$TMP/bad3.yaml"
+run "$B/lie-render" "$TMP/museum1-s.lie" -q --size 32x32 --path "$TMP/bad3.yaml" -o "$TMP/bad_%d.exr"
+expect_rc 1 "camera path with a YAML syntax error"
+expect_no_file "$TMP/bad_0.exr" "no frames from bad paths"
+
+# Bad caches
+head -c 100 "$TMP/cornell-s.lie" >"$TMP/trunc.lie"
+run "$B/lie-render" "$TMP/trunc.lie" -q --size 8x8 -o "$TMP/t.exr"
+expect_rc 1 "truncated cache"
+expect_one_error_line "lie-render: $TMP/trunc.lie:" "truncated cache: one line"
+printf 'garbage' >"$TMP/garbage.lie"
+run "$B/lie-render" "$TMP/garbage.lie" -q --size 8x8 -o "$TMP/t.exr"
+expect_rc 1 "garbage cache"
+expect_no_file "$TMP/t.exr" "no image from bad caches"
+finish

@@ -1,0 +1,363 @@
+/* lib/lie and lib/patch: blocker lists on scenes whose answer is known,
+ * subdivision limits, conservative lists containing sampled ones,
+ * determinism, unit rebuilds, and the patch quad-tree's geometry. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "lie.h"
+
+/* floor 4x4 at y=0 (2 triangles, tris 0-1), an occluder quad 0.6x0.6 at
+ * y=1 (tris 2-3, double-sided), a 1x1 light at y=2 facing down (tris 4-5). */
+static lie_scene *occluder_scene(void)
+{
+    lie_scene *s = lie_scene_new("occluder");
+    lie_material white = lie_material_default();
+    white.metallic = 0.0f;
+    int mw = lie_scene_add_material(s, &white);
+    lie_material occ = white;
+    occ.double_sided = 1;
+    int mo = lie_scene_add_material(s, &occ);
+    lie_material light = white;
+    light.base_color[0] = light.base_color[1] = light.base_color[2] = 0.0f;
+    light.emissive[0] = light.emissive[1] = light.emissive[2] = 5.0f;
+    int ml = lie_scene_add_material(s, &light);
+    uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
+    float fl[12] = {-2, 0, -2, -2, 0, 2, 2, 0, 2, 2, 0, -2};
+    float oc[12] = {-0.3f, 1, -0.3f, -0.3f, 1, 0.3f, 0.3f, 1, 0.3f, 0.3f, 1, -0.3f};
+    float li[12] = {-0.5f, 2, -0.5f, 0.5f, 2, -0.5f, 0.5f, 2, 0.5f, -0.5f, 2, 0.5f};
+    lie_scene_add_node(s, "Floor", -1, NULL, lie_scene_add_mesh(s, "Floor", fl, NULL, NULL, 4, idx, 2, mw), -1, -1);
+    lie_scene_add_node(s, "Occluder", -1, NULL, lie_scene_add_mesh(s, "Occ", oc, NULL, NULL, 4, idx, 2, mo), -1, -1);
+    lie_scene_add_node(s, "Light", -1, NULL, lie_scene_add_mesh(s, "Light", li, NULL, NULL, 4, idx, 2, ml), -1, -1);
+    lie_error err;
+    assert_int_equal(lie_scene_flatten(s, &err), LIE_OK);
+    assert_int_equal(s->n_tris, 6);
+    assert_int_equal(s->n_emitters, 1);
+    return s;
+}
+
+static lie_env *build(const lie_scene *s, lie_rt **rt, lie_build_params p)
+{
+    lie_error err;
+    if (!*rt)
+        assert_int_equal(lie_rt_create(s, rt, &err), LIE_OK);
+    lie_env *env = NULL;
+    lie_build_stats st;
+    assert_int_equal(lie_env_build(s, *rt, &p, NULL, &env, &st, &err), LIE_OK);
+    return env;
+}
+
+/* Visit every leaf of unit (tri, e) with its patch path. */
+typedef void (*leaf_fn)(const lie_env *env, const lie_pnode *n, uint32_t tri, lie_patch_path path, void *ctx);
+static void walk(const lie_env *env, uint32_t node, uint32_t tri, lie_patch_path path, leaf_fn fn, void *ctx)
+{
+    const lie_pnode *n = &env->nodes[node];
+    if (n->child) {
+        assert_int_equal(n->cls, LIE_CLASS_SPLIT);
+        for (int k = 0; k < 4; k++)
+            walk(env, n->child + (uint32_t)k, tri, lie_patch_child(path, k), fn, ctx);
+        return;
+    }
+    fn(env, n, tri, path, ctx);
+}
+
+typedef struct occ_check {
+    const lie_scene *s;
+    int partial_with_both, occluded, visible, partial;
+} occ_check;
+
+static void check_floor_leaf(const lie_env *env, const lie_pnode *n, uint32_t tri, lie_patch_path path, void *ctx)
+{
+    occ_check *c = ctx;
+    lie_vec3 V[3];
+    lie_patch_world(path, &c->s->tri_p[3 * (size_t)tri], V);
+    lie_vec3 ctr = lie_v3_scale(lie_v3_add(V[0], lie_v3_add(V[1], V[2])), 1.0f / 3.0f);
+    float r = fmaxf(fabsf(ctr.x), fabsf(ctr.z));
+    switch (n->cls) {
+    case LIE_CLASS_PARTIAL:
+        c->partial++;
+        assert_true(n->count >= 1 && n->count <= 2);
+        for (uint32_t i = 0; i < n->count; i++)
+            assert_true(env->pool[n->list + i] == 2 || env->pool[n->list + i] == 3);
+        if (n->count == 2)
+            c->partial_with_both++;
+        break;
+    case LIE_CLASS_OCCLUDED:
+        c->occluded++;
+        /* the umbra is at most the occluder's size, right under it */
+        assert_true(r < 0.3f);
+        break;
+    case LIE_CLASS_VISIBLE:
+        c->visible++;
+        /* the penumbra ends where the light's far edge is hidden: |x| < 0.3*2 + 0.5 = 1.1 */
+        assert_true(r > 0.05f);
+        break;
+    default:
+        fail_msg("floor leaf of class %s", lie_class_name((lie_class)n->cls));
+    }
+}
+
+static void test_lie_quad_between_floor_and_light_is_the_only_blocker(void **state)
+{
+    (void)state;
+    lie_scene *s = occluder_scene();
+    lie_rt *rt = NULL;
+    lie_build_params p = lie_build_params_default();
+    p.min_patch = 1e-3f;
+    p.max_blockers = 1; /* split any list of two, to get small patches */
+    lie_env *env = build(s, &rt, p);
+    occ_check c = {s, 0, 0, 0, 0};
+    for (uint32_t t = 0; t < 2; t++)
+        walk(env, env->root[t], t, lie_patch_root(), check_floor_leaf, &c);
+    assert_true(c.partial > 0);
+    assert_true(c.occluded > 0);
+    assert_true(c.visible > 0);
+    /* the light itself and the occluder's top face: the light is not lit by itself */
+    assert_int_equal(env->nodes[env->root[4]].cls, LIE_CLASS_UNLIT);
+    assert_int_equal(env->nodes[env->root[5]].cls, LIE_CLASS_UNLIT);
+    lie_env_destroy(env);
+    /* without subdivision, both occluder triangles are in the floor's lists */
+    p.max_blockers = 8;
+    env = build(s, &rt, p);
+    for (uint32_t t = 0; t < 2; t++) {
+        const lie_pnode *n = &env->nodes[env->root[t]];
+        assert_int_equal(n->cls, LIE_CLASS_PARTIAL);
+        assert_int_equal(n->count, 2);
+        assert_int_equal(env->pool[n->list], 2);
+        assert_int_equal(env->pool[n->list + 1], 3);
+        assert_true(n->quality >= p.samples);
+    }
+    lie_env_destroy(env);
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+}
+
+typedef struct size_check {
+    const lie_scene *s;
+    const lie_build_params *p;
+} size_check;
+
+static void check_leaf_size(const lie_env *env, const lie_pnode *n, uint32_t tri, lie_patch_path path, void *ctx)
+{
+    size_check *c = ctx;
+    float area = c->s->tri_area[tri] / (float)(1u << (2 * path.depth));
+    float min_area = c->p->min_patch * c->s->max_tri_area;
+    /* a leaf was split from a parent larger than min; it is at least a quarter of that */
+    if (path.depth > 0)
+        assert_true(4.0f * area > min_area * 0.999f);
+    /* a long list only survives at the smallest size */
+    if (n->cls == LIE_CLASS_PARTIAL && n->count > c->p->max_blockers)
+        assert_true(area <= min_area * 1.001f);
+}
+
+static void test_lie_subdivision_stops_at_min_patch(void **state)
+{
+    (void)state;
+    lie_scene *s = occluder_scene();
+    lie_rt *rt = NULL;
+    lie_build_params p = lie_build_params_default();
+    p.max_blockers = 0; /* split every partial patch, as far as allowed */
+    p.samples = 16;
+    p.max_samples = 32;
+    const float sizes[] = {1e-1f, 1e-2f, 2e-3f};
+    uint32_t prev_nodes = 0;
+    for (int i = 0; i < 3; i++) {
+        p.min_patch = sizes[i];
+        lie_env *env = build(s, &rt, p);
+        size_check c = {s, &p};
+        for (uint32_t t = 0; t < 2; t++)
+            walk(env, env->root[t], t, lie_patch_root(), check_leaf_size, &c);
+        assert_true(env->n_nodes > prev_nodes); /* smaller patches, more of them */
+        prev_nodes = env->n_nodes;
+        lie_env_destroy(env);
+    }
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+}
+
+static void test_lie_conservative_lists_contain_sampled_lists(void **state)
+{
+    (void)state;
+    lie_scene *s = NULL;
+    lie_error err;
+    assert_int_equal(lie_scene_load(TEST_SCENES "/cornell.gltf", NULL, &s, &err), LIE_OK);
+    lie_rt *rt = NULL;
+    lie_build_params p = lie_build_params_default();
+    p.max_blockers = 1u << 20; /* no subdivision: compare whole triangles */
+    p.complex_cap = 1u << 20;
+    p.samples = 64;
+    p.max_samples = 256;
+    lie_env *sampled = build(s, &rt, p);
+    p.mode = LIE_BLOCKERS_CONSERVATIVE;
+    lie_env *cons = build(s, &rt, p);
+    size_t n_units = (size_t)s->n_tris * (size_t)s->n_emitters;
+    int partial_seen = 0;
+    for (size_t u = 0; u < n_units; u++) {
+        const lie_pnode *a = &sampled->nodes[sampled->root[u]], *b = &cons->nodes[cons->root[u]];
+        assert_int_equal(a->child, 0);
+        assert_int_equal(b->child, 0);
+        if (a->cls == LIE_CLASS_UNLIT) {
+            assert_int_equal(b->cls, LIE_CLASS_UNLIT);
+            continue;
+        }
+        if (a->cls == LIE_CLASS_PARTIAL || a->cls == LIE_CLASS_OCCLUDED)
+            assert_int_equal(b->cls, LIE_CLASS_PARTIAL); /* some blocker was found: the shaft is not empty */
+        if (a->cls != LIE_CLASS_PARTIAL)
+            continue;
+        partial_seen++;
+        /* every sampled blocker is in the conservative list */
+        for (uint32_t i = 0; i < a->count; i++) {
+            uint32_t t = sampled->pool[a->list + i];
+            int found = 0;
+            for (uint32_t j = 0; j < b->count; j++)
+                found |= cons->pool[b->list + j] == t;
+            assert_true(found);
+        }
+    }
+    assert_true(partial_seen > 0);
+    lie_env_destroy(sampled);
+    lie_env_destroy(cons);
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+}
+
+static void assert_env_equal(const lie_env *a, const lie_env *b)
+{
+    assert_int_equal(a->n_nodes, b->n_nodes);
+    assert_int_equal(a->n_pool, b->n_pool);
+    assert_memory_equal(a->root, b->root, sizeof(uint32_t) * a->n_tris * (size_t)a->n_emitters);
+    assert_memory_equal(a->nodes, b->nodes, sizeof(lie_pnode) * a->n_nodes);
+    if (a->n_pool)
+        assert_memory_equal(a->pool, b->pool, sizeof(uint32_t) * a->n_pool);
+}
+
+static void test_lie_build_is_identical_for_any_thread_count(void **state)
+{
+    (void)state;
+    lie_scene *s = NULL;
+    lie_error err;
+    assert_int_equal(lie_scene_load(TEST_SCENES "/cornell.gltf", NULL, &s, &err), LIE_OK);
+    lie_rt *rt = NULL;
+    lie_build_params p = lie_build_params_default();
+    p.min_patch = 1e-3f;
+    for (int mode = 0; mode < 2; mode++) {
+        p.mode = (lie_blocker_mode)mode;
+        p.threads = 1;
+        lie_env *a = build(s, &rt, p);
+        p.threads = 3;
+        lie_env *b = build(s, &rt, p);
+        assert_env_equal(a, b);
+        lie_env_destroy(a);
+        lie_env_destroy(b);
+    }
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+}
+
+static void test_lie_rebuilding_units_equals_building(void **state)
+{
+    (void)state;
+    lie_scene *s = NULL;
+    lie_error err;
+    assert_int_equal(lie_scene_load(TEST_SCENES "/cornell.gltf", NULL, &s, &err), LIE_OK);
+    lie_rt *rt = NULL;
+    lie_build_params p = lie_build_params_default();
+    p.min_patch = 1e-3f;
+    lie_env *a = build(s, &rt, p);
+    lie_env *b = build(s, &rt, p);
+    /* rebuild every third unit of b: nothing may change */
+    uint32_t units[64];
+    size_t n = 0;
+    for (uint32_t u = 0; u < s->n_tris * (uint32_t)s->n_emitters && n < 64; u += 3)
+        units[n++] = u;
+    assert_int_equal(lie_env_rebuild_units(b, s, rt, units, n, 2, NULL, &err), LIE_OK);
+    assert_env_equal(a, b);
+    lie_env_destroy(a);
+    lie_env_destroy(b);
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+}
+
+static void test_patch_children_tile_the_parent(void **state)
+{
+    (void)state;
+    /* the four children's areas add up to the parent's, and a point's leaf
+     * contains it */
+    lie_vec3 v[3] = {{0, 0, 0}, {3, 0, 0}, {0, 0, 2}};
+    lie_patch_path p = lie_patch_child(lie_patch_child(lie_patch_root(), 3), 1);
+    lie_vec3 w[3];
+    lie_patch_world(p, v, w);
+    float pa = 0.5f * lie_v3_len(lie_v3_cross(lie_v3_sub(w[1], w[0]), lie_v3_sub(w[2], w[0])));
+    assert_float_equal(pa, 3.0f / 16.0f, 1e-6f);
+    float sum = 0.0f;
+    for (int k = 0; k < 4; k++) {
+        lie_vec3 c[3];
+        lie_patch_world(lie_patch_child(p, k), v, c);
+        sum += 0.5f * lie_v3_len(lie_v3_cross(lie_v3_sub(c[1], c[0]), lie_v3_sub(c[2], c[0])));
+    }
+    assert_float_equal(sum, pa, 1e-6f);
+    /* descending from the root with a point's barycentrics follows the
+     * patch whose corners contain it */
+    for (int i = 0; i < 200; i++) {
+        float b1 = lie_hash_to_unit(lie_hash_u64x4((uint64_t)i, 1, 0, 0));
+        float b2 = lie_hash_to_unit(lie_hash_u64x4((uint64_t)i, 2, 0, 0));
+        if (b1 + b2 > 1.0f) {
+            b1 = 1.0f - b1;
+            b2 = 1.0f - b2;
+        }
+        float x = b1, y = b2;
+        lie_patch_path path = lie_patch_root();
+        for (int d = 0; d < 5; d++)
+            path = lie_patch_child(path, lie_patch_descend(&x, &y));
+        double c[3][3];
+        lie_patch_corners(path, c);
+        /* solve point = sum c_k * l_k with the local (x, y) */
+        double l0 = 1.0 - x - y;
+        double pb1 = c[0][1] * l0 + c[1][1] * x + c[2][1] * y;
+        double pb2 = c[0][2] * l0 + c[1][2] * x + c[2][2] * y;
+        assert_true(fabs(pb1 - b1) < 1e-5 && fabs(pb2 - b2) < 1e-5);
+        assert_true(x >= -1e-6f && y >= -1e-6f && x + y <= 1.0f + 1e-5f);
+    }
+}
+
+static void test_patch_names_round_trip(void **state)
+{
+    (void)state;
+    lie_patch_path p = lie_patch_root();
+    const int digits[] = {0, 3, 1, 2, 2};
+    for (int i = 0; i < 5; i++)
+        p = lie_patch_child(p, digits[i]);
+    char buf[64];
+    lie_patch_format(417, p, buf, sizeof buf);
+    assert_string_equal(buf, "417/03122");
+    uint32_t tri;
+    lie_patch_path q;
+    assert_true(lie_patch_parse(buf, &tri, &q));
+    assert_int_equal(tri, 417);
+    assert_int_equal(q.depth, 5);
+    assert_true(q.digits == p.digits);
+    assert_true(lie_patch_parse("12", &tri, &q) && q.depth == 0);
+    assert_false(lie_patch_parse("12/", &tri, &q));
+    assert_false(lie_patch_parse("12/4", &tri, &q));
+    assert_false(lie_patch_parse("x", &tri, &q));
+    assert_false(lie_patch_parse("-1", &tri, &q));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_lie_quad_between_floor_and_light_is_the_only_blocker),
+        cmocka_unit_test(test_lie_subdivision_stops_at_min_patch),
+        cmocka_unit_test(test_lie_conservative_lists_contain_sampled_lists),
+        cmocka_unit_test(test_lie_build_is_identical_for_any_thread_count),
+        cmocka_unit_test(test_lie_rebuilding_units_equals_building),
+        cmocka_unit_test(test_patch_children_tile_the_parent),
+        cmocka_unit_test(test_patch_names_round_trip),
+    };
+    return cmocka_run_group_tests_name("lie", tests, NULL, NULL);
+}

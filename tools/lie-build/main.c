@@ -1,0 +1,308 @@
+/* lie-build: build the local illumination environments of a scene and write
+ * them to a cache.
+ *   lie-build SCENE.gltf|SCENE.glb -o CACHE|- [options] */
+#include "lie.h"
+
+#include <getopt.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *prog = "lie-build";
+
+static void usage(FILE *fp)
+{
+    lie_build_params d = lie_build_params_default();
+    fprintf(fp,
+            "usage: %s SCENE.gltf|SCENE.glb -o CACHE|- [options]\n"
+            "\n"
+            "Build local illumination environments (per patch and emitter: visible,\n"
+            "occluded, or partial with a blocker list) and write them to a cache.\n"
+            "\n"
+            "  -o, --output FILE     the cache to write; - writes to stdout\n"
+            "      --samples N       shadow segments per patch-emitter pair in the first round\n"
+            "                        (default %u)\n"
+            "      --max-samples N   keep doubling while a round finds new blockers, up to N\n"
+            "                        segments (default %u)\n"
+            "      --max-blockers B  subdivide a patch whose blocker list is longer (default %u)\n"
+            "      --min-patch F     smallest patch area, as a fraction of the largest\n"
+            "                        triangle's area (default %g, the paper's 0.01%%)\n"
+            "      --complex-cap C   a list still longer at the smallest size is 'complex':\n"
+            "                        its shadow rays go to the whole scene (default %u)\n"
+            "      --blockers MODE   sampled (default, the paper's shaft sampling) |\n"
+            "                        conservative (every triangle that meets the shaft: exact)\n"
+            "      --view CAMERA     build only the patches seen from this camera (a name, an\n"
+            "                        index or eye=..,target=..; repeatable), directly or in\n"
+            "                        mirrors; the rest is marked 'none' and rendered with full\n"
+            "                        visibility (§4.3.1)\n"
+            "      --view-size WxH   the image the views are sampled at (default 512x512)\n"
+            "      --threads N       worker threads (default: all cores); the cache is the\n"
+            "                        same for any N\n"
+            "      --allow-external-uris  let the glTF reference files outside its folder\n"
+            "      --stats[=json]    print statistics to stderr\n"
+            "  -q, --quiet           no progress bar\n"
+            "  -h, --help            this help\n"
+            "      --version         print the version\n",
+            prog, d.samples, d.max_samples, d.max_blockers, (double)d.min_patch, d.complex_cap);
+}
+
+static int usage_error(const char *fmt, const char *arg)
+{
+    fprintf(stderr, "%s: ", prog);
+    fprintf(stderr, fmt, arg);
+    fprintf(stderr, " (see --help)\n");
+    return 2;
+}
+
+static int fail(const lie_error *err)
+{
+    char line[2200];
+    lie_error_format(err, line, sizeof line);
+    fprintf(stderr, "%s: %s\n", prog, line);
+    return 1;
+}
+
+enum {
+    OPT_SAMPLES = 256, OPT_MAX_SAMPLES, OPT_MAX_BLOCKERS, OPT_MIN_PATCH, OPT_COMPLEX_CAP, OPT_BLOCKERS,
+    OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_VIEW, OPT_VIEW_SIZE
+};
+
+static const struct option long_opts[] = {
+    {"output", required_argument, NULL, 'o'},
+    {"samples", required_argument, NULL, OPT_SAMPLES},
+    {"max-samples", required_argument, NULL, OPT_MAX_SAMPLES},
+    {"max-blockers", required_argument, NULL, OPT_MAX_BLOCKERS},
+    {"min-patch", required_argument, NULL, OPT_MIN_PATCH},
+    {"complex-cap", required_argument, NULL, OPT_COMPLEX_CAP},
+    {"blockers", required_argument, NULL, OPT_BLOCKERS},
+    {"view", required_argument, NULL, OPT_VIEW},
+    {"view-size", required_argument, NULL, OPT_VIEW_SIZE},
+    {"threads", required_argument, NULL, OPT_THREADS},
+    {"allow-external-uris", no_argument, NULL, OPT_EXTERNAL},
+    {"stats", optional_argument, NULL, OPT_STATS},
+    {"quiet", no_argument, NULL, 'q'},
+    {"help", no_argument, NULL, 'h'},
+    {"version", no_argument, NULL, OPT_VERSION},
+    {NULL, 0, NULL, 0},
+};
+
+static void print_stats(const char *input, const lie_scene *s, const lie_env *env, const lie_build_stats *st,
+                        double t_load, double t_bvh, double t_build, double t_write, size_t bytes, int json)
+{
+    uint64_t leaves = 0, patches = 0;
+    for (int k = 0; k < LIE_CLASS_COUNT; k++)
+        leaves += st->pairs[k];
+    for (int d = 0; d <= LIE_PATCH_MAX_DEPTH; d++)
+        patches += st->patches_per_depth[d];
+    double mean = st->pairs[LIE_CLASS_PARTIAL] ? (double)st->blocker_total / (double)st->pairs[LIE_CLASS_PARTIAL] : 0.0;
+    if (json) {
+        fprintf(stderr, "{\"tool\":\"lie-build\",\"triangles\":%u,\"emitters\":%d,\"units\":%llu,\"patches\":%llu,"
+                        "\"leaf_pairs\":%llu,\"pairs\":{",
+                s->n_tris, s->n_emitters, (unsigned long long)s->n_tris * (unsigned long long)s->n_emitters,
+                (unsigned long long)patches, (unsigned long long)leaves);
+        for (int k = 0; k < LIE_CLASS_COUNT; k++)
+            if (k != LIE_CLASS_SPLIT)
+                fprintf(stderr, "%s\"%s\":%llu", k ? "," : "", lie_class_name((lie_class)k),
+                        (unsigned long long)st->pairs[k]);
+        fprintf(stderr, "},\"patches_per_depth\":[");
+        int maxd = 0;
+        for (int d = 0; d <= LIE_PATCH_MAX_DEPTH; d++)
+            if (st->patches_per_depth[d])
+                maxd = d;
+        for (int d = 0; d <= maxd; d++)
+            fprintf(stderr, "%s%llu", d ? "," : "", (unsigned long long)st->patches_per_depth[d]);
+        fprintf(stderr, "],\"list_histogram\":[");
+        for (int b = 0; b < 18; b++)
+            fprintf(stderr, "%s%llu", b ? "," : "", (unsigned long long)st->list_hist[b]);
+        fprintf(stderr,
+                "],\"mean_list_length\":%.3f,\"segments\":%llu,\"nodes\":%u,\"pool\":%u,"
+                "\"seconds_load\":%.6f,\"seconds_bvh\":%.6f,\"seconds_build\":%.6f,\"seconds_write\":%.6f,"
+                "\"bytes\":%zu}\n",
+                mean, (unsigned long long)st->segments, env->n_nodes, env->n_pool, t_load, t_bvh, t_build, t_write,
+                bytes);
+        return;
+    }
+    fprintf(stderr, "%s: %s: %u triangles, %d emitters, %llu units\n", prog, input, s->n_tris, s->n_emitters,
+            (unsigned long long)s->n_tris * (unsigned long long)s->n_emitters);
+    fprintf(stderr, "  pairs:");
+    for (int k = 0; k < LIE_CLASS_COUNT; k++)
+        if (k != LIE_CLASS_SPLIT)
+            fprintf(stderr, " %s %llu (%.1f%%)", lie_class_name((lie_class)k), (unsigned long long)st->pairs[k],
+                    leaves ? 100.0 * (double)st->pairs[k] / (double)leaves : 0.0);
+    fprintf(stderr, "\n  patches per depth:");
+    for (int d = 0; d <= LIE_PATCH_MAX_DEPTH; d++)
+        if (st->patches_per_depth[d])
+            fprintf(stderr, " %d:%llu", d, (unsigned long long)st->patches_per_depth[d]);
+    fprintf(stderr, "\n  blocker lists: mean %.2f; lengths", mean);
+    for (int b = 0; b < 18; b++)
+        if (st->list_hist[b]) {
+            unsigned lo = b == 0 ? 1 : (1u << (b - 1)) + 1, hi = 1u << b;
+            if (lo == hi)
+                fprintf(stderr, " %u:%llu", lo, (unsigned long long)st->list_hist[b]);
+            else
+                fprintf(stderr, " %u-%u:%llu", lo, hi, (unsigned long long)st->list_hist[b]);
+        }
+    fprintf(stderr, "\n  segments cast %llu; %u nodes, %u pooled blockers, %zu bytes written\n",
+            (unsigned long long)st->segments, env->n_nodes, env->n_pool, bytes);
+    fprintf(stderr, "  time: load %.3f s, bvh %.3f s, build %.3f s, write %.3f s\n", t_load, t_bvh, t_build,
+            t_write);
+}
+
+int main(int argc, char **argv)
+{
+    lie_build_params bp = lie_build_params_default();
+    lie_scene_options so = lie_scene_options_default();
+    const char *output = NULL;
+    int stats = 0, quiet = 0;
+    const char *views[64];
+    int n_views = 0, view_w = 512, view_h = 512;
+    long v;
+    float f;
+    int c;
+    opterr = 0;
+    while ((c = getopt_long(argc, argv, ":o:qh", long_opts, NULL)) != -1) {
+        switch (c) {
+        case 'o': output = optarg; break;
+        case OPT_SAMPLES:
+            if (!lie_parse_long(optarg, 1, 1 << 20, &v))
+                return usage_error("--samples: expected an integer in 1..1048576, got '%s'", optarg);
+            bp.samples = (uint32_t)v;
+            break;
+        case OPT_MAX_SAMPLES:
+            if (!lie_parse_long(optarg, 1, 1 << 24, &v))
+                return usage_error("--max-samples: expected an integer in 1..16777216, got '%s'", optarg);
+            bp.max_samples = (uint32_t)v;
+            break;
+        case OPT_MAX_BLOCKERS:
+            if (!lie_parse_long(optarg, 0, 1 << 20, &v))
+                return usage_error("--max-blockers: expected an integer in 0..1048576, got '%s'", optarg);
+            bp.max_blockers = (uint32_t)v;
+            break;
+        case OPT_COMPLEX_CAP:
+            if (!lie_parse_long(optarg, 0, 1 << 24, &v))
+                return usage_error("--complex-cap: expected an integer in 0..16777216, got '%s'", optarg);
+            bp.complex_cap = (uint32_t)v;
+            break;
+        case OPT_MIN_PATCH:
+            if (!lie_parse_float(optarg, 1e-12f, 1.0f, &f))
+                return usage_error("--min-patch: expected a fraction in (0, 1], got '%s'", optarg);
+            bp.min_patch = f;
+            break;
+        case OPT_BLOCKERS:
+            if (strcmp(optarg, "sampled") == 0) bp.mode = LIE_BLOCKERS_SAMPLED;
+            else if (strcmp(optarg, "conservative") == 0) bp.mode = LIE_BLOCKERS_CONSERVATIVE;
+            else return usage_error("--blockers: expected sampled or conservative, got '%s'", optarg);
+            break;
+        case OPT_THREADS:
+            if (!lie_parse_long(optarg, 0, 4096, &v))
+                return usage_error("--threads: expected an integer in 0..4096, got '%s'", optarg);
+            bp.threads = (int)v;
+            break;
+        case OPT_EXTERNAL: so.allow_external_uris = 1; break;
+        case OPT_VIEW:
+            if (n_views == 64)
+                return usage_error("--view: at most 64 views, got another: '%s'", optarg);
+            views[n_views++] = optarg;
+            break;
+        case OPT_VIEW_SIZE:
+            if (!lie_parse_size(optarg, 16384, &view_w, &view_h))
+                return usage_error("--view-size: expected WxH, got '%s'", optarg);
+            break;
+        case OPT_STATS:
+            if (!optarg) stats = 1;
+            else if (strcmp(optarg, "json") == 0) stats = 2;
+            else return usage_error("--stats: expected --stats or --stats=json, got '%s'", optarg);
+            break;
+        case 'q': quiet = 1; break;
+        case 'h': usage(stdout); return 0;
+        case OPT_VERSION: printf("%s %s\n", prog, LIE_VERSION); return 0;
+        case ':': return usage_error("%s: missing value", argv[optind - 1]);
+        default: return usage_error("unknown option '%s'", argv[optind - 1]);
+        }
+    }
+    if (optind >= argc)
+        return usage_error("%s", "missing input scene");
+    if (optind + 1 < argc)
+        return usage_error("unexpected argument '%s'", argv[optind + 1]);
+    if (!output)
+        return usage_error("%s", "missing -o CACHE");
+    if (bp.max_samples < bp.samples)
+        bp.max_samples = bp.samples; /* --samples above the default cap: one round */
+    const char *input = argv[optind];
+
+    lie_error err;
+    lie_error_clear(&err);
+    double t0 = lie_time_now();
+    lie_scene *scene = NULL;
+    if (lie_scene_load(input, &so, &scene, &err) != LIE_OK)
+        return fail(&err);
+    double t1 = lie_time_now();
+    lie_rt *rt = NULL;
+    if (lie_rt_create(scene, &rt, &err) != LIE_OK) {
+        lie_scene_destroy(scene);
+        return fail(&err);
+    }
+    double t2 = lie_time_now();
+    uint8_t *mask = NULL;
+    if (n_views) {
+        lie_camera cams[64];
+        mask = calloc((size_t)scene->n_tris + 1, 1);
+        lie_status vs = mask ? LIE_OK : lie_error_set(&err, LIE_ERR_NOMEM, input, "out of memory");
+        for (int i = 0; vs == LIE_OK && i < n_views; i++) {
+            vs = lie_camera_parse(scene, views[i], &cams[i], &err);
+            if (vs != LIE_OK && !err.file[0])
+                snprintf(err.file, sizeof err.file, "%s", input);
+        }
+        if (vs == LIE_OK)
+            vs = lie_visible_triangles(scene, rt, cams, n_views, view_w, view_h, LIE_MAX_DEPTH_DEFAULT, mask, &err);
+        if (vs != LIE_OK) {
+            free(mask);
+            lie_rt_destroy(rt);
+            lie_scene_destroy(scene);
+            return fail(&err);
+        }
+    }
+    lie_progress prog_bar;
+    lie_progress_begin(&prog_bar, stderr, "lie-build", !quiet);
+    lie_env *env = NULL;
+    lie_build_stats st;
+    lie_status rc = lie_env_build_masked(scene, rt, &bp, mask, &prog_bar, &env, &st, &err);
+    free(mask);
+    lie_progress_end(&prog_bar);
+    if (rc != LIE_OK) {
+        lie_rt_destroy(rt);
+        lie_scene_destroy(scene);
+        return fail(&err);
+    }
+    double t3 = lie_time_now();
+    lie_cache cache;
+    memset(&cache, 0, sizeof cache);
+    cache.scene_path = (char *)input;
+    cache.scene_hash = cache.state_hash = scene->hash;
+    cache.n_tris = scene->n_tris;
+    cache.n_emitters = scene->n_emitters;
+    cache.emitters = calloc((size_t)scene->n_emitters + 1, sizeof *cache.emitters);
+    if (!cache.emitters) {
+        lie_error_set(&err, LIE_ERR_NOMEM, output, "out of memory");
+        rc = LIE_ERR_NOMEM;
+    }
+    for (int e = 0; cache.emitters && e < scene->n_emitters; e++) {
+        cache.emitters[e].type = (uint32_t)scene->emitters[e].type;
+        cache.emitters[e].node = scene->emitters[e].node;
+        cache.emitters[e].first_tri = scene->emitters[e].first_tri;
+        cache.emitters[e].n_tris = scene->emitters[e].n_tris;
+    }
+    cache.env = env;
+    size_t bytes = 0;
+    if (rc == LIE_OK)
+        rc = lie_cache_write(output, &cache, &bytes, &err);
+    double t4 = lie_time_now();
+    if (rc == LIE_OK && stats)
+        print_stats(input, scene, env, &st, t1 - t0, t2 - t1, t3 - t2, t4 - t3, bytes, stats == 2);
+    free(cache.emitters);
+    lie_env_destroy(env);
+    lie_rt_destroy(rt);
+    lie_scene_destroy(scene);
+    if (rc != LIE_OK)
+        return fail(&err);
+    return 0;
+}
