@@ -1,0 +1,424 @@
+/* Applying edit operations to a scene's document.  Geometry changes edit
+ * node transforms (in world space, about the node's own origin); material
+ * changes give the node's subtree its own copies of meshes and materials,
+ * so other instances sharing them are untouched; removal keeps triangle
+ * slots; additions append new roots, so their triangles come last. */
+#include "edit/edit.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+lie_status lie_edit_find_node(const lie_scene *s, const char *name, int *node, const char *file, int line, int col,
+                              lie_error *err)
+{
+    if (name[0] == '#') {
+        char *end;
+        long i = strtol(name + 1, &end, 10);
+        if (name[1] && !*end && i >= 0 && i < s->n_nodes) {
+            *node = (int)i;
+            return LIE_OK;
+        }
+        return lie_error_set_at(err, LIE_ERR_NOT_FOUND, file, line, col, "node '%s': the scene has nodes #0..#%d",
+                                name, s->n_nodes - 1);
+    }
+    int found = -1, count = 0;
+    for (int i = 0; i < s->n_nodes; i++)
+        if (s->nodes[i].name && strcmp(s->nodes[i].name, name) == 0) {
+            if (found < 0)
+                found = i;
+            count++;
+        }
+    if (count == 0)
+        return lie_error_set_at(err, LIE_ERR_NOT_FOUND, file, line, col, "node '%s': no node has this name", name);
+    if (count > 1)
+        return lie_error_set_at(err, LIE_ERR_NOT_FOUND, file, line, col,
+                                "node '%s': %d nodes have this name; use '#%d' or another index", name, count,
+                                found);
+    *node = found;
+    return LIE_OK;
+}
+
+static lie_mat4 world_of(const lie_scene *s, int node)
+{
+    lie_mat4 w = s->nodes[node].local;
+    for (int p = s->nodes[node].parent, guard = 0; p >= 0 && guard < s->n_nodes; p = s->nodes[p].parent, guard++)
+        w = lie_mat4_mul(&s->nodes[p].local, &w);
+    return w;
+}
+
+static lie_mat4 parent_world(const lie_scene *s, int node)
+{
+    int p = s->nodes[node].parent;
+    return p >= 0 ? world_of(s, p) : lie_mat4_identity();
+}
+
+/* Set the node's local transform so its world transform becomes W. */
+static int set_world(lie_scene *s, int node, const lie_mat4 *W)
+{
+    lie_mat4 P = parent_world(s, node), Pi;
+    if (!lie_mat4_inverse(&P, &Pi))
+        return 0;
+    s->nodes[node].local = lie_mat4_mul(&Pi, W);
+    return 1;
+}
+
+static int push_int(int **arr, int *n, int v)
+{
+    for (int i = 0; i < *n; i++)
+        if ((*arr)[i] == v)
+            return 1;
+    int *na = realloc(*arr, sizeof **arr * ((size_t)*n + 1));
+    if (!na)
+        return 0;
+    na[(*n)++] = v;
+    *arr = na;
+    return 1;
+}
+
+/* The node and every descendant. */
+static int collect_subtree(const lie_scene *s, int node, int **out, int *n)
+{
+    if (!push_int(out, n, node))
+        return 0;
+    for (int i = *n - 1; i < *n; i++) {
+        const lie_node *nd = &s->nodes[(*out)[i]];
+        for (int c = 0; c < nd->n_children; c++)
+            if (nd->children[c] >= 0 && nd->children[c] < s->n_nodes && !push_int(out, n, nd->children[c]))
+                return 0;
+    }
+    return 1;
+}
+
+void lie_edit_effect_free(lie_edit_effect *fx)
+{
+    if (!fx)
+        return;
+    free(fx->nodes);
+    free(fx->material_nodes);
+    memset(fx, 0, sizeof *fx);
+}
+
+static void *dup_mem(const void *p, size_t n)
+{
+    if (!p)
+        return NULL;
+    void *d = malloc(n ? n : 1);
+    if (d)
+        memcpy(d, p, n);
+    return d;
+}
+
+/* Give `node` its own copy of its mesh and of its primitives' materials;
+ * returns 0 when out of memory. */
+static int own_materials(lie_scene *s, int node)
+{
+    lie_node *nd = &s->nodes[node];
+    if (nd->mesh < 0 || nd->mesh >= s->n_meshes)
+        return 1;
+    const lie_mesh *src = &s->meshes[nd->mesh];
+    int np = src->n_prims;
+    lie_primitive *prims = calloc((size_t)np + 1, sizeof *prims);
+    if (!prims)
+        return 0;
+    for (int i = 0; i < np; i++) {
+        const lie_primitive *q = &src->prims[i];
+        prims[i] = *q;
+        prims[i].pos = dup_mem(q->pos, sizeof(float) * 3 * q->n_verts);
+        prims[i].nrm = dup_mem(q->nrm, sizeof(float) * 3 * q->n_verts);
+        prims[i].uv = dup_mem(q->uv, sizeof(float) * 2 * q->n_verts);
+        prims[i].idx = dup_mem(q->idx, sizeof(uint32_t) * 3 * q->n_tris);
+        lie_material m = q->material >= 0 && q->material < s->n_materials ? s->materials[q->material]
+                                                                           : lie_material_default();
+        int mi = lie_scene_add_material(s, &m);
+        prims[i].material = mi;
+        if ((q->pos && !prims[i].pos) || (q->nrm && !prims[i].nrm) || (q->uv && !prims[i].uv) ||
+            (q->idx && !prims[i].idx) || mi < 0) {
+            for (int k = 0; k <= i; k++) {
+                free(prims[k].pos);
+                free(prims[k].nrm);
+                free(prims[k].uv);
+                free(prims[k].idx);
+            }
+            free(prims);
+            return 0;
+        }
+    }
+    lie_mesh *nm = realloc(s->meshes, sizeof *nm * ((size_t)s->n_meshes + 1));
+    if (!nm) {
+        for (int k = 0; k < np; k++) {
+            free(prims[k].pos);
+            free(prims[k].nrm);
+            free(prims[k].uv);
+            free(prims[k].idx);
+        }
+        free(prims);
+        return 0;
+    }
+    s->meshes = nm;
+    lie_mesh *m = &s->meshes[s->n_meshes];
+    m->name = s->meshes[nd->mesh].name ? strdup(s->meshes[nd->mesh].name) : NULL;
+    m->prims = prims;
+    m->n_prims = np;
+    nd->mesh = s->n_meshes++;
+    return 1;
+}
+
+/* Copy node `src_node` of scene `src` (with its subtree, meshes, materials,
+ * textures and punctual lights) into `s` as a new root called `as`. */
+static lie_status add_from(lie_scene *s, const lie_scene *src, int src_node, const char *as, const lie_mat4 *root_local,
+                           int *new_root, lie_error *err, const char *file, int line, int col)
+{
+    int *sub = NULL, nsub = 0;
+    if (!collect_subtree(src, src_node, &sub, &nsub))
+        return lie_error_set(err, LIE_ERR_NOMEM, file, "out of memory");
+    int tex_base = s->n_textures, mat_base = s->n_materials;
+    /* textures and materials: copied whole (the few unused ones cost little) */
+    if (src->n_textures) {
+        lie_texture *nt = realloc(s->textures, sizeof *nt * ((size_t)s->n_textures + (size_t)src->n_textures));
+        if (!nt) {
+            free(sub);
+            return lie_error_set(err, LIE_ERR_NOMEM, file, "out of memory");
+        }
+        s->textures = nt;
+        for (int i = 0; i < src->n_textures; i++) {
+            lie_texture t = src->textures[i];
+            t.rgba = dup_mem(t.rgba, sizeof(float) * 4 * (size_t)t.width * (size_t)t.height);
+            if (!t.rgba) {
+                free(sub);
+                return lie_error_set(err, LIE_ERR_NOMEM, file, "out of memory");
+            }
+            s->textures[s->n_textures++] = t;
+        }
+    }
+    for (int i = 0; i < src->n_materials; i++) {
+        lie_material m = src->materials[i];
+        if (m.base_color_tex >= 0)
+            m.base_color_tex += tex_base;
+        if (m.mr_tex >= 0)
+            m.mr_tex += tex_base;
+        if (m.emissive_tex >= 0)
+            m.emissive_tex += tex_base;
+        if (lie_scene_add_material(s, &m) < 0) {
+            free(sub);
+            return lie_error_set(err, LIE_ERR_NOMEM, file, "out of memory");
+        }
+    }
+    int node_base = s->n_nodes;
+    lie_status st = LIE_OK;
+    for (int k = 0; k < nsub && st == LIE_OK; k++) {
+        const lie_node *sn = &src->nodes[sub[k]];
+        int mesh = -1, light = -1;
+        if (sn->mesh >= 0 && sn->mesh < src->n_meshes) {
+            const lie_mesh *m = &src->meshes[sn->mesh];
+            for (int pi = 0; pi < m->n_prims && st == LIE_OK; pi++) {
+                const lie_primitive *q = &m->prims[pi];
+                int mat = q->material >= 0 ? q->material + mat_base : -1;
+                int mi;
+                if (pi == 0) {
+                    mi = lie_scene_add_mesh(s, m->name, q->pos, q->nrm, q->uv, q->n_verts, q->idx, q->n_tris, mat);
+                    mesh = mi;
+                } else {
+                    /* further primitives join the same mesh */
+                    lie_mesh *dst = &s->meshes[mesh];
+                    lie_primitive *np = realloc(dst->prims, sizeof *np * ((size_t)dst->n_prims + 1));
+                    mi = -1;
+                    if (np) {
+                        dst->prims = np;
+                        lie_primitive c = *q;
+                        c.pos = dup_mem(q->pos, sizeof(float) * 3 * q->n_verts);
+                        c.nrm = dup_mem(q->nrm, sizeof(float) * 3 * q->n_verts);
+                        c.uv = dup_mem(q->uv, sizeof(float) * 2 * q->n_verts);
+                        c.idx = dup_mem(q->idx, sizeof(uint32_t) * 3 * q->n_tris);
+                        c.material = mat;
+                        dst->prims[dst->n_prims++] = c;
+                        mi = mesh;
+                    }
+                }
+                if (mi < 0)
+                    st = lie_error_set(err, LIE_ERR_NOMEM, file, "out of memory");
+            }
+        }
+        if (st == LIE_OK && sn->light >= 0 && sn->light < src->n_light_defs)
+            light = lie_scene_add_light_def(s, &src->light_defs[sn->light]);
+        /* parent: the copy of the source parent, or a new root */
+        int parent = -1;
+        if (k > 0)
+            for (int j = 0; j < k; j++)
+                if (sub[j] == sn->parent)
+                    parent = node_base + j;
+        const lie_mat4 *local = k == 0 ? root_local : &sn->local;
+        const char *name = k == 0 ? as : sn->name;
+        if (st == LIE_OK && lie_scene_add_node(s, name, parent, local, mesh, -1, light) < 0)
+            st = lie_error_set(err, LIE_ERR_NOMEM, file, "out of memory");
+    }
+    free(sub);
+    (void)line;
+    (void)col;
+    *new_root = node_base;
+    return st;
+}
+
+static lie_status apply_op(lie_scene *s, const lie_edit *e, const lie_edit_op *op, const lie_scene_options *opt,
+                           lie_edit_effect *fx, lie_error *err)
+{
+    const char *file = e->name;
+    int node = -1;
+    lie_status st;
+    if (op->kind != LIE_EDIT_ADD) {
+        st = lie_edit_find_node(s, op->node, &node, file, op->line, op->col, err);
+        if (st != LIE_OK)
+            return st;
+        if (s->nodes[node].removed)
+            return lie_error_set_at(err, LIE_ERR_NOT_FOUND, file, op->line, op->col,
+                                    "node '%s' was removed by an earlier edit", op->node);
+    }
+    int geometry = 1;
+    switch (op->kind) {
+    case LIE_EDIT_MOVE_BY:
+    case LIE_EDIT_MOVE_TO: {
+        lie_mat4 W = world_of(s, node);
+        double by[3] = {op->v[0], op->v[1], op->v[2]};
+        if (op->kind == LIE_EDIT_MOVE_TO)
+            for (int k = 0; k < 3; k++)
+                by[k] = op->v[k] - W.m[12 + k];
+        lie_mat4 T = lie_mat4_translation(by[0], by[1], by[2]);
+        lie_mat4 W2 = lie_mat4_mul(&T, &W);
+        if (!set_world(s, node, &W2))
+            return lie_error_set_at(err, LIE_ERR_FORMAT, file, op->line, op->col,
+                                    "node '%s': its parent's transform is singular", op->node);
+        break;
+    }
+    case LIE_EDIT_ROTATE: {
+        lie_mat4 W = world_of(s, node);
+        lie_mat4 to = lie_mat4_translation(-W.m[12], -W.m[13], -W.m[14]);
+        lie_mat4 back = lie_mat4_translation(W.m[12], W.m[13], W.m[14]);
+        lie_mat4 R = lie_mat4_rotation(op->v, op->degrees * M_PI / 180.0);
+        lie_mat4 a = lie_mat4_mul(&R, &to), b = lie_mat4_mul(&back, &a), W2 = lie_mat4_mul(&b, &W);
+        if (!set_world(s, node, &W2))
+            return lie_error_set_at(err, LIE_ERR_FORMAT, file, op->line, op->col,
+                                    "node '%s': its parent's transform is singular", op->node);
+        break;
+    }
+    case LIE_EDIT_SCALE: {
+        lie_mat4 S = lie_mat4_identity();
+        S.m[0] = op->v[0];
+        S.m[5] = op->v[1];
+        S.m[10] = op->v[2];
+        s->nodes[node].local = lie_mat4_mul(&s->nodes[node].local, &S);
+        break;
+    }
+    case LIE_EDIT_SET_TRANSFORM:
+        memcpy(s->nodes[node].local.m, op->matrix, sizeof op->matrix);
+        break;
+    case LIE_EDIT_REMOVE:
+        s->nodes[node].removed = 1;
+        break;
+    case LIE_EDIT_ADD: {
+        int dup = 0;
+        for (int i = 0; i < s->n_nodes; i++)
+            dup |= s->nodes[i].name && strcmp(s->nodes[i].name, op->as) == 0;
+        if (dup)
+            return lie_error_set_at(err, LIE_ERR_FORMAT, file, op->line, op->col,
+                                    "add.as: a node named '%s' exists already", op->as);
+        /* the file is relative to the edit file's folder */
+        char path[4096];
+        const char *slash = strrchr(file, '/');
+        if (op->file[0] != '/' && slash)
+            snprintf(path, sizeof path, "%.*s/%s", (int)(slash - file), file, op->file);
+        else
+            snprintf(path, sizeof path, "%s", op->file);
+        lie_scene *src = NULL;
+        lie_error sub;
+        lie_error_clear(&sub);
+        if (lie_scene_load(path, opt, &src, &sub) != LIE_OK)
+            return lie_error_set_at(err, sub.status, file, op->line, op->col, "add.file: %s: %s", path, sub.msg);
+        int src_node;
+        st = lie_edit_find_node(src, op->node, &src_node, file, op->line, op->col, err);
+        if (st == LIE_OK) {
+            lie_mat4 local = (op->has & (1u << 8)) ? lie_mat4_identity() : world_of(src, src_node);
+            if (op->has & (1u << 8))
+                memcpy(local.m, op->matrix, sizeof local.m);
+            st = add_from(s, src, src_node, op->as, &local, &node, err, file, op->line, op->col);
+        }
+        lie_scene_destroy(src);
+        if (st != LIE_OK)
+            return st;
+        break;
+    }
+    case LIE_EDIT_SET_MATERIAL:
+    case LIE_EDIT_SET_EMISSION: {
+        geometry = 0;
+        int *sub = NULL, nsub = 0;
+        if (!collect_subtree(s, node, &sub, &nsub))
+            return lie_error_set(err, LIE_ERR_NOMEM, file, "out of memory");
+        for (int k = 0; k < nsub; k++) {
+            int nd = sub[k];
+            if (s->nodes[nd].mesh < 0)
+                continue;
+            if (!own_materials(s, nd)) {
+                free(sub);
+                return lie_error_set(err, LIE_ERR_NOMEM, file, "out of memory");
+            }
+            const lie_mesh *m = &s->meshes[s->nodes[nd].mesh];
+            for (int pi = 0; pi < m->n_prims; pi++) {
+                lie_material *mat = &s->materials[m->prims[pi].material];
+                if (op->has & LIE_EDIT_HAS_BASE_COLOR) {
+                    memcpy(mat->base_color, op->base_color, sizeof op->base_color);
+                    mat->base_color_tex = -1;
+                }
+                if (op->has & LIE_EDIT_HAS_METALLIC)
+                    mat->metallic = op->metallic;
+                if (op->has & LIE_EDIT_HAS_ROUGHNESS)
+                    mat->roughness = op->roughness;
+                if (op->kind == LIE_EDIT_SET_EMISSION) {
+                    /* emissive colour times strength; one given alone keeps the other */
+                    float peak = fmaxf(mat->emissive[0], fmaxf(mat->emissive[1], mat->emissive[2]));
+                    float colour[3], strength = peak;
+                    for (int c = 0; c < 3; c++)
+                        colour[c] = peak > 0.0f ? mat->emissive[c] / peak : 1.0f;
+                    if (op->has & LIE_EDIT_HAS_EMISSIVE) {
+                        memcpy(colour, op->emissive, sizeof colour);
+                        if (!(op->has & LIE_EDIT_HAS_STRENGTH))
+                            strength = 1.0f;
+                    }
+                    if (op->has & LIE_EDIT_HAS_STRENGTH)
+                        strength = op->strength;
+                    for (int c = 0; c < 3; c++)
+                        mat->emissive[c] = colour[c] * strength;
+                    mat->emissive_tex = -1;
+                }
+            }
+            if (fx && !push_int(&fx->material_nodes, &fx->n_material_nodes, nd)) {
+                free(sub);
+                return lie_error_set(err, LIE_ERR_NOMEM, file, "out of memory");
+            }
+        }
+        free(sub);
+        break;
+    }
+    }
+    if (geometry && fx) {
+        int *sub = NULL, nsub = 0;
+        int ok = collect_subtree(s, node, &sub, &nsub);
+        for (int k = 0; ok && k < nsub; k++)
+            ok = push_int(&fx->nodes, &fx->n_nodes, sub[k]);
+        free(sub);
+        if (!ok)
+            return lie_error_set(err, LIE_ERR_NOMEM, file, "out of memory");
+    }
+    return LIE_OK;
+}
+
+lie_status lie_edit_apply(lie_scene *s, const lie_edit *e, const lie_scene_options *opt, lie_edit_effect *fx,
+                          lie_error *err)
+{
+    for (int i = 0; i < e->n_ops; i++) {
+        lie_status st = apply_op(s, e, &e->ops[i], opt, fx, err);
+        if (st != LIE_OK)
+            return st;
+    }
+    lie_status st = lie_scene_flatten(s, err);
+    if (st != LIE_OK && err && !err->file[0])
+        snprintf(err->file, sizeof err->file, "%s", e->name);
+    return st;
+}

@@ -1,0 +1,87 @@
+/* lib/edit: scene edit files (formats/edit.md), read with libyaml, and
+ * their application to a scene's document.
+ *
+ * An edit file is a YAML sequence of operations applied in order.  Nodes
+ * are named by their glTF name (which must be unique) or "#index".  Every
+ * error carries file, line and column and names the key. */
+#ifndef LIE_EDIT_H
+#define LIE_EDIT_H
+
+#include "core/core.h"
+#include "scene/scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum lie_edit_kind {
+    LIE_EDIT_MOVE_BY = 0,
+    LIE_EDIT_MOVE_TO = 1,
+    LIE_EDIT_ROTATE = 2,
+    LIE_EDIT_SCALE = 3,
+    LIE_EDIT_SET_TRANSFORM = 4,
+    LIE_EDIT_REMOVE = 5,
+    LIE_EDIT_ADD = 6,
+    LIE_EDIT_SET_MATERIAL = 7,
+    LIE_EDIT_SET_EMISSION = 8
+} lie_edit_kind;
+
+/* Which optional fields of set-material / set-emission were given. */
+enum {
+    LIE_EDIT_HAS_BASE_COLOR = 1 << 0,
+    LIE_EDIT_HAS_METALLIC = 1 << 1,
+    LIE_EDIT_HAS_ROUGHNESS = 1 << 2,
+    LIE_EDIT_HAS_EMISSIVE = 1 << 3,
+    LIE_EDIT_HAS_STRENGTH = 1 << 4
+};
+
+typedef struct lie_edit_op {
+    lie_edit_kind kind;
+    int line, col;         /* where the operation starts, for messages */
+    char *node;            /* the node named (for add: the node in `file`) */
+    double v[3];           /* move by/to, rotate axis, scale factors */
+    double degrees;        /* rotate */
+    double matrix[16];     /* set-transform, add's transform (column-major) */
+    char *file;            /* add: the glTF file, relative to the edit file */
+    char *as;              /* add: the new node's name */
+    unsigned has;          /* LIE_EDIT_HAS_* */
+    float base_color[3], metallic, roughness, emissive[3], strength;
+} lie_edit_op;
+
+typedef struct lie_edit {
+    char *name;            /* the edit file's name as given */
+    lie_edit_op *ops;
+    int n_ops;
+} lie_edit;
+
+/* Parse an edit file held in memory; `name` is used in messages and to
+ * resolve `add` files.  On success *out is owned by the caller. */
+lie_status lie_edit_parse(const unsigned char *text, size_t size, const char *name, lie_edit **out,
+                          lie_error *err);
+void lie_edit_destroy(lie_edit *e);
+
+/* What an application changed, for rst-update. */
+typedef struct lie_edit_effect {
+    int *nodes;            /* nodes whose world transform, geometry or presence changed */
+    int n_nodes;
+    int *material_nodes;   /* nodes whose materials changed (set-material, set-emission) */
+    int n_material_nodes;
+} lie_edit_effect;
+void lie_edit_effect_free(lie_edit_effect *fx);
+
+/* Apply the operations to s's document in order, then re-flatten s.
+ * Removed nodes keep their triangle slots as empty (zero-area) triangles
+ * and added objects take new slots after all others, so the global
+ * triangle indices of untouched objects never change.  `fx` (may be NULL)
+ * collects the nodes touched.  On error s may be partly edited. */
+lie_status lie_edit_apply(lie_scene *s, const lie_edit *e, const lie_scene_options *opt,
+                          lie_edit_effect *fx, lie_error *err);
+
+/* Find a node by name or "#index"; a missing or ambiguous name is an error. */
+lie_status lie_edit_find_node(const lie_scene *s, const char *name, int *node, const char *file, int line,
+                              int col, lie_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,57 @@
+/* Exact refinement of ray-segment-tree answers: the hull of a flagged
+ * node's patch and emitter against the edit's boxes. */
+#include "lie/shaft.h"
+#include "rst/rst.h"
+
+#include <stdlib.h>
+
+typedef struct refine_ctx {
+    const lie_scene *s;
+    const lie_env *env;
+    const lie_box3 *boxes;
+    int n_boxes;
+    uint8_t *flags;
+    lie_vec3 *hull;
+    uint64_t cleared;
+} refine_ctx;
+
+static void refine_node(refine_ctx *c, uint32_t node, uint32_t tri, lie_patch_path path, int e)
+{
+    if (!c->flags[node])
+        return; /* children's shafts lie inside: none of them was flagged either */
+    lie_vec3 V[3];
+    lie_patch_world(path, &c->s->tri_p[3 * (size_t)tri], V);
+    int n = lie_pair_hull_points(c->s, tri, V, e, c->hull);
+    int meets = 0;
+    float tol = 1e-5f * fmaxf(1.0f, lie_v3_len(lie_v3_sub(c->s->bounds.hi, c->s->bounds.lo)));
+    for (int b = 0; b < c->n_boxes && !meets; b++) {
+        const lie_box3 *x = &c->boxes[b];
+        lie_vec3 corners[8];
+        for (int k = 0; k < 8; k++)
+            corners[k] = lie_v3(k & 1 ? x->hi.x : x->lo.x, k & 2 ? x->hi.y : x->lo.y, k & 4 ? x->hi.z : x->lo.z);
+        meets = lie_hull_meets_hull(c->hull, n, corners, 8, tol);
+    }
+    if (!meets) {
+        c->flags[node] = 0;
+        c->cleared++;
+    }
+    const lie_pnode *x = &c->env->nodes[node];
+    if (x->child)
+        for (uint32_t k = 0; k < 4; k++)
+            refine_node(c, x->child + k, tri, lie_patch_child(path, (int)k), e);
+}
+
+uint64_t lie_rst_refine(const lie_scene *s, const lie_env *env, const lie_box3 *boxes, int n_boxes, uint8_t *flags)
+{
+    int cap = 0;
+    for (int e = 0; e < s->n_emitters; e++)
+        cap = cap > lie_pair_hull_cap(s, e) ? cap : lie_pair_hull_cap(s, e);
+    refine_ctx c = {s, env, boxes, n_boxes, flags, malloc(sizeof(lie_vec3) * ((size_t)cap + 1)), 0};
+    if (!c.hull)
+        return 0; /* out of memory: keep every flag (still correct) */
+    for (uint32_t t = 0; t < env->n_tris; t++)
+        for (int e = 0; e < env->n_emitters; e++)
+            refine_node(&c, env->root[(size_t)t * (size_t)env->n_emitters + (size_t)e], t, lie_patch_root(), e);
+    free(c.hull);
+    return c.cleared;
+}
