@@ -46,6 +46,12 @@ struct lie_rst {
     int nomem;
 };
 
+/* min and max that compile to one instruction (fminf/fmaxf are library
+ * calls on x86 for their NaN rules; a NaN bound fails the root-cell test
+ * in region_box and lands in the fallback list anyway) */
+static inline float mn(float a, float b) { return a < b ? a : b; }
+static inline float mx(float a, float b) { return a > b ? a : b; }
+
 static float axis_of(lie_vec3 v, int a) { return a == 0 ? v.x : a == 1 ? v.y : v.z; }
 
 static int box5_overlap(const box5 *x, const box5 *y)
@@ -63,7 +69,7 @@ static int box5_overlap(const box5 *x, const box5 *y)
 static int box5_meets(const tree *t, const box5 *x, const lie_box3 *w)
 {
     float wa0 = axis_of(w->lo, t->a), wa1 = axis_of(w->hi, t->a);
-    float z0 = fmaxf(x->lo[4], wa0), z1 = fminf(x->hi[4], wa1);
+    float z0 = mx(x->lo[4], wa0), z1 = mn(x->hi[4], wa1);
     if (z0 > z1)
         return 0;
     float inv = 1.0f / (t->A1 - t->A0);
@@ -130,8 +136,8 @@ static entry clip(const entry *e, const box5 *cell)
 {
     entry r = *e;
     for (int k = 0; k < 5; k++) {
-        r.b.lo[k] = fmaxf(r.b.lo[k], cell->lo[k]);
-        r.b.hi[k] = fminf(r.b.hi[k], cell->hi[k]);
+        r.b.lo[k] = mx(r.b.lo[k], cell->lo[k]);
+        r.b.hi[k] = mn(r.b.hi[k], cell->hi[k]);
     }
     return r;
 }
@@ -224,14 +230,14 @@ static int region_box(const tree *t, const lie_vec3 *P, int np, const lie_vec3 *
             float f0 = (t->A0 - pa) / d, f1 = (t->A1 - pa) / d;
             float v[4] = {pb + f0 * db, pc + f0 * dc, pb + f1 * db, pc + f1 * dc};
             for (int k = 0; k < 4; k++) {
-                out->lo[k] = fminf(out->lo[k], v[k]);
-                out->hi[k] = fmaxf(out->hi[k], v[k]);
+                out->lo[k] = mn(out->lo[k], v[k]);
+                out->hi[k] = mx(out->hi[k], v[k]);
             }
         }
     for (int i = 0; i < np + ne; i++) {
         float a = axis_of(i < np ? P[i] : E[i - np], t->a);
-        out->lo[4] = fminf(out->lo[4], a);
-        out->hi[4] = fmaxf(out->hi[4], a);
+        out->lo[4] = mn(out->lo[4], a);
+        out->hi[4] = mx(out->hi[4], a);
     }
     /* a hair wider: intercepts are computed in float */
     for (int k = 0; k < 5; k++) {
@@ -245,50 +251,84 @@ static int region_box(const tree *t, const lie_vec3 *P, int np, const lie_vec3 *
     return 1;
 }
 
+/* One region to insert: the node of a patch tree, its patch and emitter. */
+typedef struct region_item {
+    uint32_t node, tri;
+    lie_patch_path path;
+    int e;
+} region_item;
+
+/* What a region becomes: a 5D box in the tree of `axis`, or (axis -1) a
+ * world box in the fallback list. */
+typedef struct region_out {
+    int axis;
+    box5 b;
+    lie_box3 world;
+} region_out;
+
 typedef struct build_state {
     const lie_scene *s;
     const lie_env *env;
     lie_rst *r;
-    lie_vec3 *hull;
-    uint64_t regions, fallback;
+    region_item *items;
+    region_out *outs;
+    size_t n_items, cap_items;
+    lie_vec3 *hull; /* per worker, hull_cap points each */
+    int hull_cap;
+    int nomem;
 } build_state;
 
-static void add_region(build_state *bs, uint32_t node, uint32_t tri, lie_patch_path path, int e)
+enum { REGION_CHUNK = 64 };
+
+static void compute_region(build_state *bs, const region_item *it, lie_vec3 *hull, region_out *out)
 {
     const lie_scene *s = bs->s;
     lie_vec3 V[3];
-    lie_patch_world(path, &s->tri_p[3 * (size_t)tri], V);
-    int n = lie_pair_hull_points(s, tri, V, e, bs->hull);
-    int np = lie_scene_material(s, s->tri_material[tri])->double_sided ? 9 : 6;
-    const lie_vec3 *P = bs->hull, *E = bs->hull + np;
+    lie_patch_world(it->path, &s->tri_p[3 * (size_t)it->tri], V);
+    int n = lie_pair_hull_points(s, it->tri, V, it->e, hull);
+    int np = lie_scene_material(s, s->tri_material[it->tri])->double_sided ? 9 : 6;
+    const lie_vec3 *P = hull, *E = hull + np;
     int ne = n - np;
-    bs->regions++;
     /* the axis along which patch and emitter are farthest apart */
     int best = -1;
     float best_gap = 0.0f;
     for (int a = 0; a < 3; a++) {
         float p0 = INFINITY, p1 = -INFINITY, e0 = INFINITY, e1 = -INFINITY;
         for (int i = 0; i < np; i++) {
-            p0 = fminf(p0, axis_of(P[i], a));
-            p1 = fmaxf(p1, axis_of(P[i], a));
+            p0 = mn(p0, axis_of(P[i], a));
+            p1 = mx(p1, axis_of(P[i], a));
         }
         for (int j = 0; j < ne; j++) {
-            e0 = fminf(e0, axis_of(E[j], a));
-            e1 = fmaxf(e1, axis_of(E[j], a));
+            e0 = mn(e0, axis_of(E[j], a));
+            e1 = mx(e1, axis_of(E[j], a));
         }
-        float gap = fmaxf(e0 - p1, p0 - e1);
+        float gap = mx(e0 - p1, p0 - e1);
         if (gap > best_gap) {
             best_gap = gap;
             best = a;
         }
     }
-    entry en;
-    en.node = node;
-    if (best >= 0 && region_box(&bs->r->t[best], P, np, E, ne, &en.b)) {
-        insert(bs->r, &bs->r->t[best], 0, &en, 0);
+    if (best >= 0 && region_box(&bs->r->t[best], P, np, E, ne, &out->b)) {
+        out->axis = best;
         return;
     }
-    lie_rst *r = bs->r;
+    out->axis = -1;
+    out->world = lie_box3_empty();
+    for (int i = 0; i < n; i++)
+        lie_box3_grow(&out->world, hull[i]);
+}
+
+static void compute_chunk(void *ctx, size_t chunk, int worker)
+{
+    build_state *bs = ctx;
+    size_t i0 = chunk * REGION_CHUNK, i1 = i0 + REGION_CHUNK < bs->n_items ? i0 + REGION_CHUNK : bs->n_items;
+    lie_vec3 *hull = bs->hull + (size_t)worker * (size_t)bs->hull_cap;
+    for (size_t i = i0; i < i1; i++)
+        compute_region(bs, &bs->items[i], hull, &bs->outs[i]);
+}
+
+static void add_fallback(lie_rst *r, uint32_t node, lie_box3 box)
+{
     if (r->n_fb == r->cap_fb) {
         uint32_t nc = r->cap_fb ? 2 * r->cap_fb : 64;
         fb_region *nf = realloc(r->fb, sizeof *nf * nc);
@@ -301,21 +341,29 @@ static void add_region(build_state *bs, uint32_t node, uint32_t tri, lie_patch_p
     }
     fb_region *f = &r->fb[r->n_fb++];
     f->node = node;
-    f->box = lie_box3_empty();
-    for (int i = 0; i < n; i++)
-        lie_box3_grow(&f->box, bs->hull[i]);
-    bs->fallback++;
+    f->box = box;
 }
 
-static void add_subtree(build_state *bs, uint32_t node, uint32_t tri, lie_patch_path path, int e)
+static void collect(build_state *bs, uint32_t node, uint32_t tri, lie_patch_path path, int e)
 {
     const lie_pnode *x = &bs->env->nodes[node];
     if (x->cls == LIE_CLASS_UNLIT || x->cls == LIE_CLASS_NONE)
         return; /* unlit stays unlit unless the patch or emitter itself changes; none stays unbuilt */
-    add_region(bs, node, tri, path, e);
+    if (bs->n_items == bs->cap_items) {
+        size_t nc = bs->cap_items ? 2 * bs->cap_items : 1024;
+        region_item *ni = realloc(bs->items, sizeof *ni * nc);
+        if (!ni) {
+            bs->nomem = 1;
+            return;
+        }
+        bs->items = ni;
+        bs->cap_items = nc;
+    }
+    region_item it = {node, tri, path, e};
+    bs->items[bs->n_items++] = it;
     if (x->child)
         for (int k = 0; k < 4; k++)
-            add_subtree(bs, x->child + (uint32_t)k, tri, lie_patch_child(path, k), e);
+            collect(bs, x->child + (uint32_t)k, tri, lie_patch_child(path, k), e);
 }
 
 void lie_rst_destroy(lie_rst *r)
@@ -331,7 +379,8 @@ void lie_rst_destroy(lie_rst *r)
     free(r);
 }
 
-lie_status lie_rst_build(const lie_scene *s, const lie_env *env, lie_rst **out, lie_rst_stats *stats, lie_error *err)
+lie_status lie_rst_build(const lie_scene *s, const lie_env *env, int threads, lie_rst **out, lie_rst_stats *stats,
+                         lie_error *err)
 {
     *out = NULL;
     double t0 = lie_time_now();
@@ -344,7 +393,7 @@ lie_status lie_rst_build(const lie_scene *s, const lie_env *env, lie_rst **out, 
     if (lie_box3_is_empty(&s->bounds))
         lo = hi = lie_v3(0, 0, 0);
     lie_vec3 ext = lie_v3_sub(hi, lo);
-    float pad = fmaxf(1.0f, fmaxf(ext.x, fmaxf(ext.y, ext.z)));
+    float pad = mx(1.0f, mx(ext.x, mx(ext.y, ext.z)));
     for (int a = 0; a < 3; a++) {
         tree *t = &r->t[a];
         t->a = a;
@@ -366,26 +415,58 @@ lie_status lie_rst_build(const lie_scene *s, const lie_env *env, lie_rst **out, 
             return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
         }
     }
+    /* Regions are computed in parallel (each from its own item), then
+     * inserted in item order, so the trees do not depend on the schedule. */
     int cap = 0;
     for (int e = 0; e < s->n_emitters; e++)
         cap = cap > lie_pair_hull_cap(s, e) ? cap : lie_pair_hull_cap(s, e);
-    build_state bs = {s, env, r, malloc(sizeof(lie_vec3) * ((size_t)cap + 1)), 0, 0};
-    if (!bs.hull) {
-        lie_rst_destroy(r);
-        return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
-    }
-    for (uint32_t t = 0; t < env->n_tris && !r->nomem; t++)
+    int workers = threads > 0 ? threads : lie_cpu_count();
+    build_state bs;
+    memset(&bs, 0, sizeof bs);
+    bs.s = s;
+    bs.env = env;
+    bs.r = r;
+    bs.hull_cap = cap + 1;
+    bs.hull = malloc(sizeof(lie_vec3) * (size_t)bs.hull_cap * (size_t)workers);
+    for (uint32_t t = 0; t < env->n_tris && bs.hull && !bs.nomem; t++)
         for (int e = 0; e < env->n_emitters; e++)
-            add_subtree(&bs, env->root[(size_t)t * (size_t)env->n_emitters + (size_t)e], t, lie_patch_root(), e);
+            collect(&bs, env->root[(size_t)t * (size_t)env->n_emitters + (size_t)e], t, lie_patch_root(), e);
+    bs.outs = malloc(sizeof *bs.outs * (bs.n_items + 1));
+    lie_status st = LIE_ERR_NOMEM;
+    if (bs.hull && bs.outs && !bs.nomem)
+        st = lie_parallel_for((bs.n_items + REGION_CHUNK - 1) / REGION_CHUNK, workers, compute_chunk, &bs, NULL,
+                              NULL);
+    uint64_t fallback = 0;
+    for (size_t i = 0; st == LIE_OK && i < bs.n_items && !r->nomem; i++) {
+        const region_out *o = &bs.outs[i];
+        if (o->axis >= 0) {
+            entry en;
+            en.node = bs.items[i].node;
+            en.b = o->b;
+            insert(r, &r->t[o->axis], 0, &en, 0);
+        } else {
+            add_fallback(r, bs.items[i].node, o->world);
+            fallback++;
+        }
+    }
+    size_t n_regions = bs.n_items;
     free(bs.hull);
+    free(bs.items);
+    free(bs.outs);
+    if (st != LIE_OK && st != LIE_ERR_NOMEM) {
+        lie_rst_destroy(r);
+        return lie_error_set(err, st, s->path, "cannot start worker threads for the ray segment trees");
+    }
+    if (st != LIE_OK)
+        r->nomem = 1;
     if (r->nomem) {
         lie_rst_destroy(r);
         return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory building ray segment trees");
     }
     if (stats) {
         memset(stats, 0, sizeof *stats);
-        stats->regions = bs.regions;
-        stats->fallback = bs.fallback;
+        stats->regions = n_regions;
+        stats->fallback = fallback;
         stats->stored = r->stored;
         size_t bytes = sizeof *r + sizeof(fb_region) * r->cap_fb;
         for (int a = 0; a < 3; a++) {

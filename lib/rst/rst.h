@@ -35,8 +35,10 @@ typedef struct lie_rst_stats {
     double seconds;
 } lie_rst_stats;
 
-/* The trees for every node of env over scene s (which env was built for). */
-lie_status lie_rst_build(const lie_scene *s, const lie_env *env, lie_rst **out, lie_rst_stats *stats,
+/* The trees for every node of env over scene s (which env was built for),
+ * regions computed on `threads` workers (0 = all cores); the trees are the
+ * same for any thread count. */
+lie_status lie_rst_build(const lie_scene *s, const lie_env *env, int threads, lie_rst **out, lie_rst_stats *stats,
                          lie_error *err);
 void lie_rst_destroy(lie_rst *r);
 

@@ -212,7 +212,7 @@ int main(int argc, char **argv)
     int old_emitters = scene->n_emitters;
     float old_max_area = scene->max_tri_area;
     if (!full) {
-        if (lie_rst_build(scene, cache->env, &rst, &rs, &err) != LIE_OK)
+        if (lie_rst_build(scene, cache->env, threads, &rst, &rs, &err) != LIE_OK)
             goto done;
     }
     t_rst = lie_time_now() - ta;
