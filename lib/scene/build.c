@@ -27,7 +27,41 @@ lie_material lie_material_default(void)
     m.metallic = 1.0f;
     m.roughness = 1.0f;
     m.base_color_tex = m.mr_tex = m.emissive_tex = -1;
+    lie_material_tex_xf_identity(&m);
     return m;
+}
+
+void lie_material_tex_xf_identity(lie_material *m)
+{
+    for (int k = 0; k < 3; k++) {
+        const float id[5] = {0.0f, 0.0f, 0.0f, 1.0f, 1.0f};
+        memcpy(m->tex_param[k], id, sizeof id);
+    }
+    lie_material_tex_xf_update(m);
+}
+
+/* KHR_texture_transform: uv' = T(offset) R(rotation) S(scale) uv, with
+ * R = [cos sin; -sin cos] (a positive rotation turns the texture
+ * counter-clockwise in uv space). */
+void lie_material_tex_xf_update(lie_material *m)
+{
+    for (int k = 0; k < 3; k++) {
+        const float *p = m->tex_param[k];
+        double c = cos((double)p[2]), s = sin((double)p[2]);
+        float *x = m->tex_xf[k];
+        x[0] = (float)(c * p[3]);
+        x[1] = (float)(s * p[4]);
+        x[2] = p[0];
+        x[3] = (float)(-s * p[3]);
+        x[4] = (float)(c * p[4]);
+        x[5] = p[1];
+    }
+}
+
+int lie_material_tex_xf_is_identity(const lie_material *m, int k)
+{
+    const float *p = m->tex_param[k];
+    return p[0] == 0.0f && p[1] == 0.0f && p[2] == 0.0f && p[3] == 1.0f && p[4] == 1.0f;
 }
 
 /* Grow an array of `size`-byte elements by one; returns the new slot. */

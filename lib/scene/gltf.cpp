@@ -22,6 +22,7 @@
 #include <charconv>
 #include <cerrno>
 #include <climits>
+#include <cfloat>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
@@ -43,7 +44,8 @@ namespace {
 const uint64_t MAX_IMAGE_PIXELS = uint64_t(1) << 26;
 
 /* extensionsRequired we honour; any other required extension is refused. */
-const char *const SUPPORTED_REQUIRED[] = {"KHR_lights_punctual", "KHR_materials_emissive_strength"};
+const char *const SUPPORTED_REQUIRED[] = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
+                                         "KHR_mesh_quantization", "KHR_texture_transform"};
 
 struct ImportError {
     lie_status status;
@@ -698,6 +700,25 @@ int attribute(const tinygltf::Primitive &p, const char *name)
     return it == p.attributes.end() ? -1 : it->second;
 }
 
+bool uses_extension(const tinygltf::Model &m, const char *name)
+{
+    for (const std::string &e : m.extensionsUsed)
+        if (e == name)
+            return true;
+    for (const std::string &e : m.extensionsRequired)
+        if (e == name)
+            return true;
+    return false;
+}
+
+/* The integer component types KHR_mesh_quantization allows for positions
+ * and texture coordinates (normalized or not). */
+bool small_int(int ctype)
+{
+    return ctype == TINYGLTF_COMPONENT_TYPE_BYTE || ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+           ctype == TINYGLTF_COMPONENT_TYPE_SHORT || ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+}
+
 /* Check a primitive and count its triangles; nothing is allocated yet. */
 PrimPlan plan_primitive(const tinygltf::Model &m, int mi, int pi, lie_scene *s)
 {
@@ -729,16 +750,25 @@ PrimPlan plan_primitive(const tinygltf::Model &m, int mi, int pi, lie_scene *s)
     int ap = attribute(p, "POSITION");
     if (ap < 0)
         fail(LIE_ERR_FORMAT, "%s has no POSITION", what.c_str());
+    /* KHR_mesh_quantization widens the attribute types (gltfpack and other
+     * optimisers write it); the node transforms carry the dequantisation. */
+    const bool quant = uses_extension(m, "KHR_mesh_quantization");
     pl.pos = check_accessor(m, ap, what + " POSITION");
-    if (pl.pos.ctype != TINYGLTF_COMPONENT_TYPE_FLOAT || pl.pos.ncomp != 3)
-        fail(LIE_ERR_FORMAT, "%s: POSITION must be VEC3 FLOAT", what.c_str());
+    if (pl.pos.ncomp != 3 || !(pl.pos.ctype == TINYGLTF_COMPONENT_TYPE_FLOAT || (quant && small_int(pl.pos.ctype))))
+        fail(LIE_ERR_FORMAT, "%s: POSITION must be VEC3 FLOAT%s", what.c_str(),
+             quant ? " or (KHR_mesh_quantization) BYTE/SHORT, signed or unsigned" : "");
     pl.n_verts = pl.pos.count;
 
     int an = attribute(p, "NORMAL");
     if ((pl.has_nrm = an >= 0)) {
         pl.nrm = check_accessor(m, an, what + " NORMAL");
-        if (pl.nrm.ctype != TINYGLTF_COMPONENT_TYPE_FLOAT || pl.nrm.ncomp != 3)
-            fail(LIE_ERR_FORMAT, "%s: NORMAL must be VEC3 FLOAT", what.c_str());
+        bool ok = pl.nrm.ncomp == 3 &&
+                  (pl.nrm.ctype == TINYGLTF_COMPONENT_TYPE_FLOAT ||
+                   (quant && pl.nrm.normalized &&
+                    (pl.nrm.ctype == TINYGLTF_COMPONENT_TYPE_BYTE || pl.nrm.ctype == TINYGLTF_COMPONENT_TYPE_SHORT)));
+        if (!ok)
+            fail(LIE_ERR_FORMAT, "%s: NORMAL must be VEC3 FLOAT%s", what.c_str(),
+                 quant ? " or (KHR_mesh_quantization) normalized BYTE/SHORT" : "");
         if (pl.nrm.count != pl.n_verts)
             fail(LIE_ERR_FORMAT, "%s: NORMAL has %zu elements, POSITION %zu", what.c_str(), pl.nrm.count,
                  pl.n_verts);
@@ -747,12 +777,12 @@ PrimPlan plan_primitive(const tinygltf::Model &m, int mi, int pi, lie_scene *s)
     if ((pl.has_uv = at >= 0)) {
         pl.uv = check_accessor(m, at, what + " TEXCOORD_0");
         bool ok = pl.uv.ncomp == 2 &&
-                  (pl.uv.ctype == TINYGLTF_COMPONENT_TYPE_FLOAT ||
+                  (pl.uv.ctype == TINYGLTF_COMPONENT_TYPE_FLOAT || (quant && small_int(pl.uv.ctype)) ||
                    (pl.uv.normalized && (pl.uv.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
                                          pl.uv.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT)));
         if (!ok)
-            fail(LIE_ERR_FORMAT, "%s: TEXCOORD_0 must be VEC2 FLOAT or normalized UNSIGNED_BYTE/SHORT",
-                 what.c_str());
+            fail(LIE_ERR_FORMAT, "%s: TEXCOORD_0 must be VEC2 FLOAT or normalized UNSIGNED_BYTE/SHORT%s",
+                 what.c_str(), quant ? " (or, KHR_mesh_quantization, any BYTE/SHORT)" : "");
         if (pl.uv.count != pl.n_verts)
             fail(LIE_ERR_FORMAT, "%s: TEXCOORD_0 has %zu elements, POSITION %zu", what.c_str(), pl.uv.count,
                  pl.n_verts);
@@ -943,10 +973,45 @@ float unit_factor(double v, const std::string &what)
 }
 
 /* A textureInfo's texture; texCoord other than 0 still samples TEXCOORD_0,
- * the only set the importer reads. */
-int texture_info(Import &im, const tinygltf::TextureInfo &ti, bool srgb, const std::string &what)
+ * the only set the importer reads.  Its KHR_texture_transform, if any, goes
+ * to xf (offset, rotation in radians, scale: the matrix T R S of the
+ * extension's specification). */
+int texture_info(Import &im, const tinygltf::TextureInfo &ti, bool srgb, const std::string &what, float param[5])
 {
-    return ti.index < 0 ? -1 : texture_for(im, ti.index, srgb, what);
+    if (ti.index < 0)
+        return -1;
+    auto ext = ti.extensions.find("KHR_texture_transform");
+    if (ext != ti.extensions.end()) {
+        const tinygltf::Value &v = ext->second;
+        if (!v.IsObject())
+            fail(LIE_ERR_FORMAT, "%s: KHR_texture_transform must be an object", what.c_str());
+        auto numbers = [&](const char *key, double *out, int n) {
+            if (!v.Has(key))
+                return;
+            const tinygltf::Value &a = v.Get(key);
+            bool ok = n == 1 ? a.IsNumber() : a.IsArray() && a.ArrayLen() == size_t(n);
+            for (int k = 0; ok && k < n; k++) {
+                const tinygltf::Value &x = n == 1 ? a : a.Get(k);
+                ok = x.IsNumber() && std::isfinite(x.GetNumberAsDouble());
+                if (ok)
+                    out[k] = x.GetNumberAsDouble();
+            }
+            if (!ok)
+                fail(LIE_ERR_FORMAT, "%s: KHR_texture_transform %s must be %s", what.c_str(), key,
+                     n == 1 ? "a finite number" : "two finite numbers");
+        };
+        double off[2] = {0.0, 0.0}, rot = 0.0, scl[2] = {1.0, 1.0};
+        numbers("offset", off, 2);
+        numbers("rotation", &rot, 1);
+        numbers("scale", scl, 2);
+        const double p[5] = {off[0], off[1], rot, scl[0], scl[1]};
+        for (int k = 0; k < 5; k++) {
+            if (!(fabs(p[k]) <= FLT_MAX))
+                fail(LIE_ERR_FORMAT, "%s: KHR_texture_transform value out of range", what.c_str());
+            param[k] = float(p[k]);
+        }
+    }
+    return texture_for(im, ti.index, srgb, what);
 }
 
 void import_materials(Import &im)
@@ -964,14 +1029,17 @@ void import_materials(Import &im)
         lie_material &mt = s->materials[i];
         std::string w = "material " + std::to_string(i);
         mt.name = dup_name(g.name);
+        lie_material_tex_xf_identity(&mt);
         if (pbr.baseColorFactor.size() != 4)
             fail(LIE_ERR_FORMAT, "%s: baseColorFactor needs 4 numbers", w.c_str());
         for (int c = 0; c < 4; c++)
             mt.base_color[c] = unit_factor(pbr.baseColorFactor[size_t(c)], w + " baseColorFactor");
-        mt.base_color_tex = texture_info(im, pbr.baseColorTexture, true, w + " baseColorTexture");
+        mt.base_color_tex = texture_info(im, pbr.baseColorTexture, true, w + " baseColorTexture",
+                                         mt.tex_param[LIE_TEX_BASE_COLOR]);
         mt.metallic = unit_factor(pbr.metallicFactor, w + " metallicFactor");
         mt.roughness = unit_factor(pbr.roughnessFactor, w + " roughnessFactor");
-        mt.mr_tex = texture_info(im, pbr.metallicRoughnessTexture, false, w + " metallicRoughnessTexture");
+        mt.mr_tex = texture_info(im, pbr.metallicRoughnessTexture, false, w + " metallicRoughnessTexture",
+                                 mt.tex_param[LIE_TEX_METALLIC_ROUGHNESS]);
 
         double strength = 1.0;
         auto ext = g.extensions.find("KHR_materials_emissive_strength");
@@ -989,8 +1057,9 @@ void import_materials(Import &im)
                 fail(LIE_ERR_FORMAT, "%s: emissiveFactor must be numbers >= 0", w.c_str());
             mt.emissive[c] = float(e * strength);
         }
-        mt.emissive_tex = texture_info(im, g.emissiveTexture, true, w + " emissiveTexture");
+        mt.emissive_tex = texture_info(im, g.emissiveTexture, true, w + " emissiveTexture", mt.tex_param[LIE_TEX_EMISSIVE]);
         mt.double_sided = g.doubleSided ? 1 : 0;
+        lie_material_tex_xf_update(&mt);
     }
 }
 
@@ -1589,7 +1658,7 @@ void export_materials(Export &ex, const std::map<int, int> &gl_texture)
         auto it = gl_texture.find(t * 2 + srgb);
         return it == gl_texture.end() ? -1 : it->second;
     };
-    bool strength_used = false;
+    bool strength_used = false, transform_used = false;
     for (int i = 0; i < ex.s.n_materials; i++) {
         const lie_material &mt = ex.s.materials[i];
         tinygltf::Material g;
@@ -1629,10 +1698,27 @@ void export_materials(Export &ex, const std::map<int, int> &gl_texture)
         }
         g.emissiveTexture.index = tex(mt.emissive_tex, true);
         g.doubleSided = mt.double_sided != 0;
+        tinygltf::TextureInfo *slots[3] = {&pbr.baseColorTexture, &pbr.metallicRoughnessTexture,
+                                           &g.emissiveTexture};
+        for (int k = 0; k < 3; k++) {
+            if (slots[k]->index < 0 || lie_material_tex_xf_is_identity(&mt, k))
+                continue;
+            const float *p = mt.tex_param[k];
+            tinygltf::Value::Object o;
+            o["offset"] = tinygltf::Value(tinygltf::Value::Array{tinygltf::Value(short_float(p[0])),
+                                                                 tinygltf::Value(short_float(p[1]))});
+            o["rotation"] = tinygltf::Value(short_float(p[2]));
+            o["scale"] = tinygltf::Value(tinygltf::Value::Array{tinygltf::Value(short_float(p[3])),
+                                                                tinygltf::Value(short_float(p[4]))});
+            slots[k]->extensions["KHR_texture_transform"] = tinygltf::Value(o);
+            transform_used = true;
+        }
         ex.m.materials.push_back(g);
     }
     if (strength_used)
         ex.m.extensionsUsed.push_back("KHR_materials_emissive_strength");
+    if (transform_used)
+        ex.m.extensionsUsed.push_back("KHR_texture_transform");
 }
 
 void export_document(Export &ex)

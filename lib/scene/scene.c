@@ -8,7 +8,9 @@
 
 static const lie_material default_material = {
     /* glTF 2.0 §3.9.6: the default material is white, metallic 1, roughness 1. */
-    NULL, {1.0f, 1.0f, 1.0f, 1.0f}, -1, 1.0f, 1.0f, -1, {0.0f, 0.0f, 0.0f}, -1, 0};
+    NULL, {1.0f, 1.0f, 1.0f, 1.0f}, -1, 1.0f, 1.0f, -1, {0.0f, 0.0f, 0.0f}, -1, 0,
+    {{0.0f, 0.0f, 0.0f, 1.0f, 1.0f}, {0.0f, 0.0f, 0.0f, 1.0f, 1.0f}, {0.0f, 0.0f, 0.0f, 1.0f, 1.0f}},
+    {{1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f}, {1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f}, {1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f}}};
 
 lie_scene_options lie_scene_options_default(void)
 {
@@ -375,6 +377,12 @@ static void hash_world(lie_scene *s, lie_hasher *h)
         int32_t t[3] = {m->base_color_tex, m->mr_tex, m->emissive_tex};
         lie_hasher_update(h, f, sizeof f);
         lie_hasher_update(h, t, sizeof t);
+        for (int k = 0; k < 3; k++) /* texture transforms, when there are any */
+            if (!lie_material_tex_xf_is_identity(m, k)) {
+                int32_t slot = k;
+                lie_hasher_update(h, &slot, sizeof slot);
+                lie_hasher_update(h, m->tex_param[k], sizeof m->tex_param[k]);
+            }
     }
     lie_hasher_update(h, &nt, sizeof nt);
     for (int i = 0; i < s->n_textures; i++) {

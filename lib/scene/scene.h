@@ -42,7 +42,29 @@ typedef struct lie_material {
     float emissive[3];     /* emissiveFactor x KHR_materials_emissive_strength, nits */
     int emissive_tex;      /* sRGB-decoded, or -1 */
     int double_sided;
+    /* KHR_texture_transform per texture slot (LIE_TEX_*): offset u, v,
+     * rotation (radians), scale u, v as in the file (0 0 0 1 1 without the
+     * extension), and the matrix they make (lie_material_tex_xf_update):
+     * the texture is looked up at (xf[0] u + xf[1] v + xf[2],
+     * xf[3] u + xf[4] v + xf[5]) */
+    float tex_param[3][5];
+    float tex_xf[3][6];
 } lie_material;
+
+enum { LIE_TEX_BASE_COLOR = 0, LIE_TEX_METALLIC_ROUGHNESS = 1, LIE_TEX_EMISSIVE = 2 };
+
+/* A material slot's texture coordinates after its KHR_texture_transform. */
+static inline void lie_tex_xf_apply(const float xf[6], float u, float v, float *tu, float *tv)
+{
+    *tu = xf[0] * u + xf[1] * v + xf[2];
+    *tv = xf[3] * u + xf[4] * v + xf[5];
+}
+/* Sets all three slots to the identity. */
+void lie_material_tex_xf_identity(lie_material *m);
+/* Recomputes the matrices from tex_param. */
+void lie_material_tex_xf_update(lie_material *m);
+/* Whether slot k's transform is the identity (by its parameters). */
+int lie_material_tex_xf_is_identity(const lie_material *m, int k);
 
 typedef struct lie_primitive {
     uint32_t n_verts;

@@ -84,8 +84,9 @@ void lie_light_samples_generate(const lie_scene *s, int e, int n, float su, floa
             const float *uv = &s->tri_uv[6 * (size_t)g];
             float tu = b0 * uv[0] + b1 * uv[2] + b2 * uv[4];
             float tv = b0 * uv[1] + b1 * uv[3] + b2 * uv[5];
-            float rgba[4];
-            lie_texture_sample(tex, tu, tv, rgba);
+            float rgba[4], xu, xv;
+            lie_tex_xf_apply(mat->tex_xf[LIE_TEX_EMISSIVE], tu, tv, &xu, &xv);
+            lie_texture_sample(tex, xu, xv, rgba);
             for (int k = 0; k < 3; k++)
                 le[k] *= rgba[k];
         }

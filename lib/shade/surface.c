@@ -38,13 +38,17 @@ void lie_surface_from_hit(const lie_scene *s, const lie_hit *hit, lie_vec3 ray_d
     float metallic = m->metallic, roughness = m->roughness;
     if (m->base_color_tex >= 0 && m->base_color_tex < s->n_textures) {
         float t[4];
-        lie_texture_sample(&s->textures[m->base_color_tex], tu, tv, t);
+        float xu, xv;
+        lie_tex_xf_apply(m->tex_xf[LIE_TEX_BASE_COLOR], tu, tv, &xu, &xv);
+        lie_texture_sample(&s->textures[m->base_color_tex], xu, xv, t);
         for (int k = 0; k < 4; k++)
             base[k] *= t[k];
     }
     if (m->mr_tex >= 0 && m->mr_tex < s->n_textures) {
         float t[4];
-        lie_texture_sample(&s->textures[m->mr_tex], tu, tv, t);
+        float xu, xv;
+        lie_tex_xf_apply(m->tex_xf[LIE_TEX_METALLIC_ROUGHNESS], tu, tv, &xu, &xv);
+        lie_texture_sample(&s->textures[m->mr_tex], xu, xv, t);
         roughness *= t[1];
         metallic *= t[2];
     }
@@ -63,8 +67,11 @@ void lie_surface_from_hit(const lie_scene *s, const lie_hit *hit, lie_vec3 ray_d
     int emits = m->emissive[0] > 0.0f || m->emissive[1] > 0.0f || m->emissive[2] > 0.0f;
     if (emits && (front || m->double_sided)) {
         float e[4] = {1.0f, 1.0f, 1.0f, 1.0f};
-        if (m->emissive_tex >= 0 && m->emissive_tex < s->n_textures)
-            lie_texture_sample(&s->textures[m->emissive_tex], tu, tv, e);
+        if (m->emissive_tex >= 0 && m->emissive_tex < s->n_textures) {
+            float xu, xv;
+            lie_tex_xf_apply(m->tex_xf[LIE_TEX_EMISSIVE], tu, tv, &xu, &xv);
+            lie_texture_sample(&s->textures[m->emissive_tex], xu, xv, e);
+        }
         for (int k = 0; k < 3; k++)
             sf->emission[k] = m->emissive[k] * e[k];
     } else {

@@ -248,6 +248,9 @@ static void test_export_lights_cameras_and_skipped_primitives_keep_hash(void **s
     expect_round_trip(state, FIXTURES "hierarchy.gltf"); /* TRS and matrix parents */
     expect_round_trip(state, FIXTURES "instanced.gltf");
     expect_round_trip(state, FIXTURES "sparse.gltf");
+    expect_round_trip(state, FIXTURES "quantized.gltf"); /* written back as floats */
+    expect_round_trip(state, FIXTURES "texture_transform.gltf");
+    assert_true(has_text(in_dir(state, "out.gltf"), "KHR_texture_transform"));
 }
 
 static void test_export_edited_scene_round_trip_keeps_hash(void **state)

@@ -15,6 +15,7 @@
 #include <cmocka.h>
 
 #include "scene/scene.h"
+#include "shade/shade.h"
 
 #define DATA "tests/data/gltf/"
 
@@ -367,6 +368,74 @@ static void test_gltf_sixteen_bit_grey_texture_decoded(void **state)
 
 /* ---- texture lookup ------------------------------------------------------ */
 
+static void test_gltf_quantized_attributes_dequantized(void **state)
+{
+    (void)state;
+    lie_scene *s = load("quantized.gltf");
+    assert_int_equal(s->n_tris, 1);
+    const float want[3][3] = {{1, 2, 3}, {3, 2, 3}, {1, 4, 3}};
+    for (int v = 0; v < 3; v++) {
+        assert_near(s->tri_p[v].x, want[v][0], 1e-6);
+        assert_near(s->tri_p[v].y, want[v][1], 1e-6);
+        assert_near(s->tri_p[v].z, want[v][2], 1e-6);
+        /* normalized BYTE 64 -> 0.504, then unit length */
+        assert_near(s->tri_n[v].z, 1.0, 1e-6);
+        assert_near(lie_v3_len(s->tri_n[v]), 1.0, 1e-6);
+    }
+    /* plain USHORT texture coordinates are integers, not fractions */
+    const float uv[6] = {0, 0, 2, 0, 0, 2};
+    for (int k = 0; k < 6; k++)
+        assert_near(s->tri_uv[k], uv[k], 0);
+    lie_scene_destroy(s);
+}
+
+static void test_gltf_texture_transform_read_and_applied(void **state)
+{
+    (void)state;
+    lie_scene *s = load("texture_transform.gltf");
+    const lie_material *m = &s->materials[0];
+    const float *p = m->tex_param[LIE_TEX_BASE_COLOR];
+    assert_near(p[0], 0.5, 0);
+    assert_near(p[1], 0.0, 0);
+    assert_near(p[2], M_PI / 2, 1e-6);
+    assert_near(p[3], 2.0, 0);
+    assert_near(p[4], 1.0, 0);
+    assert_false(lie_material_tex_xf_is_identity(m, LIE_TEX_BASE_COLOR));
+    assert_true(lie_material_tex_xf_is_identity(m, LIE_TEX_METALLIC_ROUGHNESS));
+    assert_true(lie_material_tex_xf_is_identity(m, LIE_TEX_EMISSIVE));
+    /* T(0.5, 0) R(pi/2) S(2, 1): (u, v) -> (v + 0.5, -2u) */
+    float tu, tv;
+    lie_tex_xf_apply(m->tex_xf[LIE_TEX_BASE_COLOR], 0.1f, 0.2f, &tu, &tv);
+    assert_near(tu, 0.7, 1e-6);
+    assert_near(tv, -0.2, 1e-6);
+    lie_tex_xf_apply(m->tex_xf[LIE_TEX_METALLIC_ROUGHNESS], 0.1f, 0.2f, &tu, &tv);
+    assert_near(tu, 0.1, 1e-7); /* floats against doubles */
+    assert_near(tv, 0.2, 1e-7);
+    /* a shading point sees the texel the transform picks: at uv (0, 0.25)
+     * the base colour texture is read at (0.75, 0) -> texel (1, 0), whose
+     * red is 0 (untransformed it would be texel (0, 0), red 128) */
+    lie_hit hit = {0};
+    hit.tri = 0;
+    hit.u = 0.0f;
+    hit.v = 0.25f;
+    hit.t = 1.0f;
+    lie_surface sf;
+    lie_surface_from_hit(s, &hit, lie_v3(0, 0, -1), &sf);
+    float expect[4];
+    lie_texture_sample(&s->textures[m->base_color_tex], 0.75f, 0.0f, expect);
+    assert_near(sf.base_color[0], expect[0], 1e-6);
+    assert_near(sf.base_color[1], expect[1], 1e-6);
+    /* a transform is part of the scene's content */
+    lie_scene *plain = load("texture_transform.gltf");
+    lie_material_tex_xf_identity(&plain->materials[0]);
+    lie_error err;
+    assert_int_equal(lie_scene_flatten(plain, &err), LIE_OK);
+    assert_true(s->hash != plain->hash);
+    lie_scene_destroy(plain);
+    lie_scene_destroy(s);
+    expect_error("texture_transform_bad.gltf", LIE_ERR_FORMAT, "KHR_texture_transform scale");
+}
+
 static void test_texture_sample_wraps_and_blends(void **state)
 {
     (void)state;
@@ -697,6 +766,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_gltf_sampler_wrap_modes_read),
         cmocka_unit_test(test_gltf_normalized_ubyte_texcoords_read_as_unit_floats),
         cmocka_unit_test(test_gltf_sixteen_bit_grey_texture_decoded),
+        cmocka_unit_test(test_gltf_quantized_attributes_dequantized),
+        cmocka_unit_test(test_gltf_texture_transform_read_and_applied),
         cmocka_unit_test(test_texture_sample_wraps_and_blends),
         cmocka_unit_test(test_gltf_lights_and_cameras_read_with_defaults),
         cmocka_unit_test(test_gltf_sparse_accessor_substitutes_values),

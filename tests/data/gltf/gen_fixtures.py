@@ -408,7 +408,59 @@ def bad():
     write("sparse_index_oob.gltf", g)
 
 
+def quantized():
+    """KHR_mesh_quantization (gltfpack's layout): POSITION as normalized
+    SHORT in a byteStride-8 view, dequantised by the node's scale and
+    translation; NORMAL as normalized BYTE (not unit length); TEXCOORD_0 as
+    plain (not normalized) USHORT.  World triangle: (1,2,3), (3,2,3), (1,4,3)."""
+    d = Doc()
+    q = 32767
+    pos = struct.pack("<4h", 0, 0, 0, 0) + struct.pack("<4h", q, 0, 0, 0) + struct.pack("<4h", 0, q, 0, 0)
+    pv = d.view(pos, stride=8)
+    d.g["accessors"].append({"bufferView": pv, "componentType": 5122, "normalized": True, "count": 3,
+                             "type": "VEC3", "min": [0, 0, 0], "max": [q, q, 0]})
+    posa = len(d.g["accessors"]) - 1
+    nv = d.view(struct.pack("<12b", 0, 0, 64, 0, 0, 0, 64, 0, 0, 0, 64, 0), stride=4)
+    d.g["accessors"].append({"bufferView": nv, "componentType": 5120, "normalized": True, "count": 3,
+                             "type": "VEC3"})
+    nrm = len(d.g["accessors"]) - 1
+    uv = d.accessor(struct.pack("<6H", 0, 0, 2, 0, 0, 2), USHORT, "VEC2", 3)
+    d.g["meshes"] = [{"primitives": [{"attributes": {"POSITION": posa, "NORMAL": nrm, "TEXCOORD_0": uv}}]}]
+    d.g["nodes"] = [{"mesh": 0, "translation": [1, 2, 3], "scale": [2, 2, 2]}]
+    d.g["scenes"] = [{"nodes": [0]}]
+    d.g["extensionsUsed"] = ["KHR_mesh_quantization"]
+    d.g["extensionsRequired"] = ["KHR_mesh_quantization"]
+    write("quantized.gltf", d.embedded())
+
+
+def texture_transform():
+    """materials.gltf's first material with KHR_texture_transform on the
+    base colour texture: offset (0.5, 0), rotation pi/2, scale (2, 1); the
+    other slots untransformed."""
+    d = Doc()
+    pos = d.positions(TRI)
+    uv = d.accessor(f32(0, 0, 1, 0, 0, 1), FLOAT, "VEC2", 3)
+    d.g["meshes"] = [{"primitives": [{"attributes": {"POSITION": pos, "TEXCOORD_0": uv}, "material": 0}]}]
+    d.g["nodes"] = [{"mesh": 0}]
+    d.g["scenes"] = [{"nodes": [0]}]
+    d.g["images"] = [{"uri": "data:image/png;base64," + base64.b64encode(png(2, 2, PIXELS)).decode()}]
+    d.g["textures"] = [{"source": 0}]
+    d.g["materials"] = [
+        {"pbrMetallicRoughness": {
+            "baseColorTexture": {"index": 0, "extensions": {"KHR_texture_transform": {
+                "offset": [0.5, 0], "rotation": math.pi / 2, "scale": [2, 1]}}},
+            "metallicRoughnessTexture": {"index": 0}}}]
+    d.g["extensionsUsed"] = ["KHR_texture_transform"]
+    write("texture_transform.gltf", d.embedded())
+    bad = json.loads(json.dumps(d.g))
+    bad["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"]["KHR_texture_transform"][
+        "scale"] = [1, "x"]
+    write("texture_transform_bad.gltf", bad)
+
+
 def main():
+    quantized()
+    texture_transform()
     modes()
     indices()
     hierarchy()
