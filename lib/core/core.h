@@ -67,6 +67,16 @@ static inline lie_vec3 lie_v3_add(lie_vec3 a, lie_vec3 b) { return lie_v3(a.x + 
 static inline lie_vec3 lie_v3_sub(lie_vec3 a, lie_vec3 b) { return lie_v3(a.x - b.x, a.y - b.y, a.z - b.z); }
 static inline lie_vec3 lie_v3_mul(lie_vec3 a, lie_vec3 b) { return lie_v3(a.x * b.x, a.y * b.y, a.z * b.z); }
 static inline lie_vec3 lie_v3_scale(lie_vec3 a, float s) { return lie_v3(a.x * s, a.y * s, a.z * s); }
+/* max and min that compile to one instruction (fmaxf/fminf are library
+ * calls on x86 for their NaN rules).  A NaN `a` gives b. */
+static inline float lie_maxf(float a, float b) { return a > b ? a : b; }
+static inline float lie_minf(float a, float b) { return a < b ? a : b; }
+/* The largest coordinate magnitude of v (NaN coordinates count as 0). */
+static inline float lie_v3_maxabs(lie_vec3 v)
+{
+    return lie_maxf(fabsf(v.x), lie_maxf(fabsf(v.y), lie_maxf(fabsf(v.z), 0.0f)));
+}
+
 static inline float lie_v3_dot(lie_vec3 a, lie_vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 static inline lie_vec3 lie_v3_cross(lie_vec3 a, lie_vec3 b)
 {

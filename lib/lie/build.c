@@ -57,8 +57,10 @@ typedef struct unit_buf {
 } unit_buf;
 
 typedef struct worker {
-    uint32_t *hits;      /* raw all-hits results of a pair */
+    uint32_t *hits;      /* all-hits results of a pair, each triangle once */
     size_t n_hits, cap_hits;
+    uint32_t *stamp;     /* per triangle: the pair that last added it to hits */
+    uint32_t stamp_id;
     uint32_t *cand;      /* conservative candidates */
     size_t n_cand, cap_cand;
     lie_vec3 *hull;      /* conservative hull points */
@@ -80,7 +82,49 @@ typedef struct build_ctx {
     const uint8_t *tri_mask;   /* build only these triangles (NULL: all) */
     unit_buf *out;        /* per triangle: its units, in emitter order, each contiguous */
     worker *workers;
+    /* update: flagged old nodes already recomputed in parallel (see
+     * precompute_flagged); memo_of[old node] indexes memo, or -1 */
+    int32_t *memo_of;
+    struct memo_entry *memo;
+    int32_t *memo_new;    /* open-addressing table of the memo entries of new nodes */
+    size_t memo_new_mask;
+    double *halton;       /* radical inverses in bases 2, 3, 5, 7 of 0..n_halton-1 */
+    uint32_t n_halton;
 } build_ctx;
+
+/* A recomputed pair, waiting for build_node to take it. */
+#define MEMO_NO_OLD UINT32_MAX
+
+typedef struct memo_entry {
+    uint32_t old;         /* the old node, or MEMO_NO_OLD for a node new in this update */
+    uint32_t tri;
+    lie_patch_path path;
+    int e;
+    lie_class cls;
+    uint32_t quality;
+    uint32_t n_list;
+    uint32_t *list;
+} memo_entry;
+
+static uint64_t memo_key(uint32_t tri, lie_patch_path path, int e)
+{
+    return lie_hash_u64x4(tri, path.digits, (uint64_t)path.depth, (uint64_t)e);
+}
+
+/* The memo entry of a node new in this update (no old node), or -1. */
+static int32_t memo_find_new(const build_ctx *c, uint32_t tri, lie_patch_path path, int e)
+{
+    if (!c->memo_new)
+        return -1;
+    for (size_t h = memo_key(tri, path, e) & c->memo_new_mask;; h = (h + 1) & c->memo_new_mask) {
+        int32_t i = c->memo_new[h];
+        if (i < 0)
+            return -1;
+        const memo_entry *m = &c->memo[i];
+        if (m->tri == tri && m->e == e && m->path.digits == path.digits && m->path.depth == path.depth)
+            return i;
+    }
+}
 
 static int push_node(unit_buf *u, worker *w)
 {
@@ -127,7 +171,17 @@ static size_t sort_unique(uint32_t *v, size_t n)
 {
     if (n < 2)
         return n;
-    qsort(v, n, sizeof *v, cmp_u32);
+    if (n <= 32) { /* the usual blocker list: insertion sort beats qsort's calls */
+        for (size_t i = 1; i < n; i++) {
+            uint32_t x = v[i];
+            size_t j = i;
+            for (; j > 0 && v[j - 1] > x; j--)
+                v[j] = v[j - 1];
+            v[j] = x;
+        }
+    } else {
+        qsort(v, n, sizeof *v, cmp_u32);
+    }
     size_t m = 1;
     for (size_t i = 1; i < n; i++)
         if (v[i] != v[m - 1])
@@ -144,6 +198,16 @@ static double radical_inverse(uint32_t base, uint32_t i)
         f *= inv;
     }
     return r;
+}
+
+/* Sample i's coordinate `dim` (bases 2, 3, 5, 7), from the table when it
+ * holds it (the same values: the table is filled by radical_inverse). */
+static const uint32_t HALTON_BASE[4] = {2, 3, 5, 7};
+#define HALTON_TABLE_MAX 4096u
+
+static double halton(const build_ctx *c, int dim, uint32_t i)
+{
+    return i < c->n_halton ? c->halton[(size_t)dim * c->n_halton + i] : radical_inverse(HALTON_BASE[dim], i);
 }
 
 static float frac_shift(double x, float shift)
@@ -186,8 +250,7 @@ static int pair_unlit(const build_ctx *c, uint32_t tri, const lie_vec3 V[3], int
                 uint32_t g = em->first_tri + k;
                 const lie_vec3 *E = &s->tri_p[3 * (size_t)g];
                 lie_vec3 ne = s->tri_ng[g];
-                float mag = fmaxf(fabsf(V[0].x), fmaxf(fabsf(V[0].y), fabsf(V[0].z)));
-                float margin = 4e-4f * fmaxf(1.0f, mag);
+                float margin = 4e-4f * lie_maxf(lie_v3_maxabs(V[0]), 1.0f);
                 for (int j = 0; j < 3; j++)
                     if (lie_v3_dot(ne, lie_v3_sub(V[j], E[0])) > -margin)
                         return 0;
@@ -413,12 +476,26 @@ static lie_class sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_pa
     size_t known = 0; /* distinct blockers after the previous round */
     int forced = 0;
     w->n_hits = 0;
+    /* hits are kept unique as they come (a segment through an occluder
+     * hits it hundreds of times a pair), by stamping triangles */
+    if (!w->stamp) {
+        w->stamp = calloc((size_t)s->n_tris + 1, sizeof *w->stamp);
+        if (!w->stamp) {
+            w->nomem = 1;
+            return LIE_CLASS_VISIBLE;
+        }
+    }
+    if (++w->stamp_id == 0) {
+        memset(w->stamp, 0, sizeof *w->stamp * ((size_t)s->n_tris + 1));
+        w->stamp_id = 1;
+    }
+    const uint32_t id = w->stamp_id;
     for (;;) {
         for (uint32_t i = total; i < total + round_n; i++) {
             /* patch point: Halton (2, 3); emitter point: Halton (5, 7);
              * each shifted by a hash of the pair */
             float b1, b2;
-            lie_sample_triangle(frac_shift(radical_inverse(2, i), sp1), frac_shift(radical_inverse(3, i), sp2),
+            lie_sample_triangle(frac_shift(halton(c, 0, i), sp1), frac_shift(halton(c, 1, i), sp2),
                                 &b1, &b2);
             float b0 = 1.0f - b1 - b2;
             lie_vec3 p = lie_v3_add(lie_v3_add(lie_v3_scale(V[0], b0), lie_v3_scale(V[1], b1)),
@@ -427,8 +504,8 @@ static lie_class sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_pa
             uint32_t target = LIE_NO_HIT;
             if (em->type == LIE_EMITTER_AREA) {
                 float eb1, eb2;
-                target = lie_emitter_point(s, e, frac_shift(radical_inverse(5, i), se1),
-                                           frac_shift(radical_inverse(7, i), se2), &q, &ne, &eb1, &eb2);
+                target = lie_emitter_point(s, e, frac_shift(halton(c, 2, i), se1),
+                                           frac_shift(halton(c, 3, i), se2), &q, &ne, &eb1, &eb2);
             } else if (em->type == LIE_EMITTER_POINT) {
                 q = em->position;
             } else {
@@ -454,6 +531,16 @@ static lie_class sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_pa
             }
             valid++;
             blocked += w->n_hits > before;
+            size_t k = before;
+            for (size_t j = before; j < w->n_hits; j++) {
+                uint32_t t = w->hits[j];
+                if (t < s->n_tris && w->stamp[t] == id)
+                    continue;
+                if (t < s->n_tris)
+                    w->stamp[t] = id;
+                w->hits[k++] = t;
+            }
+            w->n_hits = k;
         }
         w->st.segments += round_n;
         total += round_n;
@@ -595,7 +682,25 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
     lie_class cls;
     uint32_t quality = 0;
     size_t n_list = 0;
-    if (pair_unlit(c, tri, V, two_sided, e)) {
+    int32_t mi = old >= 0 && c->memo_of ? c->memo_of[old] : memo_find_new(c, tri, path, e);
+    if (mi >= 0) {
+        /* computed already, in parallel with the other flagged nodes */
+        const memo_entry *m = &c->memo[mi];
+        cls = m->cls;
+        quality = m->quality;
+        n_list = m->n_list;
+        if (n_list > w->cap_hits) {
+            uint32_t *nb = realloc(w->hits, n_list * sizeof *nb);
+            if (!nb) {
+                w->nomem = 1;
+                return;
+            }
+            w->hits = nb;
+            w->cap_hits = n_list;
+        }
+        if (n_list)
+            memcpy(w->hits, m->list, n_list * sizeof *w->hits);
+    } else if (pair_unlit(c, tri, V, two_sided, e)) {
         cls = LIE_CLASS_UNLIT;
     } else if (c->p->mode == LIE_BLOCKERS_SAMPLED) {
         cls = sample_pair(c, w, tri, path, V, two_sided, e, eps, &quality, &n_list);
@@ -715,6 +820,7 @@ static void workers_free(worker *ws, int n)
 {
     for (int i = 0; ws && i < n; i++) {
         free(ws[i].hits);
+        free(ws[i].stamp);
         free(ws[i].cand);
         free(ws[i].hull);
     }
@@ -731,6 +837,161 @@ static void stats_merge(lie_build_stats *dst, const lie_build_stats *src)
         dst->list_hist[k] += src->list_hist[k];
     dst->segments += src->segments;
     dst->blocker_total += src->blocker_total;
+}
+
+/* ---- update: flagged nodes recomputed in parallel ------------------------ */
+
+/* An update's work sits in few units (a floor triangle's patch tree under a
+ * moved object holds most of it), so parallelism over triangles leaves the
+ * cores idle.  Before the build proper, the nodes build_node will compute
+ * are computed in parallel, in waves by depth: wave 0 the flagged roots and
+ * the roots of units built afresh, wave d+1 the children of wave d's nodes
+ * that split (their flagged old children, or all four where there were
+ * none).  These are exactly the nodes build_node computes (a sampled pair
+ * depends only on its patch and emitter), so the result and the statistics
+ * do not change; build_node takes each from the memo. */
+typedef struct memo_state {
+    build_ctx *c;
+    size_t first, n;      /* this wave: memo[first, first + n) */
+} memo_state;
+
+static void memo_compute(void *ctx, size_t item, int worker_id)
+{
+    memo_state *ms = ctx;
+    const build_ctx *c = ms->c;
+    worker *w = &c->workers[worker_id];
+    memo_entry *m = &c->memo[ms->first + item];
+    const lie_scene *s = c->s;
+    lie_vec3 V[3];
+    lie_patch_world(m->path, &s->tri_p[3 * (size_t)m->tri], V);
+    int two_sided = lie_scene_material(s, s->tri_material[m->tri])->double_sided != 0;
+    size_t n_list = 0;
+    m->quality = 0;
+    if (pair_unlit(c, m->tri, V, two_sided, m->e))
+        m->cls = LIE_CLASS_UNLIT;
+    else
+        m->cls = sample_pair(c, w, m->tri, m->path, V, two_sided, m->e, lie_pair_eps(s, m->tri), &m->quality,
+                             &n_list);
+    m->n_list = (uint32_t)n_list;
+    m->list = NULL;
+    if (n_list && !w->nomem) {
+        m->list = malloc(n_list * sizeof *m->list);
+        if (!m->list)
+            w->nomem = 1;
+        else
+            memcpy(m->list, w->hits, n_list * sizeof *m->list);
+    }
+}
+
+static int memo_push(build_ctx *c, size_t *n, size_t *cap, uint32_t old, uint32_t tri, lie_patch_path path, int e)
+{
+    if (*n == *cap) {
+        size_t nc = *cap ? 2 * *cap : 256;
+        memo_entry *nm = realloc(c->memo, nc * sizeof *nm);
+        if (!nm)
+            return 0;
+        c->memo = nm;
+        *cap = nc;
+    }
+    memo_entry *m = &c->memo[(*n)++];
+    memset(m, 0, sizeof *m);
+    m->old = old;
+    m->tri = tri;
+    m->path = path;
+    m->e = e;
+    if (old != MEMO_NO_OLD)
+        c->memo_of[old] = (int32_t)(*n - 1);
+    return 1;
+}
+
+/* Index the entries of new nodes for memo_find_new. */
+static int memo_index_new(build_ctx *c, size_t n)
+{
+    size_t cap = 16;
+    while (cap < 2 * n)
+        cap *= 2;
+    c->memo_new = malloc(sizeof *c->memo_new * cap);
+    if (!c->memo_new)
+        return 0;
+    for (size_t i = 0; i < cap; i++)
+        c->memo_new[i] = -1;
+    c->memo_new_mask = cap - 1;
+    for (size_t i = 0; i < n; i++) {
+        const memo_entry *m = &c->memo[i];
+        if (m->old != MEMO_NO_OLD)
+            continue;
+        size_t h = memo_key(m->tri, m->path, m->e) & c->memo_new_mask;
+        while (c->memo_new[h] >= 0)
+            h = (h + 1) & c->memo_new_mask;
+        c->memo_new[h] = (int32_t)i;
+    }
+    return 1;
+}
+
+static void memo_free(build_ctx *c, size_t n)
+{
+    for (size_t i = 0; c->memo && i < n; i++)
+        free(c->memo[i].list);
+    free(c->memo);
+    free(c->memo_of);
+    free(c->memo_new);
+    c->memo = NULL;
+    c->memo_of = NULL;
+    c->memo_new = NULL;
+}
+
+static lie_status precompute_flagged(build_ctx *c, int threads, size_t *n_memo)
+{
+    const lie_env *old = c->old;
+    const lie_scene *s = c->s;
+    *n_memo = 0;
+    c->memo_of = malloc(sizeof *c->memo_of * ((size_t)old->n_nodes + 1));
+    if (!c->memo_of)
+        return LIE_ERR_NOMEM;
+    for (uint32_t i = 0; i < old->n_nodes; i++)
+        c->memo_of[i] = -1;
+    size_t n = 0, cap = 0;
+    size_t ne = (size_t)s->n_emitters;
+    for (uint32_t t = 0; t < s->n_tris; t++)
+        for (size_t e = 0; e < ne; e++) {
+            int32_t ou = c->old_unit[(size_t)t * ne + e];
+            uint32_t r = ou < 0 ? MEMO_NO_OLD : old->root[ou];
+            if ((r == MEMO_NO_OLD || c->node_flags[r]) && !memo_push(c, &n, &cap, r, t, lie_patch_root(), (int)e)) {
+                *n_memo = n;
+                return LIE_ERR_NOMEM;
+            }
+        }
+    size_t first = 0;
+    lie_status st = LIE_OK;
+    while (st == LIE_OK && first < n) {
+        memo_state ms = {c, first, n - first};
+        st = lie_parallel_for(ms.n, threads, memo_compute, &ms, NULL, NULL);
+        for (int i = 0; i < threads; i++)
+            if (c->workers[i].nomem)
+                st = LIE_ERR_NOMEM;
+        size_t end = n;
+        for (size_t i = first; st == LIE_OK && i < end; i++) {
+            const memo_entry m = c->memo[i];
+            uint32_t child = m.old == MEMO_NO_OLD ? 0 : old->nodes[m.old].child;
+            float area = s->tri_area[m.tri] / (float)(1u << (2 * (m.path.depth < 15 ? m.path.depth : 15)));
+            int splits = m.cls == LIE_CLASS_PARTIAL && m.n_list > c->p->max_blockers && area > c->min_area &&
+                         m.path.depth < LIE_PATCH_MAX_DEPTH;
+            if (!splits)
+                continue;
+            /* the children build_node will compute: flagged old ones, or
+             * all four when the node had none (unflagged ones are copied) */
+            for (uint32_t k = 0; k < 4; k++)
+                if ((!child || c->node_flags[child + k]) &&
+                    !memo_push(c, &n, &cap, child ? child + k : MEMO_NO_OLD, m.tri,
+                               lie_patch_child(m.path, (int)k), m.e))
+                    st = LIE_ERR_NOMEM;
+        }
+        first = end;
+    }
+    *n_memo = n;
+    if (st == LIE_OK && !memo_index_new(c, n))
+        st = LIE_ERR_NOMEM;
+    return st;
 }
 
 /* Build (or, with a mask, rebuild some units of) every triangle, then
@@ -754,9 +1015,18 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
         threads = lie_cpu_count();
     c.workers = calloc((size_t)threads, sizeof *c.workers);
     c.out = calloc((size_t)s->n_tris + 1, sizeof *c.out);
-    lie_status st = c.workers && c.out ? LIE_OK : LIE_ERR_NOMEM;
+    c.n_halton = c.p->max_samples < HALTON_TABLE_MAX ? c.p->max_samples : HALTON_TABLE_MAX;
+    c.halton = malloc(sizeof *c.halton * 4 * (size_t)c.n_halton + 1);
+    for (int d = 0; c.halton && d < 4; d++)
+        for (uint32_t i = 0; i < c.n_halton; i++)
+            c.halton[(size_t)d * c.n_halton + i] = radical_inverse(HALTON_BASE[d], i);
+    lie_status st = c.workers && c.out && c.halton ? LIE_OK : LIE_ERR_NOMEM;
+    size_t n_memo = 0;
+    if (st == LIE_OK && node_flags && old_unit && c.p->mode == LIE_BLOCKERS_SAMPLED)
+        st = precompute_flagged(&c, threads, &n_memo);
     if (st == LIE_OK)
         st = lie_parallel_for(s->n_tris, threads, build_triangle, &c, progress ? lie_progress_cb : NULL, progress);
+    memo_free(&c, n_memo);
     for (int i = 0; c.workers && i < threads; i++) {
         if (c.workers[i].nomem)
             st = LIE_ERR_NOMEM;
@@ -771,6 +1041,7 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
         free(c.out[t].pool);
     }
     free(c.out);
+    free(c.halton);
     workers_free(c.workers, threads);
     return st;
 }

@@ -200,14 +200,17 @@ static void sat_add(lie_sat *sat, lie_vec3 d, const lie_vec3 *hull, int n_hull, 
     if (!(len > 1e-12f) || sat->n >= LIE_SAT_MAX)
         return;
     d = lie_v3_scale(d, 1.0f / len);
-    float lo = INFINITY, hi = -INFINITY;
+    float lo = INFINITY, hi = -INFINITY, mag = 0.0f;
     for (int i = 0; i < n_hull; i++) {
         float v = lie_v3_dot(d, hull[i]);
         lo = v < lo ? v : lo;
         hi = v > hi ? v : hi;
+        mag = lie_maxf(lie_v3_maxabs(hull[i]), mag);
     }
-    /* widened by the tolerance and by float rounding of the projections */
-    float m = tol + 1e-6f * (fabsf(lo) + fabsf(hi));
+    /* widened by the tolerance and by float rounding of the projections,
+     * which is relative to the coordinates' size, not the projection's
+     * (a plane through the origin projects everything near 0) */
+    float m = tol + 1e-6f * (fabsf(lo) + fabsf(hi)) + 4e-6f * mag;
     sat->d[sat->n] = d;
     sat->lo[sat->n] = lo - m;
     sat->hi[sat->n] = hi + m;
@@ -242,6 +245,43 @@ void lie_sat_init(lie_sat *sat, const lie_vec3 *hull, int n_hull, int n_patch, l
         for (int k = 0; k < 3; k++) {
             lie_vec3 a = hull[n_patch + i + k], b = hull[n_patch + i + (k + 1) % 3];
             sat_add(sat, lie_v3_cross(lie_v3_sub(b, a), axis), hull, n_hull, tol);
+        }
+    /* The hull's own faces separate best: a triangle near a long shaft but
+     * outside it is beyond one of them.  Found by brute force over triples
+     * (small hulls only); a plane through three points that has every
+     * point on one side is a face.  Any direction is a valid axis (sat_add
+     * measures the hull's extent along it), so rounding here can only cost
+     * rejections, never correctness. */
+    if (n_hull > LIE_SAT_FACE_POINTS)
+        return;
+    int first_face = sat->n;
+    for (int i = 0; i < n_hull && sat->n < LIE_SAT_MAX; i++)
+        for (int j = i + 1; j < n_hull && sat->n < LIE_SAT_MAX; j++) {
+            lie_vec3 eij = lie_v3_sub(hull[j], hull[i]);
+            float lij = lie_v3_dot(eij, eij);
+            if (!(lij > 0.0f))
+                continue;
+            for (int k = j + 1; k < n_hull && sat->n < LIE_SAT_MAX; k++) {
+                lie_vec3 nrm = lie_v3_cross(eij, lie_v3_sub(hull[k], hull[i]));
+                float l2 = lie_v3_dot(nrm, nrm);
+                if (!(l2 > 1e-10f * lij * lie_v3_dot(lie_v3_sub(hull[k], hull[i]), lie_v3_sub(hull[k], hull[i]))))
+                    continue; /* (nearly) collinear */
+                nrm = lie_v3_scale(nrm, 1.0f / sqrtf(l2));
+                float d0 = lie_v3_dot(nrm, hull[i]), mag = 1e-5f * (fabsf(d0) + 1.0f);
+                int above = 0, below = 0;
+                for (int q = 0; q < n_hull && !(above && below); q++) {
+                    float v = lie_v3_dot(nrm, hull[q]) - d0;
+                    above |= v > mag;
+                    below |= v < -mag;
+                }
+                if (above && below)
+                    continue; /* not a face */
+                int dup = 0;
+                for (int q = first_face; q < sat->n && !dup; q++)
+                    dup = fabsf(lie_v3_dot(sat->d[q], nrm)) > 0.99999f;
+                if (!dup)
+                    sat_add(sat, nrm, hull, n_hull, tol);
+            }
         }
 }
 

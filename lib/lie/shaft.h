@@ -13,9 +13,11 @@ int lie_hull_meets_hull(const lie_vec3 *a, int na, const lie_vec3 *b, int nb, do
 
 /* A quick separating-axis prefilter for one hull: its extent along a few
  * directions likely to separate (the patch's and emitter's normals, the
- * shaft's side directions).  A triangle wholly beyond the extent along any
+ * shaft's side directions, and for hulls of up to LIE_SAT_FACE_POINTS
+ * points the normals of the hull's faces).  A triangle wholly beyond the extent along any
  * of them cannot meet the hull (exact: any direction is a valid axis). */
-#define LIE_SAT_MAX 16
+#define LIE_SAT_MAX 48
+#define LIE_SAT_FACE_POINTS 24
 typedef struct lie_sat {
     int n;
     lie_vec3 d[LIE_SAT_MAX];

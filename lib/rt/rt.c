@@ -383,8 +383,7 @@ int lie_shadow_segment(lie_vec3 p, lie_vec3 ng, lie_vec3 q, lie_vec3 *org, lie_v
 {
     /* Offset scaled by the coordinates' magnitude (float spacing grows with
      * it); the segment stops the same relative distance short of q. */
-    float mag = fmaxf(fabsf(p.x), fmaxf(fabsf(p.y), fabsf(p.z)));
-    float eps = 1e-4f * fmaxf(1.0f, mag);
+    float eps = 1e-4f * lie_maxf(lie_v3_maxabs(p), 1.0f);
     lie_vec3 o = lie_v3_add(p, lie_v3_scale(ng, eps));
     lie_vec3 d = lie_v3_sub(q, o);
     float len = lie_v3_len(d);
