@@ -190,7 +190,7 @@ std::string fs_expand(const std::string &joined, void *user)
         return std::string(); /* tinygltf's second search path, the working directory */
     std::string uri = joined.substr(fs.prefix.size());
     fs.last_uri = uri;
-    const char *outside = "leaves the scene's folder (allow_external_uris permits it)";
+    const char *outside = "leaves the scene's folder (--allow-external-uris permits it)";
 
     size_t colon = uri.find(':');
     if (colon != std::string::npos && colon > 0 && isalpha((unsigned char)uri[0]) &&
