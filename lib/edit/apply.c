@@ -126,17 +126,19 @@ static int own_materials(lie_scene *s, int node)
         prims[i].pos = dup_mem(q->pos, sizeof(float) * 3 * q->n_verts);
         prims[i].nrm = dup_mem(q->nrm, sizeof(float) * 3 * q->n_verts);
         prims[i].uv = dup_mem(q->uv, sizeof(float) * 2 * q->n_verts);
+        prims[i].color = dup_mem(q->color, sizeof(float) * 4 * q->n_verts);
         prims[i].idx = dup_mem(q->idx, sizeof(uint32_t) * 3 * q->n_tris);
         lie_material m = q->material >= 0 && q->material < s->n_materials ? s->materials[q->material]
                                                                            : lie_material_default();
         int mi = lie_scene_add_material(s, &m);
         prims[i].material = mi;
         if ((q->pos && !prims[i].pos) || (q->nrm && !prims[i].nrm) || (q->uv && !prims[i].uv) ||
-            (q->idx && !prims[i].idx) || mi < 0) {
+            (q->color && !prims[i].color) || (q->idx && !prims[i].idx) || mi < 0) {
             for (int k = 0; k <= i; k++) {
                 free(prims[k].pos);
                 free(prims[k].nrm);
                 free(prims[k].uv);
+                free(prims[k].color);
                 free(prims[k].idx);
             }
             free(prims);
@@ -149,6 +151,7 @@ static int own_materials(lie_scene *s, int node)
             free(prims[k].pos);
             free(prims[k].nrm);
             free(prims[k].uv);
+            free(prims[k].color);
             free(prims[k].idx);
         }
         free(prims);
@@ -217,6 +220,12 @@ static lie_status add_from(lie_scene *s, const lie_scene *src, int src_node, con
                 if (pi == 0) {
                     mi = lie_scene_add_mesh(s, m->name, q->pos, q->nrm, q->uv, q->n_verts, q->idx, q->n_tris, mat);
                     mesh = mi;
+                    if (mi >= 0 && q->color) {
+                        lie_primitive *dp = &s->meshes[mi].prims[0];
+                        dp->color = dup_mem(q->color, sizeof(float) * 4 * q->n_verts);
+                        if (!dp->color)
+                            mi = -1;
+                    }
                 } else {
                     /* further primitives join the same mesh */
                     lie_mesh *dst = &s->meshes[mesh];
@@ -228,10 +237,20 @@ static lie_status add_from(lie_scene *s, const lie_scene *src, int src_node, con
                         c.pos = dup_mem(q->pos, sizeof(float) * 3 * q->n_verts);
                         c.nrm = dup_mem(q->nrm, sizeof(float) * 3 * q->n_verts);
                         c.uv = dup_mem(q->uv, sizeof(float) * 2 * q->n_verts);
+                        c.color = dup_mem(q->color, sizeof(float) * 4 * q->n_verts);
                         c.idx = dup_mem(q->idx, sizeof(uint32_t) * 3 * q->n_tris);
                         c.material = mat;
-                        dst->prims[dst->n_prims++] = c;
-                        mi = mesh;
+                        if ((q->pos && !c.pos) || (q->nrm && !c.nrm) || (q->uv && !c.uv) ||
+                            (q->color && !c.color) || (q->idx && !c.idx)) {
+                            free(c.pos);
+                            free(c.nrm);
+                            free(c.uv);
+                            free(c.color);
+                            free(c.idx);
+                        } else {
+                            dst->prims[dst->n_prims++] = c;
+                            mi = mesh;
+                        }
                     }
                 }
                 if (mi < 0)

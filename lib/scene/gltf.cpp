@@ -689,8 +689,8 @@ void read_floats(const Accessor &a, float *dst, const std::string &what)
 struct PrimPlan {
     bool skip;                   /* points or lines */
     int mode;
-    Accessor pos, nrm, uv, idx;
-    bool has_nrm, has_uv, has_idx;
+    Accessor pos, nrm, uv, col, idx;
+    bool has_nrm, has_uv, has_col, has_idx;
     size_t n_verts, n_idx, n_tris;
 };
 
@@ -787,6 +787,20 @@ PrimPlan plan_primitive(const tinygltf::Model &m, int mi, int pi, lie_scene *s)
             fail(LIE_ERR_FORMAT, "%s: TEXCOORD_0 has %zu elements, POSITION %zu", what.c_str(), pl.uv.count,
                  pl.n_verts);
     }
+    int ac = attribute(p, "COLOR_0");
+    if ((pl.has_col = ac >= 0)) {
+        pl.col = check_accessor(m, ac, what + " COLOR_0");
+        bool ok = (pl.col.ncomp == 3 || pl.col.ncomp == 4) &&
+                  (pl.col.ctype == TINYGLTF_COMPONENT_TYPE_FLOAT ||
+                   (pl.col.normalized && (pl.col.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                                          pl.col.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT)));
+        if (!ok)
+            fail(LIE_ERR_FORMAT, "%s: COLOR_0 must be VEC3 or VEC4, FLOAT or normalized UNSIGNED_BYTE/SHORT",
+                 what.c_str());
+        if (pl.col.count != pl.n_verts)
+            fail(LIE_ERR_FORMAT, "%s: COLOR_0 has %zu elements, POSITION %zu", what.c_str(), pl.col.count,
+                 pl.n_verts);
+    }
     if ((pl.has_idx = p.indices >= 0)) {
         pl.idx = check_accessor(m, p.indices, what + " indices");
         bool ok = pl.idx.ncomp == 1 && (pl.idx.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
@@ -822,6 +836,18 @@ void read_primitive(const PrimPlan &pl, int mi, int pi, lie_primitive *out)
     if (pl.has_uv) {
         out->uv = alloc_array<float>(pl.n_verts * 2);
         read_floats(pl.uv, out->uv, what + " TEXCOORD_0");
+    }
+    if (pl.has_col) {
+        /* RGBA per vertex, alpha 1 for RGB; linear already (glTF 2.0
+         * §3.7.2.1), and a multiplier, so kept in [0, 1] */
+        std::vector<float> raw(pl.n_verts * pl.col.ncomp);
+        read_floats(pl.col, raw.data(), what + " COLOR_0");
+        out->color = alloc_array<float>(pl.n_verts * 4);
+        for (size_t v = 0; v < pl.n_verts; v++)
+            for (size_t c = 0; c < 4; c++) {
+                float x = c < pl.col.ncomp ? raw[v * pl.col.ncomp + c] : 1.0f;
+                out->color[v * 4 + c] = x < 0.0f ? 0.0f : x > 1.0f ? 1.0f : x;
+            }
     }
 
     std::vector<uint32_t> v(pl.n_idx);
@@ -1587,6 +1613,9 @@ tinygltf::Primitive export_primitive(Export &ex, const lie_primitive &p)
     if (p.uv)
         g.attributes["TEXCOORD_0"] = add_accessor(ex, p.uv, p.n_verts, TINYGLTF_TYPE_VEC2,
                                                   TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TARGET_ARRAY_BUFFER);
+    if (p.color)
+        g.attributes["COLOR_0"] = add_accessor(ex, p.color, p.n_verts, TINYGLTF_TYPE_VEC4,
+                                               TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TARGET_ARRAY_BUFFER);
     g.indices = add_accessor(ex, p.idx, size_t(p.n_tris) * 3, TINYGLTF_TYPE_SCALAR,
                              TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
     return g;

@@ -31,6 +31,7 @@ static void free_world(lie_scene *s)
     free(s->tri_p);
     free(s->tri_n);
     free(s->tri_uv);
+    free(s->tri_color);
     free(s->tri_ng);
     free(s->tri_area);
     free(s->tri_material);
@@ -46,7 +47,7 @@ static void free_world(lie_scene *s)
     s->instances = NULL;
     s->n_instances = 0;
     s->tri_p = s->tri_n = s->tri_ng = NULL;
-    s->tri_uv = s->tri_area = NULL;
+    s->tri_uv = s->tri_area = s->tri_color = NULL;
     s->tri_material = NULL;
     s->tri_instance = NULL;
     s->tri_removed = NULL;
@@ -75,6 +76,7 @@ void lie_scene_destroy(lie_scene *s)
             free(m->prims[p].pos);
             free(m->prims[p].nrm);
             free(m->prims[p].uv);
+            free(m->prims[p].color);
             free(m->prims[p].idx);
         }
         free(m->prims);
@@ -276,6 +278,11 @@ static void fill_node(lie_scene *s, int nd, const lie_mat4 *world, int dead, voi
                     } else {
                         uv[0] = uv[1] = 0.0f;
                     }
+                    if (s->tri_color) {
+                        float *col = &s->tri_color[12 * (size_t)g + 4 * k];
+                        for (int q = 0; q < 4; q++)
+                            col[q] = pr->color ? pr->color[4 * (size_t)v[k] + (size_t)q] : 1.0f;
+                    }
                 }
                 s->tri_material[g] = pr->material;
                 s->tri_instance[g] = inst;
@@ -365,6 +372,10 @@ static void hash_world(lie_scene *s, lie_hasher *h)
     lie_hasher_update(h, s->tri_p, sizeof(lie_vec3) * 3 * n);
     lie_hasher_update(h, s->tri_n, sizeof(lie_vec3) * 3 * n);
     lie_hasher_update(h, s->tri_uv, sizeof(float) * 6 * n);
+    if (s->tri_color) { /* only when there are vertex colours: other scenes keep their hashes */
+        lie_hasher_update(h, "COLOR_0", 7);
+        lie_hasher_update(h, s->tri_color, sizeof(float) * 12 * n);
+    }
     lie_hasher_update(h, s->tri_material, sizeof(int32_t) * n);
     lie_hasher_update(h, s->tri_removed, n);
     int32_t nm = s->n_materials, nt = s->n_textures, ne = s->n_emitters;
@@ -425,11 +436,16 @@ lie_status lie_scene_flatten(lie_scene *s, lie_error *err)
     s->tri_instance = malloc(sizeof(uint32_t) * n + 1);
     s->tri_removed = malloc(n + 1);
     s->tri_emitter = malloc(sizeof(int32_t) * n + 1);
+    int any_color = 0; /* vertex colours cost memory only where a file has them */
+    for (int i = 0; i < s->n_meshes; i++)
+        for (int p = 0; p < s->meshes[i].n_prims; p++)
+            any_color |= s->meshes[i].prims[p].color != NULL;
+    s->tri_color = any_color ? malloc(sizeof(float) * 12 * n + 1) : NULL;
     s->emitters = calloc((size_t)c.instances + (size_t)c.lights + 1, sizeof *s->emitters);
     s->cameras = calloc((size_t)c.cameras + 1, sizeof *s->cameras);
     if (!s->instances || !s->tri_p || !s->tri_n || !s->tri_uv || !s->tri_ng || !s->tri_area ||
         !s->tri_material || !s->tri_instance || !s->tri_removed || !s->tri_emitter || !s->emitters ||
-        !s->cameras) {
+        !s->cameras || (any_color && !s->tri_color)) {
         free_world(s);
         return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory for %zu triangles", n);
     }

@@ -71,6 +71,7 @@ typedef struct lie_primitive {
     float *pos;            /* 3 per vertex, local space */
     float *nrm;            /* 3 per vertex or NULL (flat normals then) */
     float *uv;             /* 2 per vertex (TEXCOORD_0) or NULL */
+    float *color;          /* 4 per vertex (COLOR_0, linear RGBA; A = 1 for RGB) or NULL */
     uint32_t n_tris;
     uint32_t *idx;         /* 3 per triangle; strips and fans already converted */
     int material;          /* material index, or -1 for glTF's default material */
@@ -178,6 +179,8 @@ typedef struct lie_scene {
     lie_vec3 *tri_p;          /* 3 per triangle: world positions, CCW = front */
     lie_vec3 *tri_n;          /* 3 per triangle: unit shading normals */
     float *tri_uv;            /* 6 per triangle */
+    float *tri_color;         /* 12 per triangle (COLOR_0 RGBA per corner, 1 where a primitive
+                                 has none), or NULL when no primitive has COLOR_0 */
     lie_vec3 *tri_ng;         /* unit geometric normal (front side) */
     float *tri_area;
     int32_t *tri_material;    /* -1: default material (see lie_scene_material) */

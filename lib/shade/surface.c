@@ -35,6 +35,11 @@ void lie_surface_from_hit(const lie_scene *s, const lie_hit *hit, lie_vec3 ray_d
     float tv = b0 * uv[1] + b1 * uv[3] + b2 * uv[5];
     const lie_material *m = lie_scene_material(s, s->tri_material[g]);
     float base[4] = {m->base_color[0], m->base_color[1], m->base_color[2], m->base_color[3]};
+    if (s->tri_color) { /* COLOR_0 multiplies the base colour (glTF 2.0 §3.7.2.1) */
+        const float *col = &s->tri_color[12 * (size_t)g];
+        for (int k = 0; k < 4; k++)
+            base[k] *= b0 * col[k] + b1 * col[4 + k] + b2 * col[8 + k];
+    }
     float metallic = m->metallic, roughness = m->roughness;
     if (m->base_color_tex >= 0 && m->base_color_tex < s->n_textures) {
         float t[4];

@@ -36,6 +36,14 @@ YAML
 for op in move_by move_to rotate scale scale3 settf remove material dim lift add; do
     same_as_rebuild "$TMP/m1.lie" "museum1 $op" "$TMP/$op.yaml"
 done
+# an added object with vertex colours (COLOR_0) and no name: the edit log
+# replays it, so the updated cache renders
+cat >"$TMP/addcol.yaml" <<YAML
+- add: {file: $ROOT/tests/data/gltf/vertex_colors.gltf, node: "#0", as: Painted, transform: {translation: [0, 0.8, 0]}}
+YAML
+same_as_rebuild "$TMP/m1.lie" "museum1 add with vertex colours" "$TMP/addcol.yaml"
+run "$B/lie-render" "$TMP/u.lie" -q --size 32x32 -o "$TMP/addcol.exr"
+expect_rc 0 "the cache with the coloured object renders"
 same_as_rebuild "$TMP/m1.lie" "museum1: light off" "$TMP/off.yaml"
 edit on '- set-emission: {node: Light, strength: 14}'
 same_as_rebuild "$TMP/m1.lie" "museum1: light off then on again" "$TMP/off.yaml" "$TMP/on.yaml"

@@ -436,6 +436,48 @@ static void test_gltf_texture_transform_read_and_applied(void **state)
     expect_error("texture_transform_bad.gltf", LIE_ERR_FORMAT, "KHR_texture_transform scale");
 }
 
+static void test_gltf_vertex_colors_multiply_base_color(void **state)
+{
+    (void)state;
+    lie_scene *s = load("vertex_colors.gltf");
+    assert_int_equal(s->n_tris, 3);
+    assert_non_null(s->tri_color);
+    /* triangle 0: VEC3 FLOAT, alpha 1, 2 clamped to 1 */
+    const float want0[12] = {1, 0, 0, 1, 0, 1, 0, 1, 0, 0, 1, 1};
+    for (int k = 0; k < 12; k++)
+        assert_near(s->tri_color[k], want0[k], 0);
+    /* triangle 1: normalized USHORT RGBA */
+    assert_near(s->tri_color[12 + 3], 32768 / 65535.0, 1e-6);
+    assert_near(s->tri_color[12 + 8], 65535 / 65535.0, 0);
+    assert_near(s->tri_color[12 + 9], 0.0, 0);
+    /* triangle 2: no COLOR_0, white */
+    for (int k = 0; k < 12; k++)
+        assert_near(s->tri_color[24 + k], 1.0, 0);
+    /* at vertex 1 of triangle 0 the base colour is (0.5, 1, 1) x (0, 1, 0) */
+    lie_hit hit = {0};
+    hit.tri = 0;
+    hit.u = 1.0f;
+    hit.v = 0.0f;
+    hit.t = 1.0f;
+    lie_surface sf;
+    lie_surface_from_hit(s, &hit, lie_v3(0, 0, -1), &sf);
+    assert_near(sf.base_color[0], 0.0, 1e-7);
+    assert_near(sf.base_color[1], 1.0, 1e-7);
+    assert_near(sf.base_color[2], 0.0, 1e-7);
+    /* halfway between vertices 0 and 2: (0.5, 1, 1) x (0.5, 0, 0.5) */
+    hit.u = 0.0f;
+    hit.v = 0.5f;
+    lie_surface_from_hit(s, &hit, lie_v3(0, 0, -1), &sf);
+    assert_near(sf.base_color[0], 0.25, 1e-6);
+    assert_near(sf.base_color[1], 0.0, 1e-6);
+    assert_near(sf.base_color[2], 0.5, 1e-6);
+    /* vertex colours are content; scenes without them keep no array */
+    lie_scene *plain = load("materials.gltf");
+    assert_null(plain->tri_color);
+    lie_scene_destroy(plain);
+    lie_scene_destroy(s);
+}
+
 static void test_texture_sample_wraps_and_blends(void **state)
 {
     (void)state;
@@ -768,6 +810,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_gltf_sixteen_bit_grey_texture_decoded),
         cmocka_unit_test(test_gltf_quantized_attributes_dequantized),
         cmocka_unit_test(test_gltf_texture_transform_read_and_applied),
+        cmocka_unit_test(test_gltf_vertex_colors_multiply_base_color),
         cmocka_unit_test(test_texture_sample_wraps_and_blends),
         cmocka_unit_test(test_gltf_lights_and_cameras_read_with_defaults),
         cmocka_unit_test(test_gltf_sparse_accessor_substitutes_values),

@@ -458,7 +458,27 @@ def texture_transform():
     write("texture_transform_bad.gltf", bad)
 
 
+def vertex_colors():
+    """COLOR_0 three ways on the same triangle: VEC3 FLOAT (with a value
+    above 1, clamped), VEC4 normalized USHORT, and none (white), under a
+    material of base colour (0.5, 1, 1, 1)."""
+    d = Doc()
+    pos = d.positions(TRI)
+    c3 = d.accessor(f32(1, 0, 0, 0, 1, 0, 0, 0, 2), FLOAT, "VEC3", 3)
+    c4 = d.accessor(struct.pack("<12H", 65535, 65535, 65535, 32768, 0, 0, 0, 0, 65535, 0, 65535, 65535),
+                    USHORT, "VEC4", 3, normalized=True)
+    d.g["meshes"] = [{"primitives": [
+        {"attributes": {"POSITION": pos, "COLOR_0": c3}, "material": 0},
+        {"attributes": {"POSITION": pos, "COLOR_0": c4}, "material": 0},
+        {"attributes": {"POSITION": pos}, "material": 0}]}]
+    d.g["nodes"] = [{"mesh": 0}]
+    d.g["scenes"] = [{"nodes": [0]}]
+    d.g["materials"] = [{"pbrMetallicRoughness": {"baseColorFactor": [0.5, 1, 1, 1], "metallicFactor": 0}}]
+    write("vertex_colors.gltf", d.embedded())
+
+
 def main():
+    vertex_colors()
     quantized()
     texture_transform()
     modes()
