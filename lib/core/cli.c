@@ -2,7 +2,9 @@
 #include "core/core.h"
 
 #include <errno.h>
+#include <stdarg.h>
 #include <stdlib.h>
+#include <string.h>
 
 int lie_parse_long(const char *s, long min, long max, long *out)
 {
@@ -60,4 +62,30 @@ void lie_json_string(FILE *fp, const char *s)
             fputc(*p, fp);
     }
     fputc('"', fp);
+}
+
+int lie_parse_stats(const char *arg)
+{
+    if (!arg)
+        return 1;
+    return strcmp(arg, "json") == 0 ? 2 : 0;
+}
+
+int lie_usage_error(const char *prog, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fprintf(stderr, "%s: ", prog);
+    vfprintf(stderr, fmt, ap);
+    fprintf(stderr, " (see --help)\n");
+    va_end(ap);
+    return 2;
+}
+
+int lie_report_error(const char *prog, const lie_error *err, int code)
+{
+    char line[2200];
+    lie_error_format(err, line, sizeof line);
+    fprintf(stderr, "%s: %s\n", prog, line);
+    return code;
 }

@@ -226,6 +226,15 @@ void lie_json_string(FILE *fp, const char *s);
 
 /* "WxH" with both in [1, max]. */
 int lie_parse_size(const char *s, int max, int *w, int *h);
+/* The value of --stats (arg NULL: 1) or --stats=json (2); 0 for another. */
+int lie_parse_stats(const char *arg);
+
+/* ---- tool messages (CLI.md: one line on stderr) ------------------------- */
+
+/* "PROG: message (see --help)"; returns 2, the usage-error exit status. */
+int lie_usage_error(const char *prog, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* "PROG: FILE: what is wrong" from err; returns `code`. */
+int lie_report_error(const char *prog, const lie_error *err, int code);
 
 #ifdef __cplusplus
 }

@@ -6,13 +6,7 @@
 
 const char *const inspect_prog = "lie-inspect";
 
-int inspect_fail(const lie_error *err, int code)
-{
-    char line[2200];
-    lie_error_format(err, line, sizeof line);
-    fprintf(stderr, "%s: %s\n", inspect_prog, line);
-    return code;
-}
+int inspect_fail(const lie_error *err, int code) { return lie_report_error(inspect_prog, err, code); }
 
 int inspect_stdout_check(void)
 {

@@ -65,13 +65,7 @@ static void usage(FILE *fp)
             inspect_prog, INSPECT_DIFF_SHOWN, LIE_RENDER_WIDTH_DEFAULT, LIE_RENDER_HEIGHT_DEFAULT);
 }
 
-static int usage_error(const char *fmt, const char *arg)
-{
-    fprintf(stderr, "%s: ", inspect_prog);
-    fprintf(stderr, fmt, arg);
-    fprintf(stderr, " (see --help)\n");
-    return 2;
-}
+#define usage_error(...) lie_usage_error(inspect_prog, __VA_ARGS__)
 
 enum {
     OPT_SCENE = 256, OPT_JSON, OPT_VERSION, OPT_EXTERNAL, OPT_ALL, OPT_STRICT, OPT_CAMERA, OPT_EMITTER, OPT_SIZE,

@@ -31,21 +31,9 @@ static void usage(FILE *fp)
             prog);
 }
 
-static int usage_error(const char *fmt, const char *arg)
-{
-    fprintf(stderr, "%s: ", prog);
-    fprintf(stderr, fmt, arg);
-    fprintf(stderr, " (see --help)\n");
-    return 2;
-}
+#define usage_error(...) lie_usage_error(prog, __VA_ARGS__)
 
-static int fail(const lie_error *err)
-{
-    char line[2200];
-    lie_error_format(err, line, sizeof line);
-    fprintf(stderr, "%s: %s\n", prog, line);
-    return 1;
-}
+static int fail(const lie_error *err) { return lie_report_error(prog, err, 1); }
 
 enum { OPT_FULL = 256, OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_WRITE_SCENE };
 
@@ -143,9 +131,8 @@ int main(int argc, char **argv)
             break;
         case OPT_EXTERNAL: so.allow_external_uris = 1; break;
         case OPT_STATS:
-            if (!optarg) stats = 1;
-            else if (strcmp(optarg, "json") == 0) stats = 2;
-            else return usage_error("--stats: expected --stats or --stats=json, got '%s'", optarg);
+            if (!(stats = lie_parse_stats(optarg)))
+                return usage_error("--stats: expected --stats or --stats=json, got '%s'", optarg);
             break;
         case 'q': quiet = 1; break;
         case 'h': usage(stdout); return 0;
