@@ -3,97 +3,50 @@
  * and the key. */
 #include "edit/edit.h"
 
+#include "core/yaml_doc.h"
+
 #include <stdlib.h>
 #include <string.h>
-#include <yaml.h>
 
-typedef struct pctx {
-    yaml_document_t *doc;
-    const char *name;
-    lie_error *err;
-} pctx;
-
-static lie_status perr(pctx *p, const yaml_node_t *n, const char *key, const char *what)
+static lie_status get_string(lie_yaml *p, const yaml_node_t *n, const char *key, char **out)
 {
-    return lie_error_set_at(p->err, LIE_ERR_FORMAT, p->name, (int)n->start_mark.line + 1,
-                            (int)n->start_mark.column + 1, "%s: %s", key, what);
-}
-
-static const char *scalar(const yaml_node_t *n)
-{
-    return n && n->type == YAML_SCALAR_NODE ? (const char *)n->data.scalar.value : NULL;
-}
-
-static lie_status get_number(pctx *p, const yaml_node_t *n, const char *key, double *out)
-{
-    const char *s = scalar(n);
-    if (!s || n->data.scalar.style != YAML_PLAIN_SCALAR_STYLE)
-        return perr(p, n, key, "expected a number");
-    char *end;
-    double v = strtod(s, &end);
-    if (!*s || *end || !isfinite(v) || strpbrk(s, "xXnNiI"))
-        return perr(p, n, key, "expected a number");
-    *out = v;
-    return LIE_OK;
-}
-
-static lie_status get_numbers(pctx *p, const yaml_node_t *n, const char *key, double *out, int count)
-{
-    if (n->type != YAML_SEQUENCE_NODE || n->data.sequence.items.top - n->data.sequence.items.start != count) {
-        char what[64];
-        snprintf(what, sizeof what, "expected a sequence of %d numbers", count);
-        return perr(p, n, key, what);
-    }
-    for (int i = 0; i < count; i++) {
-        yaml_node_t *it = yaml_document_get_node(p->doc, n->data.sequence.items.start[i]);
-        if (!it)
-            return perr(p, n, key, "malformed sequence");
-        lie_status st = get_number(p, it, key, &out[i]);
-        if (st != LIE_OK)
-            return st;
-    }
-    return LIE_OK;
-}
-
-static lie_status get_string(pctx *p, const yaml_node_t *n, const char *key, char **out)
-{
-    const char *s = scalar(n);
+    const char *s = lie_yaml_scalar(n);
     if (!s || !*s)
-        return perr(p, n, key, "expected a name");
+        return lie_yaml_error(p, n, key, "expected a name");
     free(*out);
     *out = strdup(s);
     return *out ? LIE_OK : lie_error_set(p->err, LIE_ERR_NOMEM, p->name, "out of memory");
 }
 
 /* A transform: 16 numbers (column-major), or {translation, rotation, scale}. */
-static lie_status get_transform(pctx *p, const yaml_node_t *n, const char *key, double m[16])
+static lie_status get_transform(lie_yaml *p, const yaml_node_t *n, const char *key, double m[16])
 {
     if (n->type == YAML_SEQUENCE_NODE)
-        return get_numbers(p, n, key, m, 16);
+        return lie_yaml_numbers(p, n, key, m, 16);
     if (n->type != YAML_MAPPING_NODE)
-        return perr(p, n, key, "expected 16 numbers or a mapping of translation, rotation, scale");
+        return lie_yaml_error(p, n, key, "expected 16 numbers or a mapping of translation, rotation, scale");
     double t[3] = {0, 0, 0}, q[4] = {0, 0, 0, 1}, sc[3] = {1, 1, 1};
     for (yaml_node_pair_t *pr = n->data.mapping.pairs.start; pr < n->data.mapping.pairs.top; pr++) {
-        yaml_node_t *kn = yaml_document_get_node(p->doc, pr->key), *vn = yaml_document_get_node(p->doc, pr->value);
-        const char *k = scalar(kn);
+        yaml_node_t *kn = yaml_document_get_node(&p->doc, pr->key), *vn = yaml_document_get_node(&p->doc, pr->value);
+        const char *k = lie_yaml_scalar(kn);
         char sub[96];
         snprintf(sub, sizeof sub, "%s.%s", key, k ? k : "?");
         lie_status st;
         if (!k || !vn)
-            return perr(p, n, key, "keys must be plain names");
+            return lie_yaml_error(p, n, key, "keys must be plain names");
         if (strcmp(k, "translation") == 0)
-            st = get_numbers(p, vn, sub, t, 3);
+            st = lie_yaml_numbers(p, vn, sub, t, 3);
         else if (strcmp(k, "rotation") == 0)
-            st = get_numbers(p, vn, sub, q, 4);
+            st = lie_yaml_numbers(p, vn, sub, q, 4);
         else if (strcmp(k, "scale") == 0)
-            st = get_numbers(p, vn, sub, sc, 3);
+            st = lie_yaml_numbers(p, vn, sub, sc, 3);
         else
-            return perr(p, kn, sub, "unknown key (expected translation, rotation or scale)");
+            return lie_yaml_error(p, kn, sub, "unknown key (expected translation, rotation or scale)");
         if (st != LIE_OK)
             return st;
     }
     if (!(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] > 0.0))
-        return perr(p, n, key, "rotation is a zero quaternion");
+        return lie_yaml_error(p, n, key, "rotation is a zero quaternion");
     lie_mat4 r = lie_mat4_from_trs(t, q, sc);
     memcpy(m, r.m, sizeof r.m);
     return LIE_OK;
@@ -106,22 +59,22 @@ typedef struct field {
 } field;
 
 /* Collect an operation's fields; unknown keys are errors. */
-static lie_status collect(pctx *p, const yaml_node_t *map, const char *op, field *f, int nf)
+static lie_status collect(lie_yaml *p, const yaml_node_t *map, const char *op, field *f, int nf)
 {
     if (map->type != YAML_MAPPING_NODE)
-        return perr(p, map, op, "expected a mapping of the operation's fields");
+        return lie_yaml_error(p, map, op, "expected a mapping of the operation's fields");
     for (yaml_node_pair_t *pr = map->data.mapping.pairs.start; pr < map->data.mapping.pairs.top; pr++) {
-        yaml_node_t *kn = yaml_document_get_node(p->doc, pr->key), *vn = yaml_document_get_node(p->doc, pr->value);
-        const char *k = scalar(kn);
+        yaml_node_t *kn = yaml_document_get_node(&p->doc, pr->key), *vn = yaml_document_get_node(&p->doc, pr->value);
+        const char *k = lie_yaml_scalar(kn);
         if (!k || !vn)
-            return perr(p, map, op, "keys must be plain names");
+            return lie_yaml_error(p, map, op, "keys must be plain names");
         int found = 0;
         for (int i = 0; i < nf; i++)
             if (strcmp(f[i].name, k) == 0) {
                 char sub[96];
                 snprintf(sub, sizeof sub, "%s.%s", op, k);
                 if (f[i].seen)
-                    return perr(p, kn, sub, "given twice");
+                    return lie_yaml_error(p, kn, sub, "given twice");
                 f[i].seen = 1;
                 f[i].key = kn;
                 f[i].value = vn;
@@ -134,25 +87,25 @@ static lie_status collect(pctx *p, const yaml_node_t *map, const char *op, field
             for (int i = 0; i < nf && n < (int)sizeof what; i++)
                 n += snprintf(what + n, sizeof what - (size_t)n, "%s %s", i ? "," : "", f[i].name);
             snprintf(what + (n < (int)sizeof what ? n : (int)sizeof what - 1), sizeof what - (size_t)(n < (int)sizeof what ? n : (int)sizeof what - 1), ")");
-            return perr(p, kn, sub, what);
+            return lie_yaml_error(p, kn, sub, what);
         }
     }
     return LIE_OK;
 }
 
-static lie_status parse_op(pctx *p, const yaml_node_t *item, int index, lie_edit_op *op)
+static lie_status parse_op(lie_yaml *p, const yaml_node_t *item, int index, lie_edit_op *op)
 {
     char key[64];
     snprintf(key, sizeof key, "[%d]", index);
     if (item->type != YAML_MAPPING_NODE || item->data.mapping.pairs.top - item->data.mapping.pairs.start != 1)
-        return perr(p, item, key,
+        return lie_yaml_error(p, item, key,
                     "expected one operation: move, rotate, scale, set-transform, remove, add, set-material or "
                     "set-emission");
     yaml_node_pair_t *pr = item->data.mapping.pairs.start;
-    yaml_node_t *kn = yaml_document_get_node(p->doc, pr->key), *vn = yaml_document_get_node(p->doc, pr->value);
-    const char *name = scalar(kn);
+    yaml_node_t *kn = yaml_document_get_node(&p->doc, pr->key), *vn = yaml_document_get_node(&p->doc, pr->value);
+    const char *name = lie_yaml_scalar(kn);
     if (!name || !vn)
-        return perr(p, item, key, "malformed operation");
+        return lie_yaml_error(p, item, key, "malformed operation");
     op->line = (int)item->start_mark.line + 1;
     op->col = (int)item->start_mark.column + 1;
     char opk[64];
@@ -163,12 +116,12 @@ static lie_status parse_op(pctx *p, const yaml_node_t *item, int index, lie_edit
         if ((st = collect(p, vn, opk, f, 3)) != LIE_OK)
             return st;
         if (f[1].seen == f[2].seen)
-            return perr(p, vn, opk, "needs exactly one of by or to");
+            return lie_yaml_error(p, vn, opk, "needs exactly one of by or to");
         op->kind = f[1].seen ? LIE_EDIT_MOVE_BY : LIE_EDIT_MOVE_TO;
         const field *v = f[1].seen ? &f[1] : &f[2];
-        st = get_numbers(p, v->value, f[1].seen ? "move.by" : "move.to", op->v, 3);
+        st = lie_yaml_numbers(p, v->value, f[1].seen ? "move.by" : "move.to", op->v, 3);
         if (st == LIE_OK && !f[0].seen)
-            return perr(p, vn, "move.node", "missing");
+            return lie_yaml_error(p, vn, "move.node", "missing");
         if (st == LIE_OK)
             st = get_string(p, f[0].value, "move.node", &op->node);
     } else if (strcmp(name, "rotate") == 0) {
@@ -179,50 +132,50 @@ static lie_status parse_op(pctx *p, const yaml_node_t *item, int index, lie_edit
             if (!f[i].seen) {
                 char sub[64];
                 snprintf(sub, sizeof sub, "rotate.%s", f[i].name);
-                return perr(p, vn, sub, "missing");
+                return lie_yaml_error(p, vn, sub, "missing");
             }
         op->kind = LIE_EDIT_ROTATE;
         st = get_string(p, f[0].value, "rotate.node", &op->node);
         if (st == LIE_OK)
-            st = get_numbers(p, f[1].value, "rotate.axis", op->v, 3);
+            st = lie_yaml_numbers(p, f[1].value, "rotate.axis", op->v, 3);
         if (st == LIE_OK && !(op->v[0] * op->v[0] + op->v[1] * op->v[1] + op->v[2] * op->v[2] > 0.0))
-            return perr(p, f[1].value, "rotate.axis", "must not be zero");
+            return lie_yaml_error(p, f[1].value, "rotate.axis", "must not be zero");
         if (st == LIE_OK)
-            st = get_number(p, f[2].value, "rotate.degrees", &op->degrees);
+            st = lie_yaml_number(p, f[2].value, "rotate.degrees", &op->degrees);
     } else if (strcmp(name, "scale") == 0) {
         field f[] = {{"node", 0, 0, 0}, {"by", 0, 0, 0}};
         if ((st = collect(p, vn, opk, f, 2)) != LIE_OK)
             return st;
         if (!f[0].seen || !f[1].seen)
-            return perr(p, vn, f[0].seen ? "scale.by" : "scale.node", "missing");
+            return lie_yaml_error(p, vn, f[0].seen ? "scale.by" : "scale.node", "missing");
         op->kind = LIE_EDIT_SCALE;
         st = get_string(p, f[0].value, "scale.node", &op->node);
         if (st == LIE_OK) {
             if (f[1].value->type == YAML_SEQUENCE_NODE) {
-                st = get_numbers(p, f[1].value, "scale.by", op->v, 3);
+                st = lie_yaml_numbers(p, f[1].value, "scale.by", op->v, 3);
             } else {
-                st = get_number(p, f[1].value, "scale.by", &op->v[0]);
+                st = lie_yaml_number(p, f[1].value, "scale.by", &op->v[0]);
                 op->v[1] = op->v[2] = op->v[0];
             }
         }
         if (st == LIE_OK && !(op->v[0] != 0.0 && op->v[1] != 0.0 && op->v[2] != 0.0))
-            return perr(p, f[1].value, "scale.by", "a scale factor of 0 would collapse the object");
+            return lie_yaml_error(p, f[1].value, "scale.by", "a scale factor of 0 would collapse the object");
     } else if (strcmp(name, "set-transform") == 0) {
         field f[] = {{"node", 0, 0, 0}, {"matrix", 0, 0, 0}};
         if ((st = collect(p, vn, opk, f, 2)) != LIE_OK)
             return st;
         if (!f[0].seen || !f[1].seen)
-            return perr(p, vn, f[0].seen ? "set-transform.matrix" : "set-transform.node", "missing");
+            return lie_yaml_error(p, vn, f[0].seen ? "set-transform.matrix" : "set-transform.node", "missing");
         op->kind = LIE_EDIT_SET_TRANSFORM;
         st = get_string(p, f[0].value, "set-transform.node", &op->node);
         if (st == LIE_OK)
-            st = get_numbers(p, f[1].value, "set-transform.matrix", op->matrix, 16);
+            st = lie_yaml_numbers(p, f[1].value, "set-transform.matrix", op->matrix, 16);
     } else if (strcmp(name, "remove") == 0) {
         field f[] = {{"node", 0, 0, 0}};
         if ((st = collect(p, vn, opk, f, 1)) != LIE_OK)
             return st;
         if (!f[0].seen)
-            return perr(p, vn, "remove.node", "missing");
+            return lie_yaml_error(p, vn, "remove.node", "missing");
         op->kind = LIE_EDIT_REMOVE;
         st = get_string(p, f[0].value, "remove.node", &op->node);
     } else if (strcmp(name, "add") == 0) {
@@ -233,7 +186,7 @@ static lie_status parse_op(pctx *p, const yaml_node_t *item, int index, lie_edit
             if (!f[i].seen) {
                 char sub[64];
                 snprintf(sub, sizeof sub, "add.%s", f[i].name);
-                return perr(p, vn, sub, "missing");
+                return lie_yaml_error(p, vn, sub, "missing");
             }
         op->kind = LIE_EDIT_ADD;
         st = get_string(p, f[0].value, "add.file", &op->file);
@@ -250,32 +203,32 @@ static lie_status parse_op(pctx *p, const yaml_node_t *item, int index, lie_edit
         if ((st = collect(p, vn, opk, f, 4)) != LIE_OK)
             return st;
         if (!f[0].seen)
-            return perr(p, vn, "set-material.node", "missing");
+            return lie_yaml_error(p, vn, "set-material.node", "missing");
         if (!f[1].seen && !f[2].seen && !f[3].seen)
-            return perr(p, vn, opk, "needs at least one of base-color, metallic, roughness");
+            return lie_yaml_error(p, vn, opk, "needs at least one of base-color, metallic, roughness");
         op->kind = LIE_EDIT_SET_MATERIAL;
         st = get_string(p, f[0].value, "set-material.node", &op->node);
         double c[3], x;
         if (st == LIE_OK && f[1].seen) {
-            st = get_numbers(p, f[1].value, "set-material.base-color", c, 3);
+            st = lie_yaml_numbers(p, f[1].value, "set-material.base-color", c, 3);
             for (int k = 0; st == LIE_OK && k < 3; k++) {
                 if (!(c[k] >= 0.0 && c[k] <= 1.0))
-                    return perr(p, f[1].value, "set-material.base-color", "components must be in [0, 1]");
+                    return lie_yaml_error(p, f[1].value, "set-material.base-color", "components must be in [0, 1]");
                 op->base_color[k] = (float)c[k];
             }
             op->has |= LIE_EDIT_HAS_BASE_COLOR;
         }
         if (st == LIE_OK && f[2].seen) {
-            st = get_number(p, f[2].value, "set-material.metallic", &x);
+            st = lie_yaml_number(p, f[2].value, "set-material.metallic", &x);
             if (st == LIE_OK && !(x >= 0.0 && x <= 1.0))
-                return perr(p, f[2].value, "set-material.metallic", "must be in [0, 1]");
+                return lie_yaml_error(p, f[2].value, "set-material.metallic", "must be in [0, 1]");
             op->metallic = (float)x;
             op->has |= LIE_EDIT_HAS_METALLIC;
         }
         if (st == LIE_OK && f[3].seen) {
-            st = get_number(p, f[3].value, "set-material.roughness", &x);
+            st = lie_yaml_number(p, f[3].value, "set-material.roughness", &x);
             if (st == LIE_OK && !(x >= 0.0 && x <= 1.0))
-                return perr(p, f[3].value, "set-material.roughness", "must be in [0, 1]");
+                return lie_yaml_error(p, f[3].value, "set-material.roughness", "must be in [0, 1]");
             op->roughness = (float)x;
             op->has |= LIE_EDIT_HAS_ROUGHNESS;
         }
@@ -284,30 +237,30 @@ static lie_status parse_op(pctx *p, const yaml_node_t *item, int index, lie_edit
         if ((st = collect(p, vn, opk, f, 3)) != LIE_OK)
             return st;
         if (!f[0].seen)
-            return perr(p, vn, "set-emission.node", "missing");
+            return lie_yaml_error(p, vn, "set-emission.node", "missing");
         if (!f[1].seen && !f[2].seen)
-            return perr(p, vn, opk, "needs emissive, strength or both");
+            return lie_yaml_error(p, vn, opk, "needs emissive, strength or both");
         op->kind = LIE_EDIT_SET_EMISSION;
         st = get_string(p, f[0].value, "set-emission.node", &op->node);
         double c[3], x;
         if (st == LIE_OK && f[1].seen) {
-            st = get_numbers(p, f[1].value, "set-emission.emissive", c, 3);
+            st = lie_yaml_numbers(p, f[1].value, "set-emission.emissive", c, 3);
             for (int k = 0; st == LIE_OK && k < 3; k++) {
                 if (!(c[k] >= 0.0 && c[k] <= 1.0))
-                    return perr(p, f[1].value, "set-emission.emissive", "components must be in [0, 1]");
+                    return lie_yaml_error(p, f[1].value, "set-emission.emissive", "components must be in [0, 1]");
                 op->emissive[k] = (float)c[k];
             }
             op->has |= LIE_EDIT_HAS_EMISSIVE;
         }
         if (st == LIE_OK && f[2].seen) {
-            st = get_number(p, f[2].value, "set-emission.strength", &x);
+            st = lie_yaml_number(p, f[2].value, "set-emission.strength", &x);
             if (st == LIE_OK && !(x >= 0.0 && x <= 1e9))
-                return perr(p, f[2].value, "set-emission.strength", "must be in [0, 1e9]");
+                return lie_yaml_error(p, f[2].value, "set-emission.strength", "must be in [0, 1e9]");
             op->strength = (float)x;
             op->has |= LIE_EDIT_HAS_STRENGTH;
         }
     } else {
-        return perr(p, kn, opk,
+        return lie_yaml_error(p, kn, opk,
                     "unknown operation (expected move, rotate, scale, set-transform, remove, add, set-material or "
                     "set-emission)");
     }
@@ -331,40 +284,30 @@ void lie_edit_destroy(lie_edit *e)
 lie_status lie_edit_parse(const unsigned char *text, size_t size, const char *name, lie_edit **out, lie_error *err)
 {
     *out = NULL;
-    yaml_parser_t parser;
-    yaml_document_t doc;
-    if (!yaml_parser_initialize(&parser))
-        return lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory");
-    yaml_parser_set_input_string(&parser, text, size);
-    if (!yaml_parser_load(&parser, &doc)) {
-        lie_status st = lie_error_set_at(err, LIE_ERR_FORMAT, name, (int)parser.problem_mark.line + 1,
-                                         (int)parser.problem_mark.column + 1, "YAML: %s",
-                                         parser.problem ? parser.problem : "syntax error");
-        yaml_parser_delete(&parser);
-        return st;
-    }
-    yaml_parser_delete(&parser);
-    pctx p = {&doc, name, err};
+    lie_yaml p;
+    lie_status lst = lie_yaml_load(&p, text, size, name, err);
+    if (lst != LIE_OK)
+        return lst;
     lie_status st = LIE_OK;
     lie_edit *e = calloc(1, sizeof *e);
     if (!e || !(e->name = strdup(name))) {
         free(e);
-        yaml_document_delete(&doc);
+        lie_yaml_free(&p);
         return lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory");
     }
-    yaml_node_t *root = yaml_document_get_root_node(&doc);
+    yaml_node_t *root = yaml_document_get_root_node(&p.doc);
     if (root) {
         if (root->type != YAML_SEQUENCE_NODE) {
-            st = perr(&p, root, "document", "expected a sequence of operations (lines starting with '- ')");
+            st = lie_yaml_error(&p, root, "document", "expected a sequence of operations (lines starting with '- ')");
         } else {
             int n = (int)(root->data.sequence.items.top - root->data.sequence.items.start);
             e->ops = calloc((size_t)n + 1, sizeof *e->ops);
             if (!e->ops)
                 st = lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory");
             for (int i = 0; st == LIE_OK && i < n; i++) {
-                yaml_node_t *it = yaml_document_get_node(&doc, root->data.sequence.items.start[i]);
+                yaml_node_t *it = yaml_document_get_node(&p.doc, root->data.sequence.items.start[i]);
                 if (!it) {
-                    st = perr(&p, root, "document", "malformed sequence");
+                    st = lie_yaml_error(&p, root, "document", "malformed sequence");
                     break;
                 }
                 e->n_ops = i + 1;
@@ -372,7 +315,7 @@ lie_status lie_edit_parse(const unsigned char *text, size_t size, const char *na
             }
         }
     }
-    yaml_document_delete(&doc);
+    lie_yaml_free(&p);
     if (st != LIE_OK) {
         lie_edit_destroy(e);
         return st;

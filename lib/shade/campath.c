@@ -3,75 +3,43 @@
  * with a uniform Catmull-Rom spline. */
 #include "shade/shade.h"
 
+#include "core/yaml_doc.h"
+
 #include <stdlib.h>
 #include <string.h>
-#include <yaml.h>
 
 #define MAX_FRAMES 1000000
-
-typedef struct parse_ctx {
-    yaml_document_t *doc;
-    const char *name;
-    lie_error *err;
-} parse_ctx;
-
-static lie_status node_error(parse_ctx *p, const yaml_node_t *n, const char *key, const char *what)
-{
-    return lie_error_set_at(p->err, LIE_ERR_FORMAT, p->name, (int)n->start_mark.line + 1,
-                            (int)n->start_mark.column + 1, "%s: %s", key, what);
-}
 
 static int scalar_is(const yaml_node_t *n, const char *s)
 {
     return n->type == YAML_SCALAR_NODE && strcmp((const char *)n->data.scalar.value, s) == 0;
 }
 
-static lie_status get_number(parse_ctx *p, const yaml_node_t *n, const char *key, double *out)
+static lie_status get_vec3(lie_yaml *p, const yaml_node_t *n, const char *key, lie_vec3 *out)
 {
-    if (n->type != YAML_SCALAR_NODE || n->data.scalar.style != YAML_PLAIN_SCALAR_STYLE)
-        return node_error(p, n, key, "expected a number");
-    const char *s = (const char *)n->data.scalar.value;
-    char *end;
-    double v = strtod(s, &end);
-    if (!*s || *end || !isfinite(v) || strpbrk(s, "xXnNiI"))
-        return node_error(p, n, key, "expected a number");
-    *out = v;
-    return LIE_OK;
-}
-
-static lie_status get_vec3(parse_ctx *p, const yaml_node_t *n, const char *key, lie_vec3 *out)
-{
-    if (n->type != YAML_SEQUENCE_NODE ||
-        n->data.sequence.items.top - n->data.sequence.items.start != 3)
-        return node_error(p, n, key, "expected a sequence of 3 numbers");
     double v[3];
-    for (int i = 0; i < 3; i++) {
-        yaml_node_t *item = yaml_document_get_node(p->doc, n->data.sequence.items.start[i]);
-        if (!item)
-            return node_error(p, n, key, "malformed sequence");
-        lie_status st = get_number(p, item, key, &v[i]);
-        if (st != LIE_OK)
-            return st;
-    }
+    lie_status st = lie_yaml_numbers(p, n, key, v, 3);
+    if (st != LIE_OK)
+        return st;
     *out = lie_v3((float)v[0], (float)v[1], (float)v[2]);
     return LIE_OK;
 }
 
-static lie_status parse_key(parse_ctx *p, const yaml_node_t *n, int index, float prev_fov, lie_camera_key *k)
+static lie_status parse_key(lie_yaml *p, const yaml_node_t *n, int index, float prev_fov, lie_camera_key *k)
 {
     char key[64];
     snprintf(key, sizeof key, "keys[%d]", index);
     if (n->type != YAML_MAPPING_NODE)
-        return node_error(p, n, key, "expected a mapping with eye, target, up, fov, frames");
+        return lie_yaml_error(p, n, key, "expected a mapping with eye, target, up, fov, frames");
     int have_eye = 0, have_target = 0;
     k->up = lie_v3(0.0f, 1.0f, 0.0f);
     k->fov_deg = prev_fov;
     k->frames = 1;
     for (yaml_node_pair_t *pr = n->data.mapping.pairs.start; pr < n->data.mapping.pairs.top; pr++) {
-        yaml_node_t *kn = yaml_document_get_node(p->doc, pr->key);
-        yaml_node_t *vn = yaml_document_get_node(p->doc, pr->value);
+        yaml_node_t *kn = yaml_document_get_node(&p->doc, pr->key);
+        yaml_node_t *vn = yaml_document_get_node(&p->doc, pr->value);
         if (!kn || !vn || kn->type != YAML_SCALAR_NODE)
-            return node_error(p, n, key, "keys must be plain names");
+            return lie_yaml_error(p, n, key, "keys must be plain names");
         char sub[128];
         snprintf(sub, sizeof sub, "%s.%s", key, (const char *)kn->data.scalar.value);
         lie_status st = LIE_OK;
@@ -85,31 +53,31 @@ static lie_status parse_key(parse_ctx *p, const yaml_node_t *n, int index, float
             st = get_vec3(p, vn, sub, &k->up);
         } else if (scalar_is(kn, "fov")) {
             double f = 0.0; /* converted below even when get_number fails */
-            st = get_number(p, vn, sub, &f);
+            st = lie_yaml_number(p, vn, sub, &f);
             if (st == LIE_OK && !(f > 0.0 && f < 180.0))
-                return node_error(p, vn, sub, "expected a number in (0, 180)");
+                return lie_yaml_error(p, vn, sub, "expected a number in (0, 180)");
             k->fov_deg = (float)f;
         } else if (scalar_is(kn, "frames")) {
             double f = 0.0; /* converted below even when get_number fails */
-            st = get_number(p, vn, sub, &f);
+            st = lie_yaml_number(p, vn, sub, &f);
             if (st == LIE_OK && !(f >= 1.0 && f <= MAX_FRAMES && f == floor(f)))
-                return node_error(p, vn, sub, "expected an integer in 1..1000000");
+                return lie_yaml_error(p, vn, sub, "expected an integer in 1..1000000");
             k->frames = (int)f;
         } else {
-            return node_error(p, kn, sub, "unknown key (expected eye, target, up, fov or frames)");
+            return lie_yaml_error(p, kn, sub, "unknown key (expected eye, target, up, fov or frames)");
         }
         if (st != LIE_OK)
             return st;
     }
     if (!have_eye)
-        return node_error(p, n, key, "missing eye");
+        return lie_yaml_error(p, n, key, "missing eye");
     if (!have_target)
-        return node_error(p, n, key, "missing target");
+        return lie_yaml_error(p, n, key, "missing target");
     lie_vec3 f = lie_v3_sub(k->target, k->eye);
     if (!(lie_v3_len(f) > 0.0f))
-        return node_error(p, n, key, "eye and target coincide");
+        return lie_yaml_error(p, n, key, "eye and target coincide");
     if (!(lie_v3_len(lie_v3_cross(lie_v3_norm(f), k->up)) > 1e-6f))
-        return node_error(p, n, key, "up is parallel to the view direction");
+        return lie_yaml_error(p, n, key, "up is parallel to the view direction");
     return LIE_OK;
 }
 
@@ -117,39 +85,29 @@ lie_status lie_camera_path_parse(const unsigned char *text, size_t size, const c
                                  lie_camera_path **out, lie_error *err)
 {
     *out = NULL;
-    yaml_parser_t parser;
-    yaml_document_t doc;
-    if (!yaml_parser_initialize(&parser))
-        return lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory");
-    yaml_parser_set_input_string(&parser, text, size);
-    if (!yaml_parser_load(&parser, &doc)) {
-        lie_status st = lie_error_set_at(err, LIE_ERR_FORMAT, name, (int)parser.problem_mark.line + 1,
-                                         (int)parser.problem_mark.column + 1, "YAML: %s",
-                                         parser.problem ? parser.problem : "syntax error");
-        yaml_parser_delete(&parser);
-        return st;
-    }
-    yaml_parser_delete(&parser);
-    parse_ctx p = {&doc, name, err};
+    lie_yaml p;
+    lie_status lst = lie_yaml_load(&p, text, size, name, err);
+    if (lst != LIE_OK)
+        return lst;
     lie_status st = LIE_OK;
     lie_camera_path *cp = calloc(1, sizeof *cp);
-    yaml_node_t *root = yaml_document_get_root_node(&doc);
+    yaml_node_t *root = yaml_document_get_root_node(&p.doc);
     if (!cp) {
         st = lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory");
     } else if (!root) {
         st = lie_error_set(err, LIE_ERR_FORMAT, name, "empty document: expected a mapping with keys");
     } else if (root->type != YAML_MAPPING_NODE) {
-        st = node_error(&p, root, "document", "expected a mapping with keys and interpolation");
+        st = lie_yaml_error(&p, root, "document", "expected a mapping with keys and interpolation");
     }
     if (cp)
         cp->smooth = 1;
     const yaml_node_t *keys = NULL;
     for (yaml_node_pair_t *pr = st == LIE_OK ? root->data.mapping.pairs.start : NULL;
          st == LIE_OK && pr < root->data.mapping.pairs.top; pr++) {
-        yaml_node_t *kn = yaml_document_get_node(&doc, pr->key);
-        yaml_node_t *vn = yaml_document_get_node(&doc, pr->value);
+        yaml_node_t *kn = yaml_document_get_node(&p.doc, pr->key);
+        yaml_node_t *vn = yaml_document_get_node(&p.doc, pr->value);
         if (!kn || !vn || kn->type != YAML_SCALAR_NODE)
-            st = node_error(&p, root, "document", "keys must be plain names");
+            st = lie_yaml_error(&p, root, "document", "keys must be plain names");
         else if (scalar_is(kn, "keys"))
             keys = vn;
         else if (scalar_is(kn, "interpolation")) {
@@ -158,17 +116,17 @@ lie_status lie_camera_path_parse(const unsigned char *text, size_t size, const c
             else if (scalar_is(vn, "smooth"))
                 cp->smooth = 1;
             else
-                st = node_error(&p, vn, "interpolation", "expected linear or smooth");
+                st = lie_yaml_error(&p, vn, "interpolation", "expected linear or smooth");
         } else {
             char k[128];
             snprintf(k, sizeof k, "%s", (const char *)kn->data.scalar.value);
-            st = node_error(&p, kn, k, "unknown key (expected keys or interpolation)");
+            st = lie_yaml_error(&p, kn, k, "unknown key (expected keys or interpolation)");
         }
     }
     if (st == LIE_OK && !keys)
-        st = node_error(&p, root, "keys", "missing");
+        st = lie_yaml_error(&p, root, "keys", "missing");
     if (st == LIE_OK && (keys->type != YAML_SEQUENCE_NODE || keys->data.sequence.items.top == keys->data.sequence.items.start))
-        st = node_error(&p, keys, "keys", "expected a sequence of at least one key");
+        st = lie_yaml_error(&p, keys, "keys", "expected a sequence of at least one key");
     if (st == LIE_OK) {
         int n = (int)(keys->data.sequence.items.top - keys->data.sequence.items.start);
         cp->keys = calloc((size_t)n, sizeof *cp->keys);
@@ -177,9 +135,9 @@ lie_status lie_camera_path_parse(const unsigned char *text, size_t size, const c
         float fov = 45.0f;
         long frames = 0;
         for (int i = 0; st == LIE_OK && i < n; i++) {
-            yaml_node_t *kn = yaml_document_get_node(&doc, keys->data.sequence.items.start[i]);
+            yaml_node_t *kn = yaml_document_get_node(&p.doc, keys->data.sequence.items.start[i]);
             if (!kn) {
-                st = node_error(&p, keys, "keys", "malformed sequence");
+                st = lie_yaml_error(&p, keys, "keys", "malformed sequence");
                 break;
             }
             st = parse_key(&p, kn, i, fov, &cp->keys[i]);
@@ -189,11 +147,11 @@ lie_status lie_camera_path_parse(const unsigned char *text, size_t size, const c
             fov = cp->keys[i].fov_deg;
             frames += i + 1 < n ? cp->keys[i].frames : 1;
             if (frames > MAX_FRAMES)
-                st = node_error(&p, kn, "keys", "more than 1000000 frames");
+                st = lie_yaml_error(&p, kn, "keys", "more than 1000000 frames");
         }
         cp->n_frames = (int)frames;
     }
-    yaml_document_delete(&doc);
+    lie_yaml_free(&p);
     if (st != LIE_OK) {
         lie_camera_path_destroy(cp);
         return st;
