@@ -5,6 +5,7 @@
 
 #include <OpenEXR/openexr.h>
 #include <limits.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -34,12 +35,16 @@ static void on_exr_error(exr_const_context_t ctxt, exr_result_t code, const char
     if (exr_get_user_data(ctxt, &ud) != EXR_ERR_SUCCESS || !ud)
         return;
     exr_stream *s = ud;
-    if (s->msg[0])
-        return;
-    snprintf(s->msg, sizeof s->msg, "%s", msg ? msg : exr_get_error_code_as_string(code));
-    for (char *p = s->msg; *p; p++)
-        if (*p == '\n' || *p == '\r')
-            *p = ' ';
+    /* chunks are compressed on worker threads: the first message wins */
+    static pthread_mutex_t lock = PTHREAD_MUTEX_INITIALIZER;
+    pthread_mutex_lock(&lock);
+    if (!s->msg[0]) {
+        snprintf(s->msg, sizeof s->msg, "%s", msg ? msg : exr_get_error_code_as_string(code));
+        for (char *p = s->msg; *p; p++)
+            if (*p == '\n' || *p == '\r')
+                *p = ' ';
+    }
+    pthread_mutex_unlock(&lock);
 }
 
 /* pwrite() semantics: chunks may arrive past the end (the offset table is
@@ -209,6 +214,84 @@ static lie_status check_attrs(const lie_attr *attrs, int n_attrs, int *long_name
     return LIE_OK;
 }
 
+/* ---- chunks compressed in parallel, written in order ---------------------
+ *
+ * ZIP compression costs about as much as rendering a frame, so every chunk
+ * runs OpenEXR's encode pipeline (pack, compress) on a worker thread with
+ * a write step that keeps the result; the chunks are then written in
+ * increasing y by this thread.  Each chunk's bytes depend on its pixels
+ * only, so the file is the same for any thread count. */
+static _Atomic int exr_threads;
+
+void lie_exr_set_threads(int threads) { exr_threads = threads > 0 ? threads : 0; }
+
+typedef struct chunk_out {
+    unsigned char *data;
+    uint64_t size;
+    exr_result_t rv;
+} chunk_out;
+
+typedef struct chunk_job {
+    exr_context_t ctx;
+    int part;
+    const lie_frame *f;
+    const exr_out_channel *ch;
+    int n_ch;
+    const exr_chunk_info_t *cinfo;
+    chunk_out *out;
+} chunk_job;
+
+static exr_result_t keep_chunk(exr_encode_pipeline_t *enc)
+{
+    chunk_out *o = enc->encoding_user_data;
+    o->data = malloc(enc->compressed_bytes ? (size_t)enc->compressed_bytes : 1);
+    if (!o->data)
+        return EXR_ERR_OUT_OF_MEMORY;
+    memcpy(o->data, enc->compressed_buffer, (size_t)enc->compressed_bytes);
+    o->size = enc->compressed_bytes;
+    return EXR_ERR_SUCCESS;
+}
+
+static void encode_chunk(void *ctx, size_t k, int worker)
+{
+    (void)worker;
+    const chunk_job *j = ctx;
+    const exr_chunk_info_t *ci = &j->cinfo[k];
+    exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
+    exr_result_t rv = exr_encoding_initialize(j->ctx, j->part, ci, &enc);
+    int have_enc = rv == EXR_ERR_SUCCESS;
+    /* The library keeps the channel list sorted by name; the encoder's
+     * channels are matched back to ours by name. */
+    for (int c = 0; rv == EXR_ERR_SUCCESS && c < enc.channel_count; c++) {
+        exr_coding_channel_info_t *ec = &enc.channels[c];
+        const exr_out_channel *src = NULL;
+        for (int q = 0; q < j->n_ch && !src; q++)
+            if (strcmp(j->ch[q].name, ec->channel_name) == 0)
+                src = &j->ch[q];
+        if (!src) {
+            rv = EXR_ERR_INVALID_ARGUMENT;
+            break;
+        }
+        size_t row = (size_t)(ci->start_y) * (size_t)j->f->width * (size_t)src->stride;
+        ec->encode_from_ptr = (const uint8_t *)(src->base + row);
+        ec->user_pixel_stride = src->stride * (int32_t)sizeof(float);
+        ec->user_line_stride = j->f->width * src->stride * (int32_t)sizeof(float);
+        ec->user_bytes_per_element = sizeof(float);
+        ec->user_data_type = EXR_PIXEL_FLOAT;
+    }
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_encoding_choose_default_routines(j->ctx, j->part, &enc);
+    if (rv == EXR_ERR_SUCCESS) {
+        enc.yield_until_ready_fn = NULL; /* nothing is written here */
+        enc.write_fn = keep_chunk;
+        enc.encoding_user_data = &j->out[k];
+        rv = exr_encoding_run(j->ctx, j->part, &enc);
+    }
+    if (have_enc)
+        exr_encoding_destroy(j->ctx, &enc);
+    j->out[k].rv = rv;
+}
+
 /* Build the whole file in `s`. */
 static lie_status encode_exr(exr_stream *s, const char *path, const lie_frame *f,
                              const exr_out_channel *ch, int n_ch, const lie_attr *attrs,
@@ -269,44 +352,33 @@ static lie_status encode_exr(exr_stream *s, const char *path, const lie_frame *f
         st = exr_fail(err, LIE_ERR_IO, path, s, rv, "cannot plan EXR chunks");
         goto done;
     }
-    exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
-    int have_enc = 0;
-    for (int y = 0; y < f->height; y += lines) {
-        exr_chunk_info_t cinfo;
-        rv = exr_write_scanline_chunk_info(ctx, part, y, &cinfo);
-        if (rv == EXR_ERR_SUCCESS) {
-            rv = have_enc ? exr_encoding_update(ctx, part, &cinfo, &enc)
-                          : exr_encoding_initialize(ctx, part, &cinfo, &enc);
-            have_enc = 1;
-        }
-        for (int c = 0; rv == EXR_ERR_SUCCESS && c < enc.channel_count; c++) {
-            exr_coding_channel_info_t *ec = &enc.channels[c];
-            const exr_out_channel *src = NULL;
-            for (int k = 0; k < n_ch && !src; k++)
-                if (strcmp(ch[k].name, ec->channel_name) == 0)
-                    src = &ch[k];
-            if (!src) {
-                rv = EXR_ERR_INVALID_ARGUMENT;
-                break;
-            }
-            size_t row = (size_t)(cinfo.start_y) * (size_t)f->width * (size_t)src->stride;
-            ec->encode_from_ptr = (const uint8_t *)(src->base + row);
-            ec->user_pixel_stride = src->stride * (int32_t)sizeof(float);
-            ec->user_line_stride = f->width * src->stride * (int32_t)sizeof(float);
-            ec->user_bytes_per_element = sizeof(float);
-            ec->user_data_type = EXR_PIXEL_FLOAT;
-        }
-        if (rv == EXR_ERR_SUCCESS)
-            rv = exr_encoding_choose_default_routines(ctx, part, &enc);
-        if (rv == EXR_ERR_SUCCESS)
-            rv = exr_encoding_run(ctx, part, &enc);
-        if (rv != EXR_ERR_SUCCESS) {
-            st = exr_fail(err, LIE_ERR_IO, path, s, rv, "cannot encode EXR scanlines");
-            break;
-        }
+    size_t n_chunks = (size_t)(f->height + lines - 1) / (size_t)lines;
+    exr_chunk_info_t *cinfo = calloc(n_chunks + 1, sizeof *cinfo);
+    chunk_out *out = calloc(n_chunks + 1, sizeof *out);
+    if (!cinfo || !out) {
+        free(cinfo);
+        free(out);
+        st = lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+        goto done;
     }
-    if (have_enc)
-        exr_encoding_destroy(ctx, &enc);
+    for (size_t k = 0; k < n_chunks && rv == EXR_ERR_SUCCESS; k++)
+        rv = exr_write_scanline_chunk_info(ctx, part, (int)k * lines, &cinfo[k]);
+    if (rv == EXR_ERR_SUCCESS) {
+        chunk_job job = {ctx, part, f, ch, n_ch, cinfo, out};
+        if (lie_parallel_for(n_chunks, exr_threads, encode_chunk, &job, NULL, NULL) != LIE_OK)
+            rv = EXR_ERR_OUT_OF_MEMORY;
+    }
+    for (size_t k = 0; k < n_chunks && rv == EXR_ERR_SUCCESS; k++) {
+        rv = out[k].rv;
+        if (rv == EXR_ERR_SUCCESS)
+            rv = exr_write_scanline_chunk(ctx, part, cinfo[k].start_y, out[k].data, out[k].size);
+    }
+    for (size_t k = 0; k < n_chunks; k++)
+        free(out[k].data);
+    free(out);
+    free(cinfo);
+    if (rv != EXR_ERR_SUCCESS)
+        st = exr_fail(err, LIE_ERR_IO, path, s, rv, "cannot encode EXR scanlines");
 
 done:
     /* exr_finish writes the chunk offset table. */

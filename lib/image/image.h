@@ -66,6 +66,10 @@ typedef struct lie_attr {
  * ("compression", ...), is LIE_ERR_ARG. */
 lie_status lie_exr_write(const char *path, const lie_frame *f, const lie_attr *attrs, int n_attrs,
                          lie_error *err);
+/* Worker threads that compress EXR chunks (0, the default: all cores); the
+ * bytes written do not depend on it.  Process-wide, like OpenEXR's own
+ * global thread count; tools set it from --threads. */
+void lie_exr_set_threads(int threads);
 
 /* Read an EXR file written by anyone: every channel as float.  "R","G","B"
  * go to rgb (missing ones are 0); other channels "layer.chan" become AOVs

@@ -509,6 +509,51 @@ static void test_exr_write_is_deterministic(void **state)
     lie_frame_destroy(f);
 }
 
+/* Chunks are compressed on worker threads and written in order: a frame
+ * of many chunks (the last one short) gives the same bytes for any thread
+ * count and reads back bit for bit. */
+static void test_exr_chunks_compressed_in_parallel_same_bytes(void **state)
+{
+    (void)state;
+    const int w = 37, h = 203;
+    lie_frame *f = lie_frame_create(w, h);
+    assert_non_null(f);
+    static const char *const one[1] = {"R"};
+    float *cx = lie_frame_add_aov(f, "complexity", 1, one);
+    assert_non_null(cx);
+    for (int i = 0; i < w * h * 3; i++)
+        f->rgb[i] = sinf((float)i * 0.01f) * (float)(i % 97);
+    for (int i = 0; i < w * h; i++)
+        cx[i] = (float)(i % 13);
+    lie_error err;
+    const char *p[3] = {tmp_path("par1.exr"), tmp_path("par2.exr"), tmp_path("par0.exr")};
+    const int threads[3] = {1, 2, 0};
+    for (int k = 0; k < 3; k++) {
+        lie_exr_set_threads(threads[k]);
+        assert_int_equal(lie_exr_write(p[k], f, NULL, 0, &err), LIE_OK);
+    }
+    lie_exr_set_threads(0);
+    size_t n[3];
+    unsigned char *d[3];
+    for (int k = 0; k < 3; k++)
+        d[k] = slurp(p[k], &n[k]);
+    for (int k = 1; k < 3; k++) {
+        assert_int_equal(n[k], n[0]);
+        assert_memory_equal(d[k], d[0], n[0]);
+    }
+    lie_frame *g = NULL;
+    assert_int_equal(lie_exr_read(p[1], &g, &err), LIE_OK);
+    assert_int_equal(g->width, w);
+    assert_int_equal(g->height, h);
+    assert_memory_equal(g->rgb, f->rgb, sizeof(float) * 3 * (size_t)w * (size_t)h);
+    assert_int_equal(g->n_aovs, 1);
+    assert_memory_equal(g->aovs[0].data, cx, sizeof(float) * (size_t)w * (size_t)h);
+    for (int k = 0; k < 3; k++)
+        free(d[k]);
+    lie_frame_destroy(g);
+    lie_frame_destroy(f);
+}
+
 static void test_exr_write_to_missing_directory_fails_with_io_error(void **state)
 {
     (void)state;
@@ -920,6 +965,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_exr_read_string_attr_reports_missing_wrong_type_and_short_buffer),
         cmocka_unit_test(test_exr_write_rejects_clashing_attribute),
         cmocka_unit_test(test_exr_write_is_deterministic),
+        cmocka_unit_test(test_exr_chunks_compressed_in_parallel_same_bytes),
         cmocka_unit_test(test_exr_write_to_missing_directory_fails_with_io_error),
         cmocka_unit_test(test_exr_write_below_a_regular_file_fails_with_io_error),
         cmocka_unit_test(test_exr_write_that_cannot_be_renamed_leaves_no_temp_file),

@@ -252,6 +252,7 @@ int main(int argc, char **argv)
             if (!lie_parse_long(optarg, 0, 4096, &v))
                 return usage_error("--threads: expected an integer in 0..4096, got '%s'", optarg);
             ro.threads = (int)v;
+            lie_exr_set_threads(ro.threads);
             break;
         case OPT_EXTERNAL: so.allow_external_uris = 1; break;
         case OPT_SCENE: scene_override = optarg; break;
