@@ -72,10 +72,20 @@ printf '\n  100 light samples:\n'
 printf '    LIE vs full (streams):        %sx   (target >= 10x)\n' "$(ratio "$t100_f" "$t100_l")"
 printf '    LIE vs full (one at a time):  %sx   (target >= 20x; the paper: 19x)\n' "$(ratio "$t100_s" "$t100_l")"
 printf '    LIE 100-sample / eye rays:    %s    (target <= 2; the paper: 3.7)\n' "$(ratio "$t100_l" "$t_eye")"
-printf '    where a LIE frame goes: eye rays %s s, + shading %s s, + LIE visibility (leaf lookup,\n' "$(num "$t_eye")" "$(num "$(awk -v a="$t_none" -v b="$t_eye" 'BEGIN{print a-b}')")"
-printf '      blocker tests, Embree fallback for %s rays) %s s\n' "$emb" "$(num "$(awk -v a="$t100_l" -v b="$t_none" 'BEGIN{print a-b}')")"
+# Where a LIE frame goes, from ablations measured side by side:
+# --lie-skip answers partial pairs (blockers) or complex pairs (fallback)
+# as unshadowed; the differences are those parts' costs.
+t_skip_b=$(render "$CACHE" --light-samples 100 --lie-skip blockers)
+t_skip_f=$(render "$CACHE" --light-samples 100 --lie-skip fallback)
+t_skip_all=$(render "$CACHE" --light-samples 100 --lie-skip both)
+d_blockers=$(awk -v a="$t100_l" -v b="$t_skip_b" 'BEGIN{print a-b}')
+d_fallback=$(awk -v a="$t100_l" -v b="$t_skip_f" 'BEGIN{print a-b}')
+d_lookup=$(awk -v a="$t_skip_all" -v b="$t_none" 'BEGIN{print a-b}')
+printf '    where a LIE frame goes (%s s): eye rays %s s, shading %s s, leaf lookup and classes %s s\n' "$(num "$t100_l")" "$(num "$t_eye")" "$(num "$(awk -v a="$t_none" -v b="$t_eye" 'BEGIN{print a-b}')")" "$(num "$d_lookup")"
+printf '      (net of shading skipped for occluded pairs), blocker tests %s s, Embree fallback %s s (%s rays)\n' "$(num "$d_blockers")" "$(num "$d_fallback")" "$emb"
 printf '    full visibility: %s M shadow rays/s (visibility time), %s rays\n' "$mr" "$rays_full"
 json="$json,\"shading_no_visibility_seconds\":$t_none,\"lie_embree_fallback_rays\":$emb,\"full_mrays_per_s\":$mr"
+json="$json,\"lie_breakdown\":{\"lookup_net\":$d_lookup,\"blocker_tests\":$d_blockers,\"embree_fallback\":$d_fallback}"
 
 printf '\n  Table 2: min patch size, %s (build, then a 100-sample frame)\n' "$(basename "$SCENE")"
 printf '  %-9s %8s %9s %9s %9s %9s %9s %6s %9s %8s %8s %8s\n' "min patch" patches visible occluded partial complex unlit "mean" "cache B" "build s" "LIE s" "build/frame"

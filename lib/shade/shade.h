@@ -143,8 +143,14 @@ typedef struct lie_render_options {
     unsigned aovs;         /* LIE_AOV_* bits */
     int aov_emitter;       /* complexity/patch AOVs for this emitter; -1 = all */
     int eye_only;          /* trace eye rays only (benchmark baseline) */
+    unsigned lie_skip;     /* LIE_SKIP_*: benchmark ablations (wrong images) */
     int progress;          /* progress bar on stderr if a terminal */
 } lie_render_options;
+
+/* Benchmark ablations of --visibility=lie: answer partial pairs (their
+ * blocker tests) or complex pairs (their Embree rays) as unshadowed, so
+ * that side-by-side runs show where a LIE frame's time goes. */
+enum { LIE_SKIP_BLOCKERS = 1u << 0, LIE_SKIP_FALLBACK = 1u << 1 };
 
 #define LIE_RENDER_WIDTH_DEFAULT 512
 #define LIE_RENDER_HEIGHT_DEFAULT 512

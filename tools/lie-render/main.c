@@ -40,6 +40,9 @@ static void usage(FILE *fp)
             "                          | none (no shadows: measures shading alone)\n"
             "      --rays MODE         how full visibility casts shadow rays: stream (default),\n"
             "                          packet (8-wide) or single\n"
+            "      --lie-skip WHAT     benchmarks only, wrong images: answer partial pairs\n"
+            "                          (blockers), complex pairs (fallback) or both as\n"
+            "                          unshadowed, to see where a LIE frame's time goes\n"
             "      --max-depth D       mirror reflection depth (default %d)\n"
             "      --aov LIST          extra EXR layers, comma-separated: albedo, normal, depth,\n"
             "                          complexity (the paper's Figure 10 colours), patch\n"
@@ -60,7 +63,7 @@ static void usage(FILE *fp)
 static int fail(const lie_error *err) { return lie_report_error(prog, err, 1); }
 
 enum {
-    OPT_CAMERA = 256, OPT_SIZE, OPT_SPP, OPT_LIGHT_SAMPLES, OPT_PATTERN, OPT_VISIBILITY, OPT_RAYS,
+    OPT_CAMERA = 256, OPT_SIZE, OPT_SPP, OPT_LIGHT_SAMPLES, OPT_PATTERN, OPT_VISIBILITY, OPT_RAYS, OPT_LIE_SKIP,
     OPT_MAX_DEPTH, OPT_AOV, OPT_EXPOSURE, OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_SCENE,
     OPT_EMITTER, OPT_PATH
 };
@@ -77,6 +80,7 @@ static const struct option long_opts[] = {
     {"pattern", required_argument, NULL, OPT_PATTERN},
     {"visibility", required_argument, NULL, OPT_VISIBILITY},
     {"rays", required_argument, NULL, OPT_RAYS},
+    {"lie-skip", required_argument, NULL, OPT_LIE_SKIP},
     {"max-depth", required_argument, NULL, OPT_MAX_DEPTH},
     {"aov", required_argument, NULL, OPT_AOV},
     {"exposure", required_argument, NULL, OPT_EXPOSURE},
@@ -220,6 +224,12 @@ int main(int argc, char **argv)
             if (strcmp(optarg, "fixed") == 0) ro.pattern = LIE_PATTERN_FIXED;
             else if (strcmp(optarg, "rotated") == 0) ro.pattern = LIE_PATTERN_ROTATED;
             else return usage_error("--pattern: expected fixed or rotated, got '%s'", optarg);
+            break;
+        case OPT_LIE_SKIP:
+            if (strcmp(optarg, "blockers") == 0) ro.lie_skip = LIE_SKIP_BLOCKERS;
+            else if (strcmp(optarg, "fallback") == 0) ro.lie_skip = LIE_SKIP_FALLBACK;
+            else if (strcmp(optarg, "both") == 0) ro.lie_skip = LIE_SKIP_BLOCKERS | LIE_SKIP_FALLBACK;
+            else return usage_error("--lie-skip: expected blockers, fallback or both, got '%s'", optarg);
             break;
         case OPT_VISIBILITY:
             visibility_set = 1;
