@@ -50,4 +50,16 @@ run "$B/lie-render" "$S/cornell.gltf" --size 16x16 -q --camera NoSuchCamera -o "
 expect_rc 1 "unknown camera name"
 expect_one_error_line "lie-render: $S/cornell.gltf: no camera named" "unknown camera: one line"
 expect_no_file "$TMP/c2.exr" "no output for an unknown camera"
+
+# A scene without emitters renders (emission only), with a warning unless -q.
+G="$ROOT/tests/data/gltf"
+run "$B/lie-render" "$G/hierarchy.gltf" --size 8x8 -o "$TMP/dark.exr"
+expect_rc 0 "a scene without emitters renders"
+if grep -q "lie-render: $G/hierarchy.gltf: warning: no emitters" "$TMP/err"; then ok "and says it has no emitters"; else
+    not_ok "no-emitter warning"; sed 's/^/# /' "$TMP/err"; fi
+run "$B/lie-render" "$G/hierarchy.gltf" --size 8x8 -q -o "$TMP/dark.exr"
+if [ "$rc" -eq 0 ] && [ ! -s "$TMP/err" ]; then ok "-q silences the warning"; else not_ok "-q and the warning"; fi
+run "$B/lie-build" "$G/hierarchy.gltf" -o "$TMP/dark.lie"
+if [ "$rc" -eq 0 ] && grep -q "lie-build: $G/hierarchy.gltf: warning: no emitters" "$TMP/err"; then
+    ok "lie-build warns too"; else not_ok "lie-build no-emitter warning"; sed 's/^/# /' "$TMP/err"; fi
 finish

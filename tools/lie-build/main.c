@@ -222,6 +222,9 @@ int main(int argc, char **argv)
     lie_scene *scene = NULL;
     if (lie_scene_load(input, &so, &scene, &err) != LIE_OK)
         return fail(&err);
+    if (scene->n_emitters == 0 && !quiet)
+        fprintf(stderr, "%s: %s: warning: no emitters (no emissive material, no KHR_lights_punctual light): "
+                        "the cache holds no environments\n", prog, input);
     double t1 = lie_time_now();
     lie_rt *rt = NULL;
     if (lie_rt_create(scene, &rt, &err) != LIE_OK) {

@@ -323,6 +323,9 @@ int main(int argc, char **argv)
         }
         ro.oracle = lie_lie_vis_oracle(lv);
     }
+    if (scene->n_emitters == 0 && !quiet)
+        fprintf(stderr, "%s: %s: warning: no emitters (no emissive material, no KHR_lights_punctual light): "
+                        "the image shows emission only\n", prog, input);
     if (ro.aov_emitter >= scene->n_emitters) {
         lie_error_set(&err, LIE_ERR_ARG, input, "--emitter %d: the scene has %d emitters", ro.aov_emitter,
                       scene->n_emitters);
