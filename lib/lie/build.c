@@ -305,7 +305,7 @@ float lie_pair_eps(const lie_scene *s, uint32_t tri)
 int lie_pair_hull_cap(const lie_scene *s, int e)
 {
     const lie_emitter *em = &s->emitters[e];
-    return 9 + (em->type == LIE_EMITTER_AREA ? 3 * (int)em->n_tris : 3);
+    return 9 + (em->type == LIE_EMITTER_AREA ? (em->n_hull ? em->n_hull : 3 * (int)em->n_tris) : 3);
 }
 
 int lie_pair_hull_points(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], int e, lie_vec3 *out)
@@ -321,7 +321,10 @@ int lie_pair_hull_points(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], 
         if (two_sided)
             out[n++] = lie_v3_sub(V[k], lie_v3_scale(ng, eps));
     }
-    if (em->type == LIE_EMITTER_AREA) {
+    if (em->type == LIE_EMITTER_AREA && em->n_hull) {
+        memcpy(&out[n], em->hull, sizeof(lie_vec3) * (size_t)em->n_hull); /* a box around many triangles */
+        n += em->n_hull;
+    } else if (em->type == LIE_EMITTER_AREA) {
         memcpy(&out[n], &s->tri_p[3 * (size_t)em->first_tri], sizeof(lie_vec3) * 3 * em->n_tris);
         n += 3 * (int)em->n_tris;
     } else if (em->type == LIE_EMITTER_POINT) {

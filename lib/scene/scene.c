@@ -214,6 +214,91 @@ typedef struct fill_ctx {
     lie_status status;
 } fill_ctx;
 
+/* A bounding box of an area emitter with many triangles, oriented to its
+ * plane: the axis is its area-weighted normal when the triangles mostly
+ * agree on it (a tessellated panel, whose box is then flat), the in-plane
+ * axes its vertices' principal directions; else the world axes (a closed
+ * bulb).  Widened a little, so rounding never leaves a vertex outside. */
+static void emitter_hull(const lie_scene *s, lie_emitter *e)
+{
+    e->n_hull = 0;
+    if (e->n_tris <= LIE_EMITTER_HULL_TRIS)
+        return;
+    const lie_vec3 *P = &s->tri_p[3 * (size_t)e->first_tri];
+    size_t nv = 3 * (size_t)e->n_tris;
+    double nx = 0, ny = 0, nz = 0, total = 0, cx = 0, cy = 0, cz = 0;
+    for (uint32_t t = 0; t < e->n_tris; t++) {
+        lie_vec3 g = s->tri_ng[e->first_tri + t];
+        double a = s->tri_area[e->first_tri + t];
+        nx += a * g.x;
+        ny += a * g.y;
+        nz += a * g.z;
+        total += a;
+    }
+    for (size_t i = 0; i < nv; i++) {
+        cx += P[i].x;
+        cy += P[i].y;
+        cz += P[i].z;
+    }
+    cx /= (double)nv;
+    cy /= (double)nv;
+    cz /= (double)nv;
+    double len = sqrt(nx * nx + ny * ny + nz * nz);
+    double ax[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    if (len > 0.5 * total && len > 0.0) {
+        double w[3] = {nx / len, ny / len, nz / len};
+        /* any unit u orthogonal to w, then v = w x u */
+        double u[3] = {fabs(w[0]) < 0.9 ? 1.0 : 0.0, fabs(w[0]) < 0.9 ? 0.0 : 1.0, 0.0};
+        double d = u[0] * w[0] + u[1] * w[1] + u[2] * w[2];
+        for (int k = 0; k < 3; k++)
+            u[k] -= d * w[k];
+        double ul = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+        for (int k = 0; k < 3; k++)
+            u[k] /= ul;
+        double v[3] = {w[1] * u[2] - w[2] * u[1], w[2] * u[0] - w[0] * u[2], w[0] * u[1] - w[1] * u[0]};
+        /* principal directions in the plane: the angle that diagonalises
+         * the 2x2 covariance of the projected vertices */
+        double suu = 0, svv = 0, suv = 0;
+        for (size_t i = 0; i < nv; i++) {
+            double q[3] = {P[i].x - cx, P[i].y - cy, P[i].z - cz};
+            double pu = q[0] * u[0] + q[1] * u[1] + q[2] * u[2], pv = q[0] * v[0] + q[1] * v[1] + q[2] * v[2];
+            suu += pu * pu;
+            svv += pv * pv;
+            suv += pu * pv;
+        }
+        double th = 0.5 * atan2(2.0 * suv, suu - svv), c = cos(th), sn = sin(th);
+        for (int k = 0; k < 3; k++) {
+            ax[0][k] = c * u[k] + sn * v[k];
+            ax[1][k] = -sn * u[k] + c * v[k];
+            ax[2][k] = w[k];
+        }
+    }
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    double mag = 0.0;
+    for (size_t i = 0; i < nv; i++) {
+        double q[3] = {P[i].x, P[i].y, P[i].z};
+        for (int a = 0; a < 3; a++) {
+            double pr = q[0] * ax[a][0] + q[1] * ax[a][1] + q[2] * ax[a][2];
+            lo[a] = pr < lo[a] ? pr : lo[a];
+            hi[a] = pr > hi[a] ? pr : hi[a];
+            mag = fmax(mag, fabs(q[a]));
+        }
+    }
+    if (!isfinite(mag))
+        return; /* keep the vertices */
+    double pad = 1e-5 * (mag + 1.0);
+    for (int k = 0; k < 8; k++) {
+        double p[3] = {0, 0, 0};
+        for (int a = 0; a < 3; a++) {
+            double t = (k >> a) & 1 ? hi[a] + pad : lo[a] - pad;
+            for (int q = 0; q < 3; q++)
+                p[q] += t * ax[a][q];
+        }
+        e->hull[k] = lie_v3((float)p[0], (float)p[1], (float)p[2]);
+    }
+    e->n_hull = 8;
+}
+
 static void fill_node(lie_scene *s, int nd, const lie_mat4 *world, int dead, void *p)
 {
     fill_ctx *f = p;
@@ -308,6 +393,7 @@ static void fill_node(lie_scene *s, int nd, const lie_mat4 *world, int dead, voi
                     e->tri_cdf[t] = (float)acc;
                 }
                 e->area = (float)acc;
+                emitter_hull(s, e);
                 memcpy(e->radiance, mat->emissive, sizeof e->radiance);
                 e->double_sided = mat->double_sided;
                 e->cos_inner = e->cos_outer = -2.0f;

@@ -131,6 +131,8 @@ typedef enum lie_emitter_type {
     LIE_EMITTER_DIRECTIONAL = 2
 } lie_emitter_type;
 
+#define LIE_EMITTER_HULL_TRIS 4
+
 typedef struct lie_emitter {
     lie_emitter_type type;
     int node;              /* node it comes from */
@@ -141,6 +143,12 @@ typedef struct lie_emitter {
     float *tri_cdf;        /* n_tris, cumulative area (last = area) */
     float radiance[3];     /* emissive (before any emissive texture), nits */
     int double_sided;
+    /* A few points whose convex hull contains the emitter, for shaft tests
+     * (lib/lie): the corners of a bounding box oriented to the emitter's
+     * plane when it has more than LIE_EMITTER_HULL_TRIS triangles; n_hull
+     * 0: its triangles' vertices serve. */
+    lie_vec3 hull[8];
+    int n_hull;
     /* punctual */
     lie_vec3 position;
     lie_vec3 direction;    /* where the light points (spot, directional), unit */

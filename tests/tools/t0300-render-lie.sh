@@ -4,13 +4,17 @@
 # determinism, stdin, --scene, complexity layers, camera paths, errors.
 . "$ROOT/tests/tools/lib.sh"
 SIZE=${LIE_TEST_SIZE:-160x160}
+SCENES=$S
 
 compare() { # A B MAXFRAC_ANY MAXFRAC_2PCT WHAT
     if "$H/exr-compare" "$1" "$2" "$3" "$4" >"$TMP/cmp" 2>&1; then ok "$5: $(cat "$TMP/cmp")"; else
         not_ok "$5: $(cat "$TMP/cmp")"; fi
 }
 
-for scene in museum1 museum2 museum3 cornell; do
+# panel_light: an emitter of 50 triangles (shafts bounded by an oriented box)
+cp "$ROOT/tests/data/gltf/panel_light.gltf" "$TMP/panel_light.gltf"
+for scene in museum1 museum2 museum3 cornell panel_light; do
+    S=$SCENES; [ "$scene" = panel_light ] && S=$TMP
     run "$B/lie-build" "$S/$scene.gltf" -q -o "$TMP/$scene-c.lie" --blockers conservative
     expect_rc 0 "$scene: conservative build"
     run "$B/lie-build" "$S/$scene.gltf" -q -o "$TMP/$scene-s.lie"
@@ -26,6 +30,7 @@ for scene in museum1 museum2 museum3 cornell; do
     run "$B/lie-render" "$TMP/$scene-c.lie" -q --size $SIZE --visibility=full -o "$TMP/$scene-cf.exr"
     compare "$TMP/$scene-full.exr" "$TMP/$scene-cf.exr" 0 0 "$scene: --visibility=full from a cache = from the scene, pixel for pixel"
 done
+S=$SCENES
 
 run "$B/lie-render" "$TMP/museum1-s.lie" -q --size 96x64 --threads 1 -o "$TMP/t1.exr"
 run "$B/lie-render" "$TMP/museum1-s.lie" -q --size 96x64 --threads 2 -o "$TMP/t2.exr"

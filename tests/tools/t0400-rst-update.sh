@@ -42,6 +42,13 @@ cat >"$TMP/addcol.yaml" <<YAML
 - add: {file: $ROOT/tests/data/gltf/vertex_colors.gltf, node: "#0", as: Painted, transform: {translation: [0, 0.8, 0]}}
 YAML
 same_as_rebuild "$TMP/m1.lie" "museum1 add with vertex colours" "$TMP/addcol.yaml"
+# an emitter of many triangles (its shafts bounded by an oriented box), moved and turned
+cp "$ROOT/tests/data/gltf/panel_light.gltf" "$TMP/"
+"$B/lie-build" "$TMP/panel_light.gltf" -q -o "$TMP/pl.lie" || not_ok "build panel_light"
+edit plmove '- move: {node: Box, by: [0.7, 0, 0.3]}'
+edit plturn '- rotate: {node: Panel, axis: [0, 1, 0], degrees: 20}'
+same_as_rebuild "$TMP/pl.lie" "panel_light: box moved" "$TMP/plmove.yaml"
+same_as_rebuild "$TMP/pl.lie" "panel_light: panel turned" "$TMP/plturn.yaml"
 run "$B/lie-render" "$TMP/u.lie" -q --size 32x32 -o "$TMP/addcol.exr"
 expect_rc 0 "the cache with the coloured object renders"
 same_as_rebuild "$TMP/m1.lie" "museum1: light off" "$TMP/off.yaml"

@@ -477,7 +477,48 @@ def vertex_colors():
     write("vertex_colors.gltf", d.embedded())
 
 
+def panel_light():
+    """A tessellated, tilted emissive panel (50 triangles, so shaft tests
+    bound it by an oriented box) over a floor with a small box between,
+    and a camera: the LIE oracle on an emitter of many triangles."""
+    d = Doc()
+    fl = d.positions([(-3, 0, -3), (-3, 0, 3), (3, 0, 3), (3, 0, -3)])
+    fi = d.indices([0, 1, 2, 0, 2, 3])
+    s = 0.4
+    box = [(-s, 0, -s), (s, 0, -s), (s, 0, s), (-s, 0, s), (-s, 0.8, -s), (s, 0.8, -s), (s, 0.8, s), (-s, 0.8, s)]
+    bp = d.positions(box)
+    bi = d.indices([4, 6, 5, 4, 7, 6, 0, 1, 5, 0, 5, 4, 1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7])
+    n = 5
+    c, sn = math.cos(0.4), math.sin(0.4)
+    pts = []
+    for i in range(n + 1):
+        for j in range(n + 1):
+            u, v = -0.8 + 1.6 * i / n, -0.8 + 1.6 * j / n
+            pts.append((u, 2.2 + v * sn, v * c))
+    idx = []
+    for i in range(n):
+        for j in range(n):
+            a = i * (n + 1) + j
+            b, e = a + 1, a + n + 1
+            idx += [a, b, e, b, e + 1, e]
+    pp = d.positions(pts)
+    pi = d.indices(idx)
+    d.g["meshes"] = [{"primitives": [{"attributes": {"POSITION": fl}, "indices": fi, "material": 0}]},
+                     {"primitives": [{"attributes": {"POSITION": bp}, "indices": bi, "material": 0}]},
+                     {"primitives": [{"attributes": {"POSITION": pp}, "indices": pi, "material": 1}]}]
+    d.g["materials"] = [{"pbrMetallicRoughness": {"baseColorFactor": [0.7, 0.7, 0.7, 1], "metallicFactor": 0}},
+                        {"emissiveFactor": [1, 0.9, 0.8], "doubleSided": True,
+                         "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 8}}}]
+    d.g["extensionsUsed"] = ["KHR_materials_emissive_strength"]
+    d.g["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.9, "znear": 0.05}}]
+    d.g["nodes"] = [{"mesh": 0, "name": "Floor"}, {"mesh": 1, "name": "Box"}, {"mesh": 2, "name": "Panel"},
+                    {"camera": 0, "translation": [0, 2.5, 5.5], "rotation": [-0.2588, 0, 0, 0.9659]}]
+    d.g["scenes"] = [{"nodes": [0, 1, 2, 3]}]
+    write("panel_light.gltf", d.embedded())
+
+
 def main():
+    panel_light()
     vertex_colors()
     quantized()
     texture_transform()
