@@ -180,7 +180,31 @@ static size_t sort_unique(uint32_t *v, size_t n)
             v[j] = x;
         }
     } else {
-        qsort(v, n, sizeof *v, cmp_u32);
+        /* candidate lists run to thousands: byte-wise radix passes,
+         * skipping a byte every key shares (the top ones, mostly) */
+        uint32_t *tmp = malloc(n * sizeof *tmp);
+        if (!tmp) {
+            qsort(v, n, sizeof *v, cmp_u32);
+        } else {
+            uint32_t *src = v, *dst = tmp;
+            for (int shift = 0; shift < 32; shift += 8) {
+                size_t count[257] = {0};
+                for (size_t i = 0; i < n; i++)
+                    count[((src[i] >> shift) & 0xFFu) + 1]++;
+                if (count[((src[0] >> shift) & 0xFFu) + 1] == n)
+                    continue; /* one bucket: already in order by this byte */
+                for (int b = 0; b < 256; b++)
+                    count[b + 1] += count[b];
+                for (size_t i = 0; i < n; i++)
+                    dst[count[(src[i] >> shift) & 0xFFu]++] = src[i];
+                uint32_t *x = src;
+                src = dst;
+                dst = x;
+            }
+            if (src != v)
+                memcpy(v, src, n * sizeof *v);
+            free(tmp);
+        }
     }
     size_t m = 1;
     for (size_t i = 1; i < n; i++)
@@ -283,6 +307,75 @@ static void collect_candidate(void *ctx, uint32_t tri)
         w->cap_cand = nc;
     }
     w->cand[w->n_cand++] = tri;
+}
+
+static float v3_axis(lie_vec3 v, int a) { return a == 0 ? v.x : a == 1 ? v.y : v.z; }
+
+/* Candidates for the triangles that meet the convex hull of hull[0..nh)
+ * (grown by tol when tol > 0) into w->cand, sorted and unique: Embree box
+ * queries over the hull cut into slabs along its longest axis.  A slab's
+ * box bounds the hull's part in it: the hull's points inside, and where
+ * the segments between two points cross the slab's planes (the vertices of
+ * a convex hull cut by a plane lie on such segments).  A long oblique
+ * shaft so stops dragging in everything under its bounding box: a
+ * terrain patch's shaft to a ceiling light touched thousands of ground
+ * triangles.  Every triangle meeting the hull is among the candidates. */
+#define SHAFT_SLABS 4
+
+static void shaft_candidates(const build_ctx *c, worker *w, const lie_vec3 *hull, int nh, float tol)
+{
+    lie_box3 all = lie_box3_empty();
+    for (int i = 0; i < nh; i++)
+        lie_box3_grow(&all, hull[i]);
+    float grow = lie_maxf(tol, 0.0f) + 1e-6f * lie_rt_scale(c->rt);
+    w->n_cand = 0;
+    int a = 0;
+    lie_vec3 ext = lie_v3_sub(all.hi, all.lo);
+    if (ext.y > v3_axis(ext, a))
+        a = 1;
+    if (ext.z > v3_axis(ext, a))
+        a = 2;
+    float lo = v3_axis(all.lo, a), hi = v3_axis(all.hi, a), width = (hi - lo) / (float)SHAFT_SLABS;
+    lie_box3 slab[SHAFT_SLABS];
+    int n_slabs = 1;
+    if (nh <= 64 && width > 0.0f && isfinite(width)) {
+        n_slabs = SHAFT_SLABS;
+        for (int k = 0; k < n_slabs; k++)
+            slab[k] = lie_box3_empty();
+        for (int i = 0; i < nh; i++) {
+            int k = (int)((v3_axis(hull[i], a) - lo) / width);
+            k = k < 0 ? 0 : k >= n_slabs ? n_slabs - 1 : k;
+            lie_box3_grow(&slab[k], hull[i]);
+        }
+        for (int i = 0; i < nh; i++)
+            for (int j = i + 1; j < nh; j++) {
+                float pa = v3_axis(hull[i], a), pb = v3_axis(hull[j], a);
+                if (pa == pb)
+                    continue;
+                for (int k = 1; k < n_slabs; k++) {
+                    float y = lo + (float)k * width;
+                    if ((y - pa) * (y - pb) > 0.0f)
+                        continue;
+                    float t = (y - pa) / (pb - pa);
+                    lie_vec3 x = lie_v3_add(hull[i], lie_v3_scale(lie_v3_sub(hull[j], hull[i]), t));
+                    lie_box3_grow(&slab[k - 1], x);
+                    lie_box3_grow(&slab[k], x);
+                }
+            }
+        /* rounding of the crossing points: widen by their size's epsilon */
+        grow += 1e-5f * lie_maxf(lie_v3_maxabs(all.lo), lie_v3_maxabs(all.hi));
+    } else {
+        slab[0] = all;
+    }
+    for (int k = 0; k < n_slabs; k++) {
+        if (lie_box3_is_empty(&slab[k]))
+            continue;
+        lie_box3 b = slab[k];
+        b.lo = lie_v3_sub(b.lo, lie_v3(grow, grow, grow));
+        b.hi = lie_v3_add(b.hi, lie_v3(grow, grow, grow));
+        lie_rt_box_query(c->rt, b, collect_candidate, w);
+    }
+    w->n_cand = sort_unique(w->cand, w->n_cand);
 }
 
 float lie_ray_far(const lie_scene *s)
@@ -390,13 +483,7 @@ static size_t shaft_triangles(const build_ctx *c, worker *w, uint32_t tri, const
     for (int i = n_patch; i < nh; i++)
         w->hull[i] = lie_v3_add(ectr, lie_v3_scale(lie_v3_sub(w->hull[i], ectr), 0.999f));
     float tol = -1e-7f * lie_rt_scale(c->rt); /* negative: contact is not entry */
-    lie_box3 box = lie_box3_empty();
-    for (int i = 0; i < nh; i++)
-        lie_box3_grow(&box, w->hull[i]);
-    box.lo = lie_v3_sub(box.lo, lie_v3(tol, tol, tol));
-    box.hi = lie_v3_add(box.hi, lie_v3(tol, tol, tol));
-    w->n_cand = 0;
-    lie_rt_box_query(c->rt, box, collect_candidate, w);
+    shaft_candidates(c, w, w->hull, nh, tol);
     lie_sat sat;
     pair_sat(c, w, nh, tri, two_sided, e, 0.0f, &sat);
     size_t m = 0;
@@ -416,6 +503,8 @@ static size_t shaft_triangles(const build_ctx *c, worker *w, uint32_t tri, const
 /* Sampling finds a blocker's triangles where segments happened to hit it;
  * the rest of the same object inside the shaft blocks other rays.  Add every
  * triangle of an instance already in the list that meets the shaft. */
+#define EXPAND_SCAN_MAX 256 /* instances up to this many triangles are scanned whole */
+
 static void expand_instances(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided,
                              int e, float eps)
 {
@@ -429,6 +518,10 @@ static void expand_instances(const build_ctx *c, worker *w, uint32_t tri, const 
     float tol = 1e-6f * lie_rt_scale(c->rt);
     lie_sat sat;
     pair_sat(c, w, nh, tri, two_sided, e, tol, &sat);
+    /* A large instance (a terrain, a building exported as one mesh) is not
+     * scanned whole: its candidates come from one Embree box query over the
+     * shaft's bounds, shared by every large instance of the list. */
+    int have_box = 0;
     uint32_t last = UINT32_MAX;
     for (size_t i = 0; i < n0; i++) {
         uint32_t inst = s->tri_instance[w->hits[i]];
@@ -436,8 +529,18 @@ static void expand_instances(const build_ctx *c, worker *w, uint32_t tri, const 
             continue; /* hits are sorted, so an instance's triangles are together */
         last = inst;
         const lie_instance *in = &s->instances[inst];
-        for (uint32_t k = 0; k < in->n_tris; k++) {
-            uint32_t t = in->first_tri + k;
+        int scan = in->n_tris <= EXPAND_SCAN_MAX;
+        if (!scan && !have_box) {
+            shaft_candidates(c, w, w->hull, nh, tol);
+            if (w->nomem)
+                return;
+            have_box = 1;
+        }
+        size_t n_try = scan ? in->n_tris : w->n_cand;
+        for (size_t k = 0; k < n_try; k++) {
+            uint32_t t = scan ? in->first_tri + (uint32_t)k : w->cand[k];
+            if (!scan && s->tri_instance[t] != inst)
+                continue;
             if (t == tri || s->tri_emitter[t] == e || !(s->tri_area[t] > 0.0f))
                 continue;
             if (lie_sat_rejects(&sat, &s->tri_p[3 * (size_t)t]) ||
@@ -614,14 +717,7 @@ static lie_class conservative_pair(const build_ctx *c, worker *w, uint32_t tri, 
         cand = parent;
         n_cand = n_parent;
     } else {
-        lie_box3 box = lie_box3_empty();
-        for (int i = 0; i < nh; i++)
-            lie_box3_grow(&box, w->hull[i]);
-        box.lo = lie_v3_sub(box.lo, lie_v3(tol, tol, tol));
-        box.hi = lie_v3_add(box.hi, lie_v3(tol, tol, tol));
-        w->n_cand = 0;
-        lie_rt_box_query(c->rt, box, collect_candidate, w);
-        w->n_cand = sort_unique(w->cand, w->n_cand);
+        shaft_candidates(c, w, w->hull, nh, tol);
         cand = w->cand;
         n_cand = w->n_cand;
     }
