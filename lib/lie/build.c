@@ -843,8 +843,14 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
     lie_pnode *nd = &u->nodes[idx];
     nd->quality = quality;
     nd->count = (uint32_t)n_list;
-    w->st.pairs[cls == LIE_CLASS_PARTIAL && n_list > c->p->complex_cap ? LIE_CLASS_COMPLEX : cls]++;
-    if (cls == LIE_CLASS_PARTIAL && n_list > c->p->complex_cap) {
+    /* A list with an alpha-masked triangle goes to Embree as well: the
+     * renderer's segment test knows nothing of holes. */
+    int masked = 0;
+    for (size_t k = 0; cls == LIE_CLASS_PARTIAL && k < n_list && !masked; k++)
+        masked = lie_scene_material(s, s->tri_material[w->hits[k]])->alpha_mask;
+    int complex = cls == LIE_CLASS_PARTIAL && (n_list > c->p->complex_cap || masked);
+    w->st.pairs[complex ? LIE_CLASS_COMPLEX : cls]++;
+    if (complex) {
         nd->cls = LIE_CLASS_COMPLEX; /* the renderer asks the whole scene */
         return;
     }

@@ -11,6 +11,7 @@ struct lie_rt {
     RTCScene scene;
     const lie_scene *s;
     uint8_t *tri_two_sided; /* per triangle: material is double-sided */
+    uint8_t *tri_masked;    /* per triangle: alphaMode MASK (NULL: none is) */
     float scale;
     lie_error *pending;     /* where the error callback writes during create */
 };
@@ -44,16 +45,43 @@ typedef struct query_ctx {
  * tnear, dir_x, dir_y, dir_z, ...; hit = Ng_x, Ng_y, Ng_z, u, v, primID. */
 #define RAYN_DIR(ray, N, i, k) (((const float *)(ray))[(4 + (k)) * (N) + (i)])
 #define HITN_PRIM(hit, N, i) (((const unsigned *)(hit))[5 * (N) + (i)])
+#define HITN_U(hit, N, i) (((const float *)(hit))[3 * (N) + (i)])
+#define HITN_V(hit, N, i) (((const float *)(hit))[4 * (N) + (i)])
+
+/* A hit on an alpha-masked triangle where its alpha is below the cutoff
+ * is no hit at all (for every kind of query). */
+static int hit_is_hole(const lie_rt *rt, const struct RTCFilterFunctionNArguments *args, unsigned i,
+                       unsigned prim)
+{
+    return rt->tri_masked && rt->tri_masked[prim] &&
+           !lie_scene_solid_at(rt->s, prim, HITN_U(args->hit, args->N, i), HITN_V(args->hit, args->N, i));
+}
+
+/* Occlusion queries carry Embree's plain context; the rt comes with the
+ * geometry (set only when some triangle is masked). */
+static void occluded_filter(const struct RTCFilterFunctionNArguments *args)
+{
+    const lie_rt *rt = args->geometryUserPtr;
+    for (unsigned i = 0; i < args->N; i++)
+        if (args->valid[i] == -1 && hit_is_hole(rt, args, i, HITN_PRIM(args->hit, args->N, i)))
+            args->valid[i] = 0;
+}
 
 static void intersect_filter(const struct RTCFilterFunctionNArguments *args)
 {
     query_ctx *q = (query_ctx *)args->context;
-    if (q->mode == QUERY_CLOSEST)
+    if (q->mode == QUERY_CLOSEST && !q->rt->tri_masked)
         return;
     for (unsigned i = 0; i < args->N; i++) {
         if (args->valid[i] != -1)
             continue;
         unsigned prim = HITN_PRIM(args->hit, args->N, i);
+        if (hit_is_hole(q->rt, args, i, prim)) {
+            args->valid[i] = 0; /* through a hole of an alpha-masked surface */
+            continue;
+        }
+        if (q->mode == QUERY_CLOSEST)
+            continue;
         if (q->mode == QUERY_CULL) {
             if (q->rt->tri_two_sided[prim])
                 continue;
@@ -109,8 +137,21 @@ lie_status lie_rt_create(const lie_scene *s, lie_rt **out, lie_error *err)
         lie_rt_destroy(rt);
         return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
     }
-    for (uint32_t i = 0; i < s->n_tris; i++)
-        rt->tri_two_sided[i] = (uint8_t)(lie_scene_material(s, s->tri_material[i])->double_sided != 0);
+    int any_masked = 0;
+    for (uint32_t i = 0; i < s->n_tris; i++) {
+        const lie_material *m = lie_scene_material(s, s->tri_material[i]);
+        rt->tri_two_sided[i] = (uint8_t)(m->double_sided != 0);
+        any_masked |= m->alpha_mask;
+    }
+    if (any_masked) {
+        rt->tri_masked = malloc((size_t)s->n_tris + 1);
+        if (!rt->tri_masked) {
+            lie_rt_destroy(rt);
+            return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
+        }
+        for (uint32_t i = 0; i < s->n_tris; i++)
+            rt->tri_masked[i] = (uint8_t)(lie_scene_material(s, s->tri_material[i])->alpha_mask != 0);
+    }
     lie_vec3 ext = lie_box3_is_empty(&s->bounds) ? lie_v3(1, 1, 1) : lie_v3_sub(s->bounds.hi, s->bounds.lo);
     rt->scale = fmaxf(1.0f, fmaxf(ext.x, fmaxf(ext.y, ext.z)));
     /* Robust traversal: watertight triangle tests, so shadows do not leak
@@ -133,6 +174,10 @@ lie_status lie_rt_create(const lie_scene *s, lie_rt **out, lie_error *err)
                     ib[i] = (unsigned)i;
             }
             rtcSetGeometryIntersectFilterFunction(g, intersect_filter);
+            if (rt->tri_masked) {
+                rtcSetGeometryUserData(g, rt);
+                rtcSetGeometryOccludedFilterFunction(g, occluded_filter);
+            }
             rtcCommitGeometry(g);
             rtcAttachGeometryByID(rt->scene, g, 0);
             rtcReleaseGeometry(g);
@@ -160,6 +205,7 @@ void lie_rt_destroy(lie_rt *rt)
     if (rt->device)
         rtcReleaseDevice(rt->device);
     free(rt->tri_two_sided);
+    free(rt->tri_masked);
     free(rt);
 }
 

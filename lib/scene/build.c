@@ -27,6 +27,7 @@ lie_material lie_material_default(void)
     m.metallic = 1.0f;
     m.roughness = 1.0f;
     m.base_color_tex = m.mr_tex = m.emissive_tex = -1;
+    m.alpha_cutoff = 0.5f;
     lie_material_tex_xf_identity(&m);
     return m;
 }

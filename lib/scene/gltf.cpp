@@ -1085,6 +1085,10 @@ void import_materials(Import &im)
         }
         mt.emissive_tex = texture_info(im, g.emissiveTexture, true, w + " emissiveTexture", mt.tex_param[LIE_TEX_EMISSIVE]);
         mt.double_sided = g.doubleSided ? 1 : 0;
+        mt.alpha_mask = g.alphaMode == "MASK";
+        if (!std::isfinite(g.alphaCutoff))
+            fail(LIE_ERR_FORMAT, "%s: alphaCutoff is not a finite number", w.c_str());
+        mt.alpha_cutoff = float(g.alphaCutoff);
         lie_material_tex_xf_update(&mt);
     }
 }
@@ -1727,6 +1731,10 @@ void export_materials(Export &ex, const std::map<int, int> &gl_texture)
         }
         g.emissiveTexture.index = tex(mt.emissive_tex, true);
         g.doubleSided = mt.double_sided != 0;
+        if (mt.alpha_mask) {
+            g.alphaMode = "MASK";
+            g.alphaCutoff = short_float(mt.alpha_cutoff);
+        }
         tinygltf::TextureInfo *slots[3] = {&pbr.baseColorTexture, &pbr.metallicRoughnessTexture,
                                            &g.emissiveTexture};
         for (int k = 0; k < 3; k++) {

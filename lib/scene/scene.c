@@ -8,7 +8,7 @@
 
 static const lie_material default_material = {
     /* glTF 2.0 §3.9.6: the default material is white, metallic 1, roughness 1. */
-    NULL, {1.0f, 1.0f, 1.0f, 1.0f}, -1, 1.0f, 1.0f, -1, {0.0f, 0.0f, 0.0f}, -1, 0,
+    NULL, {1.0f, 1.0f, 1.0f, 1.0f}, -1, 1.0f, 1.0f, -1, {0.0f, 0.0f, 0.0f}, -1, 0, 0, 0.5f,
     {{0.0f, 0.0f, 0.0f, 1.0f, 1.0f}, {0.0f, 0.0f, 0.0f, 1.0f, 1.0f}, {0.0f, 0.0f, 0.0f, 1.0f, 1.0f}},
     {{1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f}, {1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f}, {1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f}}};
 
@@ -474,6 +474,10 @@ static void hash_world(lie_scene *s, lie_hasher *h)
         int32_t t[3] = {m->base_color_tex, m->mr_tex, m->emissive_tex};
         lie_hasher_update(h, f, sizeof f);
         lie_hasher_update(h, t, sizeof t);
+        if (m->alpha_mask) { /* only masked materials: other scenes keep their hashes */
+            float a[2] = {1.0f, m->alpha_cutoff};
+            lie_hasher_update(h, a, sizeof a);
+        }
         for (int k = 0; k < 3; k++) /* texture transforms, when there are any */
             if (!lie_material_tex_xf_is_identity(m, k)) {
                 int32_t slot = k;

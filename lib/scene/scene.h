@@ -42,6 +42,11 @@ typedef struct lie_material {
     float emissive[3];     /* emissiveFactor x KHR_materials_emissive_strength, nits */
     int emissive_tex;      /* sRGB-decoded, or -1 */
     int double_sided;
+    /* alphaMode MASK: a point whose alpha (base colour factor x texture x
+     * COLOR_0) is below alpha_cutoff is a hole, for camera, mirror and
+     * shadow rays alike.  OPAQUE and BLEND are opaque (0). */
+    int alpha_mask;
+    float alpha_cutoff;
     /* KHR_texture_transform per texture slot (LIE_TEX_*): offset u, v,
      * rotation (radians), scale u, v as in the file (0 0 0 1 1 without the
      * extension), and the matrix they make (lie_material_tex_xf_update):
@@ -232,6 +237,10 @@ uint32_t lie_emitter_point(const lie_scene *s, int e, float u1, float u2, lie_ve
 
 /* Bilinear lookup with the texture's wrap modes; rgba out. */
 void lie_texture_sample(const lie_texture *t, float u, float v, float rgba[4]);
+
+/* Whether the point (b1, b2) of triangle tri is solid: always, unless its
+ * material is alphaMode MASK and the alpha there is below the cutoff. */
+int lie_scene_solid_at(const lie_scene *s, uint32_t tri, float b1, float b2);
 
 /* Camera by name (node or camera name) or by "#index"/decimal index into
  * s->cameras; NULL or "" gives the first camera, or the default camera when

@@ -70,3 +70,24 @@ void lie_texture_sample(const lie_texture *t, float u, float v, float rgba[4])
         rgba[c] = top + fy * (bottom - top);
     }
 }
+
+int lie_scene_solid_at(const lie_scene *s, uint32_t tri, float b1, float b2)
+{
+    const lie_material *m = lie_scene_material(s, s->tri_material[tri]);
+    if (!m->alpha_mask)
+        return 1;
+    float b0 = 1.0f - b1 - b2, a = m->base_color[3];
+    if (m->base_color_tex >= 0 && m->base_color_tex < s->n_textures) {
+        const float *uv = &s->tri_uv[6 * (size_t)tri];
+        float u = b0 * uv[0] + b1 * uv[2] + b2 * uv[4], v = b0 * uv[1] + b1 * uv[3] + b2 * uv[5];
+        float tu, tv, rgba[4];
+        lie_tex_xf_apply(m->tex_xf[LIE_TEX_BASE_COLOR], u, v, &tu, &tv);
+        lie_texture_sample(&s->textures[m->base_color_tex], tu, tv, rgba);
+        a *= rgba[3];
+    }
+    if (s->tri_color) {
+        const float *c = &s->tri_color[12 * (size_t)tri];
+        a *= b0 * c[3] + b1 * c[7] + b2 * c[11];
+    }
+    return a >= m->alpha_cutoff;
+}

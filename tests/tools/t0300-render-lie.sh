@@ -11,10 +11,11 @@ compare() { # A B MAXFRAC_ANY MAXFRAC_2PCT WHAT
         not_ok "$5: $(cat "$TMP/cmp")"; fi
 }
 
-# panel_light: an emitter of 50 triangles (shafts bounded by an oriented box)
-cp "$ROOT/tests/data/gltf/panel_light.gltf" "$TMP/panel_light.gltf"
-for scene in museum1 museum2 museum3 cornell panel_light; do
-    S=$SCENES; [ "$scene" = panel_light ] && S=$TMP
+# panel_light: an emitter of 50 triangles (shafts bounded by an oriented box);
+# alpha_mask: shadows through the holes of alphaMode MASK surfaces
+cp "$ROOT/tests/data/gltf/panel_light.gltf" "$ROOT/tests/data/gltf/alpha_mask.gltf" "$TMP/"
+for scene in museum1 museum2 museum3 cornell panel_light alpha_mask; do
+    S=$SCENES; [ -f "$TMP/$scene.gltf" ] && S=$TMP
     run "$B/lie-build" "$S/$scene.gltf" -q -o "$TMP/$scene-c.lie" --blockers conservative
     expect_rc 0 "$scene: conservative build"
     run "$B/lie-build" "$S/$scene.gltf" -q -o "$TMP/$scene-s.lie"

@@ -49,6 +49,11 @@ edit plmove '- move: {node: Box, by: [0.7, 0, 0.3]}'
 edit plturn '- rotate: {node: Panel, axis: [0, 1, 0], degrees: 20}'
 same_as_rebuild "$TMP/pl.lie" "panel_light: box moved" "$TMP/plmove.yaml"
 same_as_rebuild "$TMP/pl.lie" "panel_light: panel turned" "$TMP/plturn.yaml"
+# an alpha-masked screen (its pairs go to Embree) moved over the floor
+cp "$ROOT/tests/data/gltf/alpha_mask.gltf" "$TMP/"
+"$B/lie-build" "$TMP/alpha_mask.gltf" -q -o "$TMP/am.lie" || not_ok "build alpha_mask"
+edit ammove '- move: {node: Screen, by: [0.3, 0.2, -0.4]}'
+same_as_rebuild "$TMP/am.lie" "alpha_mask: screen moved" "$TMP/ammove.yaml"
 run "$B/lie-render" "$TMP/u.lie" -q --size 32x32 -o "$TMP/addcol.exr"
 expect_rc 0 "the cache with the coloured object renders"
 same_as_rebuild "$TMP/m1.lie" "museum1: light off" "$TMP/off.yaml"

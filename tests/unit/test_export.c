@@ -251,6 +251,8 @@ static void test_export_lights_cameras_and_skipped_primitives_keep_hash(void **s
     expect_round_trip(state, FIXTURES "quantized.gltf"); /* written back as floats */
     expect_round_trip(state, FIXTURES "vertex_colors.gltf");
     assert_true(has_text(in_dir(state, "out.gltf"), "COLOR_0"));
+    expect_round_trip(state, FIXTURES "alpha_mask.gltf");
+    assert_true(has_text(in_dir(state, "out.gltf"), "\"alphaMode\": \"MASK\""));
     expect_round_trip(state, FIXTURES "texture_transform.gltf");
     assert_true(has_text(in_dir(state, "out.gltf"), "KHR_texture_transform"));
 }

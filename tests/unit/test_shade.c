@@ -321,6 +321,63 @@ static void test_ray_modes_agree(void **state)
     lie_scene_destroy(s);
 }
 
+/* alphaMode MASK (tests/data/gltf/alpha_mask.gltf): the screen over the
+ * floor at y = 1 alternates solid and clear texels (u = (x + 1) / 2, v =
+ * (z + 1) / 2, 4 x 4 texels, solid where i + j is even); the quad at x in
+ * [1.5, 2.5] has base alpha 0.3 under a cutoff of 0.5: clear everywhere. */
+static void test_alpha_mask_holes_for_every_ray(void **state)
+{
+    (void)state;
+    lie_scene *s = NULL;
+    lie_error err;
+    assert_int_equal(lie_scene_load(TEST_SCENES "/../data/gltf/alpha_mask.gltf", NULL, &s, &err), LIE_OK);
+    const lie_material *scr = &s->materials[1], *clr = &s->materials[2], *flr = &s->materials[0];
+    assert_true(scr->alpha_mask && clr->alpha_mask && !flr->alpha_mask);
+    assert_float_equal(scr->alpha_cutoff, 0.5f, 0.0f);
+    lie_rt *rt = NULL;
+    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
+    lie_vec3 up = lie_v3(0, 1, 0), down = lie_v3(0, -1, 0);
+    /* shadow segments straight up from just above the floor to y = 2 */
+    assert_true(lie_rt_occluded(rt, lie_v3(-0.75f, 0.01f, -0.75f), up, 0.0f, 2.0f));  /* texel (0, 0): solid */
+    assert_false(lie_rt_occluded(rt, lie_v3(-0.25f, 0.01f, -0.75f), up, 0.0f, 2.0f)); /* texel (1, 0): clear */
+    assert_true(lie_rt_occluded(rt, lie_v3(-0.25f, 0.01f, -0.25f), up, 0.0f, 2.0f));  /* texel (1, 1): solid */
+    assert_false(lie_rt_occluded(rt, lie_v3(2.0f, 0.01f, 0.0f), up, 0.0f, 2.0f));     /* the clear quad */
+    /* the batched forms agree */
+    float ox[2] = {-0.75f, -0.25f}, oy[2] = {0.01f, 0.01f}, oz[2] = {-0.75f, -0.75f};
+    float dx[2] = {0, 0}, dy[2] = {1, 1}, dz[2] = {0, 0}, tn[2] = {0, 0}, tf[2] = {2, 2};
+    uint8_t occ[2];
+    lie_ray_batch b = {ox, oy, oz, dx, dy, dz, tn, tf, occ, 2};
+    for (int mode = LIE_RAYS_SINGLE; mode <= LIE_RAYS_STREAM; mode++) {
+        occ[0] = occ[1] = 7;
+        lie_rt_occluded_batch(rt, &b, (lie_ray_mode)mode);
+        assert_int_equal(occ[0], 1);
+        assert_int_equal(occ[1], 0);
+    }
+    /* a camera ray through a clear texel reaches the floor, through a
+     * solid one it stops at the screen; packets the same */
+    lie_hit h;
+    assert_true(lie_rt_intersect(rt, lie_v3(-0.25f, 3.0f, -0.75f), down, 0.0f, INFINITY, 1, &h));
+    assert_float_equal(h.t, 3.0f, 1e-4f);
+    assert_true(lie_rt_intersect(rt, lie_v3(-0.75f, 3.0f, -0.75f), down, 0.0f, INFINITY, 1, &h));
+    assert_float_equal(h.t, 2.0f, 1e-4f);
+    lie_vec3 dirs[2] = {down, down};
+    lie_hit h8[2];
+    lie_rt_intersect8(rt, lie_v3(-0.25f, 3.0f, -0.75f), dirs, 2, 0, h8);
+    assert_float_equal(h8[0].t, 3.0f, 1e-4f);
+    /* lie-build's all-hits query skips the holes too */
+    uint32_t *hits = NULL;
+    size_t n = 0, cap = 0;
+    assert_int_equal(lie_rt_all_hits(rt, lie_v3(-0.25f, 0.01f, -0.75f), up, 0.0f, 2.0f, NULL, 0, &hits, &n, &cap),
+                     LIE_OK);
+    assert_int_equal(n, 0);
+    assert_int_equal(lie_rt_all_hits(rt, lie_v3(-0.75f, 0.01f, -0.75f), up, 0.0f, 2.0f, NULL, 0, &hits, &n, &cap),
+                     LIE_OK);
+    assert_true(n >= 1);
+    free(hits);
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+}
+
 static void test_all_hits_reports_every_triangle_on_a_segment(void **state)
 {
     (void)state;
@@ -373,6 +430,7 @@ int main(void)
         cmocka_unit_test(test_render_is_identical_for_any_thread_count),
         cmocka_unit_test(test_ray_modes_agree),
         cmocka_unit_test(test_all_hits_reports_every_triangle_on_a_segment),
+        cmocka_unit_test(test_alpha_mask_holes_for_every_ray),
     };
     return cmocka_run_group_tests_name("shade", tests, NULL, NULL);
 }

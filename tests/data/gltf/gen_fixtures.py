@@ -517,7 +517,45 @@ def panel_light():
     write("panel_light.gltf", d.embedded())
 
 
+def alpha_mask():
+    """alphaMode MASK: a floor, a light above it, and between them a screen
+    whose 4x4 texture alternates solid and clear texels (cutoff 0.5), next
+    to a quad whose base alpha 0.3 makes it clear everywhere; a camera."""
+    d = Doc()
+    fl = d.positions([(-3, 0, -3), (-3, 0, 3), (3, 0, 3), (3, 0, -3)])
+    quad = d.indices([0, 1, 2, 0, 2, 3])
+    scr = d.positions([(-1, 1, -1), (-1, 1, 1), (1, 1, 1), (1, 1, -1)])
+    uv = d.accessor(f32(0, 0, 0, 1, 1, 1, 1, 0), FLOAT, "VEC2", 4)
+    clear = d.positions([(1.5, 1, -1), (1.5, 1, 1), (2.5, 1, 1), (2.5, 1, -1)])
+    lt = d.positions([(-0.5, 2.5, -0.5), (0.5, 2.5, -0.5), (0.5, 2.5, 0.5), (-0.5, 2.5, 0.5)])
+    checker = [[(255, 255, 255, 255 if (i + j) % 2 == 0 else 0) for i in range(4)] for j in range(4)]
+    d.g["images"] = [{"uri": "data:image/png;base64," + base64.b64encode(png(4, 4, checker)).decode()}]
+    d.g["samplers"] = [{"magFilter": 9728, "minFilter": 9728}]
+    d.g["textures"] = [{"source": 0, "sampler": 0}]
+    d.g["meshes"] = [
+        {"primitives": [{"attributes": {"POSITION": fl}, "indices": quad, "material": 0}]},
+        {"primitives": [{"attributes": {"POSITION": scr, "TEXCOORD_0": uv}, "indices": quad, "material": 1}]},
+        {"primitives": [{"attributes": {"POSITION": clear}, "indices": quad, "material": 2}]},
+        {"primitives": [{"attributes": {"POSITION": lt}, "indices": quad, "material": 3}]}]
+    d.g["materials"] = [
+        {"pbrMetallicRoughness": {"baseColorFactor": [0.7, 0.7, 0.7, 1], "metallicFactor": 0}},
+        {"name": "screen", "alphaMode": "MASK", "doubleSided": True,
+         "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0}},
+        {"name": "clear", "alphaMode": "MASK", "alphaCutoff": 0.5, "doubleSided": True,
+         "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 0.3], "metallicFactor": 0}},
+        {"emissiveFactor": [1, 1, 1], "doubleSided": True,
+         "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 10}}}]
+    d.g["extensionsUsed"] = ["KHR_materials_emissive_strength"]
+    d.g["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.9, "znear": 0.05}}]
+    d.g["nodes"] = [{"mesh": 0, "name": "Floor"}, {"mesh": 1, "name": "Screen"}, {"mesh": 2, "name": "Clear"},
+                    {"mesh": 3, "name": "Light"},
+                    {"camera": 0, "translation": [0, 4.5, 4.5], "rotation": [-0.3827, 0, 0, 0.9239]}]
+    d.g["scenes"] = [{"nodes": [0, 1, 2, 3, 4]}]
+    write("alpha_mask.gltf", d.embedded())
+
+
 def main():
+    alpha_mask()
     panel_light()
     vertex_colors()
     quantized()
