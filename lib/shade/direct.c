@@ -10,6 +10,9 @@
 
 #include <stdlib.h>
 #include <string.h>
+#ifdef __AVX2__
+#include <immintrin.h>
+#endif
 
 lie_status lie_shade_scratch_init(lie_shade_scratch *sc, int cap, int max_blockers)
 {
@@ -54,6 +57,30 @@ void lie_shade_scratch_free(lie_shade_scratch *sc)
     free(sc->blockers);
     lie_light_samples_free(&sc->rotated);
     memset(sc, 0, sizeof *sc);
+}
+
+/* sum of w[i] over the samples not blocked (occ[i] == 0), in a fixed order:
+ * eight lanes, then their pairwise sum, then the tail.  Written out
+ * because GCC's `omp simd reduction` kept the accumulator in memory, a
+ * store and reload per 8 samples that took 40% of the shading time. */
+static float unblocked_sum(const float *w, const uint32_t *occ, int n)
+{
+    int i = 0;
+    float sum = 0.0f;
+#ifdef __AVX2__
+    __m256 acc = _mm256_setzero_ps();
+    const __m256i none = _mm256_setzero_si256();
+    for (; i + 8 <= n; i += 8) {
+        __m256 free_ = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_loadu_si256((const __m256i *)(occ + i)), none));
+        acc = _mm256_add_ps(acc, _mm256_and_ps(free_, _mm256_loadu_ps(w + i)));
+    }
+    float lane[8];
+    _mm256_storeu_ps(lane, acc);
+    sum = ((lane[0] + lane[1]) + (lane[2] + lane[3])) + ((lane[4] + lane[5]) + (lane[6] + lane[7]));
+#endif
+    for (; i < n; i++)
+        sum += occ[i] ? 0.0f : w[i];
+    return sum;
 }
 
 /* Unshadowed contributions of an area emitter's samples, seen from origin o
@@ -320,25 +347,14 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
         const float *restrict wr = sc->wr, *restrict wg = sc->wg, *restrict wb = sc->wb;
         const uint32_t *restrict occ = sc->occ;
         if (sc->scalar) {
-            float sum = 0.0f;
-#pragma omp simd reduction(+ : sum)
-            for (int i = 0; i < n; i++)
-                sum += occ[i] ? 0.0f : wr[i];
+            float sum = unblocked_sum(wr, occ, n);
             rgb[0] += sum * sc->scale[0];
             rgb[1] += sum * sc->scale[1];
             rgb[2] += sum * sc->scale[2];
             continue;
         }
-        float sr = 0.0f, sg = 0.0f, sb = 0.0f;
-#pragma omp simd reduction(+ : sr, sg, sb)
-        for (int i = 0; i < n; i++) {
-            float v = occ[i] ? 0.0f : 1.0f;
-            sr += wr[i] * v;
-            sg += wg[i] * v;
-            sb += wb[i] * v;
-        }
-        rgb[0] += sr;
-        rgb[1] += sg;
-        rgb[2] += sb;
+        rgb[0] += unblocked_sum(wr, occ, n);
+        rgb[1] += unblocked_sum(wg, occ, n);
+        rgb[2] += unblocked_sum(wb, occ, n);
     }
 }
