@@ -760,6 +760,26 @@ static void hist_add(lie_build_stats *st, uint32_t n)
     st->list_hist[b]++;
 }
 
+/* §4.1.1: a patch whose list is too long is split while it is large.  But
+ * a closed, double-sided emitter hides its far side behind its near side:
+ * those blockers are the emitter's own triangles, and smaller patches keep
+ * seeing about as many; when they alone pass the complex cap, splitting
+ * cannot help and the pair is complex at once. */
+static int splits(const build_ctx *c, uint32_t tri, lie_patch_path path, int e, lie_class cls, const uint32_t *list,
+                  size_t n_list)
+{
+    const lie_scene *s = c->s;
+    float area = s->tri_area[tri] / (float)(1u << (2 * (path.depth < 15 ? path.depth : 15)));
+    if (!(cls == LIE_CLASS_PARTIAL && n_list > c->p->max_blockers && area > c->min_area &&
+          path.depth < LIE_PATCH_MAX_DEPTH))
+        return 0;
+    const lie_emitter *em = &s->emitters[e];
+    size_t own = 0;
+    for (size_t k = 0; em->type == LIE_EMITTER_AREA && k < n_list; k++)
+        own += list[k] - em->first_tri < em->n_tris;
+    return own <= c->p->complex_cap;
+}
+
 /* Build node `idx` (already pushed) for patch `path` of unit (tri, e). */
 static void copy_node(const lie_env *old, uint32_t from, worker *w, unit_buf *u, uint32_t idx);
 
@@ -808,9 +828,7 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
     }
     if (w->nomem)
         return;
-    float area = s->tri_area[tri] / (float)(1u << (2 * (path.depth < 15 ? path.depth : 15)));
-    if (cls == LIE_CLASS_PARTIAL && n_list > c->p->max_blockers && area > c->min_area &&
-        path.depth < LIE_PATCH_MAX_DEPTH) {
+    if (splits(c, tri, path, e, cls, w->hits, n_list)) {
         /* §4.1.1: split a patch whose list is too long while it is large */
         uint32_t *keep = NULL;
         if (c->p->mode == LIE_BLOCKERS_CONSERVATIVE) {
@@ -1078,10 +1096,7 @@ static lie_status precompute_flagged(build_ctx *c, int threads, size_t *n_memo)
         for (size_t i = first; st == LIE_OK && i < end; i++) {
             const memo_entry m = c->memo[i];
             uint32_t child = m.old == MEMO_NO_OLD ? 0 : old->nodes[m.old].child;
-            float area = s->tri_area[m.tri] / (float)(1u << (2 * (m.path.depth < 15 ? m.path.depth : 15)));
-            int splits = m.cls == LIE_CLASS_PARTIAL && m.n_list > c->p->max_blockers && area > c->min_area &&
-                         m.path.depth < LIE_PATCH_MAX_DEPTH;
-            if (!splits)
+            if (!splits(c, m.tri, m.path, m.e, m.cls, m.list, m.n_list))
                 continue;
             /* the children build_node will compute: flagged old ones, or
              * all four when the node had none (unflagged ones are copied) */

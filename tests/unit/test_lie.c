@@ -53,6 +53,26 @@ static lie_env *build(const lie_scene *s, lie_rt **rt, lie_build_params p)
     return env;
 }
 
+/* A scene with a white Lambert floor (triangles 0 and 1, 4 x 4 at y = 0)
+ * and two materials: *white (the floor's) and *glow, a double-sided
+ * emitter of radiance 5. */
+static lie_scene *floor_scene(const char *name, int *white_out, int *glow_out)
+{
+    lie_scene *s = lie_scene_new(name);
+    lie_material white = lie_material_default();
+    white.metallic = 0.0f;
+    *white_out = lie_scene_add_material(s, &white);
+    lie_material glow = white;
+    glow.emissive[0] = glow.emissive[1] = glow.emissive[2] = 5.0f;
+    glow.double_sided = 1;
+    *glow_out = lie_scene_add_material(s, &glow);
+    uint32_t idx4[6] = {0, 1, 2, 0, 2, 3};
+    float fl[12] = {-2, 0, -2, -2, 0, 2, 2, 0, 2, 2, 0, -2};
+    lie_scene_add_node(s, "Floor", -1, NULL, lie_scene_add_mesh(s, "Floor", fl, NULL, NULL, 4, idx4, 2, *white_out),
+                       -1, -1);
+    return s;
+}
+
 /* An emitter of many triangles: a tessellated panel, tilted, over a
  * floor, with a small occluder between.  Its shaft tests use a box
  * oriented to its plane (8 points, not 3 per triangle): the box holds
@@ -60,18 +80,10 @@ static lie_env *build(const lie_scene *s, lie_rt **rt, lie_build_params p)
  * image's blockers (every triangle that meets the shaft). */
 static lie_scene *panel_scene(int n)
 {
-    lie_scene *s = lie_scene_new("panel");
-    lie_material white = lie_material_default();
-    white.metallic = 0.0f;
-    int mw = lie_scene_add_material(s, &white);
-    lie_material light = white;
-    light.emissive[0] = light.emissive[1] = light.emissive[2] = 5.0f;
-    light.double_sided = 1;
-    int ml = lie_scene_add_material(s, &light);
+    int mw, ml;
+    lie_scene *s = floor_scene("panel", &mw, &ml);
     uint32_t idx4[6] = {0, 1, 2, 0, 2, 3};
-    float fl[12] = {-2, 0, -2, -2, 0, 2, 2, 0, 2, 2, 0, -2};
     float oc[12] = {-0.2f, 1, -0.2f, -0.2f, 1, 0.2f, 0.2f, 1, 0.2f, 0.2f, 1, -0.2f};
-    lie_scene_add_node(s, "Floor", -1, NULL, lie_scene_add_mesh(s, "Floor", fl, NULL, NULL, 4, idx4, 2, mw), -1, -1);
     lie_scene_add_node(s, "Occluder", -1, NULL, lie_scene_add_mesh(s, "Occ", oc, NULL, NULL, 4, idx4, 2, mw), -1,
                        -1);
     /* an n x n grid in a plane tilted 30 degrees about x, at height 2 */
@@ -154,6 +166,54 @@ static void test_lie_many_triangle_emitter_uses_a_flat_oriented_box(void **state
     /* a panel of few triangles keeps its vertices */
     s = panel_scene(1);
     assert_int_equal(s->emitters[0].n_hull, 0);
+    lie_scene_destroy(s);
+}
+
+/* A closed, double-sided emitter (a bulb) hides its far side behind its
+ * near side: a floor patch's blockers are mostly the bulb's own triangles,
+ * and no subdivision removes them, so the pair is complex at once instead
+ * of being split down to the smallest patches. */
+static void test_lie_self_occluding_emitter_is_complex_without_splitting(void **state)
+{
+    (void)state;
+    int mw, mg;
+    lie_scene *s = floor_scene("bulb", &mw, &mg);
+    enum { RINGS = 16, SEGS = 24 };
+    float pos[3 * (RINGS + 1) * SEGS];
+    uint32_t idx[6 * RINGS * SEGS];
+    for (int i = 0; i <= RINGS; i++)
+        for (int j = 0; j < SEGS; j++) {
+            float th = 3.14159265f * (float)i / RINGS, ph = 6.2831853f * (float)j / SEGS;
+            float *p = &pos[3 * (i * SEGS + j)];
+            p[0] = 0.5f * sinf(th) * cosf(ph);
+            p[1] = 2.0f + 0.5f * cosf(th);
+            p[2] = 0.5f * sinf(th) * sinf(ph);
+        }
+    int nt = 0;
+    for (int i = 0; i < RINGS; i++)
+        for (int j = 0; j < SEGS; j++) {
+            uint32_t a = (uint32_t)(i * SEGS + j), b = (uint32_t)(i * SEGS + (j + 1) % SEGS);
+            uint32_t c = a + SEGS, d = b + SEGS;
+            uint32_t *q = &idx[6 * (i * SEGS + j)];
+            q[0] = a, q[1] = c, q[2] = b, q[3] = b, q[4] = c, q[5] = d;
+            nt += 2;
+        }
+    lie_scene_add_node(s, "Bulb", -1, NULL,
+                       lie_scene_add_mesh(s, "Bulb", pos, NULL, NULL, (RINGS + 1) * SEGS, idx, (uint32_t)nt, mg), -1,
+                       -1);
+    lie_error err;
+    assert_int_equal(lie_scene_flatten(s, &err), LIE_OK);
+    assert_int_equal(s->n_emitters, 1);
+    lie_rt *rt = NULL;
+    lie_env *env = build(s, &rt, lie_build_params_default());
+    for (uint32_t t = 0; t < 2; t++) {
+        const lie_pnode *n = &env->nodes[env->root[t]];
+        assert_int_equal(n->cls, LIE_CLASS_COMPLEX);
+        assert_int_equal(n->child, 0);
+        assert_true(n->count > 64);
+    }
+    lie_env_destroy(env);
+    lie_rt_destroy(rt);
     lie_scene_destroy(s);
 }
 
@@ -464,6 +524,7 @@ int main(void)
         cmocka_unit_test(test_patch_children_tile_the_parent),
         cmocka_unit_test(test_patch_names_round_trip),
         cmocka_unit_test(test_lie_many_triangle_emitter_uses_a_flat_oriented_box),
+        cmocka_unit_test(test_lie_self_occluding_emitter_is_complex_without_splitting),
     };
     return cmocka_run_group_tests_name("lie", tests, NULL, NULL);
 }
