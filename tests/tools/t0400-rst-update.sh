@@ -36,6 +36,13 @@ YAML
 for op in move_by move_to rotate scale scale3 settf remove material dim lift add; do
     same_as_rebuild "$TMP/m1.lie" "museum1 $op" "$TMP/$op.yaml"
 done
+# the update's parallel parts (tree regions, recomputation waves) give the
+# same bytes for any thread count
+run "$B/rst-update" "$TMP/m1.lie" "$TMP/move_by.yaml" -q --threads 1 -o "$TMP/t1.lie"
+run "$B/rst-update" "$TMP/m1.lie" "$TMP/move_by.yaml" -q --threads 2 -o "$TMP/t2.lie"
+run "$B/rst-update" "$TMP/m1.lie" "$TMP/move_by.yaml" -q --threads 7 -o "$TMP/t7.lie"
+expect_same "$TMP/t1.lie" "$TMP/t2.lie" "rst-update: identical caches for 1 and 2 threads"
+expect_same "$TMP/t1.lie" "$TMP/t7.lie" "rst-update: identical caches for 1 and 7 threads"
 # an added object with vertex colours (COLOR_0) and no name: the edit log
 # replays it, so the updated cache renders
 cat >"$TMP/addcol.yaml" <<YAML
