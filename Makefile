@@ -18,7 +18,7 @@ ARCHFLAGS ?= -march=x86-64-v3
 WERROR   ?= -Werror
 WARN     := -Wall -Wextra -Wshadow -Wno-unused-parameter $(WERROR)
 OPT_release := -O3 -g
-OPT_asan    := -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=all
+OPT_asan    := -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recover=all
 OPT      := $(OPT_$(VARIANT))
 # -fno-math-errno and -fno-trapping-math let the shading loops vectorise; -ffp-contract=off keeps results identical
 # whichever way a loop is vectorised.  -fopenmp-simd enables `#pragma omp simd` only.

@@ -343,8 +343,8 @@ static void shaft_candidates(const build_ctx *c, worker *w, const lie_vec3 *hull
         for (int k = 0; k < n_slabs; k++)
             slab[k] = lie_box3_empty();
         for (int i = 0; i < nh; i++) {
-            int k = (int)((v3_axis(hull[i], a) - lo) / width);
-            k = k < 0 ? 0 : k >= n_slabs ? n_slabs - 1 : k;
+            float f = (v3_axis(hull[i], a) - lo) / width; /* NaN falls in slab 0, never through a cast */
+            int k = f >= 1.0f ? (f < (float)n_slabs ? (int)f : n_slabs - 1) : 0;
             lie_box3_grow(&slab[k], hull[i]);
         }
         for (int i = 0; i < nh; i++)
