@@ -642,9 +642,14 @@ lie_status lie_scene_camera(const lie_scene *s, const char *spec, lie_camera *ou
     char *end = NULL;
     long idx = strtol(num, &end, 10);
     if (*num && end && *end == '\0') {
-        if (idx < 0 || idx >= s->n_cameras)
-            return lie_error_set(err, LIE_ERR_NOT_FOUND, path, "camera %ld: the scene has %d camera%s",
-                                 idx, s->n_cameras, s->n_cameras == 1 ? "" : "s");
+        if (idx < 0 || idx >= s->n_cameras) {
+            int ortho = 0;
+            for (int i = 0; i < s->n_camera_defs; i++)
+                ortho += !(s->camera_defs[i].yfov > 0.0f);
+            return lie_error_set(err, LIE_ERR_NOT_FOUND, path, "camera %ld: the scene has %d camera%s%s", idx,
+                                 s->n_cameras, s->n_cameras == 1 ? "" : "s",
+                                 ortho ? " (orthographic cameras are not supported and not counted)" : "");
+        }
         *out = s->cameras[idx];
         return LIE_OK;
     }
