@@ -122,38 +122,22 @@ static int own_materials(lie_scene *s, int node)
         return 0;
     for (int i = 0; i < np; i++) {
         const lie_primitive *q = &src->prims[i];
-        prims[i] = *q;
-        prims[i].pos = dup_mem(q->pos, sizeof(float) * 3 * q->n_verts);
-        prims[i].nrm = dup_mem(q->nrm, sizeof(float) * 3 * q->n_verts);
-        prims[i].uv = dup_mem(q->uv, sizeof(float) * 2 * q->n_verts);
-        prims[i].color = dup_mem(q->color, sizeof(float) * 4 * q->n_verts);
-        prims[i].idx = dup_mem(q->idx, sizeof(uint32_t) * 3 * q->n_tris);
+        int copied = lie_primitive_copy(q, &prims[i]);
         lie_material m = q->material >= 0 && q->material < s->n_materials ? s->materials[q->material]
                                                                            : lie_material_default();
-        int mi = lie_scene_add_material(s, &m);
+        int mi = copied ? lie_scene_add_material(s, &m) : -1;
         prims[i].material = mi;
-        if ((q->pos && !prims[i].pos) || (q->nrm && !prims[i].nrm) || (q->uv && !prims[i].uv) ||
-            (q->color && !prims[i].color) || (q->idx && !prims[i].idx) || mi < 0) {
-            for (int k = 0; k <= i; k++) {
-                free(prims[k].pos);
-                free(prims[k].nrm);
-                free(prims[k].uv);
-                free(prims[k].color);
-                free(prims[k].idx);
-            }
+        if (mi < 0) {
+            for (int k = 0; k < i + copied; k++)
+                lie_primitive_free(&prims[k]);
             free(prims);
             return 0;
         }
     }
     lie_mesh *nm = realloc(s->meshes, sizeof *nm * ((size_t)s->n_meshes + 1));
     if (!nm) {
-        for (int k = 0; k < np; k++) {
-            free(prims[k].pos);
-            free(prims[k].nrm);
-            free(prims[k].uv);
-            free(prims[k].color);
-            free(prims[k].idx);
-        }
+        for (int k = 0; k < np; k++)
+            lie_primitive_free(&prims[k]);
         free(prims);
         return 0;
     }
@@ -233,21 +217,9 @@ static lie_status add_from(lie_scene *s, const lie_scene *src, int src_node, con
                     mi = -1;
                     if (np) {
                         dst->prims = np;
-                        lie_primitive c = *q;
-                        c.pos = dup_mem(q->pos, sizeof(float) * 3 * q->n_verts);
-                        c.nrm = dup_mem(q->nrm, sizeof(float) * 3 * q->n_verts);
-                        c.uv = dup_mem(q->uv, sizeof(float) * 2 * q->n_verts);
-                        c.color = dup_mem(q->color, sizeof(float) * 4 * q->n_verts);
-                        c.idx = dup_mem(q->idx, sizeof(uint32_t) * 3 * q->n_tris);
-                        c.material = mat;
-                        if ((q->pos && !c.pos) || (q->nrm && !c.nrm) || (q->uv && !c.uv) ||
-                            (q->color && !c.color) || (q->idx && !c.idx)) {
-                            free(c.pos);
-                            free(c.nrm);
-                            free(c.uv);
-                            free(c.color);
-                            free(c.idx);
-                        } else {
+                        lie_primitive c;
+                        if (lie_primitive_copy(q, &c)) {
+                            c.material = mat;
                             dst->prims[dst->n_prims++] = c;
                             mi = mesh;
                         }

@@ -100,6 +100,32 @@ static void *dup_array(const void *src, size_t bytes)
     return d;
 }
 
+void lie_primitive_free(lie_primitive *p)
+{
+    free(p->pos);
+    free(p->nrm);
+    free(p->uv);
+    free(p->color);
+    free(p->idx);
+}
+
+int lie_primitive_copy(const lie_primitive *src, lie_primitive *out)
+{
+    lie_primitive p = *src;
+    p.pos = dup_array(src->pos, sizeof(float) * 3 * src->n_verts);
+    p.nrm = dup_array(src->nrm, sizeof(float) * 3 * src->n_verts);
+    p.uv = dup_array(src->uv, sizeof(float) * 2 * src->n_verts);
+    p.color = dup_array(src->color, sizeof(float) * 4 * src->n_verts);
+    p.idx = dup_array(src->idx, sizeof(uint32_t) * 3 * src->n_tris);
+    if ((src->pos && !p.pos) || (src->nrm && !p.nrm) || (src->uv && !p.uv) || (src->color && !p.color) ||
+        (src->idx && !p.idx)) {
+        lie_primitive_free(&p);
+        return 0;
+    }
+    *out = p;
+    return 1;
+}
+
 int lie_scene_add_mesh(lie_scene *s, const char *name, const float *pos, const float *nrm,
                        const float *uv, uint32_t n_verts, const uint32_t *idx, uint32_t n_tris,
                        int material)
@@ -115,20 +141,14 @@ int lie_scene_add_mesh(lie_scene *s, const char *name, const float *pos, const f
     p.idx = dup_array(idx, sizeof(uint32_t) * 3 * n_tris);
     lie_primitive *prim = malloc(sizeof *prim);
     if (!p.pos || (nrm && !p.nrm) || (uv && !p.uv) || !p.idx || !prim) {
-        free(p.pos);
-        free(p.nrm);
-        free(p.uv);
-        free(p.idx);
+        lie_primitive_free(&p);
         free(prim);
         return -1;
     }
     *prim = p;
     lie_mesh *m = grow((void **)&s->meshes, &s->n_meshes, sizeof *m);
     if (!m) {
-        free(p.pos);
-        free(p.nrm);
-        free(p.uv);
-        free(p.idx);
+        lie_primitive_free(&p);
         free(prim);
         return -1;
     }

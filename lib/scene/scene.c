@@ -72,13 +72,8 @@ void lie_scene_destroy(lie_scene *s)
     free(s->roots);
     for (int i = 0; i < s->n_meshes; i++) {
         lie_mesh *m = &s->meshes[i];
-        for (int p = 0; p < m->n_prims; p++) {
-            free(m->prims[p].pos);
-            free(m->prims[p].nrm);
-            free(m->prims[p].uv);
-            free(m->prims[p].color);
-            free(m->prims[p].idx);
-        }
+        for (int p = 0; p < m->n_prims; p++)
+            lie_primitive_free(&m->prims[p]);
         free(m->prims);
         free(m->name);
     }

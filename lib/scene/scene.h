@@ -257,6 +257,12 @@ lie_scene *lie_scene_new(const char *path);
 /* Each returns the new element's index, or -1 when out of memory.  Arrays
  * and strings are copied.  The world is stale until lie_scene_flatten(). */
 int lie_scene_add_material(lie_scene *s, const lie_material *m);
+/* A deep copy of src's arrays into *out (everything else copied as is);
+ * 0 when out of memory, and then nothing is left allocated. */
+int lie_primitive_copy(const lie_primitive *src, lie_primitive *out);
+/* Frees a primitive's arrays (not the struct). */
+void lie_primitive_free(lie_primitive *p);
+
 int lie_scene_add_mesh(lie_scene *s, const char *name, const float *pos, const float *nrm,
                        const float *uv, uint32_t n_verts, const uint32_t *idx, uint32_t n_tris,
                        int material);
