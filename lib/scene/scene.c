@@ -294,6 +294,60 @@ static void emitter_hull(const lie_scene *s, lie_emitter *e)
     e->n_hull = 8;
 }
 
+/* Is the emitter planar (see lie_emitter)?  Its largest triangle gives the
+ * normal and the first in-plane axis; a vertex may stand off the plane by
+ * 1e-5 of the emitter's size (tessellation rounding), a triangle's normal
+ * may differ by 0.26 degrees. */
+static void emitter_plane(const lie_scene *s, lie_emitter *e)
+{
+    e->planar = 0;
+    if (e->n_tris == 0)
+        return;
+    uint32_t big = e->first_tri;
+    for (uint32_t t = e->first_tri; t < e->first_tri + e->n_tris; t++)
+        if (s->tri_area[t] > s->tri_area[big])
+            big = t;
+    const lie_vec3 *B = &s->tri_p[3 * (size_t)big];
+    double n[3] = {s->tri_ng[big].x, s->tri_ng[big].y, s->tri_ng[big].z};
+    double u[3] = {(double)B[1].x - B[0].x, (double)B[1].y - B[0].y, (double)B[1].z - B[0].z};
+    double d = u[0] * n[0] + u[1] * n[1] + u[2] * n[2];
+    for (int k = 0; k < 3; k++)
+        u[k] -= d * n[k];
+    double ul = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    if (!(ul > 0.0) || !isfinite(ul))
+        return;
+    for (int k = 0; k < 3; k++)
+        u[k] /= ul;
+    double v[3] = {n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0]};
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t t = e->first_tri; t < e->first_tri + e->n_tris; t++) {
+        lie_vec3 g = s->tri_ng[t];
+        double c = g.x * n[0] + g.y * n[1] + g.z * n[2];
+        if (!(c > 0.99999) && !(e->double_sided && c < -0.99999))
+            return;
+        for (int k = 0; k < 3; k++) {
+            const lie_vec3 *q = &s->tri_p[3 * (size_t)t + (size_t)k];
+            double x[3] = {q->x, q->y, q->z};
+            double pr[3] = {x[0] * u[0] + x[1] * u[1] + x[2] * u[2], x[0] * v[0] + x[1] * v[1] + x[2] * v[2],
+                            x[0] * n[0] + x[1] * n[1] + x[2] * n[2]};
+            for (int a = 0; a < 3; a++) {
+                lo[a] = pr[a] < lo[a] ? pr[a] : lo[a];
+                hi[a] = pr[a] > hi[a] ? pr[a] : hi[a];
+            }
+        }
+    }
+    double size = fmax(hi[0] - lo[0], hi[1] - lo[1]);
+    if (!isfinite(size) || !(size > 0.0) || hi[2] - lo[2] > 1e-5 * size)
+        return;
+    double cu = 0.5 * (lo[0] + hi[0]), cv = 0.5 * (lo[1] + hi[1]), cn = 0.5 * (lo[2] + hi[2]);
+    e->plane_o = lie_v3((float)(cu * u[0] + cv * v[0] + cn * n[0]), (float)(cu * u[1] + cv * v[1] + cn * n[1]),
+                        (float)(cu * u[2] + cv * v[2] + cn * n[2]));
+    e->plane_u = lie_v3((float)u[0], (float)u[1], (float)u[2]);
+    e->plane_v = lie_v3((float)v[0], (float)v[1], (float)v[2]);
+    e->plane_n = lie_v3((float)n[0], (float)n[1], (float)n[2]);
+    e->planar = 1;
+}
+
 static void fill_node(lie_scene *s, int nd, const lie_mat4 *world, int dead, void *p)
 {
     fill_ctx *f = p;
@@ -391,6 +445,7 @@ static void fill_node(lie_scene *s, int nd, const lie_mat4 *world, int dead, voi
                 emitter_hull(s, e);
                 memcpy(e->radiance, mat->emissive, sizeof e->radiance);
                 e->double_sided = mat->double_sided;
+                emitter_plane(s, e);
                 e->cos_inner = e->cos_outer = -2.0f;
                 if (e->area > 0.0f) {
                     for (uint32_t t = 0; t < in->n_tris; t++)

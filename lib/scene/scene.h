@@ -154,6 +154,13 @@ typedef struct lie_emitter {
      * 0: its triangles' vertices serve. */
     lie_vec3 hull[8];
     int n_hull;
+    /* Planar: every triangle lies in one plane (within rounding) and faces
+     * one way, or the emitter is double-sided.  Then plane_u, plane_v and
+     * plane_n are an orthonormal frame with plane_n the emitters' facing
+     * and plane_o the centre of its vertices' extent in the plane; light
+     * samples carry coordinates in it (lib/shade). */
+    int planar;
+    lie_vec3 plane_o, plane_u, plane_v, plane_n;
     /* punctual */
     lie_vec3 position;
     lie_vec3 direction;    /* where the light points (spot, directional), unit */

@@ -83,6 +83,51 @@ static float unblocked_sum(const float *w, const uint32_t *occ, int n)
     return sum;
 }
 
+/* unblocked_sum with nothing blocked, in the same order (the same bits),
+ * without reading a mask: the sum of a visible pair */
+static float plain_sum(const float *w, int n)
+{
+    int i = 0;
+    float sum = 0.0f;
+#ifdef __AVX2__
+    __m256 acc = _mm256_setzero_ps();
+    for (; i + 8 <= n; i += 8)
+        acc = _mm256_add_ps(acc, _mm256_loadu_ps(w + i));
+    float lane[8];
+    _mm256_storeu_ps(lane, acc);
+    sum = ((lane[0] + lane[1]) + (lane[2] + lane[3])) + ((lane[4] + lane[5]) + (lane[6] + lane[7]));
+#endif
+    for (; i < n; i++)
+        sum += w[i];
+    return sum;
+}
+
+/* Add the pair's contributions to rgb: the samples' weights, masked by
+ * occ unless every sample is visible (occ NULL). */
+static void add_pair(const lie_shade_scratch *sc, const uint32_t *occ, int n, float rgb[3])
+{
+    if (sc->scalar) {
+        float sum = occ ? unblocked_sum(sc->wr, occ, n) : plain_sum(sc->wr, n);
+        rgb[0] += sum * sc->scale[0];
+        rgb[1] += sum * sc->scale[1];
+        rgb[2] += sum * sc->scale[2];
+        return;
+    }
+    rgb[0] += occ ? unblocked_sum(sc->wr, occ, n) : plain_sum(sc->wr, n);
+    rgb[1] += occ ? unblocked_sum(sc->wg, occ, n) : plain_sum(sc->wg, n);
+    rgb[2] += occ ? unblocked_sum(sc->wb, occ, n) : plain_sum(sc->wb, n);
+}
+
+/* A Lambert receiver under an emitter of one colour: wr holds the
+ * geometric term alone, the colour is applied once, to the sum. */
+static void lambert_colour(const lie_surface *sf, const lie_light_samples *ls, lie_shade_scratch *sc)
+{
+    sc->scalar = 1;
+    sc->scale[0] = ls->r[0] * sf->diffuse[0] * (float)M_1_PI;
+    sc->scale[1] = ls->g[0] * sf->diffuse[1] * (float)M_1_PI;
+    sc->scale[2] = ls->b[0] * sf->diffuse[2] * (float)M_1_PI;
+}
+
 /* Unshadowed contributions of an area emitter's samples, seen from origin o
  * (the surface point lifted off the surface).  Branch-free: invalid samples
  * get weight 0 by selection, so NaNs from degenerate geometry never leak. */
@@ -98,6 +143,42 @@ static void kernel_area(const lie_surface *sf, lie_vec3 o, const lie_light_sampl
     const float *restrict lr = ls->r, *restrict lg = ls->g, *restrict lb = ls->b;
     float *restrict wr = sc->wr, *restrict wg = sc->wg, *restrict wb = sc->wb;
     const float sgn = two_sided ? -1.0f : 1.0f; /* two-sided: |cos| via max(c, -c) */
+    if (sf->lambert && ls->uniform && ls->planar) {
+        /* ... and a planar emitter: d = w + s u + t v with w = po - o, so the
+         * emitter's cosine is one number, the receiver's cosines are
+         * linear forms in (s, t), and G = (n.d)(-pn.d) / |d|^4 needs one
+         * division and no square root. */
+        const float wx = ls->po[0] - px, wy = ls->po[1] - py, wz = ls->po[2] - pz;
+        const float ux = ls->pu[0], uy = ls->pu[1], uz = ls->pu[2];
+        const float vx = ls->pv[0], vy = ls->pv[1], vz = ls->pv[2];
+        float ce = -(ls->pn[0] * wx + ls->pn[1] * wy + ls->pn[2] * wz);
+        ce = ce > sgn * ce ? ce : sgn * ce;
+        const float r0 = nx * wx + ny * wy + nz * wz, ru = nx * ux + ny * uy + nz * uz,
+                    rv = nx * vx + ny * vy + nz * vz;
+        const float g0 = gx * wx + gy * wy + gz * wz, gu = gx * ux + gy * uy + gz * uz,
+                    gv = gx * vx + gy * vy + gz * vz;
+        const float *restrict ss = ls->s, *restrict ts = ls->t;
+        float *restrict G_out = sc->wr;
+        if (!(ce > 0.0f)) {
+            memset(G_out, 0, sizeof *G_out * (size_t)n); /* behind the emitter */
+        } else {
+#pragma omp simd
+            for (int i = 0; i < n; i++) {
+                float s = ss[i], t = ts[i];
+                float dx = fmaf(t, vx, fmaf(s, ux, wx)), dy = fmaf(t, vy, fmaf(s, uy, wy)),
+                      dz = fmaf(t, vz, fmaf(s, uz, wz));
+                float d2 = fmaf(dz, dz, fmaf(dy, dy, dx * dx));
+                float cr = fmaf(t, rv, fmaf(s, ru, r0));
+                float cg = fmaf(t, gv, fmaf(s, gu, g0));
+                float inv = 1.0f / d2;
+                float G = (cr * ce) * (inv * inv);
+                int ok = (cr > 0.0f) & (cg > 0.0f) & (d2 > 0.0f);
+                G_out[i] = ok ? G : 0.0f;
+            }
+        }
+        lambert_colour(sf, ls, sc);
+        return;
+    }
     if (sf->lambert && ls->uniform) {
         /* The common case: a Lambert receiver and an emitter of one colour.
          * Only the geometric term varies per sample; colour is applied
@@ -116,10 +197,7 @@ static void kernel_area(const lie_surface *sf, lie_vec3 o, const lie_light_sampl
             float G = cr * ce * (inv * inv);
             G_out[i] = ok ? G : 0.0f;
         }
-        sc->scalar = 1;
-        sc->scale[0] = lr[0] * sf->diffuse[0] * (float)M_1_PI;
-        sc->scale[1] = lg[0] * sf->diffuse[1] * (float)M_1_PI;
-        sc->scale[2] = lb[0] * sf->diffuse[2] * (float)M_1_PI;
+        lambert_colour(sf, ls, sc);
         return;
     }
     sc->scalar = 0;
@@ -231,6 +309,29 @@ static void kernel_punctual(const lie_shade_ctx *c, const lie_surface *sf, lie_v
     sc->scalar = 0;
 }
 
+/* Each shadow ray is the segment o -> o + d_i, d_i the vector to the
+ * sample shortened by eps: the same segments for Embree and for blocker
+ * lists. */
+void lie_shadow_segments(lie_shadow_query *q)
+{
+    if (q->have_segments)
+        return;
+    q->have_segments = 1;
+    float *restrict sdx = q->dx, *restrict sdy = q->dy, *restrict sdz = q->dz;
+    const float *restrict lx = q->ls->x, *restrict ly = q->ls->y, *restrict lz = q->ls->z;
+    const float ox = q->o.x, oy = q->o.y, oz = q->o.z, eps = q->eps;
+    const int n = q->n;
+#pragma omp simd
+    for (int i = 0; i < n; i++) {
+        float dx = lx[i] - ox, dy = ly[i] - oy, dz = lz[i] - oz;
+        float d2 = dx * dx + dy * dy + dz * dz;
+        float k = d2 > 0.0f ? 1.0f - eps / sqrtf(d2) : 0.0f;
+        sdx[i] = dx * k;
+        sdy[i] = dy * k;
+        sdz[i] = dz * k;
+    }
+}
+
 void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pixel, int depth,
                       lie_shade_scratch *sc, float rgb[3])
 {
@@ -286,25 +387,16 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
             n = 1;
         }
         sc->stats.light_samples += (uint64_t)n;
+        if (cls == LIE_VISCLASS_VISIBLE) {
+            sc->stats.shadow_rays_skipped += (uint64_t)n;
+            add_pair(sc, NULL, n, rgb);
+            continue;
+        }
         memset(sc->occ, 0, sizeof *sc->occ * (size_t)n);
-        if (cls != LIE_VISCLASS_VISIBLE) {
-            /* Each shadow ray is the segment o -> o + d_i, d_i the vector to
-             * the sample shortened by eps: the same segments for Embree and
-             * for blocker lists. */
-            float *restrict sdx = sc->dx, *restrict sdy = sc->dy, *restrict sdz = sc->dz;
-            if (ls) {
-                const float *restrict lx = ls->x, *restrict ly = ls->y, *restrict lz = ls->z;
-                const float ox = o.x, oy = o.y, oz = o.z;
-#pragma omp simd
-                for (int i = 0; i < n; i++) {
-                    float dx = lx[i] - ox, dy = ly[i] - oy, dz = lz[i] - oz;
-                    float d2 = dx * dx + dy * dy + dz * dz;
-                    float k = d2 > 0.0f ? 1.0f - eps / sqrtf(d2) : 0.0f;
-                    sdx[i] = dx * k;
-                    sdy[i] = dy * k;
-                    sdz[i] = dz * k;
-                }
-            } else {
+        {
+            lie_shadow_query q = {o, eps, ls, n, ls == NULL, sc->dx, sc->dy, sc->dz};
+            float *sdx = sc->dx, *sdy = sc->dy, *sdz = sc->dz;
+            if (!ls) {
                 float len = sc->dist[0] - eps;
                 sdx[0] *= len;
                 sdy[0] *= len;
@@ -312,10 +404,11 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
             }
             if (cls == LIE_VISCLASS_BLOCKERS) {
                 /* short lists: test every sample, no compaction */
-                opt->oracle->occluded(opt->oracle->ctx, sc->blockers, n_blockers, o, sdx, sdy, sdz, n, sc->occ);
+                opt->oracle->occluded(opt->oracle->ctx, sc->blockers, n_blockers, &q, sc->occ);
                 sc->stats.shadow_rays_skipped += (uint64_t)n;
             } else {
                 /* Embree: rays only for samples that would contribute */
+                lie_shadow_segments(&q);
                 lie_ray_batch *b = &sc->batch;
                 int m = 0;
                 for (int i = 0; i < n; i++) {
@@ -341,20 +434,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                 }
                 sc->stats.shadow_rays += (uint64_t)m;
             }
-        } else {
-            sc->stats.shadow_rays_skipped += (uint64_t)n;
         }
-        const float *restrict wr = sc->wr, *restrict wg = sc->wg, *restrict wb = sc->wb;
-        const uint32_t *restrict occ = sc->occ;
-        if (sc->scalar) {
-            float sum = unblocked_sum(wr, occ, n);
-            rgb[0] += sum * sc->scale[0];
-            rgb[1] += sum * sc->scale[1];
-            rgb[2] += sum * sc->scale[2];
-            continue;
-        }
-        rgb[0] += unblocked_sum(wr, occ, n);
-        rgb[1] += unblocked_sum(wg, occ, n);
-        rgb[2] += unblocked_sum(wb, occ, n);
+        add_pair(sc, sc->occ, n, rgb);
     }
 }

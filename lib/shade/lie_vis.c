@@ -21,6 +21,7 @@ struct lie_lie_vis {
     mt_tri *tris;
     sphere *tri_sphere;     /* per triangle */
     sphere *emitter_sphere; /* per emitter; r < 0: no culling (directional) */
+    float *pool_sphere[4];  /* x, y, z, r of the sphere of each pool entry's triangle */
     lie_vis_oracle oracle;
 };
 
@@ -45,85 +46,218 @@ static lie_vis_class classify(void *ctx, const lie_surface *sf, int e, const voi
 /* The blockers whose bounding spheres meet the cone from o around the
  * emitter's bounding sphere, cut at the emitter: every segment of this
  * point lies in it (the patch's list serves the whole patch; one point
- * needs fewer, often none). */
+ * needs fewer, often none).  The spheres of each list lie side by side
+ * (pool_sphere), so the test runs over eight blockers at a time; the
+ * flags go to out[] and are compacted in place. */
 static int select_blockers(void *ctx, const void *pair, int e, lie_vec3 o, uint32_t *out)
 {
     const lie_lie_vis *v = ctx;
     const lie_pnode *nd = pair;
     const uint32_t *list = v->env->pool + nd->list;
+    const int count = (int)nd->count;
     const sphere E = v->emitter_sphere[e];
     float wx = E.x - o.x, wy = E.y - o.y, wz = E.z - o.z;
     float D2 = wx * wx + wy * wy + wz * wz;
     if (!(E.r >= 0.0f) || D2 <= E.r * E.r) {
-        memcpy(out, list, sizeof *out * nd->count); /* no cone: keep them all */
-        return (int)nd->count;
+        memcpy(out, list, sizeof *out * (size_t)count); /* no cone: keep them all */
+        return count;
     }
     float D = sqrtf(D2), sa = E.r / D, ca = sqrtf(1.0f - sa * sa);
-    int m = 0;
-    for (uint32_t j = 0; j < nd->count; j++) {
-        const sphere B = v->tri_sphere[list[j]];
-        float vx = B.x - o.x, vy = B.y - o.y, vz = B.z - o.z;
+    float ux = wx / D, uy = wy / D, uz = wz / D, far = D + E.r;
+    const float *restrict bx = v->pool_sphere[0] + nd->list, *restrict by = v->pool_sphere[1] + nd->list,
+                          *restrict bz = v->pool_sphere[2] + nd->list, *restrict br = v->pool_sphere[3] + nd->list;
+    uint32_t *restrict keep = out;
+#pragma omp simd
+    for (int j = 0; j < count; j++) {
+        float vx = bx[j] - o.x, vy = by[j] - o.y, vz = bz[j] - o.z, r = br[j];
         float v2 = vx * vx + vy * vy + vz * vz;
-        if (v2 <= B.r * B.r) {
-            out[m++] = list[j]; /* o inside the blocker's sphere */
-            continue;
-        }
+        int inside = v2 <= r * r; /* o inside the blocker's sphere */
         float dv = sqrtf(v2);
-        float t = (vx * wx + vy * wy + vz * wz) / D; /* along the axis */
-        if (t + B.r < 0.0f || t - B.r > D + E.r)
-            continue; /* behind o, or beyond the emitter */
-        float sb = B.r / dv, cb = sqrtf(1.0f - sb * sb);
-        float cos_theta = t / dv;
+        float t = vx * ux + vy * uy + vz * uz; /* along the axis */
+        int in_range = (t + r >= 0.0f) & (t - r <= far); /* not behind o, not beyond the emitter */
+        float sb = r / dv, cb = sqrtf(1.0f - sb * sb);
         /* inside the cone widened by the sphere's angular radius:
          * theta <= alpha + beta, i.e. cos theta >= cos(alpha + beta) */
         float cos_sum = ca * cb - sa * sb;
-        int wide = ca * cb - sa * sb < -0.999f; /* alpha + beta near pi */
-        if (wide || cos_theta >= cos_sum - 1e-6f)
-            out[m++] = list[j];
+        int wide = cos_sum < -0.999f; /* alpha + beta near pi */
+        int in_cone = wide | (t / dv >= cos_sum - 1e-6f);
+        keep[j] = (uint32_t)(inside | (in_range & in_cone));
     }
+    int m = 0;
+    for (int j = 0; j < count; j++)
+        if (keep[j])
+            out[m++] = list[j];
     return m;
 }
 
-/* Segments o -> o + d_i against the selected blockers.  The origin is
- * shared, so per blocker we set up once the three planes through o and the
- * triangle's edges and the triangle's plane; a segment is blocked when its
- * direction is inside all three edge planes (same sign) and its end is on
- * the other side of the triangle's plane from o.  Four dot products per
- * segment and blocker, no division, vectorised over segments. */
-static void occluded(void *ctx, const uint32_t *blockers, int n_blockers, lie_vec3 o, const float *dxs,
-                     const float *dys, const float *dzs, int n, uint32_t *occ_out)
+/* Segments against one blocker, in 3D: the origin is shared, so per
+ * blocker we set up once the three planes through o and the triangle's
+ * edges and the triangle's plane; a segment is blocked when its direction
+ * is inside all three edge planes (same sign) and its end is on the other
+ * side of the triangle's plane from o.  Four dot products per segment, no
+ * division, vectorised over segments. */
+static void blocker_3d(const mt_tri *T, lie_vec3 o, const float *dxs, const float *dys, const float *dzs, int n,
+                       uint32_t *occ_out)
 {
-    const lie_lie_vis *v = ctx;
     const float *restrict dx = dxs, *restrict dy = dys, *restrict dz = dzs;
     uint32_t *restrict occ = occ_out;
-    memset(occ, 0, sizeof *occ * (size_t)n);
-    for (int j = 0; j < n_blockers; j++) {
-        const mt_tri T = v->tris[blockers[j]];        /* vertices relative to the origin (shared vertices stay bit-equal,
-         * so neighbouring triangles' edge planes are exact negations:
-         * watertight) */
-        float ax = T.ax - o.x, ay = T.ay - o.y, az = T.az - o.z;
-        float bx = T.bx - o.x, by = T.by - o.y, bz = T.bz - o.z;
-        float cx = T.cx - o.x, cy = T.cy - o.y, cz = T.cz - o.z;
-        /* edge planes through the origin */
-        float m0x = ay * bz - az * by, m0y = az * bx - ax * bz, m0z = ax * by - ay * bx;
-        float m1x = by * cz - bz * cy, m1y = bz * cx - bx * cz, m1z = bx * cy - by * cx;
-        float m2x = cy * az - cz * ay, m2y = cz * ax - cx * az, m2z = cx * ay - cy * ax;
-        /* triangle plane: n . (p - o) = h, h = n . a */
-        float e1x = bx - ax, e1y = by - ay, e1z = bz - az, e2x = cx - ax, e2y = cy - ay, e2z = cz - az;
-        float nx = e1y * e2z - e1z * e2y, ny = e1z * e2x - e1x * e2z, nz = e1x * e2y - e1y * e2x;
-        float h = nx * ax + ny * ay + nz * az;
+    /* vertices relative to the origin (shared vertices stay bit-equal, so
+     * neighbouring triangles' edge planes are exact negations: watertight) */
+    float ax = T->ax - o.x, ay = T->ay - o.y, az = T->az - o.z;
+    float bx = T->bx - o.x, by = T->by - o.y, bz = T->bz - o.z;
+    float cx = T->cx - o.x, cy = T->cy - o.y, cz = T->cz - o.z;
+    /* edge planes through the origin */
+    float m0x = ay * bz - az * by, m0y = az * bx - ax * bz, m0z = ax * by - ay * bx;
+    float m1x = by * cz - bz * cy, m1y = bz * cx - bx * cz, m1z = bx * cy - by * cx;
+    float m2x = cy * az - cz * ay, m2y = cz * ax - cx * az, m2z = cx * ay - cy * ax;
+    /* triangle plane: n . (p - o) = h, h = n . a */
+    float e1x = bx - ax, e1y = by - ay, e1z = bz - az, e2x = cx - ax, e2y = cy - ay, e2z = cz - az;
+    float nx = e1y * e2z - e1z * e2y, ny = e1z * e2x - e1x * e2z, nz = e1x * e2y - e1y * e2x;
+    float h = nx * ax + ny * ay + nz * az;
 #pragma omp simd
-        for (int i = 0; i < n; i++) {
-            float e0 = m0x * dx[i] + m0y * dy[i] + m0z * dz[i];
-            float e1 = m1x * dx[i] + m1y * dy[i] + m1z * dz[i];
-            float e2 = m2x * dx[i] + m2y * dy[i] + m2z * dz[i];
-            float pd = nx * dx[i] + ny * dy[i] + nz * dz[i];
-            int inside = ((e0 >= 0.0f) & (e1 >= 0.0f) & (e2 >= 0.0f)) | ((e0 <= 0.0f) & (e1 <= 0.0f) & (e2 <= 0.0f));
-            /* the plane is crossed between t = 0 and t = 1: h and pd share a
-             * sign and |h| <= |pd| (h = 0: the origin lies in the plane) */
-            int crosses = ((h >= 0.0f) & (pd >= h)) | ((h <= 0.0f) & (pd <= h));
-            int degenerate = (e0 == 0.0f) & (e1 == 0.0f) & (e2 == 0.0f);
-            occ[i] |= (uint32_t)-(inside & crosses & !degenerate);
+    for (int i = 0; i < n; i++) {
+        float e0 = m0x * dx[i] + m0y * dy[i] + m0z * dz[i];
+        float e1 = m1x * dx[i] + m1y * dy[i] + m1z * dz[i];
+        float e2 = m2x * dx[i] + m2y * dy[i] + m2z * dz[i];
+        float pd = nx * dx[i] + ny * dy[i] + nz * dz[i];
+        int inside = ((e0 >= 0.0f) & (e1 >= 0.0f) & (e2 >= 0.0f)) | ((e0 <= 0.0f) & (e1 <= 0.0f) & (e2 <= 0.0f));
+        /* the plane is crossed between t = 0 and t = 1: h and pd share a
+         * sign and |h| <= |pd| (h = 0: the origin lies in the plane) */
+        int crosses = ((h >= 0.0f) & (pd >= h)) | ((h <= 0.0f) & (pd <= h));
+        int degenerate = (e0 == 0.0f) & (e1 == 0.0f) & (e2 == 0.0f);
+        occ[i] |= (uint32_t)-(inside & crosses & !degenerate);
+    }
+}
+
+/* Toward a planar emitter, o sees the emitter's plane at distance D along
+ * its normal, and every sample's direction has depth D.  The rays from o
+ * that meet a blocker are the cone of its vertex vectors a, b, c: d is in
+ * it iff d's three coordinates in that basis (by Cramer's rule, the edge
+ * planes' dot products divided by det(a, b, c)) are >= 0, and the ray then
+ * meets the triangle where the depth is at most the vertices' largest.  So
+ * a blocker whose vertices all lie at least 2 eps short of the plane (nearly
+ * all of them; behind o is fine) blocks exactly the samples inside its
+ * cone, and the segments' shortening by eps never matters.  Those edge
+ * planes are linear forms in a sample's (s, t): three fused multiply-adds
+ * per edge, and a compare.  The blocker's shadow on the plane (when it lies
+ * wholly in front of o) culls it or proves every sample blocked first.
+ * Returns 0 if the blocker is not of that kind (test it in 3D), 1 if
+ * done, 2 if every sample is blocked. */
+typedef struct plane_view {
+    float wx, wy, wz;  /* po - o */
+    float kx, ky, kz;  /* the plane's unit normal, pointing away from o */
+    float D;           /* distance from o to the plane */
+    float lo, hi;      /* shadows are boxed beyond lo; 2D tests only short of hi */
+    float pad;         /* of the shadow's box (rounding) */
+} plane_view;
+
+static int blocker_2d(const mt_tri *T, lie_vec3 o, const plane_view *pv, const lie_light_samples *ls,
+                      uint32_t *occ_out)
+{
+    float ax = T->ax - o.x, ay = T->ay - o.y, az = T->az - o.z;
+    float bx = T->bx - o.x, by = T->by - o.y, bz = T->bz - o.z;
+    float cx = T->cx - o.x, cy = T->cy - o.y, cz = T->cz - o.z;
+    float la = ax * pv->kx + ay * pv->ky + az * pv->kz;
+    float lb = bx * pv->kx + by * pv->ky + bz * pv->kz;
+    float lc = cx * pv->kx + cy * pv->ky + cz * pv->kz;
+    float lmin = lie_minf(la, lie_minf(lb, lc)), lmax = lie_maxf(la, lie_maxf(lb, lc));
+    if (lmax < 0.0f || lmin > pv->D)
+        return 1; /* wholly behind o, or beyond the emitter */
+    if (!(lmax < pv->hi))
+        return 0;
+    const float ux = ls->pu[0], uy = ls->pu[1], uz = ls->pu[2];
+    const float vx = ls->pv[0], vy = ls->pv[1], vz = ls->pv[2];
+    if (lmin > pv->lo) {
+        /* the shadow's box on the plane: the vertices scaled onto it */
+        float ka = pv->D / la, kb = pv->D / lb, kc = pv->D / lc;
+        float sa = (ax * ka - pv->wx) * ux + (ay * ka - pv->wy) * uy + (az * ka - pv->wz) * uz;
+        float sb = (bx * kb - pv->wx) * ux + (by * kb - pv->wy) * uy + (bz * kb - pv->wz) * uz;
+        float sc = (cx * kc - pv->wx) * ux + (cy * kc - pv->wy) * uy + (cz * kc - pv->wz) * uz;
+        float ta = (ax * ka - pv->wx) * vx + (ay * ka - pv->wy) * vy + (az * ka - pv->wz) * vz;
+        float tb = (bx * kb - pv->wx) * vx + (by * kb - pv->wy) * vy + (bz * kb - pv->wz) * vz;
+        float tc = (cx * kc - pv->wx) * vx + (cy * kc - pv->wy) * vy + (cz * kc - pv->wz) * vz;
+        if (lie_maxf(sa, lie_maxf(sb, sc)) + pv->pad < ls->smin ||
+            lie_minf(sa, lie_minf(sb, sc)) - pv->pad > ls->smax ||
+            lie_maxf(ta, lie_maxf(tb, tc)) + pv->pad < ls->tmin ||
+            lie_minf(ta, lie_minf(tb, tc)) - pv->pad > ls->tmax)
+            return 1; /* its shadow misses every sample */
+    }
+    /* edge planes through o, oriented so that inside is all >= 0 */
+    float m[3][3] = {{ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx},
+                     {by * cz - bz * cy, bz * cx - bx * cz, bx * cy - by * cx},
+                     {cy * az - cz * ay, cz * ax - cx * az, cx * ay - cy * ax}};
+    float det = ax * m[1][0] + ay * m[1][1] + az * m[1][2];
+    if (det == 0.0f)
+        return 1; /* seen edge-on: o lies in its plane */
+    float sg = det > 0.0f ? 1.0f : -1.0f;
+    float c0[3], cs[3], ct[3];
+    for (int k = 0; k < 3; k++) {
+        float mx = sg * m[k][0], my = sg * m[k][1], mz = sg * m[k][2];
+        c0[k] = mx * pv->wx + my * pv->wy + mz * pv->wz;
+        cs[k] = mx * ux + my * uy + mz * uz;
+        ct[k] = mx * vx + my * vy + mz * vz;
+    }
+    /* every corner of the samples' box inside: every sample is blocked */
+    int all = 1;
+    for (int q = 0; q < 4 && all; q++) {
+        float s = q & 1 ? ls->smax : ls->smin, t = q & 2 ? ls->tmax : ls->tmin;
+        for (int k = 0; k < 3; k++)
+            all &= fmaf(t, ct[k], fmaf(s, cs[k], c0[k])) > 0.0f;
+    }
+    if (all)
+        return 2;
+    const float a0 = c0[0], a1 = c0[1], a2 = c0[2], s0 = cs[0], s1 = cs[1], s2 = cs[2], t0 = ct[0], t1 = ct[1],
+                t2 = ct[2];
+    const float *restrict ss = ls->s, *restrict ts = ls->t;
+    uint32_t *restrict occ = occ_out;
+    const int n = ls->n;
+#pragma omp simd
+    for (int i = 0; i < n; i++) {
+        float s = ss[i], t = ts[i];
+        float e0 = fmaf(t, t0, fmaf(s, s0, a0));
+        float e1 = fmaf(t, t1, fmaf(s, s1, a1));
+        float e2 = fmaf(t, t2, fmaf(s, s2, a2));
+        occ[i] |= (uint32_t)-((e0 >= 0.0f) & (e1 >= 0.0f) & (e2 >= 0.0f));
+    }
+    return 1;
+}
+
+/* The query's segments against the selected blockers: in 2D where the
+ * emitter is planar and the blocker lies between (blocker_2d), else in 3D. */
+static void occluded(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q, uint32_t *occ)
+{
+    const lie_lie_vis *v = ctx;
+    const int n = q->n;
+    memset(occ, 0, sizeof *occ * (size_t)n);
+    const lie_light_samples *ls = q->ls;
+    plane_view pv = {0};
+    int planar = ls && ls->planar;
+    if (planar) {
+        pv.wx = ls->po[0] - q->o.x;
+        pv.wy = ls->po[1] - q->o.y;
+        pv.wz = ls->po[2] - q->o.z;
+        float d = pv.wx * ls->pn[0] + pv.wy * ls->pn[1] + pv.wz * ls->pn[2];
+        float sg = d > 0.0f ? 1.0f : -1.0f;
+        pv.kx = sg * ls->pn[0];
+        pv.ky = sg * ls->pn[1];
+        pv.kz = sg * ls->pn[2];
+        pv.D = sg * d;
+        pv.lo = q->eps;
+        pv.hi = pv.D - 2.0f * q->eps;
+        pv.pad = 1e-5f * lie_maxf(ls->smax - ls->smin, ls->tmax - ls->tmin);
+        planar = pv.hi > pv.lo;
+    }
+    for (int j = 0; j < n_blockers; j++) {
+        const mt_tri *T = &v->tris[blockers[j]];
+        int r = planar ? blocker_2d(T, q->o, &pv, ls, occ) : 0;
+        if (r == 2) {
+            for (int i = 0; i < n; i++)
+                occ[i] = ~0u;
+            return;
+        }
+        if (r == 0) {
+            lie_shadow_segments(q);
+            blocker_3d(T, q->o, q->dx, q->dy, q->dz, n, occ);
         }
     }
 }
@@ -194,6 +328,22 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
             v->emitter_sphere[e] = none;
         }
     }
+    for (int k = 0; k < 4; k++) {
+        v->pool_sphere[k] = malloc(sizeof(float) * ((size_t)env->n_pool + 1));
+        if (!v->pool_sphere[k]) {
+            lie_lie_vis_destroy(v);
+            return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
+        }
+    }
+    for (uint32_t k = 0; k < env->n_pool; k++) {
+        /* entries no partial list names are not checked on load */
+        sphere none = {0.0f, 0.0f, 0.0f, 0.0f};
+        sphere b = env->pool[k] < s->n_tris ? v->tri_sphere[env->pool[k]] : none;
+        v->pool_sphere[0][k] = b.x;
+        v->pool_sphere[1][k] = b.y;
+        v->pool_sphere[2][k] = b.z;
+        v->pool_sphere[3][k] = b.r;
+    }
     v->s = s;
     v->env = env;
     v->oracle.ctx = v;
@@ -219,5 +369,7 @@ void lie_lie_vis_destroy(lie_lie_vis *v)
     free(v->tris);
     free(v->tri_sphere);
     free(v->emitter_sphere);
+    for (int k = 0; k < 4; k++)
+        free(v->pool_sphere[k]);
     free(v);
 }

@@ -25,15 +25,15 @@ lie_status lie_light_samples_alloc(lie_light_samples *ls, int n)
     memset(ls, 0, sizeof *ls);
     if (n < 1)
         n = 1;
-    /* One block, 9 arrays, each padded to a multiple of 16 floats (64 bytes)
-     * so vector loops may read whole registers. */
+    /* One block, 11 arrays, each padded to a multiple of 16 floats (64
+     * bytes) so vector loops may read whole registers. */
     size_t stride = ((size_t)n + 15) & ~(size_t)15;
-    float *block = aligned_alloc(64, sizeof(float) * 9 * stride);
+    float *block = aligned_alloc(64, sizeof(float) * 11 * stride);
     if (!block)
         return LIE_ERR_NOMEM;
-    memset(block, 0, sizeof(float) * 9 * stride);
-    float **arr[9] = {&ls->x, &ls->y, &ls->z, &ls->nx, &ls->ny, &ls->nz, &ls->r, &ls->g, &ls->b};
-    for (int k = 0; k < 9; k++)
+    memset(block, 0, sizeof(float) * 11 * stride);
+    float **arr[11] = {&ls->x, &ls->y, &ls->z, &ls->nx, &ls->ny, &ls->nz, &ls->r, &ls->g, &ls->b, &ls->s, &ls->t};
+    for (int k = 0; k < 11; k++)
         *arr[k] = block + (size_t)k * stride;
     ls->n = n;
     return LIE_OK;
@@ -63,6 +63,7 @@ void lie_light_samples_generate(const lie_scene *s, int e, int n, float su, floa
         out->g[0] = em->intensity[1];
         out->b[0] = em->intensity[2];
         out->uniform = 0;
+        out->planar = 0;
         return;
     }
     const lie_material *mat = lie_scene_material(s, s->tri_material[em->first_tri]);
@@ -72,6 +73,17 @@ void lie_light_samples_generate(const lie_scene *s, int e, int n, float su, floa
     float w = em->area / (float)n;
     out->n = n;
     out->uniform = tex == NULL;
+    out->planar = em->planar;
+    const lie_vec3 O = em->plane_o, U = em->plane_u, V = em->plane_v, N = em->plane_n;
+    if (em->planar) {
+        float f[4][3] = {{O.x, O.y, O.z}, {U.x, U.y, U.z}, {V.x, V.y, V.z}, {N.x, N.y, N.z}};
+        memcpy(out->po, f[0], sizeof out->po);
+        memcpy(out->pu, f[1], sizeof out->pu);
+        memcpy(out->pv, f[2], sizeof out->pv);
+        memcpy(out->pn, f[3], sizeof out->pn);
+        out->smin = out->tmin = INFINITY;
+        out->smax = out->tmax = -INFINITY;
+    }
     for (int i = 0; i < n; i++) {
         float u1 = wrap01(((float)i + 0.5f) / (float)n + su);
         float u2 = wrap01(lie_radical_inverse2((uint32_t)i) + sv);
@@ -89,6 +101,19 @@ void lie_light_samples_generate(const lie_scene *s, int e, int n, float su, floa
             lie_texture_sample(tex, xu, xv, rgba);
             for (int k = 0; k < 3; k++)
                 le[k] *= rgba[k];
+        }
+        if (em->planar) {
+            /* onto the plane, and back: the point is then exactly what the
+             * linear forms of lib/shade describe */
+            double qx = (double)p.x - O.x, qy = (double)p.y - O.y, qz = (double)p.z - O.z;
+            float ps = (float)(qx * U.x + qy * U.y + qz * U.z), pt = (float)(qx * V.x + qy * V.y + qz * V.z);
+            out->s[i] = ps;
+            out->t[i] = pt;
+            out->smin = fminf(out->smin, ps);
+            out->smax = fmaxf(out->smax, ps);
+            out->tmin = fminf(out->tmin, pt);
+            out->tmax = fmaxf(out->tmax, pt);
+            p = lie_v3(O.x + ps * U.x + pt * V.x, O.y + ps * U.y + pt * V.y, O.z + ps * U.z + pt * V.z);
         }
         out->x[i] = p.x;
         out->y[i] = p.y;

@@ -26,6 +26,15 @@ typedef struct lie_light_samples {
     int n;
     float *x, *y, *z, *nx, *ny, *nz, *r, *g, *b;
     int uniform;           /* every sample has the same weight (no emissive texture) */
+    /* A planar area emitter (lie_emitter.planar): the plane's frame, and
+     * each sample's coordinates (s, t) in it, with (x, y, z) exactly
+     * po + s pu + t pv as evaluated in float; [smin, smax] x [tmin, tmax]
+     * bounds the samples.  Shading and blocker tests then work with linear
+     * forms in (s, t). */
+    int planar;
+    float po[3], pu[3], pv[3], pn[3];
+    float *s, *t;
+    float smin, smax, tmin, tmax;
 } lie_light_samples;
 
 /* Samples of emitter e: a Hammersley point set over the unit square,
@@ -80,19 +89,35 @@ typedef enum lie_vis_class {
     LIE_VISCLASS_BLOCKERS = 3    /* test rays against a blocker list only */
 } lie_vis_class;
 
+/* One shading point's shadow segments toward one emitter: o -> o + d_i,
+ * d_i the vector to sample i shortened by eps.  For an area emitter the
+ * samples are `ls` and dx, dy, dz are filled only on demand
+ * (lie_shadow_segments), since a planar emitter's segments can be tested
+ * from (s, t) alone; for a punctual one (ls NULL) the one segment is in
+ * dx[0], dy[0], dz[0] from the start. */
+typedef struct lie_shadow_query {
+    lie_vec3 o;
+    float eps;
+    const lie_light_samples *ls;
+    int n;
+    int have_segments;
+    float *dx, *dy, *dz;
+} lie_shadow_query;
+void lie_shadow_segments(lie_shadow_query *q);
+
 /* A visibility oracle other than Embree-over-everything.  classify() looks
  * up the pair; for LIE_VISCLASS_BLOCKERS, select() keeps the pair's
  * blockers that can matter from origin o (writing at most max_blockers
  * triangle indices; none left means the point sees the emitter whole) and
- * occluded() answers n shadow segments o -> o + d_i against them
- * (occ[i] = ~0 if blocked, 0 if free). */
+ * occluded() answers the query's segments against them (occ[i] = ~0 if
+ * blocked, 0 if free). */
 typedef struct lie_vis_oracle {
     void *ctx;
     int max_blockers;
     lie_vis_class (*classify)(void *ctx, const lie_surface *sf, int emitter, const void **pair);
     int (*select)(void *ctx, const void *pair, int emitter, lie_vec3 o, uint32_t *out);
-    void (*occluded)(void *ctx, const uint32_t *blockers, int n_blockers, lie_vec3 o, const float *dx,
-                     const float *dy, const float *dz, int n, uint32_t *occ);
+    void (*occluded)(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
+                     uint32_t *occ);
     /* For AOVs: the pair's class (lie_class), list length and a patch id. */
     void (*describe)(void *ctx, const lie_surface *sf, int emitter, int *cls, uint32_t *count,
                      uint64_t *patch_id);
