@@ -51,7 +51,7 @@ typedef struct lie_build_params {
 #define LIE_SAMPLES_DEFAULT 128u
 #define LIE_MAX_SAMPLES_DEFAULT 512u
 #define LIE_MAX_BLOCKERS_DEFAULT 8u
-#define LIE_COMPLEX_CAP_DEFAULT 64u
+#define LIE_COMPLEX_CAP_DEFAULT 128u
 #define LIE_MIN_PATCH_DEFAULT 1e-4f
 lie_build_params lie_build_params_default(void);
 /* Check ranges; fills err with which parameter is wrong. */

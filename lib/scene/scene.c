@@ -345,6 +345,10 @@ static void emitter_plane(const lie_scene *s, lie_emitter *e)
     e->plane_u = lie_v3((float)u[0], (float)u[1], (float)u[2]);
     e->plane_v = lie_v3((float)v[0], (float)v[1], (float)v[2]);
     e->plane_n = lie_v3((float)n[0], (float)n[1], (float)n[2]);
+    e->plane_ext[0] = (float)(lo[0] - cu);
+    e->plane_ext[1] = (float)(hi[0] - cu);
+    e->plane_ext[2] = (float)(lo[1] - cv);
+    e->plane_ext[3] = (float)(hi[1] - cv);
     e->planar = 1;
 }
 

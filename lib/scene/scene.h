@@ -161,6 +161,7 @@ typedef struct lie_emitter {
      * samples carry coordinates in it (lib/shade). */
     int planar;
     lie_vec3 plane_o, plane_u, plane_v, plane_n;
+    float plane_ext[4];    /* its vertices' extent in the frame: s min, max, t min, max */
     /* punctual */
     lie_vec3 position;
     lie_vec3 direction;    /* where the light points (spot, directional), unit */

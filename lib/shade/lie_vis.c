@@ -22,6 +22,7 @@ struct lie_lie_vis {
     sphere *tri_sphere;     /* per triangle */
     sphere *emitter_sphere; /* per emitter; r < 0: no culling (directional) */
     float *pool_sphere[4];  /* x, y, z, r of the sphere of each pool entry's triangle */
+    float *pool_vert[9];    /* its vertices: a x, y, z, b x, y, z, c x, y, z */
     lie_vis_oracle oracle;
 };
 
@@ -49,10 +50,15 @@ static lie_vis_class classify(void *ctx, const lie_surface *sf, int e, const voi
  * needs fewer, often none).  The spheres of each list lie side by side
  * (pool_sphere), so the test runs over eight blockers at a time; the
  * flags go to out[] and are compacted in place. */
+static int select_planar(const lie_lie_vis *v, const lie_pnode *nd, const lie_emitter *em, lie_vec3 o,
+                         uint32_t *out);
+
 static int select_blockers(void *ctx, const void *pair, int e, lie_vec3 o, uint32_t *out)
 {
     const lie_lie_vis *v = ctx;
     const lie_pnode *nd = pair;
+    if (v->s->emitters[e].planar)
+        return select_planar(v, nd, &v->s->emitters[e], o, out);
     const uint32_t *list = v->env->pool + nd->list;
     const int count = (int)nd->count;
     const sphere E = v->emitter_sphere[e];
@@ -82,6 +88,60 @@ static int select_blockers(void *ctx, const void *pair, int e, lie_vec3 o, uint3
         int wide = cos_sum < -0.999f; /* alpha + beta near pi */
         int in_cone = wide | (t / dv >= cos_sum - 1e-6f);
         keep[j] = (uint32_t)(inside | (in_range & in_cone));
+    }
+    int m = 0;
+    for (int j = 0; j < count; j++)
+        if (keep[j])
+            out[m++] = list[j];
+    return m;
+}
+
+/* Toward a planar emitter: the blockers that are not wholly behind o
+ * (depth along the emitter's normal < 0), not wholly beyond the emitter's
+ * plane, and, when wholly in front of o, whose shadow on the plane meets
+ * the emitter's extent.  A vertex at depth l > 0 and plane coordinate
+ * a_u = a.u falls at s = a_u D / l - w.u on the plane, so "every vertex
+ * left of s0" is a_u D < (w.u + s0) l for each: no division.  Over the
+ * list's vertices side by side, eight blockers at a time. */
+static int select_planar(const lie_lie_vis *v, const lie_pnode *nd, const lie_emitter *em, lie_vec3 o,
+                         uint32_t *out)
+{
+    const uint32_t *list = v->env->pool + nd->list;
+    const int count = (int)nd->count;
+    const lie_vec3 U = em->plane_u, V = em->plane_v;
+    const float wx = em->plane_o.x - o.x, wy = em->plane_o.y - o.y, wz = em->plane_o.z - o.z;
+    const float d = wx * em->plane_n.x + wy * em->plane_n.y + wz * em->plane_n.z;
+    const float sg = d > 0.0f ? 1.0f : -1.0f, D = sg * d;
+    const float kx = sg * em->plane_n.x, ky = sg * em->plane_n.y, kz = sg * em->plane_n.z;
+    const float wu = wx * U.x + wy * U.y + wz * U.z, wv = wx * V.x + wy * V.y + wz * V.z;
+    const float pad = 1e-4f * lie_maxf(em->plane_ext[1] - em->plane_ext[0], em->plane_ext[3] - em->plane_ext[2]);
+    const float L = wu + em->plane_ext[0] - pad, R = wu + em->plane_ext[1] + pad;
+    const float B = wv + em->plane_ext[2] - pad, T = wv + em->plane_ext[3] + pad;
+    /* shadows are boxed only for vertices clearly in front of o */
+    const float front = 1e-4f * lie_maxf(1.0f, lie_v3_maxabs(o));
+    const float *const *P = (const float *const *)v->pool_vert;
+    const float *restrict pax = P[0] + nd->list, *restrict pay = P[1] + nd->list, *restrict paz = P[2] + nd->list;
+    const float *restrict pbx = P[3] + nd->list, *restrict pby = P[4] + nd->list, *restrict pbz = P[5] + nd->list;
+    const float *restrict pcx = P[6] + nd->list, *restrict pcy = P[7] + nd->list, *restrict pcz = P[8] + nd->list;
+    uint32_t *restrict keep = out;
+#pragma omp simd
+    for (int j = 0; j < count; j++) {
+        float ax = pax[j] - o.x, ay = pay[j] - o.y, az = paz[j] - o.z;
+        float bx = pbx[j] - o.x, by = pby[j] - o.y, bz = pbz[j] - o.z;
+        float cx = pcx[j] - o.x, cy = pcy[j] - o.y, cz = pcz[j] - o.z;
+        float la = ax * kx + ay * ky + az * kz, lb = bx * kx + by * ky + bz * kz, lc = cx * kx + cy * ky + cz * kz;
+        float au = ax * U.x + ay * U.y + az * U.z, bu = bx * U.x + by * U.y + bz * U.z,
+              cu = cx * U.x + cy * U.y + cz * U.z;
+        float av = ax * V.x + ay * V.y + az * V.z, bv = bx * V.x + by * V.y + bz * V.z,
+              cv = cx * V.x + cy * V.y + cz * V.z;
+        int behind = (la < 0.0f) & (lb < 0.0f) & (lc < 0.0f);
+        int beyond = (la > D) & (lb > D) & (lc > D);
+        int in_front = (la > front) & (lb > front) & (lc > front);
+        int left = (au * D < L * la) & (bu * D < L * lb) & (cu * D < L * lc);
+        int right = (au * D > R * la) & (bu * D > R * lb) & (cu * D > R * lc);
+        int below = (av * D < B * la) & (bv * D < B * lb) & (cv * D < B * lc);
+        int above = (av * D > T * la) & (bv * D > T * lb) & (cv * D > T * lc);
+        keep[j] = (uint32_t)!(behind | beyond | (in_front & (left | right | below | above)));
     }
     int m = 0;
     for (int j = 0; j < count; j++)
@@ -139,16 +199,16 @@ static void blocker_3d(const mt_tri *T, lie_vec3 o, const float *dxs, const floa
  * all of them; behind o is fine) blocks exactly the samples inside its
  * cone, and the segments' shortening by eps never matters.  Those edge
  * planes are linear forms in a sample's (s, t): three fused multiply-adds
- * per edge, and a compare.  The blocker's shadow on the plane (when it lies
- * wholly in front of o) culls it or proves every sample blocked first.
+ * per edge, and a compare.  (select_planar has culled blockers whose
+ * shadow misses the emitter.)  If the cone holds the corners of the
+ * samples' box, every sample is blocked.
  * Returns 0 if the blocker is not of that kind (test it in 3D), 1 if
  * done, 2 if every sample is blocked. */
 typedef struct plane_view {
     float wx, wy, wz;  /* po - o */
     float kx, ky, kz;  /* the plane's unit normal, pointing away from o */
     float D;           /* distance from o to the plane */
-    float lo, hi;      /* shadows are boxed beyond lo; 2D tests only short of hi */
-    float pad;         /* of the shadow's box (rounding) */
+    float hi;          /* 2D tests only for blockers short of this depth */
 } plane_view;
 
 static int blocker_2d(const mt_tri *T, lie_vec3 o, const plane_view *pv, const lie_light_samples *ls,
@@ -167,21 +227,6 @@ static int blocker_2d(const mt_tri *T, lie_vec3 o, const plane_view *pv, const l
         return 0;
     const float ux = ls->pu[0], uy = ls->pu[1], uz = ls->pu[2];
     const float vx = ls->pv[0], vy = ls->pv[1], vz = ls->pv[2];
-    if (lmin > pv->lo) {
-        /* the shadow's box on the plane: the vertices scaled onto it */
-        float ka = pv->D / la, kb = pv->D / lb, kc = pv->D / lc;
-        float sa = (ax * ka - pv->wx) * ux + (ay * ka - pv->wy) * uy + (az * ka - pv->wz) * uz;
-        float sb = (bx * kb - pv->wx) * ux + (by * kb - pv->wy) * uy + (bz * kb - pv->wz) * uz;
-        float sc = (cx * kc - pv->wx) * ux + (cy * kc - pv->wy) * uy + (cz * kc - pv->wz) * uz;
-        float ta = (ax * ka - pv->wx) * vx + (ay * ka - pv->wy) * vy + (az * ka - pv->wz) * vz;
-        float tb = (bx * kb - pv->wx) * vx + (by * kb - pv->wy) * vy + (bz * kb - pv->wz) * vz;
-        float tc = (cx * kc - pv->wx) * vx + (cy * kc - pv->wy) * vy + (cz * kc - pv->wz) * vz;
-        if (lie_maxf(sa, lie_maxf(sb, sc)) + pv->pad < ls->smin ||
-            lie_minf(sa, lie_minf(sb, sc)) - pv->pad > ls->smax ||
-            lie_maxf(ta, lie_maxf(tb, tc)) + pv->pad < ls->tmin ||
-            lie_minf(ta, lie_minf(tb, tc)) - pv->pad > ls->tmax)
-            return 1; /* its shadow misses every sample */
-    }
     /* edge planes through o, oriented so that inside is all >= 0 */
     float m[3][3] = {{ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx},
                      {by * cz - bz * cy, bz * cx - bx * cz, bx * cy - by * cx},
@@ -242,10 +287,8 @@ static void occluded(void *ctx, const uint32_t *blockers, int n_blockers, lie_sh
         pv.ky = sg * ls->pn[1];
         pv.kz = sg * ls->pn[2];
         pv.D = sg * d;
-        pv.lo = q->eps;
         pv.hi = pv.D - 2.0f * q->eps;
-        pv.pad = 1e-5f * lie_maxf(ls->smax - ls->smin, ls->tmax - ls->tmin);
-        planar = pv.hi > pv.lo;
+        planar = pv.hi > 0.0f;
     }
     for (int j = 0; j < n_blockers; j++) {
         const mt_tri *T = &v->tris[blockers[j]];
@@ -335,6 +378,18 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
             return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
         }
     }
+    for (int k = 0; k < 9; k++) {
+        v->pool_vert[k] = malloc(sizeof(float) * ((size_t)env->n_pool + 1));
+        if (!v->pool_vert[k]) {
+            lie_lie_vis_destroy(v);
+            return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
+        }
+    }
+    for (uint32_t k = 0; k < env->n_pool; k++) {
+        const lie_vec3 *Q = env->pool[k] < s->n_tris ? &s->tri_p[3 * (size_t)env->pool[k]] : NULL;
+        for (int q = 0; q < 9; q++)
+            v->pool_vert[q][k] = Q ? (q % 3 == 0 ? Q[q / 3].x : q % 3 == 1 ? Q[q / 3].y : Q[q / 3].z) : 0.0f;
+    }
     for (uint32_t k = 0; k < env->n_pool; k++) {
         /* entries no partial list names are not checked on load */
         sphere none = {0.0f, 0.0f, 0.0f, 0.0f};
@@ -371,5 +426,7 @@ void lie_lie_vis_destroy(lie_lie_vis *v)
     free(v->emitter_sphere);
     for (int k = 0; k < 4; k++)
         free(v->pool_sphere[k]);
+    for (int k = 0; k < 9; k++)
+        free(v->pool_vert[k]);
     free(v);
 }
