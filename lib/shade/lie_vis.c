@@ -97,8 +97,8 @@ static int select_blockers(void *ctx, const void *pair, int e, lie_vec3 o, uint3
 }
 
 /* Toward a planar emitter: the blockers that are not wholly behind o
- * (depth along the emitter's normal < 0), not wholly beyond the emitter's
- * plane, and, when wholly in front of o, whose shadow on the plane meets
+ * (depth along the emitter's normal < 0), not wholly where no segment
+ * reaches (at or beyond the emitter's plane), and, when wholly in front of o, whose shadow on the plane meets
  * the emitter's extent.  A vertex at depth l > 0 and plane coordinate
  * a_u = a.u falls at s = a_u D / l - w.u on the plane, so "every vertex
  * left of s0" is a_u D < (w.u + s0) l for each: no division.  Over the
@@ -117,8 +117,11 @@ static int select_planar(const lie_lie_vis *v, const lie_pnode *nd, const lie_em
     const float pad = 1e-4f * lie_maxf(em->plane_ext[1] - em->plane_ext[0], em->plane_ext[3] - em->plane_ext[2]);
     const float L = wu + em->plane_ext[0] - pad, R = wu + em->plane_ext[1] + pad;
     const float B = wv + em->plane_ext[2] - pad, T = wv + em->plane_ext[3] + pad;
-    /* shadows are boxed only for vertices clearly in front of o */
+    /* shadows are boxed only for vertices clearly in front of o; no
+     * segment reaches `end` (lie_shade_direct's eps, from about o) */
     const float front = 1e-4f * lie_maxf(1.0f, lie_v3_maxabs(o));
+    const float rs = lie_maxf(-em->plane_ext[0], em->plane_ext[1]), rt = lie_maxf(-em->plane_ext[2], em->plane_ext[3]);
+    const float end = D - 0.25f * front * (D / (sqrtf(wx * wx + wy * wy + wz * wz) + sqrtf(rs * rs + rt * rt)));
     const float *const *P = (const float *const *)v->pool_vert;
     const float *restrict pax = P[0] + nd->list, *restrict pay = P[1] + nd->list, *restrict paz = P[2] + nd->list;
     const float *restrict pbx = P[3] + nd->list, *restrict pby = P[4] + nd->list, *restrict pbz = P[5] + nd->list;
@@ -135,7 +138,7 @@ static int select_planar(const lie_lie_vis *v, const lie_pnode *nd, const lie_em
         float av = ax * V.x + ay * V.y + az * V.z, bv = bx * V.x + by * V.y + bz * V.z,
               cv = cx * V.x + cy * V.y + cz * V.z;
         int behind = (la < 0.0f) & (lb < 0.0f) & (lc < 0.0f);
-        int beyond = (la > D) & (lb > D) & (lc > D);
+        int beyond = (la > end) & (lb > end) & (lc > end);
         int in_front = (la > front) & (lb > front) & (lc > front);
         int left = (au * D < L * la) & (bu * D < L * lb) & (cu * D < L * lc);
         int right = (au * D > R * la) & (bu * D > R * lb) & (cu * D > R * lc);
@@ -190,25 +193,29 @@ static void blocker_3d(const mt_tri *T, lie_vec3 o, const float *dxs, const floa
 }
 
 /* Toward a planar emitter, o sees the emitter's plane at distance D along
- * its normal, and every sample's direction has depth D.  The rays from o
+ * its normal, and every sample's direction d has depth D.  The rays from o
  * that meet a blocker are the cone of its vertex vectors a, b, c: d is in
  * it iff d's three coordinates in that basis (by Cramer's rule, the edge
  * planes' dot products divided by det(a, b, c)) are >= 0, and the ray then
- * meets the triangle where the depth is at most the vertices' largest.  So
- * a blocker whose vertices all lie at least 2 eps short of the plane (nearly
- * all of them; behind o is fine) blocks exactly the samples inside its
- * cone, and the segments' shortening by eps never matters.  Those edge
- * planes are linear forms in a sample's (s, t): three fused multiply-adds
- * per edge, and a compare.  (select_planar has culled blockers whose
- * shadow misses the emitter.)  If the cone holds the corners of the
- * samples' box, every sample is blocked.
- * Returns 0 if the blocker is not of that kind (test it in 3D), 1 if
+ * meets the triangle at the fraction tau = h / (n.d) of d (n the
+ * triangle's normal, h = n.a), at depth tau D.  The segment to a sample
+ * ends at 1 - eps/|d| > 1 - eps/D, so a hit at depth <= D - 2 eps blocks
+ * it and a hit at tau >= 1 does not.  For a blocker whose vertices all lie
+ * short of D - 2 eps (nearly all; behind o is fine) the cone alone decides;
+ * for one reaching the emitter's plane (a wall) the depth condition is one
+ * more linear form, and if some sample's ray meets it between the two
+ * bounds the caller answers that blocker in 3D.  These forms are linear in
+ * a sample's (s, t): two fused multiply-adds each per sample, and a
+ * compare.  (select_planar has culled blockers whose shadow misses the
+ * emitter.)  If the cone holds the corners of the samples' box, every
+ * sample is blocked.  Returns 0 if the blocker is to be tested in 3D, 1 if
  * done, 2 if every sample is blocked. */
 typedef struct plane_view {
     float wx, wy, wz;  /* po - o */
     float kx, ky, kz;  /* the plane's unit normal, pointing away from o */
     float D;           /* distance from o to the plane */
-    float hi;          /* 2D tests only for blockers short of this depth */
+    float hi;          /* D - 2 eps: a hit short of this depth blocks */
+    float end;         /* no segment reaches this depth */
 } plane_view;
 
 static int blocker_2d(const mt_tri *T, lie_vec3 o, const plane_view *pv, const lie_light_samples *ls,
@@ -221,10 +228,8 @@ static int blocker_2d(const mt_tri *T, lie_vec3 o, const plane_view *pv, const l
     float lb = bx * pv->kx + by * pv->ky + bz * pv->kz;
     float lc = cx * pv->kx + cy * pv->ky + cz * pv->kz;
     float lmin = lie_minf(la, lie_minf(lb, lc)), lmax = lie_maxf(la, lie_maxf(lb, lc));
-    if (lmax < 0.0f || lmin > pv->D)
-        return 1; /* wholly behind o, or beyond the emitter */
-    if (!(lmax < pv->hi))
-        return 0;
+    if (lmax < 0.0f || lmin > pv->end)
+        return 1; /* wholly behind o, or where no segment reaches */
     const float ux = ls->pu[0], uy = ls->pu[1], uz = ls->pu[2];
     const float vx = ls->pv[0], vy = ls->pv[1], vz = ls->pv[2];
     /* edge planes through o, oriented so that inside is all >= 0 */
@@ -242,6 +247,38 @@ static int blocker_2d(const mt_tri *T, lie_vec3 o, const plane_view *pv, const l
         cs[k] = mx * ux + my * uy + mz * uz;
         ct[k] = mx * vx + my * vy + mz * vz;
     }
+    const float a0 = c0[0], a1 = c0[1], a2 = c0[2], s0 = cs[0], s1 = cs[1], s2 = cs[2], t0 = ct[0], t1 = ct[1],
+                t2 = ct[2];
+    const float *restrict ss = ls->s, *restrict ts = ls->t;
+    uint32_t *restrict occ = occ_out;
+    const int n = ls->n;
+    if (lmax >= pv->hi) {
+        /* reaches the emitter's plane: blocked iff in the cone and the hit
+         * is short of hi (g >= 0); in the cone with the hit between hi and
+         * tau = 1 (g < 0 < g2) is for the 3D test */
+        float e1x = bx - ax, e1y = by - ay, e1z = bz - az, e2x = cx - ax, e2y = cy - ay, e2z = cz - az;
+        float nx = e1y * e2z - e1z * e2y, ny = e1z * e2x - e1x * e2z, nz = e1x * e2y - e1y * e2x;
+        float h = nx * ax + ny * ay + nz * az;
+        float sh = h > 0.0f ? 1.0f : -1.0f;
+        float n0 = nx * pv->wx + ny * pv->wy + nz * pv->wz, nu = nx * ux + ny * uy + nz * uz,
+              nv = nx * vx + ny * vy + nz * vz;
+        const float g0 = sh * (pv->hi * n0 - pv->D * h), gu = sh * pv->hi * nu, gv = sh * pv->hi * nv;
+        const float k0 = sh * (n0 - h), ku = sh * nu, kv = sh * nv;
+        uint32_t unsure = 0;
+#pragma omp simd reduction(| : unsure)
+        for (int i = 0; i < n; i++) {
+            float s = ss[i], t = ts[i];
+            float e0 = fmaf(t, t0, fmaf(s, s0, a0));
+            float e1 = fmaf(t, t1, fmaf(s, s1, a1));
+            float e2 = fmaf(t, t2, fmaf(s, s2, a2));
+            float g = fmaf(t, gv, fmaf(s, gu, g0));
+            float g2 = fmaf(t, kv, fmaf(s, ku, k0));
+            int in = (e0 >= 0.0f) & (e1 >= 0.0f) & (e2 >= 0.0f);
+            occ[i] |= (uint32_t)-(in & (g >= 0.0f));
+            unsure |= (uint32_t)(in & (g < 0.0f) & (g2 > 0.0f));
+        }
+        return unsure ? 0 : 1;
+    }
     /* every corner of the samples' box inside: every sample is blocked */
     int all = 1;
     for (int q = 0; q < 4 && all; q++) {
@@ -251,11 +288,6 @@ static int blocker_2d(const mt_tri *T, lie_vec3 o, const plane_view *pv, const l
     }
     if (all)
         return 2;
-    const float a0 = c0[0], a1 = c0[1], a2 = c0[2], s0 = cs[0], s1 = cs[1], s2 = cs[2], t0 = ct[0], t1 = ct[1],
-                t2 = ct[2];
-    const float *restrict ss = ls->s, *restrict ts = ls->t;
-    uint32_t *restrict occ = occ_out;
-    const int n = ls->n;
 #pragma omp simd
     for (int i = 0; i < n; i++) {
         float s = ss[i], t = ts[i];
@@ -288,6 +320,10 @@ static void occluded(void *ctx, const uint32_t *blockers, int n_blockers, lie_sh
         pv.kz = sg * ls->pn[2];
         pv.D = sg * d;
         pv.hi = pv.D - 2.0f * q->eps;
+        /* the segments end at least eps D / |d| short of the plane */
+        float rs = lie_maxf(-ls->smin, ls->smax), rt = lie_maxf(-ls->tmin, ls->tmax);
+        float dmax = sqrtf(pv.wx * pv.wx + pv.wy * pv.wy + pv.wz * pv.wz) + sqrtf(rs * rs + rt * rt);
+        pv.end = pv.D - 0.5f * q->eps * (pv.D / dmax);
         planar = pv.hi > 0.0f;
     }
     for (int j = 0; j < n_blockers; j++) {
