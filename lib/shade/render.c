@@ -172,29 +172,27 @@ static void render_tile(void *ctx, size_t item, int worker)
             float acc[3] = {0.0f, 0.0f, 0.0f};
             float alb[3] = {0.0f, 0.0f, 0.0f}, nrm[3] = {0.0f, 0.0f, 0.0f}, dep = 0.0f;
             int first_hits = 0;
-            uint64_t h = lie_hash_u64x4(pixel, 0x706978656cull, 0, 0);
+            uint64_t h = spp > 1 ? lie_hash_u64x4(pixel, 0x706978656cull, 0, 0) : 0;
             float shx = lie_hash_to_unit(h), shy = lie_hash_to_unit(h << 24);
             for (int k = 0; k < spp; k++) {
-                float sx = 0.5f, sy = 0.5f;
-                if (spp > 1) {
-                    /* Stratified: a Hammersley set shifted per pixel. */
-                    sx = ((float)k + 0.5f) / (float)spp + shx;
-                    sy = lie_radical_inverse2((uint32_t)k) + shy;
-                    sx -= floorf(sx);
-                    sy -= floorf(sy);
-                }
-                float ndc_x = (2.0f * ((float)x + sx) / (float)f->width - 1.0f) * j->tan_x;
-                float ndc_y = (1.0f - 2.0f * ((float)y + sy) / (float)f->height) * j->tan_y;
-                lie_vec3 d = lie_v3_norm(lie_v3_add(j->fwd, lie_v3_add(lie_v3_scale(j->right, ndc_x),
-                                                                        lie_v3_scale(j->up, ndc_y))));
-                lie_surface first = {0};
+                lie_surface first;
                 first.tri = LIE_NO_HIT;
                 float c[3] = {0.0f, 0.0f, 0.0f};
                 sc->stats.eye_rays++;
                 if (spp == 1) {
+                    /* the row's packet has traced it */
                     if (row_hits[x - x0].tri != LIE_NO_HIT)
                         shade_hit(j, &row_hits[x - x0], row_dirs[x - x0], 0, pixel, sc, c, &first);
                 } else {
+                    /* Stratified: a Hammersley set shifted per pixel. */
+                    float sx = ((float)k + 0.5f) / (float)spp + shx;
+                    float sy = lie_radical_inverse2((uint32_t)k) + shy;
+                    sx -= floorf(sx);
+                    sy -= floorf(sy);
+                    float ndc_x = (2.0f * ((float)x + sx) / (float)f->width - 1.0f) * j->tan_x;
+                    float ndc_y = (1.0f - 2.0f * ((float)y + sy) / (float)f->height) * j->tan_y;
+                    lie_vec3 d = lie_v3_norm(lie_v3_add(j->fwd, lie_v3_add(lie_v3_scale(j->right, ndc_x),
+                                                                            lie_v3_scale(j->up, ndc_y))));
                     trace(j, j->cam->eye, d, 0, pixel, sc, c, &first);
                 }
                 for (int q = 0; q < 3; q++)
