@@ -38,7 +38,11 @@ lie_status lie_shade_scratch_init(lie_shade_scratch *sc, int cap, int max_blocke
         *arr[k] = block + (size_t)k * stride;
     sc->batch.occluded = malloc(stride);
     sc->blockers = malloc(sizeof *sc->blockers * ((size_t)(max_blockers > 0 ? max_blockers : 0) + 1));
-    if (!sc->batch.occluded || !sc->blockers || lie_light_samples_alloc(&sc->rotated, cap) != LIE_OK) {
+    sc->bstride = ((size_t)(max_blockers > 0 ? max_blockers : 0) + 16) & ~(size_t)15;
+    sc->bwork = aligned_alloc(64, sizeof(float) * LIE_BLOCKER_WORK * sc->bstride);
+    sc->bkind = malloc(sizeof *sc->bkind * sc->bstride);
+    if (!sc->batch.occluded || !sc->blockers || !sc->bwork || !sc->bkind ||
+        lie_light_samples_alloc(&sc->rotated, cap) != LIE_OK) {
         lie_shade_scratch_free(sc);
         return LIE_ERR_NOMEM;
     }
@@ -55,6 +59,8 @@ void lie_shade_scratch_free(lie_shade_scratch *sc)
     free(sc->idx);
     free(sc->batch.occluded);
     free(sc->blockers);
+    free(sc->bwork);
+    free(sc->bkind);
     lie_light_samples_free(&sc->rotated);
     memset(sc, 0, sizeof *sc);
 }
@@ -394,7 +400,8 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
         }
         memset(sc->occ, 0, sizeof *sc->occ * (size_t)n);
         {
-            lie_shadow_query q = {o, eps, ls, n, ls == NULL, sc->dx, sc->dy, sc->dz};
+            lie_shadow_query q = {o,     eps,       ls,       n, ls == NULL, sc->dx, sc->dy, sc->dz,
+                                  sc->bwork, sc->bkind, sc->bstride};
             float *sdx = sc->dx, *sdy = sc->dy, *sdz = sc->dz;
             if (!ls) {
                 float len = sc->dist[0] - eps;

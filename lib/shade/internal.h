@@ -14,6 +14,9 @@ typedef struct lie_shade_scratch {
     float *dx, *dy, *dz, *dist;
     uint32_t *occ;             /* per sample: ~0 blocked, 0 free */
     uint32_t *blockers;        /* the oracle's selected blockers */
+    float *bwork;              /* lie_shadow_query.work */
+    uint32_t *bkind;
+    size_t bstride;
     int *idx;                  /* batch slot -> sample */
     lie_ray_batch batch;
     lie_light_samples rotated; /* --pattern rotated: this point's samples */

@@ -218,76 +218,97 @@ typedef struct plane_view {
     float end;         /* no segment reaches this depth */
 } plane_view;
 
-static int blocker_2d(const mt_tri *T, lie_vec3 o, const plane_view *pv, const lie_light_samples *ls,
-                      uint32_t *occ_out)
+/* What the setup pass found for a blocker. */
+enum { B_NONE = 0, B_CONE = 1, B_REACHES = 2, B_ALL = 3 };
+/* Its linear forms in (s, t), each as constant, s and t coefficients:
+ * three edges, and for a blocker reaching the plane g and g2. */
+enum { W_E0 = 0, W_E1 = 3, W_E2 = 6, W_G = 9, W_G2 = 12 };
+
+/* The setup pass, over the selected blockers side by side: their vertices
+ * are gathered relative to o, then eight at a time each gets its kind and
+ * forms. */
+static void setup_2d(const lie_lie_vis *v, const uint32_t *blockers, int nb, lie_vec3 o, const plane_view *pv,
+                     const lie_light_samples *ls, float *work, size_t stride, uint32_t *kind_out)
 {
-    float ax = T->ax - o.x, ay = T->ay - o.y, az = T->az - o.z;
-    float bx = T->bx - o.x, by = T->by - o.y, bz = T->bz - o.z;
-    float cx = T->cx - o.x, cy = T->cy - o.y, cz = T->cz - o.z;
-    float la = ax * pv->kx + ay * pv->ky + az * pv->kz;
-    float lb = bx * pv->kx + by * pv->ky + bz * pv->kz;
-    float lc = cx * pv->kx + cy * pv->ky + cz * pv->kz;
-    float lmin = lie_minf(la, lie_minf(lb, lc)), lmax = lie_maxf(la, lie_maxf(lb, lc));
-    if (lmax < 0.0f || lmin > pv->end)
-        return 1; /* wholly behind o, or where no segment reaches */
+    float *restrict W[LIE_BLOCKER_WORK];
+    for (int k = 0; k < LIE_BLOCKER_WORK; k++)
+        W[k] = work + (size_t)k * stride;
+    for (int j = 0; j < nb; j++) {
+        const mt_tri *T = &v->tris[blockers[j]];
+        W[0][j] = T->ax - o.x;
+        W[1][j] = T->ay - o.y;
+        W[2][j] = T->az - o.z;
+        W[3][j] = T->bx - o.x;
+        W[4][j] = T->by - o.y;
+        W[5][j] = T->bz - o.z;
+        W[6][j] = T->cx - o.x;
+        W[7][j] = T->cy - o.y;
+        W[8][j] = T->cz - o.z;
+    }
     const float ux = ls->pu[0], uy = ls->pu[1], uz = ls->pu[2];
     const float vx = ls->pv[0], vy = ls->pv[1], vz = ls->pv[2];
-    /* edge planes through o, oriented so that inside is all >= 0 */
-    float m[3][3] = {{ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx},
-                     {by * cz - bz * cy, bz * cx - bx * cz, bx * cy - by * cx},
-                     {cy * az - cz * ay, cz * ax - cx * az, cx * ay - cy * ax}};
-    float det = ax * m[1][0] + ay * m[1][1] + az * m[1][2];
-    if (det == 0.0f)
-        return 1; /* seen edge-on: o lies in its plane */
-    float sg = det > 0.0f ? 1.0f : -1.0f;
-    float c0[3], cs[3], ct[3];
-    for (int k = 0; k < 3; k++) {
-        float mx = sg * m[k][0], my = sg * m[k][1], mz = sg * m[k][2];
-        c0[k] = mx * pv->wx + my * pv->wy + mz * pv->wz;
-        cs[k] = mx * ux + my * uy + mz * uz;
-        ct[k] = mx * vx + my * vy + mz * vz;
-    }
-    const float a0 = c0[0], a1 = c0[1], a2 = c0[2], s0 = cs[0], s1 = cs[1], s2 = cs[2], t0 = ct[0], t1 = ct[1],
-                t2 = ct[2];
-    const float *restrict ss = ls->s, *restrict ts = ls->t;
-    uint32_t *restrict occ = occ_out;
-    const int n = ls->n;
-    if (lmax >= pv->hi) {
-        /* reaches the emitter's plane: blocked iff in the cone and the hit
-         * is short of hi (g >= 0); in the cone with the hit between hi and
-         * tau = 1 (g < 0 < g2) is for the 3D test */
+    const float wx = pv->wx, wy = pv->wy, wz = pv->wz, kx = pv->kx, ky = pv->ky, kz = pv->kz;
+    const float D = pv->D, hi = pv->hi, end = pv->end;
+    const float s_lo = ls->smin, s_hi = ls->smax, t_lo = ls->tmin, t_hi = ls->tmax;
+    uint32_t *restrict kind = kind_out;
+#pragma omp simd
+    for (int j = 0; j < nb; j++) {
+        float ax = W[0][j], ay = W[1][j], az = W[2][j], bx = W[3][j], by = W[4][j], bz = W[5][j];
+        float cx = W[6][j], cy = W[7][j], cz = W[8][j];
+        float la = ax * kx + ay * ky + az * kz, lb = bx * kx + by * ky + bz * kz, lc = cx * kx + cy * ky + cz * kz;
+        float lmin = lie_minf(la, lie_minf(lb, lc)), lmax = lie_maxf(la, lie_maxf(lb, lc));
+        /* edge planes through o, oriented so that inside is all >= 0 */
+        float m0x = ay * bz - az * by, m0y = az * bx - ax * bz, m0z = ax * by - ay * bx;
+        float m1x = by * cz - bz * cy, m1y = bz * cx - bx * cz, m1z = bx * cy - by * cx;
+        float m2x = cy * az - cz * ay, m2y = cz * ax - cx * az, m2z = cx * ay - cy * ax;
+        float det = ax * m1x + ay * m1y + az * m1z;
+        float sg = det > 0.0f ? 1.0f : -1.0f;
+        m0x *= sg, m0y *= sg, m0z *= sg, m1x *= sg, m1y *= sg, m1z *= sg, m2x *= sg, m2y *= sg, m2z *= sg;
+        float e00 = m0x * wx + m0y * wy + m0z * wz, e0s = m0x * ux + m0y * uy + m0z * uz,
+              e0t = m0x * vx + m0y * vy + m0z * vz;
+        float e10 = m1x * wx + m1y * wy + m1z * wz, e1s = m1x * ux + m1y * uy + m1z * uz,
+              e1t = m1x * vx + m1y * vy + m1z * vz;
+        float e20 = m2x * wx + m2y * wy + m2z * wz, e2s = m2x * ux + m2y * uy + m2z * uz,
+              e2t = m2x * vx + m2y * vy + m2z * vz;
+        /* the triangle's plane: g >= 0 iff the hit is short of hi, g2 > 0
+         * iff it is short of tau = 1 */
         float e1x = bx - ax, e1y = by - ay, e1z = bz - az, e2x = cx - ax, e2y = cy - ay, e2z = cz - az;
         float nx = e1y * e2z - e1z * e2y, ny = e1z * e2x - e1x * e2z, nz = e1x * e2y - e1y * e2x;
         float h = nx * ax + ny * ay + nz * az;
         float sh = h > 0.0f ? 1.0f : -1.0f;
-        float n0 = nx * pv->wx + ny * pv->wy + nz * pv->wz, nu = nx * ux + ny * uy + nz * uz,
-              nv = nx * vx + ny * vy + nz * vz;
-        const float g0 = sh * (pv->hi * n0 - pv->D * h), gu = sh * pv->hi * nu, gv = sh * pv->hi * nv;
-        const float k0 = sh * (n0 - h), ku = sh * nu, kv = sh * nv;
-        uint32_t unsure = 0;
-#pragma omp simd reduction(| : unsure)
-        for (int i = 0; i < n; i++) {
-            float s = ss[i], t = ts[i];
-            float e0 = fmaf(t, t0, fmaf(s, s0, a0));
-            float e1 = fmaf(t, t1, fmaf(s, s1, a1));
-            float e2 = fmaf(t, t2, fmaf(s, s2, a2));
-            float g = fmaf(t, gv, fmaf(s, gu, g0));
-            float g2 = fmaf(t, kv, fmaf(s, ku, k0));
-            int in = (e0 >= 0.0f) & (e1 >= 0.0f) & (e2 >= 0.0f);
-            occ[i] |= (uint32_t)-(in & (g >= 0.0f));
-            unsure |= (uint32_t)(in & (g < 0.0f) & (g2 > 0.0f));
-        }
-        return unsure ? 0 : 1;
+        float n0 = nx * wx + ny * wy + nz * wz, nu = nx * ux + ny * uy + nz * uz, nv = nx * vx + ny * vy + nz * vz;
+        /* every corner of the samples' box inside: every sample blocked */
+        int all = 1;
+        all &= fmaf(t_lo, e0t, fmaf(s_lo, e0s, e00)) > 0.0f;
+        all &= fmaf(t_lo, e0t, fmaf(s_hi, e0s, e00)) > 0.0f;
+        all &= fmaf(t_hi, e0t, fmaf(s_lo, e0s, e00)) > 0.0f;
+        all &= fmaf(t_hi, e0t, fmaf(s_hi, e0s, e00)) > 0.0f;
+        all &= fmaf(t_lo, e1t, fmaf(s_lo, e1s, e10)) > 0.0f;
+        all &= fmaf(t_lo, e1t, fmaf(s_hi, e1s, e10)) > 0.0f;
+        all &= fmaf(t_hi, e1t, fmaf(s_lo, e1s, e10)) > 0.0f;
+        all &= fmaf(t_hi, e1t, fmaf(s_hi, e1s, e10)) > 0.0f;
+        all &= fmaf(t_lo, e2t, fmaf(s_lo, e2s, e20)) > 0.0f;
+        all &= fmaf(t_lo, e2t, fmaf(s_hi, e2s, e20)) > 0.0f;
+        all &= fmaf(t_hi, e2t, fmaf(s_lo, e2s, e20)) > 0.0f;
+        all &= fmaf(t_hi, e2t, fmaf(s_hi, e2s, e20)) > 0.0f;
+        W[W_E0 + 0][j] = e00, W[W_E0 + 1][j] = e0s, W[W_E0 + 2][j] = e0t;
+        W[W_E1 + 0][j] = e10, W[W_E1 + 1][j] = e1s, W[W_E1 + 2][j] = e1t;
+        W[W_E2 + 0][j] = e20, W[W_E2 + 1][j] = e2s, W[W_E2 + 2][j] = e2t;
+        W[W_G + 0][j] = sh * (hi * n0 - D * h), W[W_G + 1][j] = sh * hi * nu, W[W_G + 2][j] = sh * hi * nv;
+        W[W_G2 + 0][j] = sh * (n0 - h), W[W_G2 + 1][j] = sh * nu, W[W_G2 + 2][j] = sh * nv;
+        int none = (lmax < 0.0f) | (lmin > end) | (det == 0.0f); /* behind o, unreached, edge-on */
+        int reaches = lmax >= hi;
+        kind[j] = none ? B_NONE : reaches ? B_REACHES : all ? B_ALL : B_CONE;
     }
-    /* every corner of the samples' box inside: every sample is blocked */
-    int all = 1;
-    for (int q = 0; q < 4 && all; q++) {
-        float s = q & 1 ? ls->smax : ls->smin, t = q & 2 ? ls->tmax : ls->tmin;
-        for (int k = 0; k < 3; k++)
-            all &= fmaf(t, ct[k], fmaf(s, cs[k], c0[k])) > 0.0f;
-    }
-    if (all)
-        return 2;
+}
+
+/* A blocker short of hi: the cone alone decides. */
+static void cone_3(const float *f, const lie_light_samples *ls, uint32_t *occ_out)
+{
+    const float a0 = f[0], s0 = f[1], t0 = f[2], a1 = f[3], s1 = f[4], t1 = f[5], a2 = f[6], s2 = f[7], t2 = f[8];
+    const float *restrict ss = ls->s, *restrict ts = ls->t;
+    uint32_t *restrict occ = occ_out;
+    const int n = ls->n;
 #pragma omp simd
     for (int i = 0; i < n; i++) {
         float s = ss[i], t = ts[i];
@@ -296,7 +317,32 @@ static int blocker_2d(const mt_tri *T, lie_vec3 o, const plane_view *pv, const l
         float e2 = fmaf(t, t2, fmaf(s, s2, a2));
         occ[i] |= (uint32_t)-((e0 >= 0.0f) & (e1 >= 0.0f) & (e2 >= 0.0f));
     }
-    return 1;
+}
+
+/* A blocker reaching the emitter's plane: blocked iff in the cone and the
+ * hit is short of hi (g >= 0).  Returns nonzero if some sample's ray meets
+ * it between hi and tau = 1 (g < 0 < g2): then the 3D test decides. */
+static uint32_t cone_5(const float *f, const lie_light_samples *ls, uint32_t *occ_out)
+{
+    const float a0 = f[0], s0 = f[1], t0 = f[2], a1 = f[3], s1 = f[4], t1 = f[5], a2 = f[6], s2 = f[7], t2 = f[8];
+    const float g0 = f[9], gu = f[10], gv = f[11], k0 = f[12], ku = f[13], kv = f[14];
+    const float *restrict ss = ls->s, *restrict ts = ls->t;
+    uint32_t *restrict occ = occ_out;
+    const int n = ls->n;
+    uint32_t unsure = 0;
+#pragma omp simd reduction(| : unsure)
+    for (int i = 0; i < n; i++) {
+        float s = ss[i], t = ts[i];
+        float e0 = fmaf(t, t0, fmaf(s, s0, a0));
+        float e1 = fmaf(t, t1, fmaf(s, s1, a1));
+        float e2 = fmaf(t, t2, fmaf(s, s2, a2));
+        float g = fmaf(t, gv, fmaf(s, gu, g0));
+        float g2 = fmaf(t, kv, fmaf(s, ku, k0));
+        int in = (e0 >= 0.0f) & (e1 >= 0.0f) & (e2 >= 0.0f);
+        occ[i] |= (uint32_t)-(in & (g >= 0.0f));
+        unsure |= (uint32_t)(in & (g < 0.0f) & (g2 > 0.0f));
+    }
+    return unsure;
 }
 
 /* The query's segments against the selected blockers: in 2D where the
@@ -326,17 +372,30 @@ static void occluded(void *ctx, const uint32_t *blockers, int n_blockers, lie_sh
         pv.end = pv.D - 0.5f * q->eps * (pv.D / dmax);
         planar = pv.hi > 0.0f;
     }
-    for (int j = 0; j < n_blockers; j++) {
-        const mt_tri *T = &v->tris[blockers[j]];
-        int r = planar ? blocker_2d(T, q->o, &pv, ls, occ) : 0;
-        if (r == 2) {
+    if (!planar) {
+        lie_shadow_segments(q);
+        for (int j = 0; j < n_blockers; j++)
+            blocker_3d(&v->tris[blockers[j]], q->o, q->dx, q->dy, q->dz, n, occ);
+        return;
+    }
+    setup_2d(v, blockers, n_blockers, q->o, &pv, ls, q->work, q->work_stride, q->kind);
+    for (int j = 0; j < n_blockers; j++)
+        if (q->kind[j] == B_ALL) {
             for (int i = 0; i < n; i++)
                 occ[i] = ~0u;
             return;
         }
-        if (r == 0) {
+    for (int j = 0; j < n_blockers; j++) {
+        if (q->kind[j] == B_NONE)
+            continue;
+        float f[LIE_BLOCKER_WORK];
+        for (int k = 0; k < LIE_BLOCKER_WORK; k++)
+            f[k] = q->work[(size_t)k * q->work_stride + (size_t)j];
+        if (q->kind[j] == B_CONE) {
+            cone_3(f, ls, occ);
+        } else if (cone_5(f, ls, occ)) {
             lie_shadow_segments(q);
-            blocker_3d(T, q->o, q->dx, q->dy, q->dz, n, occ);
+            blocker_3d(&v->tris[blockers[j]], q->o, q->dx, q->dy, q->dz, n, occ);
         }
     }
 }

@@ -102,7 +102,14 @@ typedef struct lie_shadow_query {
     int n;
     int have_segments;
     float *dx, *dy, *dz;
+    /* the oracle's per-blocker workspace: LIE_BLOCKER_WORK arrays of
+     * work_stride floats and work_stride kinds (work_stride >= the
+     * oracle's max_blockers) */
+    float *work;
+    uint32_t *kind;
+    size_t work_stride;
 } lie_shadow_query;
+#define LIE_BLOCKER_WORK 15
 void lie_shadow_segments(lie_shadow_query *q);
 
 /* A visibility oracle other than Embree-over-everything.  classify() looks
