@@ -303,20 +303,33 @@ static void setup_2d(const lie_lie_vis *v, const uint32_t *blockers, int nb, lie
 }
 
 /* A blocker short of hi: the cone alone decides. */
+typedef struct cone {
+    float a0, s0, t0, a1, s1, t1, a2, s2, t2;
+} cone;
+
+static inline cone cone_of(const float *f)
+{
+    cone c = {f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], f[8]};
+    return c;
+}
+
+static inline int in_cone(cone c, float s, float t)
+{
+    float e0 = fmaf(t, c.t0, fmaf(s, c.s0, c.a0));
+    float e1 = fmaf(t, c.t1, fmaf(s, c.s1, c.a1));
+    float e2 = fmaf(t, c.t2, fmaf(s, c.s2, c.a2));
+    return (e0 >= 0.0f) & (e1 >= 0.0f) & (e2 >= 0.0f);
+}
+
 static void cone_3(const float *f, const lie_light_samples *ls, uint32_t *occ_out)
 {
-    const float a0 = f[0], s0 = f[1], t0 = f[2], a1 = f[3], s1 = f[4], t1 = f[5], a2 = f[6], s2 = f[7], t2 = f[8];
+    const cone c = cone_of(f);
     const float *restrict ss = ls->s, *restrict ts = ls->t;
     uint32_t *restrict occ = occ_out;
     const int n = ls->n;
 #pragma omp simd
-    for (int i = 0; i < n; i++) {
-        float s = ss[i], t = ts[i];
-        float e0 = fmaf(t, t0, fmaf(s, s0, a0));
-        float e1 = fmaf(t, t1, fmaf(s, s1, a1));
-        float e2 = fmaf(t, t2, fmaf(s, s2, a2));
-        occ[i] |= (uint32_t)-((e0 >= 0.0f) & (e1 >= 0.0f) & (e2 >= 0.0f));
-    }
+    for (int i = 0; i < n; i++)
+        occ[i] |= (uint32_t)-in_cone(c, ss[i], ts[i]);
 }
 
 /* A blocker reaching the emitter's plane: blocked iff in the cone and the
@@ -324,7 +337,7 @@ static void cone_3(const float *f, const lie_light_samples *ls, uint32_t *occ_ou
  * it between hi and tau = 1 (g < 0 < g2): then the 3D test decides. */
 static uint32_t cone_5(const float *f, const lie_light_samples *ls, uint32_t *occ_out)
 {
-    const float a0 = f[0], s0 = f[1], t0 = f[2], a1 = f[3], s1 = f[4], t1 = f[5], a2 = f[6], s2 = f[7], t2 = f[8];
+    const cone c = cone_of(f);
     const float g0 = f[9], gu = f[10], gv = f[11], k0 = f[12], ku = f[13], kv = f[14];
     const float *restrict ss = ls->s, *restrict ts = ls->t;
     uint32_t *restrict occ = occ_out;
@@ -333,12 +346,9 @@ static uint32_t cone_5(const float *f, const lie_light_samples *ls, uint32_t *oc
 #pragma omp simd reduction(| : unsure)
     for (int i = 0; i < n; i++) {
         float s = ss[i], t = ts[i];
-        float e0 = fmaf(t, t0, fmaf(s, s0, a0));
-        float e1 = fmaf(t, t1, fmaf(s, s1, a1));
-        float e2 = fmaf(t, t2, fmaf(s, s2, a2));
         float g = fmaf(t, gv, fmaf(s, gu, g0));
         float g2 = fmaf(t, kv, fmaf(s, ku, k0));
-        int in = (e0 >= 0.0f) & (e1 >= 0.0f) & (e2 >= 0.0f);
+        int in = in_cone(c, s, t);
         occ[i] |= (uint32_t)-(in & (g >= 0.0f));
         unsure |= (uint32_t)(in & (g < 0.0f) & (g2 > 0.0f));
     }
