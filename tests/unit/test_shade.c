@@ -479,6 +479,9 @@ static void test_planar_blocker_tests_agree_with_embree(void **state)
     for (int k = 0; k < NB; k++)
         blockers[k] = s->emitters[0].first_tri == 0 ? (uint32_t)(k + 2) : (uint32_t)k;
     float dx[64], dy[64], dz[64];
+    enum { STRIDE = 64 };
+    static float work[LIE_BLOCKER_WORK * STRIDE];
+    static uint32_t kind[STRIDE];
     long tested = 0, off2 = 0, off3 = 0, blocked = 0;
     for (int gy = 0; gy < 3; gy++)
         for (int gx = 0; gx < 9; gx++)
@@ -486,9 +489,9 @@ static void test_planar_blocker_tests_agree_with_embree(void **state)
                 lie_vec3 o = lie_v3(-1.6f + 0.4f * (float)gx, gy == 0 ? 1e-4f : gy == 1 ? 0.7f : 1.5f,
                                     -1.6f + 0.4f * (float)gz);
                 const float eps = 1e-4f;
-                lie_shadow_query q2 = {o, eps, &ls, n, 0, dx, dy, dz};
+                lie_shadow_query q2 = {o, eps, &ls, n, 0, dx, dy, dz, work, kind, STRIDE};
                 orc->occluded(orc->ctx, blockers, NB, &q2, occ2);
-                lie_shadow_query q3 = {o, eps, &ls3, n, 0, dx, dy, dz};
+                lie_shadow_query q3 = {o, eps, &ls3, n, 0, dx, dy, dz, work, kind, STRIDE};
                 orc->occluded(orc->ctx, blockers, NB, &q3, occ3);
                 lie_shadow_segments(&q3);
                 for (int i = 0; i < n; i++) {
