@@ -54,36 +54,37 @@ static void shade_hit(const render_job *j, const lie_hit *hitp, lie_vec3 dir, in
 {
     const lie_scene *s = j->sc.s;
     lie_hit hit = *hitp;
-    lie_surface sf;
-    lie_surface_from_hit(s, &hit, dir, &sf);
-    if (first)
-        *first = sf;
+    /* straight into *first when wanted: copying a structure just written
+     * field by field stalls on store forwarding */
+    lie_surface local;
+    lie_surface *sf = first ? first : &local;
+    lie_surface_from_hit(s, &hit, dir, sf);
     sc->stats.shading_points++;
     for (int k = 0; k < 3; k++)
-        rgb[k] += sf.emission[k];
+        rgb[k] += sf->emission[k];
     if (j->sc.opt->eye_only)
         return;
-    if (sf.mirror) {
+    if (sf->mirror) {
         if (depth >= j->sc.opt->max_depth)
             return;
-        float dn = lie_v3_dot(dir, sf.n);
-        lie_vec3 r = lie_v3_norm(lie_v3_sub(dir, lie_v3_scale(sf.n, 2.0f * dn)));
-        if (lie_v3_dot(r, sf.ng) <= 0.0f)
+        float dn = lie_v3_dot(dir, sf->n);
+        lie_vec3 r = lie_v3_norm(lie_v3_sub(dir, lie_v3_scale(sf->n, 2.0f * dn)));
+        if (lie_v3_dot(r, sf->ng) <= 0.0f)
             return; /* shading normal bent the reflection below the surface */
         float cosv = fminf(fmaxf(-dn, 0.0f), 1.0f);
         float x = 1.0f - cosv, s5 = x * x * x * x * x;
-        float mag = fmaxf(fabsf(sf.p.x), fmaxf(fabsf(sf.p.y), fabsf(sf.p.z)));
-        lie_vec3 o = lie_v3_add(sf.p, lie_v3_scale(sf.ng, 1e-4f * fmaxf(1.0f, mag)));
+        float mag = fmaxf(fabsf(sf->p.x), fmaxf(fabsf(sf->p.y), fabsf(sf->p.z)));
+        lie_vec3 o = lie_v3_add(sf->p, lie_v3_scale(sf->ng, 1e-4f * fmaxf(1.0f, mag)));
         float sub[3] = {0.0f, 0.0f, 0.0f};
         sc->stats.reflection_rays++;
         trace(j, o, r, depth + 1, pixel, sc, sub, NULL);
         for (int k = 0; k < 3; k++) {
-            float F = sf.f0[k] + (1.0f - sf.f0[k]) * s5;
+            float F = sf->f0[k] + (1.0f - sf->f0[k]) * s5;
             rgb[k] += F * sub[k];
         }
         return;
     }
-    lie_shade_direct(&j->sc, &sf, pixel, depth, sc, rgb);
+    lie_shade_direct(&j->sc, sf, pixel, depth, sc, rgb);
 }
 
 /* Complexity and patch AOVs: the LIE of the surface seen through the pixel
