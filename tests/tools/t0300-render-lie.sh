@@ -12,9 +12,12 @@ compare() { # A B MAXFRAC_ANY MAXFRAC_2PCT WHAT
 }
 
 # panel_light: an emitter of 50 triangles (shafts bounded by an oriented box);
-# alpha_mask: shadows through the holes of alphaMode MASK surfaces
-cp "$ROOT/tests/data/gltf/panel_light.gltf" "$ROOT/tests/data/gltf/alpha_mask.gltf" "$TMP/"
-for scene in museum1 museum2 museum3 cornell panel_light alpha_mask; do
+# alpha_mask: shadows through the holes of alphaMode MASK surfaces;
+# bent_light: an emitter that is not planar, and a spot light (blocker
+# tests in 3D, not in the emitter plane)
+cp "$ROOT/tests/data/gltf/panel_light.gltf" "$ROOT/tests/data/gltf/alpha_mask.gltf" \
+    "$ROOT/tests/data/gltf/bent_light.gltf" "$TMP/"
+for scene in museum1 museum2 museum3 cornell panel_light alpha_mask bent_light; do
     S=$SCENES; [ -f "$TMP/$scene.gltf" ] && S=$TMP
     run "$B/lie-build" "$S/$scene.gltf" -q -o "$TMP/$scene-c.lie" --blockers conservative
     expect_rc 0 "$scene: conservative build"

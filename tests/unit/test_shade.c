@@ -514,6 +514,55 @@ static void test_planar_blocker_tests_agree_with_embree(void **state)
     lie_scene_destroy(s);
 }
 
+/* An emitter is planar when its triangles share a plane and a facing; its
+ * light samples then carry plane coordinates that give back their points.
+ * A bent emitter is not planar. */
+static void test_emitter_plane_frame_and_samples(void **state)
+{
+    (void)state;
+    lie_scene *s = square_over_floor(1.0f, 2.0f, 5.0f, 1, 0.0f, 1.0f);
+    const lie_emitter *em = &s->emitters[0];
+    assert_true(em->planar);
+    lie_vec3 U = em->plane_u, V = em->plane_v, N = em->plane_n;
+    assert_float_equal(lie_v3_dot(U, U), 1.0f, 1e-6f);
+    assert_float_equal(lie_v3_dot(V, V), 1.0f, 1e-6f);
+    assert_float_equal(lie_v3_dot(U, V), 0.0f, 1e-6f);
+    assert_float_equal(lie_v3_dot(U, N), 0.0f, 1e-6f);
+    assert_float_equal(N.y, -1.0f, 1e-6f); /* the light faces down */
+    assert_float_equal(em->plane_o.y, 2.0f, 1e-6f);
+    lie_light_samples ls;
+    assert_int_equal(lie_light_samples_alloc(&ls, 50), LIE_OK);
+    lie_light_samples_generate(s, 0, 50, 0.2f, 0.7f, &ls);
+    assert_true(ls.planar);
+    for (int i = 0; i < ls.n; i++) {
+        assert_float_equal(ls.x[i], em->plane_o.x + ls.s[i] * U.x + ls.t[i] * V.x, 1e-6f);
+        assert_float_equal(ls.y[i], 2.0f, 1e-6f);
+        assert_float_equal(ls.z[i], em->plane_o.z + ls.s[i] * U.z + ls.t[i] * V.z, 1e-6f);
+        assert_true(ls.s[i] >= ls.smin && ls.s[i] <= ls.smax && ls.t[i] >= ls.tmin && ls.t[i] <= ls.tmax);
+        assert_true(ls.s[i] >= em->plane_ext[0] - 1e-6f && ls.s[i] <= em->plane_ext[1] + 1e-6f);
+    }
+    lie_light_samples_free(&ls);
+    lie_scene_destroy(s);
+
+    /* two quads meeting at an angle */
+    s = lie_scene_new("bent");
+    lie_material light = lie_material_default();
+    light.emissive[0] = light.emissive[1] = light.emissive[2] = 1.0f;
+    int ml = lie_scene_add_material(s, &light);
+    float lp[18] = {-1, 2.3f, -0.5f, 0, 2, -0.5f, 0, 2, 0.5f, -1, 2.3f, 0.5f, 1, 2.3f, -0.5f, 1, 2.3f, 0.5f};
+    uint32_t li[12] = {0, 1, 2, 0, 2, 3, 1, 4, 5, 1, 5, 2};
+    lie_scene_add_node(s, "Bent", -1, NULL, lie_scene_add_mesh(s, "Bent", lp, NULL, NULL, 6, li, 4, ml), -1, -1);
+    lie_error err;
+    assert_int_equal(lie_scene_flatten(s, &err), LIE_OK);
+    assert_int_equal(s->n_emitters, 1);
+    assert_false(s->emitters[0].planar);
+    assert_int_equal(lie_light_samples_alloc(&ls, 8), LIE_OK);
+    lie_light_samples_generate(s, 0, 8, 0.2f, 0.7f, &ls);
+    assert_false(ls.planar);
+    lie_light_samples_free(&ls);
+    lie_scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -529,6 +578,7 @@ int main(void)
         cmocka_unit_test(test_all_hits_reports_every_triangle_on_a_segment),
         cmocka_unit_test(test_alpha_mask_holes_for_every_ray),
         cmocka_unit_test(test_planar_blocker_tests_agree_with_embree),
+        cmocka_unit_test(test_emitter_plane_frame_and_samples),
     };
     return cmocka_run_group_tests_name("shade", tests, NULL, NULL);
 }

@@ -554,7 +554,47 @@ def alpha_mask():
     write("alpha_mask.gltf", d.embedded())
 
 
+def bent_light():
+    """A bent emitter (two quads meeting at 40 degrees: not planar, so
+    lie-render tests its blockers in 3D) and a spot light, over a floor
+    with a box and a tilted quad between; a camera: the LIE oracle off the
+    planar-emitter path."""
+    d = Doc()
+    fl = d.positions([(-3, 0, -3), (-3, 0, 3), (3, 0, 3), (3, 0, -3)])
+    quad = d.indices([0, 1, 2, 0, 2, 3])
+    s = 0.35
+    box = [(-s, 0, -s), (s, 0, -s), (s, 0, s), (-s, 0, s), (-s, 0.7, -s), (s, 0.7, -s), (s, 0.7, s), (-s, 0.7, s)]
+    bp = d.positions([(x - 0.6, y, z) for x, y, z in box])
+    bi = d.indices([4, 6, 5, 4, 7, 6, 0, 1, 5, 0, 5, 4, 1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7])
+    tilt = d.positions([(0.3, 1.3, -0.5), (0.3, 0.8, 0.5), (1.1, 0.8, 0.5), (1.1, 1.3, -0.5)])
+    c, sn = math.cos(math.radians(20)), math.sin(math.radians(20))
+    lt = d.positions([(-0.8 * c, 2.2 + 0.8 * sn, -0.5), (0, 2.2, -0.5), (0, 2.2, 0.5), (-0.8 * c, 2.2 + 0.8 * sn, 0.5),
+                      (0.8 * c, 2.2 + 0.8 * sn, -0.5), (0.8 * c, 2.2 + 0.8 * sn, 0.5)])
+    li = d.indices([0, 1, 2, 0, 2, 3, 1, 4, 5, 1, 5, 2])
+    d.g["meshes"] = [{"primitives": [{"attributes": {"POSITION": fl}, "indices": quad, "material": 0}]},
+                     {"primitives": [{"attributes": {"POSITION": bp}, "indices": bi, "material": 0}]},
+                     {"primitives": [{"attributes": {"POSITION": tilt}, "indices": quad, "material": 1}]},
+                     {"primitives": [{"attributes": {"POSITION": lt}, "indices": li, "material": 2}]}]
+    d.g["materials"] = [{"pbrMetallicRoughness": {"baseColorFactor": [0.7, 0.7, 0.7, 1], "metallicFactor": 0}},
+                        {"doubleSided": True,
+                         "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.6, 0.7, 1], "metallicFactor": 0}},
+                        {"emissiveFactor": [1, 0.95, 0.9], "doubleSided": True,
+                         "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 6}}}]
+    d.g["extensionsUsed"] = ["KHR_materials_emissive_strength", "KHR_lights_punctual"]
+    d.g["extensions"] = {"KHR_lights_punctual": {"lights": [
+        {"type": "spot", "color": [0.8, 0.9, 1], "intensity": 12, "spot": {"outerConeAngle": 0.7}}]}}
+    d.g["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.9, "znear": 0.05}}]
+    d.g["nodes"] = [{"mesh": 0, "name": "Floor"}, {"mesh": 1, "name": "Box"}, {"mesh": 2, "name": "Tilted"},
+                    {"mesh": 3, "name": "BentLight"},
+                    {"name": "Spot", "translation": [1.5, 2.5, 1.0], "rotation": [-0.7071, 0, 0, 0.7071],
+                     "extensions": {"KHR_lights_punctual": {"light": 0}}},
+                    {"camera": 0, "translation": [0, 2.8, 5.0], "rotation": [-0.2588, 0, 0, 0.9659]}]
+    d.g["scenes"] = [{"nodes": [0, 1, 2, 3, 4, 5]}]
+    write("bent_light.gltf", d.embedded())
+
+
 def main():
+    bent_light()
     alpha_mask()
     panel_light()
     vertex_colors()
