@@ -252,7 +252,7 @@ int lie_rt_intersect(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, 
     return 1;
 }
 
-void lie_rt_intersect8(const lie_rt *rt, lie_vec3 org, const lie_vec3 *dir, int n, int cull_backfaces,
+void lie_rt_intersect8(const lie_rt *rt, const lie_vec3 *org, const lie_vec3 *dir, int n, int cull_backfaces,
                        lie_hit *hits)
 {
     query_ctx q;
@@ -266,9 +266,9 @@ void lie_rt_intersect8(const lie_rt *rt, lie_vec3 org, const lie_vec3 *dir, int 
     for (int k = 0; k < 8; k++) {
         int ok = k < n;
         valid[k] = ok ? -1 : 0;
-        rh.ray.org_x[k] = org.x;
-        rh.ray.org_y[k] = org.y;
-        rh.ray.org_z[k] = org.z;
+        rh.ray.org_x[k] = ok ? org[k].x : 0.0f;
+        rh.ray.org_y[k] = ok ? org[k].y : 0.0f;
+        rh.ray.org_z[k] = ok ? org[k].z : 0.0f;
         rh.ray.tnear[k] = 0.0f;
         rh.ray.dir_x[k] = ok ? dir[k].x : 0.0f;
         rh.ray.dir_y[k] = ok ? dir[k].y : 0.0f;

@@ -50,9 +50,10 @@ void lie_rt_destroy(lie_rt *rt);
 int lie_rt_intersect(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, float tfar,
                      int cull_backfaces, lie_hit *hit);
 
-/* Closest hits of up to 8 rays from one origin (an 8-wide packet: coherent
- * camera rays), t in [0, inf); hits[i].tri is LIE_NO_HIT on a miss. */
-void lie_rt_intersect8(const lie_rt *rt, lie_vec3 org, const lie_vec3 *dir, int n, int cull_backfaces,
+/* Closest hits of up to 8 rays org[i] + t dir[i] (an 8-wide packet:
+ * coherent camera rays), t in [0, inf); hits[i].tri is LIE_NO_HIT on a
+ * miss. */
+void lie_rt_intersect8(const lie_rt *rt, const lie_vec3 *org, const lie_vec3 *dir, int n, int cull_backfaces,
                        lie_hit *hits);
 
 /* 1 if anything lies on the segment [tnear, tfar]. */

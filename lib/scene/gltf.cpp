@@ -1260,10 +1260,20 @@ void import_cameras(const tinygltf::Model &m, lie_scene *s)
             c.aspect = float(p.aspectRatio);
             c.znear = float(p.znear);
         } else if (g.type == "orthographic") {
-            /* kept so camera indices stay the file's; yfov 0 marks it unusable */
+            /* glTF 2.0 §5.13: xmag and ymag MUST NOT be zero (SHOULD NOT be
+             * negative: their size is used), zfar > znear >= 0 */
+            const tinygltf::OrthographicCamera &o = g.orthographic;
+            if (!std::isfinite(o.xmag) || !std::isfinite(o.ymag) || o.xmag == 0.0 || o.ymag == 0.0 ||
+                !(o.znear >= 0.0) || !std::isfinite(o.znear) || !(o.zfar > o.znear) || !std::isfinite(o.zfar) ||
+                !(std::fabs(o.ymag) < 1e30) || !(std::fabs(o.xmag) < 1e30))
+                fail(LIE_ERR_FORMAT, "camera %zu: orthographic xmag and ymag must be finite and nonzero, "
+                                     "zfar > znear >= 0", i);
             c.yfov = 0.0f;
             c.aspect = 0.0f;
-            c.znear = std::isfinite(g.orthographic.znear) ? float(g.orthographic.znear) : 0.0f;
+            c.xmag = float(std::fabs(o.xmag));
+            c.ymag = float(std::fabs(o.ymag));
+            c.znear = float(o.znear);
+            c.zfar = float(o.zfar);
         } else {
             fail(LIE_ERR_FORMAT, "camera %zu: unknown type '%s'", i, clean(g.type).c_str());
         }
@@ -1788,7 +1798,8 @@ void export_document(Export &ex)
         const lie_node &n = s.nodes[nd];
         if (n.mesh >= 0 && n.mesh < s.n_meshes && mesh_has_triangles(s.meshes[n.mesh]))
             mesh_map[size_t(n.mesh)] = 0;
-        if (n.camera >= 0 && n.camera < s.n_camera_defs && s.camera_defs[n.camera].yfov > 0.0f)
+        if (n.camera >= 0 && n.camera < s.n_camera_defs &&
+            (s.camera_defs[n.camera].yfov > 0.0f || s.camera_defs[n.camera].ymag > 0.0f))
             camera_map[size_t(n.camera)] = 0;
         if (n.light >= 0 && n.light < s.n_light_defs)
             light_map[size_t(n.light)] = 0;
@@ -1817,11 +1828,19 @@ void export_document(Export &ex)
         tinygltf::Camera g;
         if (c.name)
             g.name = c.name;
-        g.type = "perspective";
-        g.perspective.yfov = short_float(c.yfov);
-        g.perspective.aspectRatio = short_float(c.aspect);
-        g.perspective.znear = short_float(c.znear);
-        g.perspective.zfar = 0.0; /* infinite: taken out of the JSON below */
+        if (c.ymag > 0.0f) {
+            g.type = "orthographic";
+            g.orthographic.xmag = short_float(c.xmag);
+            g.orthographic.ymag = short_float(c.ymag);
+            g.orthographic.znear = short_float(c.znear);
+            g.orthographic.zfar = short_float(c.zfar);
+        } else {
+            g.type = "perspective";
+            g.perspective.yfov = short_float(c.yfov);
+            g.perspective.aspectRatio = short_float(c.aspect);
+            g.perspective.znear = short_float(c.znear);
+            g.perspective.zfar = 0.0; /* infinite: taken out of the JSON below */
+        }
         camera_map[size_t(i)] = int(m.cameras.size());
         m.cameras.push_back(g);
     }

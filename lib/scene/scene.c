@@ -496,8 +496,9 @@ static void fill_node(lie_scene *s, int nd, const lie_mat4 *world, int dead, voi
         c->up = lie_v3_norm(up);
         c->yfov = cd->yfov;
         c->aspect = cd->aspect;
-        /* orthographic cameras come with yfov 0: not supported, skipped */
-        if (cd->yfov > 0.0f && lie_v3_dot(c->forward, c->forward) > 0.5f && lie_v3_dot(c->up, c->up) > 0.5f)
+        c->ymag = cd->ymag > 0.0f ? cd->ymag : 0.0f;
+        if ((cd->yfov > 0.0f || c->ymag > 0.0f) && lie_v3_dot(c->forward, c->forward) > 0.5f &&
+            lie_v3_dot(c->up, c->up) > 0.5f)
             s->n_cameras++;
         else
             free(c->name); /* a degenerate transform: no usable camera */
@@ -696,14 +697,9 @@ lie_status lie_scene_camera(const lie_scene *s, const char *spec, lie_camera *ou
     char *end = NULL;
     long idx = strtol(num, &end, 10);
     if (*num && end && *end == '\0') {
-        if (idx < 0 || idx >= s->n_cameras) {
-            int ortho = 0;
-            for (int i = 0; i < s->n_camera_defs; i++)
-                ortho += !(s->camera_defs[i].yfov > 0.0f);
-            return lie_error_set(err, LIE_ERR_NOT_FOUND, path, "camera %ld: the scene has %d camera%s%s", idx,
-                                 s->n_cameras, s->n_cameras == 1 ? "" : "s",
-                                 ortho ? " (orthographic cameras are not supported and not counted)" : "");
-        }
+        if (idx < 0 || idx >= s->n_cameras)
+            return lie_error_set(err, LIE_ERR_NOT_FOUND, path, "camera %ld: the scene has %d camera%s", idx,
+                                 s->n_cameras, s->n_cameras == 1 ? "" : "s");
         *out = s->cameras[idx];
         return LIE_OK;
     }

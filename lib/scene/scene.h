@@ -90,9 +90,11 @@ typedef struct lie_mesh {
 
 typedef struct lie_camera_def {
     char *name;
-    float yfov;            /* radians */
+    float yfov;            /* perspective: radians; 0 for an orthographic camera */
     float aspect;          /* 0 when the file gives none */
     float znear;
+    float xmag, ymag;      /* orthographic: half the view's width and height; 0 for perspective */
+    float zfar;            /* orthographic (required there); 0 for perspective (infinite) */
 } lie_camera_def;
 
 typedef enum lie_light_type {
@@ -175,6 +177,7 @@ typedef struct lie_camera {
     lie_vec3 eye, forward, up; /* unit forward and up, orthogonal */
     float yfov;            /* radians */
     float aspect;          /* 0 = the image's */
+    float ymag;            /* > 0: orthographic, half the view's height in world units (yfov unused) */
 } lie_camera;
 
 typedef struct lie_scene_stats {
@@ -290,8 +293,8 @@ lie_material lie_material_default(void);
  * DIR/NAME_texN.png (image N), each written atomically, the .gltf last; on
  * failure the files this call already put in place are removed again.
  * Left out: removed nodes with their subtrees, nodes outside the default
- * scene, unused meshes, cameras and lights, textures no material uses, and
- * orthographic cameras (the importer keeps none).  Every material is
+ * scene, unused meshes, cameras and lights, and textures no material
+ * uses.  Every material is
  * written, so material indices stay.  Texture pixels go back to the code
  * values they were decoded from (8-bit when every value is an 8-bit code's,
  * else 16-bit), in the colour space of the slot that uses them.  "-"

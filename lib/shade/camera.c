@@ -22,6 +22,34 @@ static int parse_floats(const char **p, float *v, int n)
     return 1;
 }
 
+lie_view lie_view_make(const lie_camera *cam, int width, int height)
+{
+    lie_view v;
+    v.eye = cam->eye;
+    v.fwd = lie_v3_norm(cam->forward);
+    v.right = lie_v3_norm(lie_v3_cross(v.fwd, cam->up));
+    v.up = lie_v3_cross(v.right, v.fwd);
+    v.ortho = cam->ymag > 0.0f && isfinite(cam->ymag);
+    float yfov = cam->yfov > 0.0f && cam->yfov < (float)M_PI ? cam->yfov : 0.7853982f;
+    v.half_h = v.ortho ? cam->ymag : tanf(0.5f * yfov);
+    v.half_w = v.half_h * (float)width / (float)height;
+    return v;
+}
+
+void lie_view_ray(const lie_view *v, float x, float y, int width, int height, lie_vec3 *org, lie_vec3 *dir)
+{
+    float nx = (2.0f * x / (float)width - 1.0f) * v->half_w;
+    float ny = (1.0f - 2.0f * y / (float)height) * v->half_h;
+    lie_vec3 off = lie_v3_add(lie_v3_scale(v->right, nx), lie_v3_scale(v->up, ny));
+    if (v->ortho) {
+        *org = lie_v3_add(v->eye, off);
+        *dir = v->fwd;
+    } else {
+        *org = v->eye;
+        *dir = lie_v3_norm(lie_v3_add(v->fwd, off));
+    }
+}
+
 lie_status lie_camera_parse(const lie_scene *s, const char *spec, lie_camera *out, lie_error *err)
 {
     if (!spec || !strchr(spec, '='))

@@ -30,8 +30,7 @@ typedef struct render_job {
     const lie_camera *cam;
     lie_frame *frame;
     float *albedo, *normal, *depth, *complexity, *patch;
-    lie_vec3 right, up, fwd;
-    float tan_y, tan_x;
+    lie_view view;
     int tiles_x;
     lie_shade_scratch *scratch; /* one per worker */
 } render_job;
@@ -93,12 +92,11 @@ static void describe_pixel(const render_job *j, int x, int y, size_t pi)
 {
     const lie_render_options *opt = j->sc.opt;
     const lie_frame *f = j->frame;
-    float ndc_x = (2.0f * ((float)x + 0.5f) / (float)f->width - 1.0f) * j->tan_x;
-    float ndc_y = (1.0f - 2.0f * ((float)y + 0.5f) / (float)f->height) * j->tan_y;
-    lie_vec3 d = lie_v3_norm(lie_v3_add(j->fwd, lie_v3_add(lie_v3_scale(j->right, ndc_x), lie_v3_scale(j->up, ndc_y))));
+    lie_vec3 org, d;
+    lie_view_ray(&j->view, (float)x + 0.5f, (float)y + 0.5f, f->width, f->height, &org, &d);
     lie_hit hit;
     float rgb[3] = {0.0f, 0.0f, 0.0f}, prgb[3] = {0.0f, 0.0f, 0.0f};
-    if (lie_rt_intersect(j->sc.rt, j->cam->eye, d, 0.0f, INFINITY, 1, &hit)) {
+    if (lie_rt_intersect(j->sc.rt, org, d, 0.0f, INFINITY, 1, &hit)) {
         lie_surface sf;
         lie_surface_from_hit(j->sc.s, &hit, d, &sf);
         int ne = j->sc.s->n_emitters;
@@ -155,18 +153,15 @@ static void render_tile(void *ctx, size_t item, int worker)
     /* One eye ray per pixel: coherent camera rays go to Embree as 8-wide
      * packets, a row of a tile at a time. */
     lie_hit row_hits[LIE_TILE];
-    lie_vec3 row_dirs[LIE_TILE];
+    lie_vec3 row_orgs[LIE_TILE], row_dirs[LIE_TILE];
     for (int y = y0; y < y1; y++) {
         if (spp == 1) {
             int n = x1 - x0;
-            for (int i = 0; i < n; i++) {
-                float ndc_x = (2.0f * ((float)(x0 + i) + 0.5f) / (float)f->width - 1.0f) * j->tan_x;
-                float ndc_y = (1.0f - 2.0f * ((float)y + 0.5f) / (float)f->height) * j->tan_y;
-                row_dirs[i] = lie_v3_norm(lie_v3_add(j->fwd, lie_v3_add(lie_v3_scale(j->right, ndc_x),
-                                                                        lie_v3_scale(j->up, ndc_y))));
-            }
+            for (int i = 0; i < n; i++)
+                lie_view_ray(&j->view, (float)(x0 + i) + 0.5f, (float)y + 0.5f, f->width, f->height, &row_orgs[i],
+                             &row_dirs[i]);
             for (int i = 0; i < n; i += 8)
-                lie_rt_intersect8(j->sc.rt, j->cam->eye, row_dirs + i, n - i < 8 ? n - i : 8, 1, row_hits + i);
+                lie_rt_intersect8(j->sc.rt, row_orgs + i, row_dirs + i, n - i < 8 ? n - i : 8, 1, row_hits + i);
         }
         for (int x = x0; x < x1; x++) {
             uint64_t pixel = (uint64_t)y * (uint64_t)f->width + (uint64_t)x;
@@ -190,11 +185,9 @@ static void render_tile(void *ctx, size_t item, int worker)
                     float sy = lie_radical_inverse2((uint32_t)k) + shy;
                     sx -= floorf(sx);
                     sy -= floorf(sy);
-                    float ndc_x = (2.0f * ((float)x + sx) / (float)f->width - 1.0f) * j->tan_x;
-                    float ndc_y = (1.0f - 2.0f * ((float)y + sy) / (float)f->height) * j->tan_y;
-                    lie_vec3 d = lie_v3_norm(lie_v3_add(j->fwd, lie_v3_add(lie_v3_scale(j->right, ndc_x),
-                                                                            lie_v3_scale(j->up, ndc_y))));
-                    trace(j, j->cam->eye, d, 0, pixel, sc, c, &first);
+                    lie_vec3 org, d;
+                    lie_view_ray(&j->view, (float)x + sx, (float)y + sy, f->width, f->height, &org, &d);
+                    trace(j, org, d, 0, pixel, sc, c, &first);
                 }
                 for (int q = 0; q < 3; q++)
                     acc[q] += c[q];
@@ -205,7 +198,7 @@ static void render_tile(void *ctx, size_t item, int worker)
                     nrm[0] += first.n.x;
                     nrm[1] += first.n.y;
                     nrm[2] += first.n.z;
-                    dep += lie_v3_dot(lie_v3_sub(first.p, j->cam->eye), j->fwd);
+                    dep += lie_v3_dot(lie_v3_sub(first.p, j->cam->eye), j->view.fwd);
                 }
             }
             size_t pi = (size_t)pixel;
@@ -253,13 +246,7 @@ lie_status lie_render(const lie_scene *s, const lie_rt *rt, const lie_camera *ca
     if (!isfinite(j.sc.ray_far))
         j.sc.ray_far = 1e30f;
     j.cam = cam;
-    j.fwd = lie_v3_norm(cam->forward);
-    j.right = lie_v3_norm(lie_v3_cross(j.fwd, cam->up));
-    j.up = lie_v3_cross(j.right, j.fwd);
-    float yfov = cam->yfov > 0.0f && cam->yfov < (float)M_PI ? cam->yfov : 0.7853982f;
-    /* The image's aspect ratio wins over the camera's, so pixels stay square. */
-    j.tan_y = tanf(0.5f * yfov);
-    j.tan_x = j.tan_y * (float)opt->width / (float)opt->height;
+    j.view = lie_view_make(cam, opt->width, opt->height);
     lie_frame *f = lie_frame_create(opt->width, opt->height);
     if (!f)
         return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory for a %dx%d frame", opt->width, opt->height);

@@ -204,6 +204,19 @@ lie_status lie_render(const lie_scene *s, const lie_rt *rt, const lie_camera *ca
                       const lie_render_options *opt, lie_frame **out, lie_render_stats *stats,
                       lie_error *err);
 
+/* A camera's rays for a width x height image: perspective from the eye,
+ * or orthographic (ymag > 0) along forward from the image plane through
+ * the eye.  The image's aspect ratio wins over the camera's, so pixels stay
+ * square (an orthographic view keeps its height, 2 ymag). */
+typedef struct lie_view {
+    lie_vec3 eye, fwd, right, up;
+    float half_w, half_h;  /* tangents (perspective) or world units (orthographic) */
+    int ortho;
+} lie_view;
+lie_view lie_view_make(const lie_camera *cam, int width, int height);
+/* The ray through image point (x, y) in pixels (0, 0 the top left corner). */
+void lie_view_ray(const lie_view *v, float x, float y, int width, int height, lie_vec3 *org, lie_vec3 *dir);
+
 /* Parse a --camera value: a camera name or index in the scene, or
  * "eye=X,Y,Z,target=X,Y,Z[,up=X,Y,Z][,fov=DEG]". */
 lie_status lie_camera_parse(const lie_scene *s, const char *spec, lie_camera *out, lie_error *err);

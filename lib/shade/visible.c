@@ -7,18 +7,11 @@ lie_status lie_visible_triangles(const lie_scene *s, const lie_rt *rt, const lie
     if (width < 1 || height < 1)
         return lie_error_set(err, LIE_ERR_ARG, s->path, "view size %dx%d out of range", width, height);
     for (int c = 0; c < n_cams; c++) {
-        const lie_camera *cam = &cams[c];
-        lie_vec3 fwd = lie_v3_norm(cam->forward);
-        lie_vec3 right = lie_v3_norm(lie_v3_cross(fwd, cam->up));
-        lie_vec3 up = lie_v3_cross(right, fwd);
-        float yfov = cam->yfov > 0.0f && cam->yfov < (float)M_PI ? cam->yfov : 0.7853982f;
-        float ty = tanf(0.5f * yfov), tx = ty * (float)width / (float)height;
+        const lie_view v = lie_view_make(&cams[c], 2 * width, 2 * height);
         for (int y = 0; y < 2 * height; y++)
             for (int x = 0; x < 2 * width; x++) {
-                float nx = (2.0f * ((float)x + 0.5f) / (float)(2 * width) - 1.0f) * tx;
-                float ny = (1.0f - 2.0f * ((float)y + 0.5f) / (float)(2 * height)) * ty;
-                lie_vec3 org = cam->eye;
-                lie_vec3 d = lie_v3_norm(lie_v3_add(fwd, lie_v3_add(lie_v3_scale(right, nx), lie_v3_scale(up, ny))));
+                lie_vec3 org, d;
+                lie_view_ray(&v, (float)x + 0.5f, (float)y + 0.5f, 2 * width, 2 * height, &org, &d);
                 for (int depth = 0; depth <= max_depth; depth++) {
                     lie_hit hit;
                     if (!lie_rt_intersect(rt, org, d, 0.0f, INFINITY, 1, &hit))

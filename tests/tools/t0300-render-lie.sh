@@ -36,6 +36,25 @@ for scene in museum1 museum2 museum3 cornell panel_light alpha_mask bent_light; 
 done
 S=$SCENES
 
+# an orthographic camera (bent_light's "Top"): parallel eye rays, the same
+# oracle; lie-build --view builds what it sees; --write-scene keeps it
+run "$B/lie-render" "$TMP/bent_light.gltf" -q --size 96x72 --camera Top --visibility=full -o "$TMP/top-full.exr"
+expect_rc 0 "orthographic camera: reference render"
+run "$B/lie-render" "$TMP/bent_light-c.lie" -q --size 96x72 --camera Top -o "$TMP/top-c.exr"
+compare "$TMP/top-full.exr" "$TMP/top-c.exr" 0.0001 0.0001 "orthographic camera: conservative LIE image = reference"
+run "$B/lie-render" "$TMP/bent_light.gltf" -q --size 96x72 --camera 0 --visibility=full -o "$TMP/persp.exr"
+if "$H/exr-compare" "$TMP/persp.exr" "$TMP/top-full.exr" 0.5 1 >/dev/null 2>&1; then
+    not_ok "the orthographic view differs from the perspective one"; else ok "the orthographic view differs from the perspective one"; fi
+run "$B/lie-build" "$TMP/bent_light.gltf" -q --view Top -o "$TMP/top-view.lie"
+expect_rc 0 "lie-build --view with an orthographic camera"
+printf -- '- move: {node: Box, by: [0.1, 0, 0]}\n' >"$TMP/nudge.yaml"
+run "$B/rst-update" "$TMP/bent_light-s.lie" "$TMP/nudge.yaml" -q -o "$TMP/nudge.lie" --write-scene "$TMP/nudged.gltf"
+expect_rc 0 "rst-update --write-scene with an orthographic camera"
+if grep -q '"orthographic"' "$TMP/nudged.gltf" && grep -q '"ymag"' "$TMP/nudged.gltf"; then
+    ok "the written scene keeps the orthographic camera"; else not_ok "the written scene lost the orthographic camera"; fi
+run "$B/lie-render" "$TMP/nudged.gltf" -q --size 96x72 --camera Top --visibility=full -o "$TMP/top-nudged.exr"
+expect_rc 0 "the written scene renders from its orthographic camera"
+
 run "$B/lie-render" "$TMP/museum1-s.lie" -q --size 96x64 --threads 1 -o "$TMP/t1.exr"
 run "$B/lie-render" "$TMP/museum1-s.lie" -q --size 96x64 --threads 2 -o "$TMP/t2.exr"
 expect_same "$TMP/t1.exr" "$TMP/t2.exr" "LIE frames identical for 1 and 2 threads"

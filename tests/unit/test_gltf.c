@@ -539,9 +539,18 @@ static void test_gltf_lights_and_cameras_read_with_defaults(void **state)
     assert_near(c[0].aspect, 1.5, 0);
     assert_near(c[0].znear, 0.1, 1e-7);
     assert_near(c[1].aspect, 0.0, 0); /* none in the file */
-    assert_near(c[2].yfov, 0.0, 0);   /* orthographic: kept, marked unusable */
+    assert_near(c[2].yfov, 0.0, 0); /* orthographic */
+    assert_near(c[2].xmag, 1.0, 0);
+    assert_near(c[2].ymag, 1.0, 0);
+    assert_near(c[2].znear, 0.1, 1e-7);
+    assert_near(c[2].zfar, 10.0, 0);
     assert_int_equal(s->nodes[4].camera, 0);
     assert_int_equal(s->nodes[6].camera, 2);
+    /* all three are usable cameras; the orthographic one looks down -z */
+    assert_int_equal(s->n_cameras, 3);
+    assert_near(s->cameras[2].ymag, 1.0, 0);
+    assert_near(s->cameras[0].ymag, 0.0, 0);
+    assert_near(s->cameras[2].forward.z, -1.0, 1e-6);
     lie_scene_destroy(s);
 }
 
@@ -742,6 +751,7 @@ static void test_gltf_attribute_types_and_counts_checked(void **state)
     expect_error("position_type.gltf", LIE_ERR_FORMAT, "POSITION must be VEC3 FLOAT");
     expect_error("normal_count.gltf", LIE_ERR_FORMAT, "NORMAL has 2 elements, POSITION 3");
     expect_error("sparse_index_oob.gltf", LIE_ERR_FORMAT, "sparse index 9 beyond its count 3");
+    expect_error("ortho_zero.gltf", LIE_ERR_FORMAT, "camera 0: orthographic xmag and ymag must be finite and nonzero");
 }
 
 static void test_gltf_node_graph_errors_refused(void **state)

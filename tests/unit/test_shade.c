@@ -362,7 +362,8 @@ static void test_alpha_mask_holes_for_every_ray(void **state)
     assert_float_equal(h.t, 2.0f, 1e-4f);
     lie_vec3 dirs[2] = {down, down};
     lie_hit h8[2];
-    lie_rt_intersect8(rt, lie_v3(-0.25f, 3.0f, -0.75f), dirs, 2, 0, h8);
+    const lie_vec3 orgs[2] = {lie_v3(-0.25f, 3.0f, -0.75f), lie_v3(-0.25f, 3.0f, -0.75f)};
+    lie_rt_intersect8(rt, orgs, dirs, 2, 0, h8);
     assert_float_equal(h8[0].t, 3.0f, 1e-4f);
     /* lie-build's all-hits query skips the holes too */
     uint32_t *hits = NULL;

@@ -370,6 +370,10 @@ def bad():
     write("cycle.gltf", d.embedded())
 
     d = one_triangle()
+    d.g["cameras"] = [{"type": "orthographic", "orthographic": {"xmag": 1, "ymag": 0, "znear": 0.1, "zfar": 10}}]
+    write("ortho_zero.gltf", d.embedded())
+
+    d = one_triangle()
     d.g["nodes"] = [{"children": [2]}, {"children": [2]}, {"mesh": 0}]
     d.g["scenes"] = [{"nodes": [0, 1]}]
     write("two_parents.gltf", d.embedded())
@@ -557,8 +561,8 @@ def alpha_mask():
 def bent_light():
     """A bent emitter (two quads meeting at 40 degrees: not planar, so
     lie-render tests its blockers in 3D) and a spot light, over a floor
-    with a box and a tilted quad between; a camera: the LIE oracle off the
-    planar-emitter path."""
+    with a box and a tilted quad between; a perspective and an orthographic
+    camera: the LIE oracle off the planar-emitter path."""
     d = Doc()
     fl = d.positions([(-3, 0, -3), (-3, 0, 3), (3, 0, 3), (3, 0, -3)])
     quad = d.indices([0, 1, 2, 0, 2, 3])
@@ -583,13 +587,16 @@ def bent_light():
     d.g["extensionsUsed"] = ["KHR_materials_emissive_strength", "KHR_lights_punctual"]
     d.g["extensions"] = {"KHR_lights_punctual": {"lights": [
         {"type": "spot", "color": [0.8, 0.9, 1], "intensity": 12, "spot": {"outerConeAngle": 0.7}}]}}
-    d.g["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.9, "znear": 0.05}}]
+    d.g["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.9, "znear": 0.05}},
+                      {"type": "orthographic", "name": "Plan",
+                       "orthographic": {"xmag": 3.2, "ymag": 2.4, "znear": 0.01, "zfar": 50}}]
     d.g["nodes"] = [{"mesh": 0, "name": "Floor"}, {"mesh": 1, "name": "Box"}, {"mesh": 2, "name": "Tilted"},
                     {"mesh": 3, "name": "BentLight"},
                     {"name": "Spot", "translation": [1.5, 2.5, 1.0], "rotation": [-0.7071, 0, 0, 0.7071],
                      "extensions": {"KHR_lights_punctual": {"light": 0}}},
-                    {"camera": 0, "translation": [0, 2.8, 5.0], "rotation": [-0.2588, 0, 0, 0.9659]}]
-    d.g["scenes"] = [{"nodes": [0, 1, 2, 3, 4, 5]}]
+                    {"camera": 0, "translation": [0, 2.8, 5.0], "rotation": [-0.2588, 0, 0, 0.9659]},
+                    {"camera": 1, "name": "Top", "translation": [0, 1.9, 3.0], "rotation": [-0.3827, 0, 0, 0.9239]}]
+    d.g["scenes"] = [{"nodes": [0, 1, 2, 3, 4, 5, 6]}]
     write("bent_light.gltf", d.embedded())
 
 
