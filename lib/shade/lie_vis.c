@@ -21,8 +21,11 @@ struct lie_lie_vis {
     mt_tri *tris;
     sphere *tri_sphere;     /* per triangle */
     sphere *emitter_sphere; /* per emitter; r < 0: no culling (directional) */
-    float *pool_sphere[4];  /* x, y, z, r of the sphere of each pool entry's triangle */
-    float *pool_vert[9];    /* its vertices: a x, y, z, b x, y, z, c x, y, z */
+    /* per triangle, side by side, for the selection loops (which gather
+     * them by a list's triangle indices): its sphere's x, y, z, r and its
+     * vertices a x, y, z, b x, y, z, c x, y, z */
+    float *soa_sphere[4];
+    float *soa_vert[9];
     lie_vis_oracle oracle;
 };
 
@@ -48,7 +51,7 @@ static lie_vis_class classify(void *ctx, const lie_surface *sf, int e, const voi
  * emitter's bounding sphere, cut at the emitter: every segment of this
  * point lies in it (the patch's list serves the whole patch; one point
  * needs fewer, often none).  The spheres of each list lie side by side
- * (pool_sphere), so the test runs over eight blockers at a time; the
+ * (soa_sphere), so the test runs over eight blockers at a time; the
  * flags go to out[] and are compacted in place. */
 static int select_planar(const lie_lie_vis *v, const lie_pnode *nd, const lie_emitter *em, lie_vec3 o,
                          uint32_t *out);
@@ -70,12 +73,13 @@ static int select_blockers(void *ctx, const void *pair, int e, lie_vec3 o, uint3
     }
     float D = sqrtf(D2), sa = E.r / D, ca = sqrtf(1.0f - sa * sa);
     float ux = wx / D, uy = wy / D, uz = wz / D, far = D + E.r;
-    const float *restrict bx = v->pool_sphere[0] + nd->list, *restrict by = v->pool_sphere[1] + nd->list,
-                          *restrict bz = v->pool_sphere[2] + nd->list, *restrict br = v->pool_sphere[3] + nd->list;
+    const float *restrict bx = v->soa_sphere[0], *restrict by = v->soa_sphere[1], *restrict bz = v->soa_sphere[2],
+                          *restrict br = v->soa_sphere[3];
     uint32_t *restrict keep = out;
 #pragma omp simd
     for (int j = 0; j < count; j++) {
-        float vx = bx[j] - o.x, vy = by[j] - o.y, vz = bz[j] - o.z, r = br[j];
+        const uint32_t b = list[j];
+        float vx = bx[b] - o.x, vy = by[b] - o.y, vz = bz[b] - o.z, r = br[b];
         float v2 = vx * vx + vy * vy + vz * vz;
         int inside = v2 <= r * r; /* o inside the blocker's sphere */
         float dv = sqrtf(v2);
@@ -122,16 +126,17 @@ static int select_planar(const lie_lie_vis *v, const lie_pnode *nd, const lie_em
     const float front = 1e-4f * lie_maxf(1.0f, lie_v3_maxabs(o));
     const float rs = lie_maxf(-em->plane_ext[0], em->plane_ext[1]), rt = lie_maxf(-em->plane_ext[2], em->plane_ext[3]);
     const float end = D - 0.25f * front * (D / (sqrtf(wx * wx + wy * wy + wz * wz) + sqrtf(rs * rs + rt * rt)));
-    const float *const *P = (const float *const *)v->pool_vert;
-    const float *restrict pax = P[0] + nd->list, *restrict pay = P[1] + nd->list, *restrict paz = P[2] + nd->list;
-    const float *restrict pbx = P[3] + nd->list, *restrict pby = P[4] + nd->list, *restrict pbz = P[5] + nd->list;
-    const float *restrict pcx = P[6] + nd->list, *restrict pcy = P[7] + nd->list, *restrict pcz = P[8] + nd->list;
+    const float *const *P = (const float *const *)v->soa_vert;
+    const float *restrict pax = P[0], *restrict pay = P[1], *restrict paz = P[2];
+    const float *restrict pbx = P[3], *restrict pby = P[4], *restrict pbz = P[5];
+    const float *restrict pcx = P[6], *restrict pcy = P[7], *restrict pcz = P[8];
     uint32_t *restrict keep = out;
 #pragma omp simd
     for (int j = 0; j < count; j++) {
-        float ax = pax[j] - o.x, ay = pay[j] - o.y, az = paz[j] - o.z;
-        float bx = pbx[j] - o.x, by = pby[j] - o.y, bz = pbz[j] - o.z;
-        float cx = pcx[j] - o.x, cy = pcy[j] - o.y, cz = pcz[j] - o.z;
+        const uint32_t i = list[j];
+        float ax = pax[i] - o.x, ay = pay[i] - o.y, az = paz[i] - o.z;
+        float bx = pbx[i] - o.x, by = pby[i] - o.y, bz = pbz[i] - o.z;
+        float cx = pcx[i] - o.x, cy = pcy[i] - o.y, cz = pcz[i] - o.z;
         float la = ax * kx + ay * ky + az * kz, lb = bx * kx + by * ky + bz * kz, lc = cx * kx + cy * ky + cz * kz;
         float au = ax * U.x + ay * U.y + az * U.z, bu = bx * U.x + by * U.y + bz * U.z,
               cu = cx * U.x + cy * U.y + cz * U.z;
@@ -476,33 +481,28 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
             v->emitter_sphere[e] = none;
         }
     }
-    for (int k = 0; k < 4; k++) {
-        v->pool_sphere[k] = malloc(sizeof(float) * ((size_t)env->n_pool + 1));
-        if (!v->pool_sphere[k]) {
+    const size_t nt = (size_t)s->n_tris + 1;
+    for (int k = 0; k < 4; k++)
+        v->soa_sphere[k] = malloc(sizeof(float) * nt);
+    for (int k = 0; k < 9; k++)
+        v->soa_vert[k] = malloc(sizeof(float) * nt);
+    for (int k = 0; k < 13; k++)
+        if (!(k < 4 ? v->soa_sphere[k] : v->soa_vert[k - 4])) {
             lie_lie_vis_destroy(v);
             return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
         }
-    }
-    for (int k = 0; k < 9; k++) {
-        v->pool_vert[k] = malloc(sizeof(float) * ((size_t)env->n_pool + 1));
-        if (!v->pool_vert[k]) {
-            lie_lie_vis_destroy(v);
-            return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
+    for (uint32_t t = 0; t < s->n_tris; t++) {
+        const sphere b = v->tri_sphere[t];
+        v->soa_sphere[0][t] = b.x;
+        v->soa_sphere[1][t] = b.y;
+        v->soa_sphere[2][t] = b.z;
+        v->soa_sphere[3][t] = b.r;
+        const lie_vec3 *Q = &s->tri_p[3 * (size_t)t];
+        for (int q = 0; q < 3; q++) {
+            v->soa_vert[3 * q + 0][t] = Q[q].x;
+            v->soa_vert[3 * q + 1][t] = Q[q].y;
+            v->soa_vert[3 * q + 2][t] = Q[q].z;
         }
-    }
-    for (uint32_t k = 0; k < env->n_pool; k++) {
-        const lie_vec3 *Q = env->pool[k] < s->n_tris ? &s->tri_p[3 * (size_t)env->pool[k]] : NULL;
-        for (int q = 0; q < 9; q++)
-            v->pool_vert[q][k] = Q ? (q % 3 == 0 ? Q[q / 3].x : q % 3 == 1 ? Q[q / 3].y : Q[q / 3].z) : 0.0f;
-    }
-    for (uint32_t k = 0; k < env->n_pool; k++) {
-        /* entries no partial list names are not checked on load */
-        sphere none = {0.0f, 0.0f, 0.0f, 0.0f};
-        sphere b = env->pool[k] < s->n_tris ? v->tri_sphere[env->pool[k]] : none;
-        v->pool_sphere[0][k] = b.x;
-        v->pool_sphere[1][k] = b.y;
-        v->pool_sphere[2][k] = b.z;
-        v->pool_sphere[3][k] = b.r;
     }
     v->s = s;
     v->env = env;
@@ -530,8 +530,8 @@ void lie_lie_vis_destroy(lie_lie_vis *v)
     free(v->tri_sphere);
     free(v->emitter_sphere);
     for (int k = 0; k < 4; k++)
-        free(v->pool_sphere[k]);
+        free(v->soa_sphere[k]);
     for (int k = 0; k < 9; k++)
-        free(v->pool_vert[k]);
+        free(v->soa_vert[k]);
     free(v);
 }
