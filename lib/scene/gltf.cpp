@@ -439,6 +439,35 @@ uint32_t glb_check(const std::vector<unsigned char> &d)
     throw e;
 }
 
+/* When tinygltf refuses a file, a required extension we do not support
+ * (Draco or meshopt compression, say) is the better reason to give: their
+ * accessors have no data of their own.  The JSON (of a .gltf, or a GLB's
+ * first chunk) is read once more, leniently, for extensionsRequired. */
+void fail_if_unsupported_required(const std::vector<unsigned char> &d)
+{
+    const unsigned char *json = d.data();
+    size_t len = d.size();
+    if (len >= 20 && memcmp(json, "glTF", 4) == 0) {
+        uint32_t jl = uint32_t(d[12]) | uint32_t(d[13]) << 8 | uint32_t(d[14]) << 16 | uint32_t(d[15]) << 24;
+        len = std::min<size_t>(jl, len - 20);
+        json += 20;
+    }
+    nlohmann::json j = nlohmann::json::parse(json, json + len, nullptr, false);
+    if (j.is_discarded() || !j.is_object() || !j.contains("extensionsRequired") ||
+        !j["extensionsRequired"].is_array())
+        return;
+    for (const auto &e : j["extensionsRequired"]) {
+        if (!e.is_string())
+            continue;
+        std::string name = e.get<std::string>();
+        bool ok = false;
+        for (const char *s : SUPPORTED_REQUIRED)
+            ok |= name == s;
+        if (!ok)
+            fail(LIE_ERR_UNSUPPORTED, "requires extension %s", clean(name).c_str());
+    }
+}
+
 /* Parse the file into `model`; `image_errors` gets why external images that
  * tinygltf skipped (with a warning) could not be opened. */
 void load_model(tinygltf::Model &model, const char *path, const lie_scene_options &opt,
@@ -481,8 +510,10 @@ void load_model(tinygltf::Model &model, const char *path, const lie_scene_option
     /* tinygltf's result decides; it also puts notes on problems it tolerated
      * in err.  An external image it could not open is only a warning: that is
      * an error where the image is used (texture_for). */
-    if (!ok)
+    if (!ok) {
+        fail_if_unsupported_required(data);
         fail_parse(err.empty() ? warn : err, fs);
+    }
 
     for (size_t i = 0; i < model.images.size(); i++) {
         const tinygltf::Image &im = model.images[i];

@@ -752,6 +752,7 @@ static void test_gltf_attribute_types_and_counts_checked(void **state)
     expect_error("normal_count.gltf", LIE_ERR_FORMAT, "NORMAL has 2 elements, POSITION 3");
     expect_error("sparse_index_oob.gltf", LIE_ERR_FORMAT, "sparse index 9 beyond its count 3");
     expect_error("ortho_zero.gltf", LIE_ERR_FORMAT, "camera 0: orthographic xmag and ymag must be finite and nonzero");
+    expect_error("draco_required.gltf", LIE_ERR_UNSUPPORTED, "requires extension KHR_draco_mesh_compression");
 }
 
 static void test_gltf_node_graph_errors_refused(void **state)

@@ -373,6 +373,14 @@ def bad():
     d.g["cameras"] = [{"type": "orthographic", "orthographic": {"xmag": 1, "ymag": 0, "znear": 0.1, "zfar": 10}}]
     write("ortho_zero.gltf", d.embedded())
 
+    # Draco-compressed: the accessors carry no data of their own (tinygltf
+    # refuses them); the required extension is the reason to report
+    d = one_triangle()
+    g = d.embedded()
+    del g["accessors"][0]["bufferView"]
+    g["extensionsUsed"] = g["extensionsRequired"] = ["KHR_draco_mesh_compression"]
+    write("draco_required.gltf", g)
+
     d = one_triangle()
     d.g["nodes"] = [{"children": [2]}, {"children": [2]}, {"mesh": 0}]
     d.g["scenes"] = [{"nodes": [0, 1]}]
