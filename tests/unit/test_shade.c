@@ -421,39 +421,67 @@ static void test_all_hits_reports_every_triangle_on_a_segment(void **state)
 /* Toward a planar emitter the LIE oracle tests blockers in the emitter's
  * plane coordinates (2D edge functions), and in 3D where a blocker reaches
  * the emitter's plane.  Random triangles around a light (in front of,
- * behind, straddling the shading point's level and the light's plane): the
- * oracle's answer for every segment is Embree's, with the 2D path and with
- * the 3D path forced, but for rays grazing an edge. */
-static void test_planar_blocker_tests_agree_with_embree(void **state)
+ * behind, straddling the shading point's level and the light's plane, one
+ * in the light's plane, one touching it), lights tilted and one- or
+ * two-sided, points below, level with and above the light: the oracle's
+ * answer for every segment is Embree's, with the 2D path and with the 3D
+ * path forced, but for rays grazing an edge. */
+typedef struct planar_tally {
+    long tested, blocked, off2, off3;
+} planar_tally;
+
+static lie_vec3 tilt_x(lie_vec3 p, float deg)
 {
-    (void)state;
+    float c = cosf(deg * (float)M_PI / 180.0f), sn = sinf(deg * (float)M_PI / 180.0f);
+    float y = p.y - 2.0f, z = p.z;
+    return lie_v3(p.x, 2.0f + c * y - sn * z, sn * y + c * z);
+}
+
+static void planar_case(uint64_t seed, float tilt, int two_sided, planar_tally *tl)
+{
     lie_scene *s = lie_scene_new("random-blockers");
     lie_material light = lie_material_default();
     light.base_color[0] = light.base_color[1] = light.base_color[2] = 0.0f;
     light.emissive[0] = light.emissive[1] = light.emissive[2] = 5.0f;
+    light.double_sided = two_sided;
     int ml = lie_scene_add_material(s, &light);
     lie_material grey = lie_material_default();
     grey.metallic = 0.0f;
     grey.double_sided = 1;
     int mg = lie_scene_add_material(s, &grey);
-    float lp[12] = {-0.5f, 2, -0.5f, 0.5f, 2, -0.5f, 0.5f, 2, 0.5f, -0.5f, 2, 0.5f};
+    const lie_vec3 corner[4] = {lie_v3(-0.5f, 2, -0.5f), lie_v3(0.5f, 2, -0.5f), lie_v3(0.5f, 2, 0.5f),
+                                lie_v3(-0.5f, 2, 0.5f)};
+    float lp[12];
+    for (int k = 0; k < 4; k++) {
+        lie_vec3 q = tilt_x(corner[k], tilt);
+        lp[3 * k] = q.x, lp[3 * k + 1] = q.y, lp[3 * k + 2] = q.z;
+    }
     uint32_t qi[6] = {0, 1, 2, 0, 2, 3};
     lie_scene_add_node(s, "Light", -1, NULL, lie_scene_add_mesh(s, "Light", lp, NULL, NULL, 4, qi, 2, ml), -1, -1);
     enum { NB = 60 };
     float bp[NB * 9];
     uint32_t bi[NB * 3];
-    uint64_t r = 0x9e3779b97f4a7c15ull;
+    uint64_t r = seed;
 #define RND() ((r = r * 6364136223846793005ull + 1442695040888963407ull), (float)(r >> 40) / 16777216.0f)
     for (int k = 0; k < NB; k++) {
-        float cx = 2.4f * RND() - 1.2f, cy = 2.6f * RND() - 0.3f, cz = 2.4f * RND() - 1.2f;
+        float cx = 2.4f * RND() - 1.2f;
+        float cy = 2.6f * RND() - 0.3f;
+        float cz = 2.4f * RND() - 1.2f;
         for (int v = 0; v < 3; v++) {
-            bp[9 * k + 3 * v + 0] = cx + 0.8f * RND() - 0.4f;
-            bp[9 * k + 3 * v + 1] = cy + 0.8f * RND() - 0.4f;
-            bp[9 * k + 3 * v + 2] = cz + 0.8f * RND() - 0.4f;
+            float jx = RND();
+            float jy = RND();
+            float jz = RND();
+            lie_vec3 q = lie_v3(cx + 0.8f * jx - 0.4f, cy + 0.8f * jy - 0.4f, cz + 0.8f * jz - 0.4f);
+            if (k == 0) /* in the light's plane, beside it */
+                q = tilt_x(lie_v3(0.7f + 0.3f * (float)v, 2.0f, -0.2f + 0.4f * (float)(v & 1)), tilt);
+            if (k == 1 && v == 0) /* touching the light's edge */
+                q = tilt_x(lie_v3(0.5f, 2.0f, 0.1f), tilt);
+            bp[9 * k + 3 * v + 0] = q.x;
+            bp[9 * k + 3 * v + 1] = q.y;
+            bp[9 * k + 3 * v + 2] = q.z;
             bi[3 * k + v] = (uint32_t)(3 * k + v);
         }
     }
-#undef RND
     lie_scene_add_node(s, "Blockers", -1, NULL, lie_scene_add_mesh(s, "B", bp, NULL, NULL, 3 * NB, bi, NB, mg), -1, -1);
     lie_error err;
     assert_int_equal(lie_scene_flatten(s, &err), LIE_OK);
@@ -461,34 +489,35 @@ static void test_planar_blocker_tests_agree_with_embree(void **state)
     assert_true(s->emitters[0].planar);
     lie_rt *rt = NULL;
     assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
-    lie_build_params bp_ = lie_build_params_default();
-    bp_.min_patch = 0.5f;
+    lie_build_params bparams = lie_build_params_default();
+    bparams.min_patch = 0.5f;
     lie_env *env = NULL;
     lie_build_stats bst;
-    assert_int_equal(lie_env_build(s, rt, &bp_, NULL, &env, &bst, &err), LIE_OK);
+    assert_int_equal(lie_env_build(s, rt, &bparams, NULL, &env, &bst, &err), LIE_OK);
     lie_lie_vis *lv = NULL;
     assert_int_equal(lie_lie_vis_create(s, env, &lv, &err), LIE_OK);
     const lie_vis_oracle *orc = lie_lie_vis_oracle(lv);
     const int n = 64;
     lie_light_samples ls;
     assert_int_equal(lie_light_samples_alloc(&ls, n), LIE_OK);
-    lie_light_samples_generate(s, 0, n, 0.31f, 0.67f, &ls);
+    float su = RND(), sv = RND();
+    lie_light_samples_generate(s, 0, n, su, sv, &ls);
+#undef RND
     assert_true(ls.planar);
     lie_light_samples ls3 = ls;
     ls3.planar = 0;
     uint32_t blockers[NB], occ2[64], occ3[64];
     for (int k = 0; k < NB; k++)
-        blockers[k] = s->emitters[0].first_tri == 0 ? (uint32_t)(k + 2) : (uint32_t)k;
+        blockers[k] = (uint32_t)(k + 2); /* the light's two triangles come first */
     float dx[64], dy[64], dz[64];
     enum { STRIDE = 64 };
     static float work[LIE_BLOCKER_WORK * STRIDE];
     static uint32_t kind[STRIDE];
-    long tested = 0, off2 = 0, off3 = 0, blocked = 0;
-    for (int gy = 0; gy < 3; gy++)
+    const float heights[5] = {1e-4f, 0.7f, 1.5f, 1.97f, 2.6f};
+    for (int gy = 0; gy < 5; gy++)
         for (int gx = 0; gx < 9; gx++)
             for (int gz = 0; gz < 9; gz++) {
-                lie_vec3 o = lie_v3(-1.6f + 0.4f * (float)gx, gy == 0 ? 1e-4f : gy == 1 ? 0.7f : 1.5f,
-                                    -1.6f + 0.4f * (float)gz);
+                lie_vec3 o = lie_v3(-1.6f + 0.4f * (float)gx, heights[gy], -1.6f + 0.4f * (float)gz);
                 const float eps = 1e-4f;
                 lie_shadow_query q2 = {o, eps, &ls, n, 0, dx, dy, dz, work, kind, STRIDE};
                 orc->occluded(orc->ctx, blockers, NB, &q2, occ2);
@@ -497,22 +526,37 @@ static void test_planar_blocker_tests_agree_with_embree(void **state)
                 lie_shadow_segments(&q3);
                 for (int i = 0; i < n; i++) {
                     int emb = lie_rt_occluded(rt, o, lie_v3(dx[i], dy[i], dz[i]), 0.0f, 1.0f);
-                    tested++;
-                    blocked += emb;
-                    off2 += (occ2[i] != 0) != emb;
-                    off3 += (occ3[i] != 0) != emb;
+                    tl->tested++;
+                    tl->blocked += emb;
+                    tl->off2 += (occ2[i] != 0) != emb;
+                    tl->off3 += (occ3[i] != 0) != emb;
                 }
             }
-    print_message("planar blocker tests: %ld segments, %ld blocked; 2D off %ld, 3D off %ld\n", tested, blocked,
-                  off2, off3);
-    assert_true(blocked > tested / 10 && blocked < tested * 9 / 10);
-    assert_true(off2 * 1000 <= tested);
-    assert_true(off3 * 1000 <= tested);
     lie_light_samples_free(&ls);
     lie_lie_vis_destroy(lv);
     lie_env_destroy(env);
     lie_rt_destroy(rt);
     lie_scene_destroy(s);
+}
+
+static void test_planar_blocker_tests_agree_with_embree(void **state)
+{
+    (void)state;
+    const struct {
+        uint64_t seed;
+        float tilt;
+        int two_sided;
+    } cases[] = {{0x9e3779b97f4a7c15ull, 0.0f, 0}, {0x1234567ull, 25.0f, 1}, {0xdeadbeefull, -40.0f, 0},
+                 {0x5eedull, 80.0f, 1}};
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        planar_tally tl = {0, 0, 0, 0};
+        planar_case(cases[c].seed, cases[c].tilt, cases[c].two_sided, &tl);
+        print_message("planar blocker tests, tilt %g: %ld segments, %ld blocked; 2D off %ld, 3D off %ld\n",
+                      (double)cases[c].tilt, tl.tested, tl.blocked, tl.off2, tl.off3);
+        assert_true(tl.blocked > tl.tested / 20 && tl.blocked < tl.tested * 19 / 20);
+        assert_true(tl.off2 * 1000 <= tl.tested);
+        assert_true(tl.off3 * 1000 <= tl.tested);
+    }
 }
 
 /* An emitter is planar when its triangles share a plane and a facing; its
