@@ -210,6 +210,12 @@ static lie_status add_from(lie_scene *s, const lie_scene *src, int src_node, con
                         if (!dp->color)
                             mi = -1;
                     }
+                    if (mi >= 0 && q->uv1) {
+                        lie_primitive *dp = &s->meshes[mi].prims[0];
+                        dp->uv1 = dup_mem(q->uv1, sizeof(float) * 2 * q->n_verts);
+                        if (!dp->uv1)
+                            mi = -1;
+                    }
                 } else {
                     /* further primitives join the same mesh */
                     lie_mesh *dst = &s->meshes[mesh];

@@ -105,6 +105,7 @@ void lie_primitive_free(lie_primitive *p)
     free(p->pos);
     free(p->nrm);
     free(p->uv);
+    free(p->uv1);
     free(p->color);
     free(p->idx);
 }
@@ -115,10 +116,11 @@ int lie_primitive_copy(const lie_primitive *src, lie_primitive *out)
     p.pos = dup_array(src->pos, sizeof(float) * 3 * src->n_verts);
     p.nrm = dup_array(src->nrm, sizeof(float) * 3 * src->n_verts);
     p.uv = dup_array(src->uv, sizeof(float) * 2 * src->n_verts);
+    p.uv1 = dup_array(src->uv1, sizeof(float) * 2 * src->n_verts);
     p.color = dup_array(src->color, sizeof(float) * 4 * src->n_verts);
     p.idx = dup_array(src->idx, sizeof(uint32_t) * 3 * src->n_tris);
-    if ((src->pos && !p.pos) || (src->nrm && !p.nrm) || (src->uv && !p.uv) || (src->color && !p.color) ||
-        (src->idx && !p.idx)) {
+    if ((src->pos && !p.pos) || (src->nrm && !p.nrm) || (src->uv && !p.uv) || (src->uv1 && !p.uv1) ||
+        (src->color && !p.color) || (src->idx && !p.idx)) {
         lie_primitive_free(&p);
         return 0;
     }

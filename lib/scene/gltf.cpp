@@ -720,8 +720,8 @@ void read_floats(const Accessor &a, float *dst, const std::string &what)
 struct PrimPlan {
     bool skip;                   /* points or lines */
     int mode;
-    Accessor pos, nrm, uv, col, idx;
-    bool has_nrm, has_uv, has_col, has_idx;
+    Accessor pos, nrm, uv, uv1, col, idx;
+    bool has_nrm, has_uv, has_uv1, has_col, has_idx;
     size_t n_verts, n_idx, n_tris;
 };
 
@@ -804,18 +804,23 @@ PrimPlan plan_primitive(const tinygltf::Model &m, int mi, int pi, lie_scene *s)
             fail(LIE_ERR_FORMAT, "%s: NORMAL has %zu elements, POSITION %zu", what.c_str(), pl.nrm.count,
                  pl.n_verts);
     }
-    int at = attribute(p, "TEXCOORD_0");
-    if ((pl.has_uv = at >= 0)) {
-        pl.uv = check_accessor(m, at, what + " TEXCOORD_0");
-        bool ok = pl.uv.ncomp == 2 &&
-                  (pl.uv.ctype == TINYGLTF_COMPONENT_TYPE_FLOAT || (quant && small_int(pl.uv.ctype)) ||
-                   (pl.uv.normalized && (pl.uv.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
-                                         pl.uv.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT)));
+    for (int set = 0; set < 2; set++) {
+        const char *name = set ? "TEXCOORD_1" : "TEXCOORD_0";
+        int at = attribute(p, name);
+        bool &has = set ? pl.has_uv1 : pl.has_uv;
+        Accessor &uv = set ? pl.uv1 : pl.uv;
+        if (!(has = at >= 0))
+            continue;
+        uv = check_accessor(m, at, what + " " + name);
+        bool ok = uv.ncomp == 2 &&
+                  (uv.ctype == TINYGLTF_COMPONENT_TYPE_FLOAT || (quant && small_int(uv.ctype)) ||
+                   (uv.normalized && (uv.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                                      uv.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT)));
         if (!ok)
-            fail(LIE_ERR_FORMAT, "%s: TEXCOORD_0 must be VEC2 FLOAT or normalized UNSIGNED_BYTE/SHORT%s",
-                 what.c_str(), quant ? " (or, KHR_mesh_quantization, any BYTE/SHORT)" : "");
-        if (pl.uv.count != pl.n_verts)
-            fail(LIE_ERR_FORMAT, "%s: TEXCOORD_0 has %zu elements, POSITION %zu", what.c_str(), pl.uv.count,
+            fail(LIE_ERR_FORMAT, "%s: %s must be VEC2 FLOAT or normalized UNSIGNED_BYTE/SHORT%s", what.c_str(),
+                 name, quant ? " (or, KHR_mesh_quantization, any BYTE/SHORT)" : "");
+        if (uv.count != pl.n_verts)
+            fail(LIE_ERR_FORMAT, "%s: %s has %zu elements, POSITION %zu", what.c_str(), name, uv.count,
                  pl.n_verts);
     }
     int ac = attribute(p, "COLOR_0");
@@ -867,6 +872,10 @@ void read_primitive(const PrimPlan &pl, int mi, int pi, lie_primitive *out)
     if (pl.has_uv) {
         out->uv = alloc_array<float>(pl.n_verts * 2);
         read_floats(pl.uv, out->uv, what + " TEXCOORD_0");
+    }
+    if (pl.has_uv1) {
+        out->uv1 = alloc_array<float>(pl.n_verts * 2);
+        read_floats(pl.uv1, out->uv1, what + " TEXCOORD_1");
     }
     if (pl.has_col) {
         /* RGBA per vertex, alpha 1 for RGB; linear already (glTF 2.0
@@ -1029,14 +1038,20 @@ float unit_factor(double v, const std::string &what)
     return float(fmin(fmax(v, 0.0), 1.0)); /* spec range [0, 1]; exporters overshoot by rounding */
 }
 
-/* A textureInfo's texture; texCoord other than 0 still samples TEXCOORD_0,
- * the only set the importer reads.  Its KHR_texture_transform, if any, goes
- * to xf (offset, rotation in radians, scale: the matrix T R S of the
- * extension's specification). */
-int texture_info(Import &im, const tinygltf::TextureInfo &ti, bool srgb, const std::string &what, float param[5])
+/* A textureInfo's texture.  Its texture coordinate set (texCoord, or its
+ * KHR_texture_transform's) goes to *set: 0 or 1, the sets the importer
+ * reads; a higher one reads TEXCOORD_0.  Its KHR_texture_transform, if
+ * any, goes to param (offset, rotation in radians, scale: the matrix
+ * T R S of the extension's specification). */
+int texture_info(Import &im, const tinygltf::TextureInfo &ti, bool srgb, const std::string &what, float param[5],
+                 int *set)
 {
+    *set = 0;
     if (ti.index < 0)
         return -1;
+    if (ti.texCoord < 0)
+        fail(LIE_ERR_FORMAT, "%s: texCoord must be >= 0", what.c_str());
+    *set = ti.texCoord == 1 ? 1 : 0;
     auto ext = ti.extensions.find("KHR_texture_transform");
     if (ext != ti.extensions.end()) {
         const tinygltf::Value &v = ext->second;
@@ -1057,10 +1072,16 @@ int texture_info(Import &im, const tinygltf::TextureInfo &ti, bool srgb, const s
                 fail(LIE_ERR_FORMAT, "%s: KHR_texture_transform %s must be %s", what.c_str(), key,
                      n == 1 ? "a finite number" : "two finite numbers");
         };
-        double off[2] = {0.0, 0.0}, rot = 0.0, scl[2] = {1.0, 1.0};
+        double off[2] = {0.0, 0.0}, rot = 0.0, scl[2] = {1.0, 1.0}, tc = -1.0;
         numbers("offset", off, 2);
         numbers("rotation", &rot, 1);
         numbers("scale", scl, 2);
+        numbers("texCoord", &tc, 1);
+        if (v.Has("texCoord")) {
+            if (!(tc >= 0.0) || tc != std::floor(tc))
+                fail(LIE_ERR_FORMAT, "%s: KHR_texture_transform texCoord must be an integer >= 0", what.c_str());
+            *set = tc == 1.0 ? 1 : 0;
+        }
         const double p[5] = {off[0], off[1], rot, scl[0], scl[1]};
         for (int k = 0; k < 5; k++) {
             if (!(fabs(p[k]) <= FLT_MAX))
@@ -1092,11 +1113,11 @@ void import_materials(Import &im)
         for (int c = 0; c < 4; c++)
             mt.base_color[c] = unit_factor(pbr.baseColorFactor[size_t(c)], w + " baseColorFactor");
         mt.base_color_tex = texture_info(im, pbr.baseColorTexture, true, w + " baseColorTexture",
-                                         mt.tex_param[LIE_TEX_BASE_COLOR]);
+                                         mt.tex_param[LIE_TEX_BASE_COLOR], &mt.tex_set[LIE_TEX_BASE_COLOR]);
         mt.metallic = unit_factor(pbr.metallicFactor, w + " metallicFactor");
         mt.roughness = unit_factor(pbr.roughnessFactor, w + " roughnessFactor");
         mt.mr_tex = texture_info(im, pbr.metallicRoughnessTexture, false, w + " metallicRoughnessTexture",
-                                 mt.tex_param[LIE_TEX_METALLIC_ROUGHNESS]);
+                                 mt.tex_param[LIE_TEX_METALLIC_ROUGHNESS], &mt.tex_set[LIE_TEX_METALLIC_ROUGHNESS]);
 
         double strength = 1.0;
         auto ext = g.extensions.find("KHR_materials_emissive_strength");
@@ -1114,7 +1135,8 @@ void import_materials(Import &im)
                 fail(LIE_ERR_FORMAT, "%s: emissiveFactor must be numbers >= 0", w.c_str());
             mt.emissive[c] = float(e * strength);
         }
-        mt.emissive_tex = texture_info(im, g.emissiveTexture, true, w + " emissiveTexture", mt.tex_param[LIE_TEX_EMISSIVE]);
+        mt.emissive_tex = texture_info(im, g.emissiveTexture, true, w + " emissiveTexture", mt.tex_param[LIE_TEX_EMISSIVE],
+                                       &mt.tex_set[LIE_TEX_EMISSIVE]);
         mt.double_sided = g.doubleSided ? 1 : 0;
         mt.alpha_mask = g.alphaMode == "MASK";
         if (!std::isfinite(g.alphaCutoff))
@@ -1658,6 +1680,9 @@ tinygltf::Primitive export_primitive(Export &ex, const lie_primitive &p)
     if (p.uv)
         g.attributes["TEXCOORD_0"] = add_accessor(ex, p.uv, p.n_verts, TINYGLTF_TYPE_VEC2,
                                                   TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TARGET_ARRAY_BUFFER);
+    if (p.uv1)
+        g.attributes["TEXCOORD_1"] = add_accessor(ex, p.uv1, p.n_verts, TINYGLTF_TYPE_VEC2,
+                                                  TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TARGET_ARRAY_BUFFER);
     if (p.color)
         g.attributes["COLOR_0"] = add_accessor(ex, p.color, p.n_verts, TINYGLTF_TYPE_VEC4,
                                                TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TARGET_ARRAY_BUFFER);
@@ -1778,6 +1803,9 @@ void export_materials(Export &ex, const std::map<int, int> &gl_texture)
         }
         tinygltf::TextureInfo *slots[3] = {&pbr.baseColorTexture, &pbr.metallicRoughnessTexture,
                                            &g.emissiveTexture};
+        for (int k = 0; k < 3; k++)
+            if (slots[k]->index >= 0)
+                slots[k]->texCoord = mt.tex_set[k];
         for (int k = 0; k < 3; k++) {
             if (slots[k]->index < 0 || lie_material_tex_xf_is_identity(&mt, k))
                 continue;

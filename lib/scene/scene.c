@@ -10,7 +10,8 @@ static const lie_material default_material = {
     /* glTF 2.0 §3.9.6: the default material is white, metallic 1, roughness 1. */
     NULL, {1.0f, 1.0f, 1.0f, 1.0f}, -1, 1.0f, 1.0f, -1, {0.0f, 0.0f, 0.0f}, -1, 0, 0, 0.5f,
     {{0.0f, 0.0f, 0.0f, 1.0f, 1.0f}, {0.0f, 0.0f, 0.0f, 1.0f, 1.0f}, {0.0f, 0.0f, 0.0f, 1.0f, 1.0f}},
-    {{1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f}, {1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f}, {1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f}}};
+    {{1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f}, {1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f}, {1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f}},
+    {0, 0, 0}};
 
 lie_scene_options lie_scene_options_default(void)
 {
@@ -31,6 +32,7 @@ static void free_world(lie_scene *s)
     free(s->tri_p);
     free(s->tri_n);
     free(s->tri_uv);
+    free(s->tri_uv1);
     free(s->tri_color);
     free(s->tri_ng);
     free(s->tri_area);
@@ -47,7 +49,7 @@ static void free_world(lie_scene *s)
     s->instances = NULL;
     s->n_instances = 0;
     s->tri_p = s->tri_n = s->tri_ng = NULL;
-    s->tri_uv = s->tri_area = s->tri_color = NULL;
+    s->tri_uv = s->tri_uv1 = s->tri_area = s->tri_color = NULL;
     s->tri_material = NULL;
     s->tri_instance = NULL;
     s->tri_removed = NULL;
@@ -273,6 +275,11 @@ static void fill_node(lie_scene *s, int nd, const lie_mat4 *world, int dead, voi
                     } else {
                         uv[0] = uv[1] = 0.0f;
                     }
+                    if (s->tri_uv1) {
+                        float *uv1 = &s->tri_uv1[6 * (size_t)g + 2 * k];
+                        uv1[0] = pr->uv1 ? pr->uv1[2 * (size_t)v[k]] : uv[0];
+                        uv1[1] = pr->uv1 ? pr->uv1[2 * (size_t)v[k] + 1] : uv[1];
+                    }
                     if (s->tri_color) {
                         float *col = &s->tri_color[12 * (size_t)g + 4 * k];
                         for (int q = 0; q < 4; q++)
@@ -373,6 +380,10 @@ static void hash_world(lie_scene *s, lie_hasher *h)
         lie_hasher_update(h, "COLOR_0", 7);
         lie_hasher_update(h, s->tri_color, sizeof(float) * 12 * n);
     }
+    if (s->tri_uv1) { /* likewise a second texture coordinate set */
+        lie_hasher_update(h, "TEXCOORD_1", 10);
+        lie_hasher_update(h, s->tri_uv1, sizeof(float) * 6 * n);
+    }
     lie_hasher_update(h, s->tri_material, sizeof(int32_t) * n);
     lie_hasher_update(h, s->tri_removed, n);
     int32_t nm = s->n_materials, nt = s->n_textures, ne = s->n_emitters;
@@ -394,6 +405,11 @@ static void hash_world(lie_scene *s, lie_hasher *h)
                 int32_t slot = k;
                 lie_hasher_update(h, &slot, sizeof slot);
                 lie_hasher_update(h, m->tex_param[k], sizeof m->tex_param[k]);
+            }
+        for (int k = 0; k < 3; k++) /* slots reading TEXCOORD_1 */
+            if (m->tex_set[k]) {
+                int32_t d[2] = {k + 16, m->tex_set[k]};
+                lie_hasher_update(h, d, sizeof d);
             }
     }
     lie_hasher_update(h, &nt, sizeof nt);
@@ -437,16 +453,19 @@ lie_status lie_scene_flatten(lie_scene *s, lie_error *err)
     s->tri_instance = malloc(sizeof(uint32_t) * n + 1);
     s->tri_removed = malloc(n + 1);
     s->tri_emitter = malloc(sizeof(int32_t) * n + 1);
-    int any_color = 0; /* vertex colours cost memory only where a file has them */
+    int any_color = 0, any_uv1 = 0; /* vertex colours, a second set: memory only where a file has them */
     for (int i = 0; i < s->n_meshes; i++)
-        for (int p = 0; p < s->meshes[i].n_prims; p++)
+        for (int p = 0; p < s->meshes[i].n_prims; p++) {
             any_color |= s->meshes[i].prims[p].color != NULL;
+            any_uv1 |= s->meshes[i].prims[p].uv1 != NULL;
+        }
     s->tri_color = any_color ? malloc(sizeof(float) * 12 * n + 1) : NULL;
+    s->tri_uv1 = any_uv1 ? malloc(sizeof(float) * 6 * n + 1) : NULL;
     s->emitters = calloc((size_t)c.instances + (size_t)c.lights + 1, sizeof *s->emitters);
     s->cameras = calloc((size_t)c.cameras + 1, sizeof *s->cameras);
     if (!s->instances || !s->tri_p || !s->tri_n || !s->tri_uv || !s->tri_ng || !s->tri_area ||
         !s->tri_material || !s->tri_instance || !s->tri_removed || !s->tri_emitter || !s->emitters ||
-        !s->cameras || (any_color && !s->tri_color)) {
+        !s->cameras || (any_color && !s->tri_color) || (any_uv1 && !s->tri_uv1)) {
         free_world(s);
         return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory for %zu triangles", n);
     }

@@ -54,6 +54,10 @@ typedef struct lie_material {
      * xf[3] u + xf[4] v + xf[5]) */
     float tex_param[3][5];
     float tex_xf[3][6];
+    /* The texture coordinate set each slot reads: 0 (TEXCOORD_0) or 1
+     * (TEXCOORD_1); the textureInfo's texCoord, or its
+     * KHR_texture_transform's. */
+    int tex_set[3];
 } lie_material;
 
 enum { LIE_TEX_BASE_COLOR = 0, LIE_TEX_METALLIC_ROUGHNESS = 1, LIE_TEX_EMISSIVE = 2 };
@@ -76,6 +80,7 @@ typedef struct lie_primitive {
     float *pos;            /* 3 per vertex, local space */
     float *nrm;            /* 3 per vertex or NULL (flat normals then) */
     float *uv;             /* 2 per vertex (TEXCOORD_0) or NULL */
+    float *uv1;            /* 2 per vertex (TEXCOORD_1) or NULL */
     float *color;          /* 4 per vertex (COLOR_0, linear RGBA; A = 1 for RGB) or NULL */
     uint32_t n_tris;
     uint32_t *idx;         /* 3 per triangle; strips and fans already converted */
@@ -203,6 +208,8 @@ typedef struct lie_scene {
     lie_vec3 *tri_p;          /* 3 per triangle: world positions, CCW = front */
     lie_vec3 *tri_n;          /* 3 per triangle: unit shading normals */
     float *tri_uv;            /* 6 per triangle */
+    float *tri_uv1;           /* TEXCOORD_1, 6 per triangle (TEXCOORD_0's where a primitive has
+                               * none); NULL when no primitive has it */
     float *tri_color;         /* 12 per triangle (COLOR_0 RGBA per corner, 1 where a primitive
                                  has none), or NULL when no primitive has COLOR_0 */
     lie_vec3 *tri_ng;         /* unit geometric normal (front side) */
@@ -238,6 +245,12 @@ lie_status lie_scene_flatten(lie_scene *s, lie_error *err);
 
 /* The material of a triangle (glTF's default material for -1). */
 const lie_material *lie_scene_material(const lie_scene *s, int32_t index);
+
+/* The texture coordinates material slot k (LIE_TEX_*) looks its texture up
+ * at, at barycentrics (b1, b2) of triangle tri: its set's coordinates,
+ * through its KHR_texture_transform. */
+void lie_scene_slot_uv(const lie_scene *s, const lie_material *m, int k, uint32_t tri, float b1, float b2,
+                       float *u, float *v);
 
 /* A point on area emitter e from (u1, u2) in [0,1)^2: a triangle picked in
  * proportion to area (u1's position inside its CDF interval reused, so

@@ -71,6 +71,15 @@ void lie_texture_sample(const lie_texture *t, float u, float v, float rgba[4])
     }
 }
 
+void lie_scene_slot_uv(const lie_scene *s, const lie_material *m, int k, uint32_t tri, float b1, float b2,
+                       float *u, float *v)
+{
+    const float *uv = m->tex_set[k] == 1 && s->tri_uv1 ? &s->tri_uv1[6 * (size_t)tri] : &s->tri_uv[6 * (size_t)tri];
+    float b0 = 1.0f - b1 - b2;
+    lie_tex_xf_apply(m->tex_xf[k], b0 * uv[0] + b1 * uv[2] + b2 * uv[4], b0 * uv[1] + b1 * uv[3] + b2 * uv[5], u,
+                     v);
+}
+
 int lie_scene_solid_at(const lie_scene *s, uint32_t tri, float b1, float b2)
 {
     const lie_material *m = lie_scene_material(s, s->tri_material[tri]);
@@ -78,10 +87,8 @@ int lie_scene_solid_at(const lie_scene *s, uint32_t tri, float b1, float b2)
         return 1;
     float b0 = 1.0f - b1 - b2, a = m->base_color[3];
     if (m->base_color_tex >= 0 && m->base_color_tex < s->n_textures) {
-        const float *uv = &s->tri_uv[6 * (size_t)tri];
-        float u = b0 * uv[0] + b1 * uv[2] + b2 * uv[4], v = b0 * uv[1] + b1 * uv[3] + b2 * uv[5];
         float tu, tv, rgba[4];
-        lie_tex_xf_apply(m->tex_xf[LIE_TEX_BASE_COLOR], u, v, &tu, &tv);
+        lie_scene_slot_uv(s, m, LIE_TEX_BASE_COLOR, tri, b1, b2, &tu, &tv);
         lie_texture_sample(&s->textures[m->base_color_tex], tu, tv, rgba);
         a *= rgba[3];
     }

@@ -90,14 +90,10 @@ void lie_light_samples_generate(const lie_scene *s, int e, int n, float su, floa
         lie_vec3 p, ng;
         float b1, b2;
         uint32_t g = lie_emitter_point(s, e, u1, u2, &p, &ng, &b1, &b2);
-        float b0 = 1.0f - b1 - b2;
         float le[3] = {em->radiance[0], em->radiance[1], em->radiance[2]};
         if (tex) {
-            const float *uv = &s->tri_uv[6 * (size_t)g];
-            float tu = b0 * uv[0] + b1 * uv[2] + b2 * uv[4];
-            float tv = b0 * uv[1] + b1 * uv[3] + b2 * uv[5];
             float rgba[4], xu, xv;
-            lie_tex_xf_apply(mat->tex_xf[LIE_TEX_EMISSIVE], tu, tv, &xu, &xv);
+            lie_scene_slot_uv(s, mat, LIE_TEX_EMISSIVE, g, b1, b2, &xu, &xv);
             lie_texture_sample(tex, xu, xv, rgba);
             for (int k = 0; k < 3; k++)
                 le[k] *= rgba[k];

@@ -11,7 +11,6 @@ void lie_surface_from_hit(const lie_scene *s, const lie_hit *hit, lie_vec3 ray_d
     float b1 = hit->u, b2 = hit->v, b0 = 1.0f - b1 - b2;
     const lie_vec3 *P = &s->tri_p[3 * (size_t)g];
     const lie_vec3 *N = &s->tri_n[3 * (size_t)g];
-    const float *uv = &s->tri_uv[6 * (size_t)g];
     sf->tri = g;
     sf->b1 = b1;
     sf->b2 = b2;
@@ -31,8 +30,6 @@ void lie_surface_from_hit(const lie_scene *s, const lie_hit *hit, lie_vec3 ray_d
     }
     sf->ng = ng;
     sf->n = n;
-    float tu = b0 * uv[0] + b1 * uv[2] + b2 * uv[4];
-    float tv = b0 * uv[1] + b1 * uv[3] + b2 * uv[5];
     const lie_material *m = lie_scene_material(s, s->tri_material[g]);
     float base[4] = {m->base_color[0], m->base_color[1], m->base_color[2], m->base_color[3]};
     if (s->tri_color) { /* COLOR_0 multiplies the base colour (glTF 2.0 §3.7.2.1) */
@@ -44,7 +41,7 @@ void lie_surface_from_hit(const lie_scene *s, const lie_hit *hit, lie_vec3 ray_d
     if (m->base_color_tex >= 0 && m->base_color_tex < s->n_textures) {
         float t[4];
         float xu, xv;
-        lie_tex_xf_apply(m->tex_xf[LIE_TEX_BASE_COLOR], tu, tv, &xu, &xv);
+        lie_scene_slot_uv(s, m, LIE_TEX_BASE_COLOR, g, b1, b2, &xu, &xv);
         lie_texture_sample(&s->textures[m->base_color_tex], xu, xv, t);
         for (int k = 0; k < 4; k++)
             base[k] *= t[k];
@@ -52,7 +49,7 @@ void lie_surface_from_hit(const lie_scene *s, const lie_hit *hit, lie_vec3 ray_d
     if (m->mr_tex >= 0 && m->mr_tex < s->n_textures) {
         float t[4];
         float xu, xv;
-        lie_tex_xf_apply(m->tex_xf[LIE_TEX_METALLIC_ROUGHNESS], tu, tv, &xu, &xv);
+        lie_scene_slot_uv(s, m, LIE_TEX_METALLIC_ROUGHNESS, g, b1, b2, &xu, &xv);
         lie_texture_sample(&s->textures[m->mr_tex], xu, xv, t);
         roughness *= t[1];
         metallic *= t[2];
@@ -74,7 +71,7 @@ void lie_surface_from_hit(const lie_scene *s, const lie_hit *hit, lie_vec3 ray_d
         float e[4] = {1.0f, 1.0f, 1.0f, 1.0f};
         if (m->emissive_tex >= 0 && m->emissive_tex < s->n_textures) {
             float xu, xv;
-            lie_tex_xf_apply(m->tex_xf[LIE_TEX_EMISSIVE], tu, tv, &xu, &xv);
+            lie_scene_slot_uv(s, m, LIE_TEX_EMISSIVE, g, b1, b2, &xu, &xv);
             lie_texture_sample(&s->textures[m->emissive_tex], xu, xv, e);
         }
         for (int k = 0; k < 3; k++)

@@ -258,6 +258,9 @@ static void test_export_lights_cameras_and_skipped_primitives_keep_hash(void **s
     assert_true(has_text(in_dir(state, "out.gltf"), "\"alphaMode\": \"MASK\""));
     expect_round_trip(state, FIXTURES "texture_transform.gltf");
     assert_true(has_text(in_dir(state, "out.gltf"), "KHR_texture_transform"));
+    expect_round_trip(state, FIXTURES "texcoord1.gltf");
+    assert_true(has_text(in_dir(state, "out.gltf"), "TEXCOORD_1"));
+    assert_true(has_text(in_dir(state, "out.gltf"), "\"texCoord\": 1"));
 }
 
 static void test_export_edited_scene_round_trip_keeps_hash(void **state)

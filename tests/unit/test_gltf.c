@@ -389,6 +389,33 @@ static void test_gltf_quantized_attributes_dequantized(void **state)
     lie_scene_destroy(s);
 }
 
+/* TEXCOORD_1: read, chosen per slot by texCoord (or KHR_texture_transform's
+ * texCoord), and looked up through lie_scene_slot_uv. */
+static void test_gltf_second_texcoord_set_per_slot(void **state)
+{
+    (void)state;
+    lie_scene *s = load("texcoord1.gltf");
+    const lie_primitive *p = &s->meshes[0].prims[0];
+    assert_non_null(p->uv1);
+    assert_near(p->uv1[2], 0.75, 0);
+    const lie_material *m = &s->materials[0];
+    assert_int_equal(m->tex_set[LIE_TEX_BASE_COLOR], 1);
+    assert_int_equal(m->tex_set[LIE_TEX_METALLIC_ROUGHNESS], 1);
+    assert_int_equal(m->tex_set[LIE_TEX_EMISSIVE], 0);
+    assert_non_null(s->tri_uv1);
+    float u, v;
+    lie_scene_slot_uv(s, m, LIE_TEX_BASE_COLOR, 0, 1.0f, 0.0f, &u, &v); /* at vertex 1 */
+    assert_near(u, 0.75, 1e-6);
+    assert_near(v, 0.25, 1e-6);
+    lie_scene_slot_uv(s, m, LIE_TEX_EMISSIVE, 0, 1.0f, 0.0f, &u, &v);
+    assert_near(u, 1.0, 1e-6);
+    assert_near(v, 0.0, 1e-6);
+    lie_scene_destroy(s);
+    s = load("texture_transform.gltf"); /* one set: nothing more is kept */
+    assert_null(s->tri_uv1);
+    lie_scene_destroy(s);
+}
+
 static void test_gltf_texture_transform_read_and_applied(void **state)
 {
     (void)state;
@@ -821,6 +848,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_gltf_sixteen_bit_grey_texture_decoded),
         cmocka_unit_test(test_gltf_quantized_attributes_dequantized),
         cmocka_unit_test(test_gltf_texture_transform_read_and_applied),
+        cmocka_unit_test(test_gltf_second_texcoord_set_per_slot),
         cmocka_unit_test(test_gltf_vertex_colors_multiply_base_color),
         cmocka_unit_test(test_texture_sample_wraps_and_blends),
         cmocka_unit_test(test_gltf_lights_and_cameras_read_with_defaults),

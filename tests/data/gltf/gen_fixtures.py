@@ -470,6 +470,30 @@ def texture_transform():
     write("texture_transform_bad.gltf", bad)
 
 
+def texcoord1():
+    """Two texture coordinate sets: the base colour texture reads
+    TEXCOORD_1 (texCoord 1), the emissive one TEXCOORD_0, and the
+    metallic-roughness one set 1 through KHR_texture_transform's texCoord."""
+    d = Doc()
+    pos = d.positions(TRI)
+    uv0 = d.accessor(f32(0, 0, 1, 0, 0, 1), FLOAT, "VEC2", 3)
+    uv1 = d.accessor(f32(0.25, 0.25, 0.75, 0.25, 0.25, 0.75), FLOAT, "VEC2", 3)
+    d.g["meshes"] = [{"primitives": [{"attributes": {"POSITION": pos, "TEXCOORD_0": uv0, "TEXCOORD_1": uv1},
+                                      "material": 0}]}]
+    d.g["nodes"] = [{"mesh": 0}]
+    d.g["scenes"] = [{"nodes": [0]}]
+    d.g["images"] = [{"uri": "data:image/png;base64," + base64.b64encode(png(2, 2, PIXELS)).decode()}]
+    d.g["textures"] = [{"source": 0}]
+    d.g["materials"] = [
+        {"emissiveFactor": [1, 1, 1], "emissiveTexture": {"index": 0},
+         "pbrMetallicRoughness": {
+             "baseColorTexture": {"index": 0, "texCoord": 1},
+             "metallicRoughnessTexture": {"index": 0, "extensions": {"KHR_texture_transform": {
+                 "texCoord": 1, "scale": [1, 1]}}}}}]
+    d.g["extensionsUsed"] = ["KHR_texture_transform"]
+    write("texcoord1.gltf", d.embedded())
+
+
 def vertex_colors():
     """COLOR_0 three ways on the same triangle: VEC3 FLOAT (with a value
     above 1, clamped), VEC4 normalized USHORT, and none (white), under a
@@ -609,6 +633,7 @@ def bent_light():
 
 
 def main():
+    texcoord1()
     bent_light()
     alpha_mask()
     panel_light()
