@@ -1,5 +1,5 @@
 /* --camera values: a scene camera by name or index, or an explicit
- * "eye=X,Y,Z,target=X,Y,Z[,up=X,Y,Z][,fov=DEG]". */
+ * "eye=X,Y,Z,target=X,Y,Z[,up=X,Y,Z][,fov=DEG|ortho=HEIGHT]". */
 #include "shade/shade.h"
 
 #include <stdlib.h>
@@ -56,8 +56,8 @@ lie_status lie_camera_parse(const lie_scene *s, const char *spec, lie_camera *ou
         return lie_scene_camera(s, spec, out, err);
     lie_camera c;
     memset(&c, 0, sizeof c);
-    float eye[3], target[3], up[3] = {0.0f, 1.0f, 0.0f}, fov = 45.0f;
-    int have_eye = 0, have_target = 0;
+    float eye[3], target[3], up[3] = {0.0f, 1.0f, 0.0f}, fov = 45.0f, height = 0.0f;
+    int have_eye = 0, have_target = 0, have_fov = 0;
     const char *p = spec;
     while (*p) {
         const char *eq = strchr(p, '=');
@@ -76,6 +76,9 @@ lie_status lie_camera_parse(const lie_scene *s, const char *spec, lie_camera *ou
             ok = parse_floats(&v, up, 3);
         } else if (klen == 3 && strncmp(p, "fov", 3) == 0) {
             ok = parse_floats(&v, &fov, 1) && fov > 0.0f && fov < 180.0f;
+            have_fov = 1;
+        } else if (klen == 5 && strncmp(p, "ortho", 5) == 0) {
+            ok = parse_floats(&v, &height, 1) && height > 0.0f && height < 1e30f;
         } else {
             return lie_error_set(err, LIE_ERR_ARG, NULL, "--camera: unknown key '%.*s'", (int)klen, p);
         }
@@ -85,6 +88,8 @@ lie_status lie_camera_parse(const lie_scene *s, const char *spec, lie_camera *ou
     }
     if (!have_eye || !have_target)
         return lie_error_set(err, LIE_ERR_ARG, NULL, "--camera: needs both eye= and target=");
+    if (have_fov && height > 0.0f)
+        return lie_error_set(err, LIE_ERR_ARG, NULL, "--camera: fov= is for a perspective view, ortho= for an orthographic one: not both");
     c.eye = lie_v3(eye[0], eye[1], eye[2]);
     lie_vec3 f = lie_v3_sub(lie_v3(target[0], target[1], target[2]), c.eye);
     if (lie_v3_len(f) <= 0.0f)
@@ -96,6 +101,7 @@ lie_status lie_camera_parse(const lie_scene *s, const char *spec, lie_camera *ou
         return lie_error_set(err, LIE_ERR_ARG, NULL, "--camera: up is parallel to the view direction");
     c.up = lie_v3_norm(u);
     c.yfov = fov * (float)M_PI / 180.0f;
+    c.ymag = 0.5f * height; /* ortho=HEIGHT: the view's full height in world units */
     *out = c;
     return LIE_OK;
 }

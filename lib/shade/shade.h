@@ -218,7 +218,8 @@ lie_view lie_view_make(const lie_camera *cam, int width, int height);
 void lie_view_ray(const lie_view *v, float x, float y, int width, int height, lie_vec3 *org, lie_vec3 *dir);
 
 /* Parse a --camera value: a camera name or index in the scene, or
- * "eye=X,Y,Z,target=X,Y,Z[,up=X,Y,Z][,fov=DEG]". */
+ * "eye=X,Y,Z,target=X,Y,Z[,up=X,Y,Z][,fov=DEG|ortho=HEIGHT]" (ortho: an
+ * orthographic view HEIGHT world units tall). */
 lie_status lie_camera_parse(const lie_scene *s, const char *spec, lie_camera *out, lie_error *err);
 
 /* Mark in mask (n_tris entries, not cleared) every triangle seen from the

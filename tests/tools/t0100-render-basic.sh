@@ -44,6 +44,12 @@ if grep -q '0 shadow' "$TMP/err"; then ok "no shadow rays with --light-samples 0
 # Cameras.
 run "$B/lie-render" "$S/cornell.gltf" --size 16x16 --light-samples 2 -q --camera "eye=0.278,0.273,-0.8,target=0.278,0.273,0,fov=40" -o "$TMP/c.exr"
 expect_rc 0 "explicit --camera eye=...,target=..."
+run "$B/lie-render" "$S/cornell.gltf" --size 16x16 --light-samples 2 -q --camera "eye=0.278,0.273,-0.8,target=0.278,0.273,0,ortho=0.6" -o "$TMP/c.exr"
+expect_rc 0 "explicit orthographic --camera eye=...,target=...,ortho=H"
+run "$B/lie-render" "$S/cornell.gltf" --size 16x16 -q --camera "eye=0,0,-1,target=0,0,0,fov=40,ortho=1" -o "$TMP/c3.exr"
+expect_rc 1 "--camera with both fov= and ortho= is refused"
+expect_one_error_line "lie-render: $S/cornell.gltf: --camera: fov= is for a perspective view" "fov= with ortho=: one line"
+expect_no_file "$TMP/c3.exr" "no output for fov= with ortho="
 run "$B/lie-render" "$S/cornell.gltf" --size 16x16 --light-samples 2 -q --camera 0 -o "$TMP/c.exr"
 expect_rc 0 "--camera by index"
 run "$B/lie-render" "$S/cornell.gltf" --size 16x16 -q --camera NoSuchCamera -o "$TMP/c2.exr"

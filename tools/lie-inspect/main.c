@@ -53,7 +53,7 @@ static void usage(FILE *fp)
             "                            before edits, the edit log) counts as a difference\n"
             "  -o, --output FILE         image: the PNG to write (- for stdout)\n"
             "      --camera SPEC         image: a camera name or index in the scene, or\n"
-            "                            eye=X,Y,Z,target=X,Y,Z[,up=X,Y,Z][,fov=DEG]\n"
+            "                            eye=X,Y,Z,target=X,Y,Z[,up=X,Y,Z][,fov=DEG|ortho=HEIGHT]\n"
             "      --emitter K           image: emitter K alone (default: all emitters)\n"
             "      --size WxH            image: size (default %dx%d)\n"
             "      --threads N           image: worker threads (default: all cores)\n"
