@@ -34,6 +34,11 @@ typedef struct lie_shade_ctx {
     float ray_far;                  /* shadow ray length toward directional lights */
 } lie_shade_ctx;
 
+/* Per triangle, the instance it belongs to if that instance is a closed
+ * convex mesh with every light outside it (solids.c), else -1; NULL when
+ * out of memory. */
+int32_t *lie_convex_solids(const lie_scene *s);
+
 /* Direct lighting at sf from every emitter, added to rgb.  `pixel` seeds the
  * rotated pattern. */
 void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pixel, int depth,

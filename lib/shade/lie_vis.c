@@ -1,6 +1,6 @@
 /* Shadow rays answered by local illumination environments (§4.2). */
 #include "lie/lie.h"
-#include "shade/shade.h"
+#include "shade/internal.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -26,6 +26,7 @@ struct lie_lie_vis {
      * vertices a x, y, z, b x, y, z, c x, y, z */
     float *soa_sphere[4];
     float *soa_vert[9];
+    int32_t *solid;         /* per triangle: its convex solid (lie_convex_solids) or -1 */
     lie_vis_oracle oracle;
 };
 
@@ -223,8 +224,8 @@ typedef struct plane_view {
     float end;         /* no segment reaches this depth */
 } plane_view;
 
-/* What the setup pass found for a blocker. */
-enum { B_NONE = 0, B_CONE = 1, B_REACHES = 2, B_ALL = 3 };
+/* What the setup pass found for a blocker, and whether it faces o. */
+enum { B_NONE = 0, B_CONE = 1, B_REACHES = 2, B_ALL = 3, B_KIND = 15, B_FRONT = 16 };
 /* Its linear forms in (s, t), each as constant, s and t coefficients:
  * three edges, and for a blocker reaching the plane g and g2. */
 enum { W_E0 = 0, W_E1 = 3, W_E2 = 6, W_G = 9, W_G2 = 12 };
@@ -303,7 +304,7 @@ static void setup_2d(const lie_lie_vis *v, const uint32_t *blockers, int nb, lie
         W[W_G2 + 0][j] = sh * (n0 - h), W[W_G2 + 1][j] = sh * nu, W[W_G2 + 2][j] = sh * nv;
         int none = (lmax < 0.0f) | (lmin > end) | (det == 0.0f); /* behind o, unreached, edge-on */
         int reaches = lmax >= hi;
-        kind[j] = none ? B_NONE : reaches ? B_REACHES : all ? B_ALL : B_CONE;
+        kind[j] = (none ? B_NONE : reaches ? B_REACHES : all ? B_ALL : B_CONE) | (h < 0.0f ? B_FRONT : 0);
     }
 }
 
@@ -360,6 +361,41 @@ static uint32_t cone_5(const float *f, const lie_light_samples *ls, uint32_t *oc
     return unsure;
 }
 
+/* A segment from o to a light sample, both outside a convex solid, that
+ * crosses it enters through a face that faces o.  When some selected face
+ * of a solid faces o (so o is outside it; every light is, by
+ * lie_convex_solids), that solid's faces turned away from o can block
+ * nothing more: they are dropped.  A closed column seen from the floor
+ * has half its faces in a shadow's lists. */
+static void drop_far_faces(const int32_t *solid, const uint32_t *blockers, int nb, uint32_t *kind)
+{
+    enum { MAX_SOLIDS = 16 };
+    int32_t seen[MAX_SOLIDS];
+    int n_seen = 0;
+    for (int j = 0; j < nb; j++) {
+        int32_t id = solid[blockers[j]];
+        if (id < 0 || (kind[j] & B_KIND) == B_NONE || !(kind[j] & B_FRONT))
+            continue;
+        int k = 0;
+        while (k < n_seen && seen[k] != id)
+            k++;
+        if (k == n_seen && n_seen < MAX_SOLIDS)
+            seen[n_seen++] = id;
+    }
+    if (n_seen == 0)
+        return;
+    for (int j = 0; j < nb; j++) {
+        int32_t id = solid[blockers[j]];
+        if (id < 0 || (kind[j] & B_FRONT) || (kind[j] & B_KIND) == B_NONE)
+            continue;
+        for (int k = 0; k < n_seen; k++)
+            if (seen[k] == id) {
+                kind[j] = B_NONE;
+                break;
+            }
+    }
+}
+
 /* The query's segments against the selected blockers: in 2D where the
  * emitter is planar and the blocker lies between (blocker_2d), else in 3D. */
 static void occluded(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q, uint32_t *occ)
@@ -395,18 +431,21 @@ static void occluded(void *ctx, const uint32_t *blockers, int n_blockers, lie_sh
     }
     setup_2d(v, blockers, n_blockers, q->o, &pv, ls, q->work, q->work_stride, q->kind);
     for (int j = 0; j < n_blockers; j++)
-        if (q->kind[j] == B_ALL) {
+        if ((q->kind[j] & B_KIND) == B_ALL) {
             for (int i = 0; i < n; i++)
                 occ[i] = ~0u;
             return;
         }
+    if (v->solid)
+        drop_far_faces(v->solid, blockers, n_blockers, q->kind);
     for (int j = 0; j < n_blockers; j++) {
-        if (q->kind[j] == B_NONE)
+        const uint32_t kind = q->kind[j] & B_KIND;
+        if (kind == B_NONE)
             continue;
         float f[LIE_BLOCKER_WORK];
         for (int k = 0; k < LIE_BLOCKER_WORK; k++)
             f[k] = q->work[(size_t)k * q->work_stride + (size_t)j];
-        if (q->kind[j] == B_CONE) {
+        if (kind == B_CONE) {
             cone_3(f, ls, occ);
         } else if (cone_5(f, ls, occ)) {
             lie_shadow_segments(q);
@@ -504,6 +543,11 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
             v->soa_vert[3 * q + 2][t] = Q[q].z;
         }
     }
+    v->solid = lie_convex_solids(s);
+    if (!v->solid) {
+        lie_lie_vis_destroy(v);
+        return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
+    }
     v->s = s;
     v->env = env;
     v->oracle.ctx = v;
@@ -533,5 +577,6 @@ void lie_lie_vis_destroy(lie_lie_vis *v)
         free(v->soa_sphere[k]);
     for (int k = 0; k < 9; k++)
         free(v->soa_vert[k]);
+    free(v->solid);
     free(v);
 }

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "lie.h"
+#include "shade/internal.h"
 
 /* A square of side `a` centred at (0, h, 0) in the plane y = h, front face
  * pointing down (-y), emitting radiance L; and a large floor at y = 0. */
@@ -426,6 +427,8 @@ static void test_all_hits_reports_every_triangle_on_a_segment(void **state)
  * two-sided, points below, level with and above the light: the oracle's
  * answer for every segment is Embree's, with the 2D path and with the 3D
  * path forced, but for rays grazing an edge. */
+static int add_box(lie_scene *s, const char *name, lie_vec3 lo, lie_vec3 hi, int faces, int material);
+
 typedef struct planar_tally {
     long tested, blocked, off2, off3;
 } planar_tally;
@@ -458,7 +461,7 @@ static void planar_case(uint64_t seed, float tilt, int two_sided, planar_tally *
     }
     uint32_t qi[6] = {0, 1, 2, 0, 2, 3};
     lie_scene_add_node(s, "Light", -1, NULL, lie_scene_add_mesh(s, "Light", lp, NULL, NULL, 4, qi, 2, ml), -1, -1);
-    enum { NB = 60 };
+    enum { NB = 60, NALL = NB + 24 };
     float bp[NB * 9];
     uint32_t bi[NB * 3];
     uint64_t r = seed;
@@ -483,10 +486,18 @@ static void planar_case(uint64_t seed, float tilt, int two_sided, planar_tally *
         }
     }
     lie_scene_add_node(s, "Blockers", -1, NULL, lie_scene_add_mesh(s, "B", bp, NULL, NULL, 3 * NB, bi, NB, mg), -1, -1);
+    /* closed boxes (convex solids, whose far faces the oracle drops when it
+     * sees a near one): one with shading points inside, one above them */
+    add_box(s, "Case", lie_v3(-1.3f, 0.5f, -1.3f), lie_v3(-0.5f, 0.9f, -0.5f), 6, mg);
+    add_box(s, "Block", lie_v3(0.3f, 1.2f, 0.3f), lie_v3(0.9f, 1.4f, 0.9f), 6, mg);
     lie_error err;
     assert_int_equal(lie_scene_flatten(s, &err), LIE_OK);
     assert_int_equal(s->n_emitters, 1);
     assert_true(s->emitters[0].planar);
+    int32_t *solid = lie_convex_solids(s);
+    assert_non_null(solid);
+    assert_true(solid[s->n_tris - 1] >= 0 && solid[s->n_tris - 13] >= 0); /* both boxes */
+    free(solid);
     lie_rt *rt = NULL;
     assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
     lie_build_params bparams = lie_build_params_default();
@@ -506,11 +517,11 @@ static void planar_case(uint64_t seed, float tilt, int two_sided, planar_tally *
     assert_true(ls.planar);
     lie_light_samples ls3 = ls;
     ls3.planar = 0;
-    uint32_t blockers[NB], occ2[64], occ3[64];
-    for (int k = 0; k < NB; k++)
+    uint32_t blockers[NALL], occ2[64], occ3[64];
+    for (int k = 0; k < NALL; k++)
         blockers[k] = (uint32_t)(k + 2); /* the light's two triangles come first */
     float dx[64], dy[64], dz[64];
-    enum { STRIDE = 64 };
+    enum { STRIDE = 96 };
     static float work[LIE_BLOCKER_WORK * STRIDE];
     static uint32_t kind[STRIDE];
     const float heights[5] = {1e-4f, 0.7f, 1.5f, 1.97f, 2.6f};
@@ -520,9 +531,9 @@ static void planar_case(uint64_t seed, float tilt, int two_sided, planar_tally *
                 lie_vec3 o = lie_v3(-1.6f + 0.4f * (float)gx, heights[gy], -1.6f + 0.4f * (float)gz);
                 const float eps = 1e-4f;
                 lie_shadow_query q2 = {o, eps, &ls, n, 0, dx, dy, dz, work, kind, STRIDE};
-                orc->occluded(orc->ctx, blockers, NB, &q2, occ2);
+                orc->occluded(orc->ctx, blockers, NALL, &q2, occ2);
                 lie_shadow_query q3 = {o, eps, &ls3, n, 0, dx, dy, dz, work, kind, STRIDE};
-                orc->occluded(orc->ctx, blockers, NB, &q3, occ3);
+                orc->occluded(orc->ctx, blockers, NALL, &q3, occ3);
                 lie_shadow_segments(&q3);
                 for (int i = 0; i < n; i++) {
                     int emb = lie_rt_occluded(rt, o, lie_v3(dx[i], dy[i], dz[i]), 0.0f, 1.0f);
@@ -608,6 +619,78 @@ static void test_emitter_plane_frame_and_samples(void **state)
     lie_scene_destroy(s);
 }
 
+/* Closed convex meshes with every light outside are found as solids; an
+ * open box, a non-convex closed mesh and a box around the light are not. */
+static int add_box(lie_scene *s, const char *name, lie_vec3 lo, lie_vec3 hi, int faces, int material)
+{
+    float p[24];
+    for (int k = 0; k < 8; k++) {
+        p[3 * k + 0] = k & 1 ? hi.x : lo.x;
+        p[3 * k + 1] = k & 2 ? hi.y : lo.y;
+        p[3 * k + 2] = k & 4 ? hi.z : lo.z;
+    }
+    /* outward winding, two triangles a face: -x, +x, -y, +y, -z, +z */
+    static const uint32_t idx[36] = {0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5, 0, 1, 5, 0, 5, 4,
+                                     2, 6, 7, 2, 7, 3, 0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6};
+    return lie_scene_add_node(s, name, -1, NULL, lie_scene_add_mesh(s, name, p, NULL, NULL, 8, idx, (uint32_t)faces * 2,
+                                                                    material), -1, -1);
+}
+
+static void test_convex_solids_found(void **state)
+{
+    (void)state;
+    lie_scene *s = lie_scene_new("solids");
+    lie_material grey = lie_material_default();
+    grey.metallic = 0.0f;
+    int mg = lie_scene_add_material(s, &grey);
+    lie_material light = grey;
+    light.emissive[0] = light.emissive[1] = light.emissive[2] = 5.0f;
+    int ml = lie_scene_add_material(s, &light);
+    float lp[12] = {-0.5f, 3, -0.5f, 0.5f, 3, -0.5f, 0.5f, 3, 0.5f, -0.5f, 3, 0.5f};
+    uint32_t qi[6] = {0, 2, 1, 0, 3, 2};
+    lie_scene_add_node(s, "Light", -1, NULL, lie_scene_add_mesh(s, "Light", lp, NULL, NULL, 4, qi, 2, ml), -1, -1);
+    add_box(s, "Closed", lie_v3(-0.3f, 1, -0.3f), lie_v3(0.3f, 1.6f, 0.3f), 6, mg);
+    add_box(s, "Open", lie_v3(1, 1, -0.3f), lie_v3(1.6f, 1.6f, 0.3f), 5, mg);
+    add_box(s, "AroundLight", lie_v3(-1, 2.5f, -1), lie_v3(1, 3.5f, 1), 6, mg);
+    /* an L-shaped prism: closed, wound outward, not convex */
+    float lpts[36] = {0, 0, 0, 2, 0, 0, 2, 0, 1, 1, 0, 1, 1, 0, 2, 0, 0, 2,
+                      0, 1, 0, 2, 1, 0, 2, 1, 1, 1, 1, 1, 1, 1, 2, 0, 1, 2};
+    uint32_t li[60] = {0, 3, 1, 1, 3, 2, 0, 5, 3, 3, 5, 4,           /* bottom, y = 0, facing -y */
+                       6, 7, 9, 7, 8, 9, 6, 9, 11, 9, 10, 11,        /* top, facing +y */
+                       0, 1, 7, 0, 7, 6, 1, 2, 8, 1, 8, 7, 2, 3, 9, 2, 9, 8,
+                       3, 4, 10, 3, 10, 9, 4, 5, 11, 4, 11, 10, 5, 0, 6, 5, 6, 11};
+    for (int k = 0; k < 36; k += 3)
+        lpts[k] += 3.0f;
+    for (int k = 0; k < 60; k += 3) { /* wound outward (the lists above wind inward) */
+        uint32_t x = li[k + 1];
+        li[k + 1] = li[k + 2];
+        li[k + 2] = x;
+    }
+    lie_scene_add_node(s, "Ell", -1, NULL, lie_scene_add_mesh(s, "Ell", lpts, NULL, NULL, 12, li, 20, mg), -1, -1);
+    lie_error err;
+    assert_int_equal(lie_scene_flatten(s, &err), LIE_OK);
+    assert_int_equal(s->n_emitters, 1);
+    int32_t *id = lie_convex_solids(s);
+    assert_non_null(id);
+    int found[5] = {0, 0, 0, 0, 0};
+    for (int i = 0; i < s->n_instances; i++) {
+        const lie_instance *in = &s->instances[i];
+        int node = in->node;
+        int solid = id[in->first_tri] == i;
+        for (uint32_t t = in->first_tri; t < in->first_tri + in->n_tris; t++)
+            assert_int_equal(id[t] == i, solid);
+        if (node >= 0 && node < 5)
+            found[node] = solid + 1;
+    }
+    assert_int_equal(found[0], 1); /* the light: not a closed mesh */
+    assert_int_equal(found[1], 2); /* the closed box */
+    assert_int_equal(found[2], 1); /* five faces only */
+    assert_int_equal(found[3], 1); /* the light is inside it */
+    assert_int_equal(found[4], 1); /* closed, not convex */
+    free(id);
+    lie_scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -624,6 +707,7 @@ int main(void)
         cmocka_unit_test(test_alpha_mask_holes_for_every_ray),
         cmocka_unit_test(test_planar_blocker_tests_agree_with_embree),
         cmocka_unit_test(test_emitter_plane_frame_and_samples),
+        cmocka_unit_test(test_convex_solids_found),
     };
     return cmocka_run_group_tests_name("shade", tests, NULL, NULL);
 }
