@@ -100,7 +100,7 @@ lie_status lie_camera_parse(const lie_scene *s, const char *spec, lie_camera *ou
     if (lie_v3_len(u) <= 1e-6f)
         return lie_error_set(err, LIE_ERR_ARG, NULL, "--camera: up is parallel to the view direction");
     c.up = lie_v3_norm(u);
-    c.yfov = fov * (float)M_PI / 180.0f;
+    c.yfov = height > 0.0f ? 0.0f : fov * (float)M_PI / 180.0f;
     c.ymag = 0.5f * height; /* ortho=HEIGHT: the view's full height in world units */
     *out = c;
     return LIE_OK;

@@ -398,6 +398,8 @@ int main(int argc, char **argv)
             {.name = "lie.cameraForward", .type = LIE_ATTR_V3F, .v = {fc.forward.x, fc.forward.y, fc.forward.z}},
             {.name = "lie.cameraUp", .type = LIE_ATTR_V3F, .v = {fc.up.x, fc.up.y, fc.up.z}},
             {.name = "lie.cameraYFovDegrees", .type = LIE_ATTR_FLOAT, .f = yfov_deg},
+            /* orthographic views: their height in world units (0: perspective) */
+            {.name = "lie.cameraOrthoHeight", .type = LIE_ATTR_FLOAT, .f = 2.0f * fc.ymag},
         };
         st = lie_frame_write(name, frame, attrs, (int)(sizeof attrs / sizeof attrs[0]), exposure, &err);
         lie_frame_destroy(frame);
