@@ -367,7 +367,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
             }
             if (cls == LIE_VISCLASS_BLOCKERS) {
                 /* of the patch's blockers, those this point's segments can meet */
-                n_blockers = opt->oracle->select(opt->oracle->ctx, pair, e, o, sc->blockers);
+                n_blockers = opt->oracle->select(opt->oracle->ctx, pair, e, o, eps, sc->blockers);
                 if (n_blockers == 0 || (opt->lie_skip & LIE_SKIP_BLOCKERS))
                     cls = LIE_VISCLASS_VISIBLE;
             } else if (cls == LIE_VISCLASS_TEST_ALL && (opt->lie_skip & LIE_SKIP_FALLBACK)) {

@@ -54,15 +54,15 @@ static lie_vis_class classify(void *ctx, const lie_surface *sf, int e, const voi
  * needs fewer, often none).  The spheres of each list lie side by side
  * (soa_sphere), so the test runs over eight blockers at a time; the
  * flags go to out[] and are compacted in place. */
-static int select_planar(const lie_lie_vis *v, const lie_pnode *nd, const lie_emitter *em, lie_vec3 o,
+static int select_planar(const lie_lie_vis *v, const lie_pnode *nd, const lie_emitter *em, lie_vec3 o, float eps,
                          uint32_t *out);
 
-static int select_blockers(void *ctx, const void *pair, int e, lie_vec3 o, uint32_t *out)
+static int select_blockers(void *ctx, const void *pair, int e, lie_vec3 o, float eps, uint32_t *out)
 {
     const lie_lie_vis *v = ctx;
     const lie_pnode *nd = pair;
     if (v->s->emitters[e].planar)
-        return select_planar(v, nd, &v->s->emitters[e], o, out);
+        return select_planar(v, nd, &v->s->emitters[e], o, eps, out);
     const uint32_t *list = v->env->pool + nd->list;
     const int count = (int)nd->count;
     const sphere E = v->emitter_sphere[e];
@@ -101,6 +101,19 @@ static int select_blockers(void *ctx, const void *pair, int e, lie_vec3 o, uint3
     return m;
 }
 
+/* The depth (along a planar emitter's normal, from o at distance D from
+ * its plane) that no segment from o reaches: a segment to a sample at
+ * distance |d| ends eps short of it, at depth D - eps D / |d|, and |d| is
+ * at most |w| (w = plane origin - o) plus the reach of the box
+ * ext = s min, max, t min, max around the plane origin that holds the
+ * samples.  Half that margin is kept against rounding. */
+static float unreached_depth(float D, float eps, float wx, float wy, float wz, const float ext[4])
+{
+    float rs = lie_maxf(-ext[0], ext[1]), rt = lie_maxf(-ext[2], ext[3]);
+    float dmax = sqrtf(wx * wx + wy * wy + wz * wz) + sqrtf(rs * rs + rt * rt);
+    return D - 0.5f * eps * (D / dmax);
+}
+
 /* Toward a planar emitter: the blockers that are not wholly behind o
  * (depth along the emitter's normal < 0), not wholly where no segment
  * reaches (at or beyond the emitter's plane), and, when wholly in front of o, whose shadow on the plane meets
@@ -108,7 +121,7 @@ static int select_blockers(void *ctx, const void *pair, int e, lie_vec3 o, uint3
  * a_u = a.u falls at s = a_u D / l - w.u on the plane, so "every vertex
  * left of s0" is a_u D < (w.u + s0) l for each: no division.  Over the
  * list's vertices side by side, eight blockers at a time. */
-static int select_planar(const lie_lie_vis *v, const lie_pnode *nd, const lie_emitter *em, lie_vec3 o,
+static int select_planar(const lie_lie_vis *v, const lie_pnode *nd, const lie_emitter *em, lie_vec3 o, float eps,
                          uint32_t *out)
 {
     const uint32_t *list = v->env->pool + nd->list;
@@ -122,11 +135,9 @@ static int select_planar(const lie_lie_vis *v, const lie_pnode *nd, const lie_em
     const float pad = 1e-4f * lie_maxf(em->plane_ext[1] - em->plane_ext[0], em->plane_ext[3] - em->plane_ext[2]);
     const float L = wu + em->plane_ext[0] - pad, R = wu + em->plane_ext[1] + pad;
     const float B = wv + em->plane_ext[2] - pad, T = wv + em->plane_ext[3] + pad;
-    /* shadows are boxed only for vertices clearly in front of o; no
-     * segment reaches `end` (lie_shade_direct's eps, from about o) */
-    const float front = 1e-4f * lie_maxf(1.0f, lie_v3_maxabs(o));
-    const float rs = lie_maxf(-em->plane_ext[0], em->plane_ext[1]), rt = lie_maxf(-em->plane_ext[2], em->plane_ext[3]);
-    const float end = D - 0.25f * front * (D / (sqrtf(wx * wx + wy * wy + wz * wz) + sqrtf(rs * rs + rt * rt)));
+    /* shadows are boxed only for vertices at least eps in front of o */
+    const float front = eps;
+    const float end = unreached_depth(D, eps, wx, wy, wz, em->plane_ext);
     const float *const *P = (const float *const *)v->soa_vert;
     const float *restrict pax = P[0], *restrict pay = P[1], *restrict paz = P[2];
     const float *restrict pbx = P[3], *restrict pby = P[4], *restrict pbz = P[5];
@@ -417,10 +428,8 @@ static void occluded(void *ctx, const uint32_t *blockers, int n_blockers, lie_sh
         pv.kz = sg * ls->pn[2];
         pv.D = sg * d;
         pv.hi = pv.D - 2.0f * q->eps;
-        /* the segments end at least eps D / |d| short of the plane */
-        float rs = lie_maxf(-ls->smin, ls->smax), rt = lie_maxf(-ls->tmin, ls->tmax);
-        float dmax = sqrtf(pv.wx * pv.wx + pv.wy * pv.wy + pv.wz * pv.wz) + sqrtf(rs * rs + rt * rt);
-        pv.end = pv.D - 0.5f * q->eps * (pv.D / dmax);
+        const float ext[4] = {ls->smin, ls->smax, ls->tmin, ls->tmax};
+        pv.end = unreached_depth(pv.D, q->eps, pv.wx, pv.wy, pv.wz, ext);
         planar = pv.hi > 0.0f;
     }
     if (!planar) {

@@ -114,7 +114,8 @@ void lie_shadow_segments(lie_shadow_query *q);
 
 /* A visibility oracle other than Embree-over-everything.  classify() looks
  * up the pair; for LIE_VISCLASS_BLOCKERS, select() keeps the pair's
- * blockers that can matter from origin o (writing at most max_blockers
+ * blockers that can matter to segments from origin o shortened by eps
+ * (lie_shadow_query) (writing at most max_blockers
  * triangle indices; none left means the point sees the emitter whole) and
  * occluded() answers the query's segments against them (occ[i] = ~0 if
  * blocked, 0 if free). */
@@ -122,7 +123,7 @@ typedef struct lie_vis_oracle {
     void *ctx;
     int max_blockers;
     lie_vis_class (*classify)(void *ctx, const lie_surface *sf, int emitter, const void **pair);
-    int (*select)(void *ctx, const void *pair, int emitter, lie_vec3 o, uint32_t *out);
+    int (*select)(void *ctx, const void *pair, int emitter, lie_vec3 o, float eps, uint32_t *out);
     void (*occluded)(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
                      uint32_t *occ);
     /* For AOVs: the pair's class (lie_class), list length and a patch id. */

@@ -414,6 +414,8 @@ static void test_gltf_second_texcoord_set_per_slot(void **state)
     s = load("texture_transform.gltf"); /* one set: nothing more is kept */
     assert_null(s->tri_uv1);
     lie_scene_destroy(s);
+    expect_error("texcoord1_bad.gltf", LIE_ERR_FORMAT,
+                 "metallicRoughnessTexture: KHR_texture_transform texCoord must be an integer >= 0");
 }
 
 static void test_gltf_texture_transform_read_and_applied(void **state)

@@ -492,6 +492,10 @@ def texcoord1():
                  "texCoord": 1, "scale": [1, 1]}}}}}]
     d.g["extensionsUsed"] = ["KHR_texture_transform"]
     write("texcoord1.gltf", d.embedded())
+    bad = json.loads(json.dumps(d.embedded()))
+    bad["materials"][0]["pbrMetallicRoughness"]["metallicRoughnessTexture"]["extensions"][
+        "KHR_texture_transform"]["texCoord"] = 1.5
+    write("texcoord1_bad.gltf", bad)
 
 
 def vertex_colors():

@@ -1,0 +1,36 @@
+/* Scenes built in memory that several unit test files share. */
+#ifndef LIE_TEST_FIXTURES_H
+#define LIE_TEST_FIXTURES_H
+
+#include "lie.h"
+
+/* floor 4x4 at y=0 (2 triangles, tris 0-1), an occluder quad 0.6x0.6 at
+ * y=1 (tris 2-3, double-sided), a 1x1 light at y=2 facing down (tris 4-5). */
+static lie_scene *occluder_scene(void)
+{
+    lie_scene *s = lie_scene_new("occluder");
+    lie_material white = lie_material_default();
+    white.metallic = 0.0f;
+    int mw = lie_scene_add_material(s, &white);
+    lie_material occ = white;
+    occ.double_sided = 1;
+    int mo = lie_scene_add_material(s, &occ);
+    lie_material light = white;
+    light.base_color[0] = light.base_color[1] = light.base_color[2] = 0.0f;
+    light.emissive[0] = light.emissive[1] = light.emissive[2] = 5.0f;
+    int ml = lie_scene_add_material(s, &light);
+    uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
+    float fl[12] = {-2, 0, -2, -2, 0, 2, 2, 0, 2, 2, 0, -2};
+    float oc[12] = {-0.3f, 1, -0.3f, -0.3f, 1, 0.3f, 0.3f, 1, 0.3f, 0.3f, 1, -0.3f};
+    float li[12] = {-0.5f, 2, -0.5f, 0.5f, 2, -0.5f, 0.5f, 2, 0.5f, -0.5f, 2, 0.5f};
+    lie_scene_add_node(s, "Floor", -1, NULL, lie_scene_add_mesh(s, "Floor", fl, NULL, NULL, 4, idx, 2, mw), -1, -1);
+    lie_scene_add_node(s, "Occluder", -1, NULL, lie_scene_add_mesh(s, "Occ", oc, NULL, NULL, 4, idx, 2, mo), -1, -1);
+    lie_scene_add_node(s, "Light", -1, NULL, lie_scene_add_mesh(s, "Light", li, NULL, NULL, 4, idx, 2, ml), -1, -1);
+    lie_error err;
+    assert_int_equal(lie_scene_flatten(s, &err), LIE_OK);
+    assert_int_equal(s->n_tris, 6);
+    assert_int_equal(s->n_emitters, 1);
+    return s;
+}
+
+#endif
