@@ -343,7 +343,7 @@ static void cone_3(const float *f, const lie_light_samples *ls, uint32_t *occ_ou
     const cone c = cone_of(f);
     const float *restrict ss = ls->s, *restrict ts = ls->t;
     uint32_t *restrict occ = occ_out;
-    const int n = ls->n;
+    const int n = lie_light_samples_padded(ls);
 #pragma omp simd
     for (int i = 0; i < n; i++)
         occ[i] |= (uint32_t)-in_cone(c, ss[i], ts[i]);
@@ -358,7 +358,7 @@ static uint32_t cone_5(const float *f, const lie_light_samples *ls, uint32_t *oc
     const float g0 = f[9], gu = f[10], gv = f[11], k0 = f[12], ku = f[13], kv = f[14];
     const float *restrict ss = ls->s, *restrict ts = ls->t;
     uint32_t *restrict occ = occ_out;
-    const int n = ls->n;
+    const int n = lie_light_samples_padded(ls);
     uint32_t unsure = 0;
 #pragma omp simd reduction(| : unsure)
     for (int i = 0; i < n; i++) {

@@ -121,4 +121,7 @@ void lie_light_samples_generate(const lie_scene *s, int e, int n, float su, floa
         out->g[i] = le[1] * w;
         out->b[i] = le[2] * w;
     }
+    /* the padding up to a whole vector: (s, t) that no linear form admits */
+    for (int i = n; i < lie_light_samples_padded(out); i++)
+        out->s[i] = out->t[i] = NAN;
 }

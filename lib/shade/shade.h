@@ -45,6 +45,10 @@ void lie_light_samples_generate(const lie_scene *s, int e, int n, float su, floa
                                 lie_light_samples *out);
 lie_status lie_light_samples_alloc(lie_light_samples *ls, int n);
 void lie_light_samples_free(lie_light_samples *ls);
+/* n rounded up to a whole 8-wide vector: vector loops over (s, t) may run
+ * to it, the arrays hold it (they are padded to 16), and the padding's s and
+ * t are NaN, so no linear form admits a padding sample. */
+static inline int lie_light_samples_padded(const lie_light_samples *ls) { return (ls->n + 7) & ~7; }
 /* The fixed per-emitter shift (the paper's "same sample points every time"). */
 void lie_light_pattern_shift(int e, float *su, float *sv);
 
