@@ -267,6 +267,7 @@ static void setup_2d(const lie_lie_vis *v, const uint32_t *blockers, int nb, lie
     const float wx = pv->wx, wy = pv->wy, wz = pv->wz, kx = pv->kx, ky = pv->ky, kz = pv->kz;
     const float D = pv->D, hi = pv->hi, end = pv->end;
     const float s_lo = ls->smin, s_hi = ls->smax, t_lo = ls->tmin, t_hi = ls->tmax;
+    const float s_abs = lie_maxf(fabsf(s_lo), fabsf(s_hi)), t_abs = lie_maxf(fabsf(t_lo), fabsf(t_hi));
     uint32_t *restrict kind = kind_out;
 #pragma omp simd
     for (int j = 0; j < nb; j++) {
@@ -311,11 +312,27 @@ static void setup_2d(const lie_lie_vis *v, const uint32_t *blockers, int nb, lie
         W[W_E0 + 0][j] = e00, W[W_E0 + 1][j] = e0s, W[W_E0 + 2][j] = e0t;
         W[W_E1 + 0][j] = e10, W[W_E1 + 1][j] = e1s, W[W_E1 + 2][j] = e1t;
         W[W_E2 + 0][j] = e20, W[W_E2 + 1][j] = e2s, W[W_E2 + 2][j] = e2t;
-        W[W_G + 0][j] = sh * (hi * n0 - D * h), W[W_G + 1][j] = sh * hi * nu, W[W_G + 2][j] = sh * hi * nv;
-        W[W_G2 + 0][j] = sh * (n0 - h), W[W_G2 + 1][j] = sh * nu, W[W_G2 + 2][j] = sh * nv;
+
         int none = (lmax < 0.0f) | (lmin > end) | (det == 0.0f); /* behind o, unreached, edge-on */
         int reaches = lmax >= hi;
-        kind[j] = (none ? B_NONE : reaches ? B_REACHES : all ? B_ALL : B_CONE) | (h < 0.0f ? B_FRONT : 0);
+        /* A blocker reaching the plane whose depth forms keep one sign over
+         * the samples' box (a column beside, not under, the light): g >= 0
+         * throughout makes it a plain cone; g < 0 and g2 <= 0 throughout,
+         * nothing.  The margin covers rounding, as in the corner test. */
+        float g0 = sh * (hi * n0 - D * h), gu = sh * hi * nu, gv = sh * hi * nv;
+        float k0 = sh * (n0 - h), ku = sh * nu, kv = sh * nv;
+        float gs0 = lie_minf(gu * s_lo, gu * s_hi), gs1 = lie_maxf(gu * s_lo, gu * s_hi);
+        float gt0 = lie_minf(gv * t_lo, gv * t_hi), gt1 = lie_maxf(gv * t_lo, gv * t_hi);
+        float ks1 = lie_maxf(ku * s_lo, ku * s_hi), kt1 = lie_maxf(kv * t_lo, kv * t_hi);
+        float gtol = 1e-5f * (fabsf(g0) + fabsf(gu) * s_abs + fabsf(gv) * t_abs);
+        float ktol = 1e-5f * (fabsf(k0) + fabsf(ku) * s_abs + fabsf(kv) * t_abs);
+        int short_all = g0 + gs0 + gt0 > gtol;
+        int reach_none = (g0 + gs1 + gt1 < -gtol) & (k0 + ks1 + kt1 < -ktol);
+        int cone_only = (reaches == 0) | short_all;
+        W[W_G + 0][j] = g0, W[W_G + 1][j] = gu, W[W_G + 2][j] = gv;
+        W[W_G2 + 0][j] = k0, W[W_G2 + 1][j] = ku, W[W_G2 + 2][j] = kv;
+        kind[j] = ((none | (reaches & reach_none)) ? B_NONE : !cone_only ? B_REACHES : all ? B_ALL : B_CONE) |
+                  (h < 0.0f ? B_FRONT : 0);
     }
 }
 
