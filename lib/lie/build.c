@@ -564,19 +564,114 @@ static void expand_instances(const build_ctx *c, worker *w, uint32_t tri, const 
 
 /* ---- sampled blocker lists (§4.1, §4.3.2) ------------------------------ */
 
+/* The pair's sampling: segment i runs from a patch point (Halton bases 2,
+ * 3) to an emitter point (bases 5, 7), each shifted by a hash of the pair. */
+typedef struct pair_sampler {
+    const build_ctx *c;
+    uint32_t tri;
+    const lie_vec3 *V;
+    int two_sided, e;
+    float sp1, sp2, se1, se2;
+} pair_sampler;
+
+/* Segment i, if it counts (it leaves the patch's lit side and, for a
+ * one-sided emitter, reaches its front); ex[] gets the triangles it must
+ * not report (the patch's own and the emitter point's), *n_ex their count. */
+static int pair_segment(const pair_sampler *ps, uint32_t i, lie_vec3 *org, lie_vec3 *dir, float *tnear, float *tfar,
+                        uint32_t ex[2], int *n_ex)
+{
+    const build_ctx *c = ps->c;
+    const lie_scene *s = c->s;
+    const lie_emitter *em = &s->emitters[ps->e];
+    const lie_vec3 *V = ps->V;
+    float b1, b2;
+    lie_sample_triangle(frac_shift(halton(c, 0, i), ps->sp1), frac_shift(halton(c, 1, i), ps->sp2), &b1, &b2);
+    float b0 = 1.0f - b1 - b2;
+    lie_vec3 p = lie_v3_add(lie_v3_add(lie_v3_scale(V[0], b0), lie_v3_scale(V[1], b1)), lie_v3_scale(V[2], b2));
+    lie_vec3 q, ne = lie_v3(0, 0, 0);
+    uint32_t target = LIE_NO_HIT;
+    if (em->type == LIE_EMITTER_AREA) {
+        float eb1, eb2;
+        target = lie_emitter_point(s, ps->e, frac_shift(halton(c, 2, i), ps->se1),
+                                   frac_shift(halton(c, 3, i), ps->se2), &q, &ne, &eb1, &eb2);
+    } else if (em->type == LIE_EMITTER_POINT) {
+        q = em->position;
+    } else {
+        q = lie_v3_add(p, lie_v3_scale(em->direction, -c->ray_far));
+    }
+    lie_vec3 d = lie_v3_sub(q, p);
+    lie_vec3 ng = s->tri_ng[ps->tri];
+    float cg = lie_v3_dot(ng, d);
+    if (!(cg > 0.0f) && !(ps->two_sided && cg < 0.0f))
+        return 0;
+    if (em->type == LIE_EMITTER_AREA && !em->double_sided && !(lie_v3_dot(ne, d) < 0.0f))
+        return 0;
+    lie_vec3 side = cg > 0.0f ? ng : lie_v3_scale(ng, -1.0f);
+    if (!lie_shadow_segment(p, side, q, org, dir, tnear, tfar))
+        return 0;
+    ex[0] = ps->tri;
+    ex[1] = target;
+    *n_ex = target == LIE_NO_HIT ? 1 : 2;
+    return 1;
+}
+
+/* After the first round found every segment blocked: are all the segments
+ * up to max_samples blocked too?  Any-hit queries, stopping at the first
+ * segment that is not. */
+static int all_blocked_to_max(const pair_sampler *ps, uint32_t from, worker *w)
+{
+    const build_ctx *c = ps->c;
+    for (uint32_t i = from; i < c->p->max_samples; i++) {
+        lie_vec3 org, dir;
+        float tnear, tfar;
+        uint32_t ex[2];
+        int n_ex;
+        if (!pair_segment(ps, i, &org, &dir, &tnear, &tfar, ex, &n_ex))
+            continue;
+        w->st.segments++;
+        if (!lie_rt_any_hit(c->rt, org, dir, tnear, tfar, ex, n_ex))
+            return 0;
+    }
+    return 1;
+}
+
 /* Classify one patch–emitter pair by sampling segments.  Leaves the sorted
- * unique blocker list in w->hits[0..*n_list). */
+ * unique blocker list in w->hits[0..*n_list).
+ *
+ * Rounds of segments, doubling while a round finds a blocker the earlier
+ * ones missed (§4.3.2), up to max_samples.  Sampling stops early when the
+ * outcome can no longer change; only the informational quality and count
+ * of such nodes then differ from sampling on (formats/lie-cache.md):
+ * - the first round blocked every segment: any-hit queries for the rest
+ *   either find them all blocked (occluded, quality = max_samples) or
+ *   meet a free one, and the rounds go on as if the probe had not been;
+ * - the pair is partial (some segment blocked, some not) and its list is
+ *   already past what decides the node: past max_blockers where it will
+ *   split (the emitter cannot put more than complex_cap of its own
+ *   triangles in a list), past complex_cap where it cannot split; the
+ *   list is not stored then, so it is not expanded to whole instances. */
 static lie_class sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch_path path,
                              const lie_vec3 V[3], int two_sided, int e, float eps, uint32_t *quality,
                              size_t *n_list)
 {
     const lie_scene *s = c->s;
     const lie_emitter *em = &s->emitters[e];
-    lie_vec3 ng = s->tri_ng[tri];
     uint64_t h = lie_hash_u64x4(tri, path.digits, (uint64_t)path.depth, (uint64_t)e);
-    float sp1 = lie_hash_to_unit(h), sp2 = lie_hash_to_unit(h << 24);
     uint64_t h2 = lie_hash_u64x4(h, 0x656d6974ull, 0, 0);
-    float se1 = lie_hash_to_unit(h2), se2 = lie_hash_to_unit(h2 << 24);
+    const pair_sampler ps = {c,
+                             tri,
+                             V,
+                             two_sided,
+                             e,
+                             lie_hash_to_unit(h),
+                             lie_hash_to_unit(h << 24),
+                             lie_hash_to_unit(h2),
+                             lie_hash_to_unit(h2 << 24)};
+    float area = s->tri_area[tri] / (float)(1u << (2 * (path.depth < 15 ? path.depth : 15)));
+    const int can_split = area > c->min_area && path.depth < LIE_PATCH_MAX_DEPTH;
+    /* the list length past which this node's class is settled, once partial */
+    const size_t settled = can_split ? (em->n_tris <= c->p->complex_cap ? c->p->max_blockers : SIZE_MAX)
+                                     : c->p->complex_cap;
     uint32_t total = 0, round_n = c->p->samples;
     uint64_t valid = 0, blocked = 0;
     size_t known = 0; /* distinct blockers after the previous round */
@@ -598,40 +693,15 @@ static lie_class sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_pa
     const uint32_t id = w->stamp_id;
     for (;;) {
         for (uint32_t i = total; i < total + round_n; i++) {
-            /* patch point: Halton (2, 3); emitter point: Halton (5, 7);
-             * each shifted by a hash of the pair */
-            float b1, b2;
-            lie_sample_triangle(frac_shift(halton(c, 0, i), sp1), frac_shift(halton(c, 1, i), sp2),
-                                &b1, &b2);
-            float b0 = 1.0f - b1 - b2;
-            lie_vec3 p = lie_v3_add(lie_v3_add(lie_v3_scale(V[0], b0), lie_v3_scale(V[1], b1)),
-                                    lie_v3_scale(V[2], b2));
-            lie_vec3 q, ne = lie_v3(0, 0, 0);
-            uint32_t target = LIE_NO_HIT;
-            if (em->type == LIE_EMITTER_AREA) {
-                float eb1, eb2;
-                target = lie_emitter_point(s, e, frac_shift(halton(c, 2, i), se1),
-                                           frac_shift(halton(c, 3, i), se2), &q, &ne, &eb1, &eb2);
-            } else if (em->type == LIE_EMITTER_POINT) {
-                q = em->position;
-            } else {
-                q = lie_v3_add(p, lie_v3_scale(em->direction, -c->ray_far));
-            }
-            lie_vec3 d = lie_v3_sub(q, p);
-            float cg = lie_v3_dot(ng, d);
-            if (!(cg > 0.0f) && !(two_sided && cg < 0.0f))
-                continue;
-            if (em->type == LIE_EMITTER_AREA && !em->double_sided && !(lie_v3_dot(ne, d) < 0.0f))
-                continue;
-            lie_vec3 side = cg > 0.0f ? ng : lie_v3_scale(ng, -1.0f);
             lie_vec3 org, dir;
             float tnear, tfar;
-            if (!lie_shadow_segment(p, side, q, &org, &dir, &tnear, &tfar))
+            uint32_t ex[2];
+            int n_ex;
+            if (!pair_segment(&ps, i, &org, &dir, &tnear, &tfar, ex, &n_ex))
                 continue;
-            uint32_t ex[2] = {tri, target};
             size_t before = w->n_hits;
-            if (lie_rt_all_hits(c->rt, org, dir, tnear, tfar, ex, target == LIE_NO_HIT ? 1 : 2, &w->hits,
-                                &w->n_hits, &w->cap_hits) != LIE_OK) {
+            if (lie_rt_all_hits(c->rt, org, dir, tnear, tfar, ex, n_ex, &w->hits, &w->n_hits, &w->cap_hits) !=
+                LIE_OK) {
                 w->nomem = 1;
                 return LIE_CLASS_VISIBLE;
             }
@@ -655,6 +725,16 @@ static lie_class sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_pa
         known = w->n_hits;
         if (total >= c->p->max_samples)
             break;
+        if (blocked > 0 && blocked < valid && w->n_hits > settled) {
+            *quality = total; /* partial, and the list already decides the node */
+            *n_list = w->n_hits;
+            return LIE_CLASS_PARTIAL;
+        }
+        if (total == c->p->samples && valid > 0 && blocked == valid && all_blocked_to_max(&ps, total, w)) {
+            *quality = c->p->max_samples;
+            *n_list = w->n_hits;
+            return LIE_CLASS_OCCLUDED;
+        }
         /* §4.3.2: keep doubling while a round finds a blocker the earlier
          * rounds missed */
         if (!found_new && w->n_hits > 0)

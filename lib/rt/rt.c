@@ -27,7 +27,7 @@ static void on_embree_error(void *user, enum RTCError code, const char *str)
 
 /* Query modes carried in an extended intersect context (first member is
  * Embree's, so the filter can cast back). */
-enum { QUERY_CLOSEST = 0, QUERY_CULL = 1, QUERY_ALL = 2 };
+enum { QUERY_CLOSEST = 0, QUERY_CULL = 1, QUERY_ALL = 2, QUERY_ANY = 3 };
 
 typedef struct query_ctx {
     struct RTCIntersectContext ctx;
@@ -38,6 +38,7 @@ typedef struct query_ctx {
     uint32_t **out;
     size_t *n, *cap;
     int nomem;
+    int found;           /* QUERY_ANY: a hit not excluded was accepted */
 } query_ctx;
 
 /* Embree's RTCRayN/RTCHitN accessors are C++ only; in C the layouts are
@@ -93,12 +94,21 @@ static void intersect_filter(const struct RTCFilterFunctionNArguments *args)
                 args->valid[i] = 0; /* back face of a single-sided surface */
             continue;
         }
-        /* QUERY_ALL: record and reject, so traversal continues past it. */
-        args->valid[i] = 0;
         int skip = 0;
         for (int k = 0; k < q->n_exclude; k++)
             if (q->exclude[k] == prim)
                 skip = 1;
+        if (q->mode == QUERY_ANY) {
+            /* accept the first hit not excluded: the segment is blocked,
+             * and the shortened ray ends traversal soon */
+            if (skip)
+                args->valid[i] = 0;
+            else
+                q->found = 1;
+            continue;
+        }
+        /* QUERY_ALL: record and reject, so traversal continues past it. */
+        args->valid[i] = 0;
         if (skip || q->nomem)
             continue;
         if (*q->n == *q->cap) {
@@ -363,27 +373,45 @@ void lie_rt_occluded_batch(const lie_rt *rt, lie_ray_batch *b, lie_ray_mode mode
     }
 }
 
+/* A segment query whose filter (intersect_filter) does the work. */
+static void run_query(const lie_rt *rt, query_ctx *q, lie_vec3 org, lie_vec3 dir, float tnear, float tfar)
+{
+    rtcInitIntersectContext(&q->ctx);
+    q->rt = rt;
+    struct RTCRayHit rh;
+    init_ray(&rh.ray, org, dir, tnear, tfar);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(rt->scene, &q->ctx, &rh);
+}
+
 lie_status lie_rt_all_hits(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, float tfar,
                            const uint32_t *exclude, int n_exclude, uint32_t **out, size_t *n,
                            size_t *cap)
 {
     query_ctx q;
     memset(&q, 0, sizeof q);
-    rtcInitIntersectContext(&q.ctx);
     q.mode = QUERY_ALL;
-    q.rt = rt;
     q.exclude = exclude;
     q.n_exclude = n_exclude;
     q.out = out;
     q.n = n;
     q.cap = cap;
-    struct RTCRayHit rh;
-    init_ray(&rh.ray, org, dir, tnear, tfar);
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(rt->scene, &q.ctx, &rh);
+    run_query(rt, &q, org, dir, tnear, tfar);
     return q.nomem ? LIE_ERR_NOMEM : LIE_OK;
+}
+
+int lie_rt_any_hit(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, float tfar, const uint32_t *exclude,
+                   int n_exclude)
+{
+    query_ctx q;
+    memset(&q, 0, sizeof q);
+    q.mode = QUERY_ANY;
+    q.exclude = exclude;
+    q.n_exclude = n_exclude;
+    run_query(rt, &q, org, dir, tnear, tfar);
+    return q.found;
 }
 
 typedef struct box_query {

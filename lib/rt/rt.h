@@ -70,6 +70,12 @@ lie_status lie_rt_all_hits(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float t
                            const uint32_t *exclude, int n_exclude, uint32_t **out, size_t *n,
                            size_t *cap);
 
+/* 1 if some triangle not in `exclude` meets the segment [tnear, tfar]:
+ * exactly when lie_rt_all_hits would report one (the same triangle tests
+ * and holes), found with far less traversal. */
+int lie_rt_any_hit(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, float tfar, const uint32_t *exclude,
+                   int n_exclude);
+
 /* Calls fn(ctx, tri) for every triangle whose bounding box overlaps `box`
  * (each at most once per call is not guaranteed: callers dedupe). */
 typedef void (*lie_rt_box_fn)(void *ctx, uint32_t tri);
