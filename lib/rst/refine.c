@@ -1,5 +1,6 @@
 /* Exact refinement of ray-segment-tree answers: the hull of a flagged
- * node's patch and emitter against the edit's boxes. */
+ * unit root's patch and emitter against the edit's boxes, then down its
+ * patch tree while the hulls meet them. */
 #include "lie/shaft.h"
 #include "rst/rst.h"
 
@@ -18,7 +19,7 @@ typedef struct refine_ctx {
 static void refine_node(refine_ctx *c, uint32_t node, uint32_t tri, lie_patch_path path, int e)
 {
     if (!c->flags[node])
-        return; /* children's shafts lie inside: none of them was flagged either */
+        return;
     lie_vec3 V[3];
     lie_patch_world(path, &c->s->tri_p[3 * (size_t)tri], V);
     int n = lie_pair_hull_points(c->s, tri, V, e, c->hull);
@@ -32,13 +33,16 @@ static void refine_node(refine_ctx *c, uint32_t node, uint32_t tri, lie_patch_pa
         meets = lie_hull_meets_hull(c->hull, n, corners, 8, tol);
     }
     if (!meets) {
-        c->flags[node] = 0;
+        c->flags[node] = 0; /* nor can its children's segments, all among its own */
         c->cleared++;
+        return;
     }
     const lie_pnode *x = &c->env->nodes[node];
     if (x->child)
-        for (uint32_t k = 0; k < 4; k++)
+        for (uint32_t k = 0; k < 4; k++) {
+            c->flags[x->child + k] = 1; /* a candidate, as its parent is */
             refine_node(c, x->child + k, tri, lie_patch_child(path, (int)k), e);
+        }
 }
 
 uint64_t lie_rst_refine(const lie_scene *s, const lie_env *env, const lie_box3 *boxes, int n_boxes, uint8_t *flags)
@@ -54,4 +58,21 @@ uint64_t lie_rst_refine(const lie_scene *s, const lie_env *env, const lie_box3 *
             refine_node(&c, env->root[(size_t)t * (size_t)env->n_emitters + (size_t)e], t, lie_patch_root(), e);
     free(c.hull);
     return c.cleared;
+}
+
+static void spread_node(const lie_env *env, uint32_t node, uint8_t *flags)
+{
+    const lie_pnode *x = &env->nodes[node];
+    if (!flags[node] || !x->child)
+        return;
+    for (uint32_t k = 0; k < 4; k++) {
+        flags[x->child + k] = 1;
+        spread_node(env, x->child + k, flags);
+    }
+}
+
+void lie_rst_spread(const lie_env *env, uint8_t *flags)
+{
+    for (size_t u = 0; u < (size_t)env->n_tris * (size_t)env->n_emitters; u++)
+        spread_node(env, env->root[u], flags);
 }

@@ -360,10 +360,7 @@ static void collect(build_state *bs, uint32_t node, uint32_t tri, lie_patch_path
         bs->cap_items = nc;
     }
     region_item it = {node, tri, path, e};
-    bs->items[bs->n_items++] = it;
-    if (x->child)
-        for (int k = 0; k < 4; k++)
-            collect(bs, x->child + (uint32_t)k, tri, lie_patch_child(path, k), e);
+    bs->items[bs->n_items++] = it; /* a root: lie_rst_refine descends */
 }
 
 void lie_rst_destroy(lie_rst *r)

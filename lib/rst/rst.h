@@ -2,6 +2,9 @@
  *
  * Every node of every patch tree depends on the region of space its
  * segments sweep: the convex hull of the (offset) patch and the emitter.
+ * A child's patch lies in its parent's, so its region lies in its
+ * parent's: the trees hold the regions of the units' roots, and the
+ * patch trees themselves refine an answer (lie_rst_refine).
  * In ray segment space (§5.1) that region is a 5D box: for a pair of
  * parallel planes a = A0 and a = A1 around the scene, a line crossing them
  * at (p, q) and (r, s) and the stretch t of the a axis the segments cover.
@@ -27,7 +30,7 @@ extern "C" {
 typedef struct lie_rst lie_rst;
 
 typedef struct lie_rst_stats {
-    uint64_t regions;      /* inserted (one per patch-tree node that is not unlit) */
+    uint64_t regions;      /* inserted (one per unit whose root is not unlit) */
     uint64_t fallback;     /* regions no axis could parameterise */
     uint64_t tree_nodes;
     uint64_t stored;       /* region copies held in leaves */
@@ -35,25 +38,32 @@ typedef struct lie_rst_stats {
     double seconds;
 } lie_rst_stats;
 
-/* The trees for every node of env over scene s (which env was built for),
+/* The trees for every unit root of env over scene s (which env was built for),
  * regions computed on `threads` workers (0 = all cores); the trees are the
  * same for any thread count. */
 lie_status lie_rst_build(const lie_scene *s, const lie_env *env, int threads, lie_rst **out, lie_rst_stats *stats,
                          lie_error *err);
 void lie_rst_destroy(lie_rst *r);
 
-/* Set flags[n] = 1 for every env node n whose region may meet world box b
- * (flags has env->n_nodes entries; set flags are never cleared).  Returns
- * the number of regions tested. */
+/* Set flags[n] = 1 for every unit root n of env whose region may meet
+ * world box b (flags has env->n_nodes entries; set flags are never
+ * cleared).  Returns the number of regions tested. */
 uint64_t lie_rst_query(const lie_rst *r, lie_box3 b, uint8_t *flags);
 
-/* Tighten flags from lie_rst_query: a 5D box bounds a shaft loosely (long
- * thin shafts most), so each flagged node's hull — the exact region its
- * segments sweep — is tested against the boxes (GJK), and nodes whose hull
- * meets none are unflagged.  s and env are the state the trees were built
- * for.  Returns how many flags were cleared. */
+/* Tighten flags from lie_rst_query and extend them down the patch trees:
+ * a 5D box bounds a shaft loosely (long thin shafts most), so each flagged
+ * root's hull — the exact region its segments sweep — is tested against
+ * the boxes (GJK) and unflagged if it meets none; the children of a node
+ * that stays flagged are flagged and tested in turn.  Afterwards exactly
+ * the nodes whose hull meets a box and whose ancestors' hulls all do are
+ * flagged.  s and env are the state the trees were built for.  Returns how
+ * many flags were cleared. */
 uint64_t lie_rst_refine(const lie_scene *s, const lie_env *env, const lie_box3 *boxes, int n_boxes,
                         uint8_t *flags);
+
+/* Where hulls cannot be tested (lie_rst_refine's scene would not match
+ * env's emitters): flag every node below a flagged one. */
+void lie_rst_spread(const lie_env *env, uint8_t *flags);
 
 #ifdef __cplusplus
 }

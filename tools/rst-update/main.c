@@ -297,7 +297,8 @@ int main(int argc, char **argv)
             lie_rst_query(rst, boxes_acc[i], flags);
     for (uint32_t i = 0; i < cache->env->n_nodes; i++)
         flagged_nodes_5d += flags[i];
-    /* Tighten the trees' answers with each flagged node's exact hull.  The
+    /* Tighten the trees' answers (unit roots) with each flagged root's exact
+     * hull, and carry them down the patch trees while the hulls meet.  The
      * hulls are computed on the edited scene, which is right for every
      * patch and emitter that did not move (the others are rebuilt anyway)
      * as long as emitters kept their indices. */
@@ -307,6 +308,8 @@ int main(int argc, char **argv)
                         cache->emitters[e].first_tri == scene->emitters[e].first_tri;
     if (rst && same_emitters)
         lie_rst_refine(scene, cache->env, boxes_acc, n_acc, flags);
+    else if (rst)
+        lie_rst_spread(cache->env, flags); /* the trees answer for roots; their subtrees go along */
     free(boxes_acc);
     for (uint32_t i = 0; i < cache->env->n_nodes; i++)
         flagged_nodes += flags[i];
@@ -403,7 +406,7 @@ int main(int argc, char **argv)
                     "  ray segment trees: %llu regions (%llu by bounds only), %llu tree nodes, %.1f MB\n"
                     "  units rebuilt (patch or emitter edited): %llu; units flagged: %llu, really changed: %llu "
                     "(precision %.0f%%)\n"
-                    "  patch-tree nodes flagged by the trees %llu, after exact hull tests %llu, recomputed %llu\n"
+                    "  unit roots flagged by the trees %llu; patch-tree nodes flagged by exact hull tests down from them %llu, recomputed %llu\n"
                     "  time: load %.3f s, trees %.3f s, edits %.3f s, queries %.3f s, bvh %.3f s, update %.3f s, write %.3f s\n",
                     prog, input, n_files, n_files == 1 ? "" : "s", n_units, scene->n_tris, scene->n_emitters,
                     (unsigned long long)rs.regions, (unsigned long long)rs.fallback,
