@@ -54,6 +54,8 @@ typedef struct unit_buf {
     uint32_t n_nodes, cap_nodes;
     uint32_t *pool;
     uint32_t n_pool, cap_pool;
+    int copied;           /* update: every unit is copied whole from the old env at
+                             assembly; nothing is held here but the sizes */
 } unit_buf;
 
 typedef struct worker {
@@ -828,7 +830,7 @@ static lie_class conservative_pair(const build_ctx *c, worker *w, uint32_t tri, 
     return w->n_hits ? LIE_CLASS_PARTIAL : LIE_CLASS_VISIBLE;
 }
 
-static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t n_tris, int n_emitters);
+static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t n_tris, int n_emitters, const int32_t *old_unit);
 
 /* ---- the patch tree of one unit ----------------------------------------- */
 
@@ -988,6 +990,36 @@ static void copy_node(const lie_env *old, uint32_t from, worker *w, unit_buf *u,
     u->nodes[idx] = x;
 }
 
+/* The nodes and pool entries of old node `from` and its subtree. */
+static void subtree_size(const lie_env *old, uint32_t from, uint32_t *n_nodes, uint32_t *n_pool)
+{
+    const lie_pnode *x = &old->nodes[from];
+    ++*n_nodes;
+    if (x->child)
+        for (uint32_t k = 0; k < 4; k++)
+            subtree_size(old, x->child + k, n_nodes, n_pool);
+    else if (x->cls == LIE_CLASS_PARTIAL)
+        *n_pool += x->count;
+}
+
+/* An update's triangle whose every unit continues an old one that no edit
+ * reached: it is copied at assembly, straight into the new arrays. */
+static int copied_whole(const build_ctx *c, uint32_t tri, unit_buf *u)
+{
+    size_t ne = (size_t)c->s->n_emitters;
+    if (!c->old_unit || c->tri_mask)
+        return 0;
+    for (size_t e = 0; e < ne; e++) {
+        int32_t ou = c->old_unit[(size_t)tri * ne + e];
+        if (ou < 0 || (c->node_flags && c->node_flags[c->old->root[ou]]))
+            return 0;
+    }
+    for (size_t e = 0; e < ne; e++)
+        subtree_size(c->old, c->old->root[c->old_unit[(size_t)tri * ne + e]], &u->n_nodes, &u->n_pool);
+    u->copied = 1;
+    return 1;
+}
+
 static void build_triangle(void *ctx, size_t item, int worker_id)
 {
     build_ctx *c = ctx;
@@ -996,6 +1028,8 @@ static void build_triangle(void *ctx, size_t item, int worker_id)
     unit_buf *u = &c->out[item];
     const lie_scene *s = c->s;
     size_t ne = (size_t)s->n_emitters;
+    if (copied_whole(c, tri, u))
+        return;
     u->roots = malloc(sizeof *u->roots * (ne + 1));
     if (!u->roots) {
         w->nomem = 1;
@@ -1234,7 +1268,7 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
             stats_merge(stats, &c.workers[i].st);
     }
     if (st == LIE_OK)
-        st = assemble(env, c.out, s->n_tris, s->n_emitters);
+        st = assemble(env, c.out, s->n_tris, s->n_emitters, old_unit);
     for (uint32_t t = 0; c.out && t < s->n_tris; t++) {
         free(c.out[t].roots);
         free(c.out[t].nodes);
@@ -1256,8 +1290,33 @@ void lie_env_destroy(lie_env *env)
     free(env);
 }
 
-/* Concatenate per-triangle unit buffers into env's flat arrays. */
-static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t n_tris, int n_emitters)
+/* Copy old node `from` and its subtree to node idx of the new arrays, in
+ * the order copy_node gives (children appended at next_node, lists at
+ * next_pool, as their nodes are visited). */
+static void copy_direct(const lie_env *old, uint32_t from, lie_pnode *nd, uint32_t *pl, uint32_t idx,
+                        uint32_t *next_node, uint32_t *next_pool)
+{
+    lie_pnode x = old->nodes[from];
+    if (x.child) {
+        uint32_t first = *next_node, oc = x.child;
+        *next_node += 4;
+        x.child = first;
+        nd[idx] = x;
+        for (uint32_t k = 0; k < 4; k++)
+            copy_direct(old, oc + k, nd, pl, first + k, next_node, next_pool);
+        return;
+    }
+    if (x.cls == LIE_CLASS_PARTIAL) {
+        memcpy(pl + *next_pool, old->pool + x.list, sizeof *pl * x.count);
+        x.list = *next_pool;
+        *next_pool += x.count;
+    }
+    nd[idx] = x;
+}
+
+/* Concatenate per-triangle unit buffers into env's flat arrays (copied
+ * triangles straight from env's old arrays, which are freed last). */
+static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t n_tris, int n_emitters, const int32_t *old_unit)
 {
     uint64_t nodes = 0, pool = 0;
     for (uint32_t t = 0; t < n_tris; t++) {
@@ -1278,6 +1337,18 @@ static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t n_tris, int n_
     uint32_t nb = 0, pb = 0;
     for (uint32_t t = 0; t < n_tris; t++) {
         const unit_buf *u = &bufs[t];
+        if (u->copied) {
+            uint32_t next_node = nb, next_pool = pb;
+            for (int e = 0; e < n_emitters; e++) {
+                size_t unit = (size_t)t * (size_t)n_emitters + (size_t)e;
+                uint32_t idx = next_node++;
+                root[unit] = idx;
+                copy_direct(env, env->root[old_unit[unit]], nd, pl, idx, &next_node, &next_pool);
+            }
+            nb += u->n_nodes;
+            pb += u->n_pool;
+            continue;
+        }
         for (int e = 0; e < n_emitters; e++)
             root[(size_t)t * (size_t)n_emitters + (size_t)e] = nb + u->roots[e];
         for (uint32_t i = 0; i < u->n_nodes; i++) {
