@@ -723,6 +723,9 @@ struct PrimPlan {
     Accessor pos, nrm, uv, uv1, col, idx;
     bool has_nrm, has_uv, has_uv1, has_col, has_idx;
     size_t n_verts, n_idx, n_tris;
+    /* morph targets: position and normal displacements (index -1: none) */
+    std::vector<Accessor> tpos, tnrm;
+    std::vector<int> tpos_at, tnrm_at;
 };
 
 int attribute(const tinygltf::Primitive &p, const char *name)
@@ -837,6 +840,41 @@ PrimPlan plan_primitive(const tinygltf::Model &m, int mi, int pi, lie_scene *s)
             fail(LIE_ERR_FORMAT, "%s: COLOR_0 has %zu elements, POSITION %zu", what.c_str(), pl.col.count,
                  pl.n_verts);
     }
+    /* Morph targets (glTF 2.0 §3.7.2.2): POSITION and NORMAL displacements
+     * are applied with the default weights; TANGENT and others are not used. */
+    for (size_t t = 0; t < p.targets.size(); t++) {
+        std::string tw = what + " target " + std::to_string(t);
+        Accessor none{};
+        pl.tpos.push_back(none);
+        pl.tnrm.push_back(none);
+        pl.tpos_at.push_back(-1);
+        pl.tnrm_at.push_back(-1);
+        auto ip = p.targets[t].find("POSITION");
+        if (ip != p.targets[t].end()) {
+            Accessor a = check_accessor(m, ip->second, tw + " POSITION");
+            if (a.ncomp != 3 || !(a.ctype == TINYGLTF_COMPONENT_TYPE_FLOAT || (quant && small_int(a.ctype))))
+                fail(LIE_ERR_FORMAT, "%s POSITION must be VEC3 FLOAT%s", tw.c_str(),
+                     quant ? " or (KHR_mesh_quantization) BYTE/SHORT" : "");
+            if (a.count != pl.n_verts)
+                fail(LIE_ERR_FORMAT, "%s POSITION has %zu elements, POSITION %zu", tw.c_str(), a.count,
+                     pl.n_verts);
+            pl.tpos.back() = a;
+            pl.tpos_at.back() = ip->second;
+        }
+        auto in = p.targets[t].find("NORMAL");
+        if (in != p.targets[t].end()) {
+            Accessor a = check_accessor(m, in->second, tw + " NORMAL");
+            if (a.ncomp != 3 || !(a.ctype == TINYGLTF_COMPONENT_TYPE_FLOAT ||
+                                  (quant && a.normalized &&
+                                   (a.ctype == TINYGLTF_COMPONENT_TYPE_BYTE || a.ctype == TINYGLTF_COMPONENT_TYPE_SHORT))))
+                fail(LIE_ERR_FORMAT, "%s NORMAL must be VEC3 FLOAT%s", tw.c_str(),
+                     quant ? " or (KHR_mesh_quantization) normalized BYTE/SHORT" : "");
+            if (a.count != pl.n_verts)
+                fail(LIE_ERR_FORMAT, "%s NORMAL has %zu elements, POSITION %zu", tw.c_str(), a.count, pl.n_verts);
+            pl.tnrm.back() = a;
+            pl.tnrm_at.back() = in->second;
+        }
+    }
     if ((pl.has_idx = p.indices >= 0)) {
         pl.idx = check_accessor(m, p.indices, what + " indices");
         bool ok = pl.idx.ncomp == 1 && (pl.idx.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
@@ -921,6 +959,52 @@ void read_primitive(const PrimPlan &pl, int mi, int pi, lie_primitive *out)
         }
     }
     out->n_tris = uint32_t(pl.n_tris);
+}
+
+/* Add the weighted morph target displacements to a read primitive. */
+void apply_morph(const PrimPlan &pl, const std::vector<double> &w, int mi, int pi, lie_primitive *out)
+{
+    std::string what = "mesh " + std::to_string(mi) + " primitive " + std::to_string(pi);
+    std::vector<float> d;
+    bool moved = false;
+    for (size_t t = 0; t < pl.tpos.size() && t < w.size(); t++) {
+        if (w[t] == 0.0)
+            continue;
+        d.resize(pl.n_verts * 3);
+        moved = moved || pl.tpos_at[t] >= 0;
+        for (int k = 0; k < 2; k++) {
+            float *dst = k ? out->nrm : out->pos;
+            if ((k ? pl.tnrm_at[t] : pl.tpos_at[t]) < 0 || !dst)
+                continue;
+            read_floats(k ? pl.tnrm[t] : pl.tpos[t], d.data(),
+                        what + " target " + std::to_string(t) + (k ? " NORMAL" : " POSITION"));
+            for (size_t i = 0; i < d.size(); i++)
+                dst[i] = float(double(dst[i]) + w[t] * double(d[i]));
+        }
+    }
+    for (size_t i = 0; moved && i < pl.n_verts * 3; i++)
+        if (!std::isfinite(out->pos[i]))
+            fail(LIE_ERR_FORMAT, "%s: a morphed position is not a finite number", what.c_str());
+}
+
+/* The weights a node's instance of mesh mi is drawn with: the node's, else
+ * the mesh's, else zeros (§3.7.2.2); checked against the target count. */
+std::vector<double> morph_weights(const tinygltf::Model &m, size_t mi, const std::vector<double> *node_w,
+                                  const std::string &w)
+{
+    const tinygltf::Mesh &g = m.meshes[mi];
+    size_t nt = g.primitives.empty() ? 0 : g.primitives[0].targets.size();
+    for (size_t pi = 1; pi < g.primitives.size(); pi++)
+        if (g.primitives[pi].targets.size() != nt)
+            fail(LIE_ERR_FORMAT, "mesh %zu: primitives have %zu and %zu morph targets (they must agree)", mi, nt,
+                 g.primitives[pi].targets.size());
+    const std::vector<double> &src = node_w && !node_w->empty() ? *node_w : g.weights;
+    if (!src.empty() && src.size() != nt)
+        fail(LIE_ERR_FORMAT, "%s: %zu morph weights for %zu targets", w.c_str(), src.size(), nt);
+    for (double x : src)
+        if (!std::isfinite(x))
+            fail(LIE_ERR_FORMAT, "%s: a morph weight is not a finite number", w.c_str());
+    return src.empty() ? std::vector<double>(nt, 0.0) : src;
 }
 
 /* ---- textures and materials -------------------------------------------- */
@@ -1436,10 +1520,37 @@ void import_document(const tinygltf::Model &m, lie_scene *s, const lie_scene_opt
         stack.insert(stack.end(), n.children, n.children + n.n_children);
     }
 
-    s->meshes = alloc_array<lie_mesh>(m.meshes.size());
-    s->n_meshes = int(m.meshes.size());
-    for (size_t mi = 0; mi < m.meshes.size(); mi++) {
-        lie_mesh &mesh = s->meshes[mi];
+    /* A node whose morph weights differ from its mesh's gets its own copy
+     * of the mesh, morphed with them; the copies follow the file's meshes. */
+    std::vector<std::pair<int, int>> copies; /* (node, file mesh) */
+    std::vector<std::vector<double>> mesh_w(m.meshes.size());
+    for (size_t mi = 0; mi < m.meshes.size(); mi++)
+        mesh_w[mi] = morph_weights(m, mi, NULL, "mesh " + std::to_string(mi));
+    for (int i = 0; i < s->n_nodes; i++) {
+        const tinygltf::Node &g = m.nodes[size_t(i)];
+        int mi = s->nodes[i].mesh;
+        if (mi < 0 || g.weights.empty())
+            continue;
+        if (morph_weights(m, size_t(mi), &g.weights, "node " + std::to_string(i)) == mesh_w[size_t(mi)])
+            continue;
+        copies.push_back({i, mi});
+        for (const PrimPlan &pl : plans[size_t(mi)])
+            verts += pl.n_verts;
+        if (verts > limit)
+            fail(LIE_ERR_LIMIT, "morph weights per node make more than %llu vertices", (unsigned long long)limit);
+    }
+
+    size_t n_meshes = m.meshes.size() + copies.size();
+    if (n_meshes > size_t(INT_MAX))
+        fail(LIE_ERR_LIMIT, "too many meshes");
+    s->meshes = alloc_array<lie_mesh>(n_meshes);
+    s->n_meshes = int(n_meshes);
+    for (size_t k = 0; k < n_meshes; k++) {
+        size_t mi = k < m.meshes.size() ? k : size_t(copies[k - m.meshes.size()].second);
+        std::vector<double> w = k < m.meshes.size()
+                                    ? mesh_w[mi]
+                                    : m.nodes[size_t(copies[k - m.meshes.size()].first)].weights;
+        lie_mesh &mesh = s->meshes[k];
         mesh.name = dup_name(m.meshes[mi].name);
         mesh.prims = alloc_array<lie_primitive>(plans[mi].size());
         mesh.n_prims = int(plans[mi].size());
@@ -1448,9 +1559,13 @@ void import_document(const tinygltf::Model &m, lie_scene *s, const lie_scene_opt
             lie_primitive &p = mesh.prims[pi];
             int mat = m.meshes[mi].primitives[pi].material;
             p.material = mat < 0 ? -1 : mat;
-            if (!pl.skip) /* points and lines stay as empty primitives: indices keep the file's */
+            if (!pl.skip) { /* points and lines stay as empty primitives: indices keep the file's */
                 read_primitive(pl, int(mi), int(pi), &p);
+                apply_morph(pl, w, int(mi), int(pi), &p);
+            }
         }
+        if (k >= m.meshes.size())
+            s->nodes[copies[k - m.meshes.size()].first].mesh = int(k);
     }
 }
 

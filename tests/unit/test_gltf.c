@@ -597,6 +597,35 @@ static void test_gltf_sparse_accessor_substitutes_values(void **state)
     lie_scene_destroy(s);
 }
 
+/* Morph targets are applied with the default weights: the node's, else the
+ * mesh's; a node whose weights differ from its mesh's gets a morphed copy. */
+static void test_gltf_morph_targets_applied_with_default_weights(void **state)
+{
+    (void)state;
+    lie_scene *s = load("morph.gltf");
+    assert_int_equal(s->n_meshes, 3); /* Sheet, and copies for Full and Rest */
+    assert_int_equal(s->nodes[0].mesh, 0);
+    assert_int_equal(s->nodes[1].mesh, 1);
+    assert_int_equal(s->nodes[2].mesh, 2);
+    assert_int_equal(s->n_tris, 6);
+    /* Half: weights [0.5, 0], every vertex lifted by 0.5 (a sparse target) */
+    for (int k = 0; k < 6; k++)
+        assert_near(s->tri_p[k].z, 0.5, 0);
+    assert_vec3(s->tri_p[5], 1, 1, 0.5);
+    /* Full: [1, 1], lifted by 1, vertex 3 pushed by 1 in x, its normal
+     * (0, 0, 1) + (1, 0, -1) = +x */
+    for (int k = 6; k < 12; k++)
+        assert_near(s->tri_p[k].z, 1, 0);
+    assert_vec3(s->tri_p[11], 3 + 2, 1, 1);
+    assert_vec3(s->tri_n[11], 1, 0, 0);
+    assert_vec3(s->tri_n[6], 0, 0, 1);
+    /* Rest: [0, 0], as the file's vertices */
+    assert_vec3(s->tri_p[12], 6, 0, 0);
+    assert_vec3(s->tri_p[17], 7, 1, 0);
+    lie_scene_destroy(s);
+    expect_error("morph_bad.gltf", LIE_ERR_FORMAT, "node 1: 1 morph weights for 2 targets");
+}
+
 /* ---- containers and files ----------------------------------------------- */
 
 static void test_gltf_glb_loads_with_embedded_image(void **state)
@@ -855,6 +884,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_texture_sample_wraps_and_blends),
         cmocka_unit_test(test_gltf_lights_and_cameras_read_with_defaults),
         cmocka_unit_test(test_gltf_sparse_accessor_substitutes_values),
+        cmocka_unit_test(test_gltf_morph_targets_applied_with_default_weights),
         cmocka_unit_test(test_gltf_glb_loads_with_embedded_image),
         cmocka_unit_test(test_gltf_format_detected_by_content_not_extension),
         cmocka_unit_test(test_gltf_external_bin_and_image_load),

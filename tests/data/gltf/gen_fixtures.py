@@ -636,7 +636,41 @@ def bent_light():
     write("bent_light.gltf", d.embedded())
 
 
+def morph():
+    """The quad with two morph targets: target 0 lifts every vertex by 1 in
+    z (a sparse accessor with no bufferView), target 1 moves vertex 3 by 1 in
+    x and tilts its normal.  The mesh's weights are [0.5, 0]; node "Half"
+    uses them, node "Full" has its own [1, 1], node "Rest" [0, 0].  Also
+    morph_bad.gltf: a node with one weight for the two targets."""
+    d = Doc()
+    pos = d.positions(QUAD)
+    nrm = d.accessor(f32(*[0, 0, 1] * 4), FLOAT, "VEC3", 4)
+    idx = d.indices([0, 1, 2, 2, 1, 3])
+    lift_idx = d.view(struct.pack("<4H", 0, 1, 2, 3))
+    lift_val = d.view(f32(*[0, 0, 1] * 4))
+    d.g["accessors"].append({"componentType": FLOAT, "count": 4, "type": "VEC3",
+                             "sparse": {"count": 4, "indices": {"bufferView": lift_idx, "componentType": USHORT},
+                                        "values": {"bufferView": lift_val}}})
+    lift = len(d.g["accessors"]) - 1
+    push = d.accessor(f32(*([0, 0, 0] * 3 + [1, 0, 0])), FLOAT, "VEC3", 4, min=[0, 0, 0], max=[1, 0, 0])
+    tilt = d.accessor(f32(*([0, 0, 0] * 3 + [1, 0, -1])), FLOAT, "VEC3", 4)
+    d.g["meshes"] = [{"name": "Sheet", "weights": [0.5, 0],
+                      "primitives": [{"attributes": {"POSITION": pos, "NORMAL": nrm}, "indices": idx,
+                                      "targets": [{"POSITION": lift}, {"POSITION": push, "NORMAL": tilt}]}]}]
+    d.g["nodes"] = [{"name": "Half", "mesh": 0},
+                    {"name": "Full", "mesh": 0, "weights": [1, 1], "translation": [3, 0, 0]},
+                    {"name": "Rest", "mesh": 0, "weights": [0, 0], "translation": [6, 0, 0]}]
+    d.g["scenes"] = [{"nodes": [0, 1, 2]}]
+    d.g["scene"] = 0
+    g = d.embedded()
+    write("morph.gltf", g)
+    bad = json.loads(json.dumps(g))
+    bad["nodes"][1]["weights"] = [1]
+    write("morph_bad.gltf", bad)
+
+
 def main():
+    morph()
     texcoord1()
     bent_light()
     alpha_mask()
