@@ -225,6 +225,25 @@ static _Atomic int exr_threads;
 
 void lie_exr_set_threads(int threads) { exr_threads = threads > 0 ? threads : 0; }
 
+/* The compression of the files written (lie_exr_set_compression). */
+static _Atomic int exr_compression = EXR_COMPRESSION_ZIP;
+
+static const struct {
+    const char *name;
+    exr_compression_t c;
+} COMPRESSIONS[] = {{"zip", EXR_COMPRESSION_ZIP}, {"zips", EXR_COMPRESSION_ZIPS}, {"piz", EXR_COMPRESSION_PIZ},
+                    {"rle", EXR_COMPRESSION_RLE}, {"none", EXR_COMPRESSION_NONE}};
+
+int lie_exr_set_compression(const char *name)
+{
+    for (size_t k = 0; name && k < sizeof COMPRESSIONS / sizeof *COMPRESSIONS; k++)
+        if (strcmp(name, COMPRESSIONS[k].name) == 0) {
+            exr_compression = (int)COMPRESSIONS[k].c;
+            return 1;
+        }
+    return 0;
+}
+
 typedef struct chunk_out {
     unsigned char *data;
     uint64_t size;
@@ -314,7 +333,7 @@ static lie_status encode_exr(exr_stream *s, const char *path, const lie_frame *f
     rv = exr_add_part(ctx, NULL, EXR_STORAGE_SCANLINE, &part);
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_initialize_required_attr_simple(ctx, part, f->width, f->height,
-                                                 EXR_COMPRESSION_ZIP);
+                                                 (exr_compression_t)exr_compression);
     if (rv == EXR_ERR_SUCCESS && long_names)
         rv = exr_set_longname_support(ctx, 1);
     if (rv != EXR_ERR_SUCCESS) {

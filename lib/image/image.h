@@ -60,7 +60,8 @@ typedef struct lie_attr {
 } lie_attr;
 
 /* EXR: RGB as 32-bit float channels "R","G","B" plus every AOV, ZIP
- * compression, scanline, increasing Y.  Path "-" writes to stdout.
+ * compression (or lie_exr_set_compression's), scanline, increasing Y.
+ * Path "-" writes to stdout.
  * The file is assembled in memory and written atomically.  A channel
  * name used twice, or an attribute clashing with a standard one
  * ("compression", ...), is LIE_ERR_ARG. */
@@ -70,6 +71,11 @@ lie_status lie_exr_write(const char *path, const lie_frame *f, const lie_attr *a
  * bytes written do not depend on it.  Process-wide, like OpenEXR's own
  * global thread count; tools set it from --threads. */
 void lie_exr_set_threads(int threads);
+/* The lossless compression of EXR files written from now on, by name:
+ * zip (the default: 16 scanlines per zlib block), zips (one scanline),
+ * piz (wavelet), rle or none.  Returns 0 for an unknown name (nothing
+ * changes).  Process-wide, like lie_exr_set_threads. */
+int lie_exr_set_compression(const char *name);
 
 /* Read an EXR file written by anyone: every channel as float.  "R","G","B"
  * go to rgb (missing ones are 0); other channels "layer.chan" become AOVs

@@ -57,6 +57,16 @@ expect_rc 1 "unknown camera name"
 expect_one_error_line "lie-render: $S/cornell.gltf: no camera named" "unknown camera: one line"
 expect_no_file "$TMP/c2.exr" "no output for an unknown camera"
 
+# --compression: every codec is lossless, the header names it.
+run "$B/lie-render" "$S/cornell.gltf" --size 32x32 --light-samples 4 -q -o "$TMP/zip.exr"
+for c in zips piz rle none; do
+    run "$B/lie-render" "$S/cornell.gltf" --size 32x32 --light-samples 4 -q --compression $c -o "$TMP/$c.exr"
+    if [ "$rc" -eq 0 ] && "$H/exr-compare" "$TMP/zip.exr" "$TMP/$c.exr" 0 0 >/dev/null 2>&1; then
+        ok "--compression $c: the same pixels as zip"; else not_ok "--compression $c"; sed 's/^/# /' "$TMP/err"; fi
+done
+if [ "$(wc -c <"$TMP/none.exr")" -gt "$(wc -c <"$TMP/zip.exr")" ]; then ok "--compression none writes more bytes than zip"; else
+    not_ok "--compression none: not larger than zip"; fi
+
 # A scene without emitters renders (emission only), with a warning unless -q.
 G="$ROOT/tests/data/gltf"
 run "$B/lie-render" "$G/hierarchy.gltf" --size 8x8 -o "$TMP/dark.exr"

@@ -38,6 +38,7 @@ usage "negative --spp" "$S/cornell.gltf" --spp -3 -o "$TMP/x.exr"
 usage "bad --size" "$S/cornell.gltf" --size 10by10 -o "$TMP/x.exr"
 usage "bad --visibility" "$S/cornell.gltf" --visibility some -o "$TMP/x.exr"
 usage "bad --lie-skip" "$S/cornell.gltf" --lie-skip everything -o "$TMP/x.exr"
+usage "bad --compression" "$S/cornell.gltf" --compression lzma -o "$TMP/x.exr"
 usage "missing -o" "$S/cornell.gltf"
 usage "missing input" -o "$TMP/x.exr"
 usage "missing option value" "$S/cornell.gltf" -o

@@ -49,6 +49,9 @@ static void usage(FILE *fp)
             "                          complexity (the paper's Figure 10 colours), patch\n"
             "                          (a colour per leaf patch); the last two need a cache\n"
             "      --emitter K         complexity and patch layers for emitter K only\n"
+            "      --compression C     EXR compression, all lossless: zip (default), zips, piz,\n"
+            "                          rle (several times faster to write than zip, files a\n"
+            "                          little larger) or none\n"
             "      --exposure EV       PNG exposure in stops (default 0)\n"
             "      --threads N         worker threads (default: all cores)\n"
             "      --allow-external-uris  let the glTF reference files outside its folder\n"
@@ -65,7 +68,7 @@ static int fail(const lie_error *err) { return lie_report_error(prog, err, 1); }
 
 enum {
     OPT_CAMERA = 256, OPT_SIZE, OPT_SPP, OPT_LIGHT_SAMPLES, OPT_PATTERN, OPT_VISIBILITY, OPT_RAYS, OPT_LIE_SKIP,
-    OPT_MAX_DEPTH, OPT_AOV, OPT_EXPOSURE, OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_SCENE,
+    OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_SCENE,
     OPT_EMITTER, OPT_PATH
 };
 
@@ -84,6 +87,7 @@ static const struct option long_opts[] = {
     {"lie-skip", required_argument, NULL, OPT_LIE_SKIP},
     {"max-depth", required_argument, NULL, OPT_MAX_DEPTH},
     {"aov", required_argument, NULL, OPT_AOV},
+    {"compression", required_argument, NULL, OPT_COMPRESSION},
     {"exposure", required_argument, NULL, OPT_EXPOSURE},
     {"threads", required_argument, NULL, OPT_THREADS},
     {"allow-external-uris", no_argument, NULL, OPT_EXTERNAL},
@@ -254,6 +258,10 @@ int main(int argc, char **argv)
             if (!parse_aovs(optarg, &ro.aovs))
                 return usage_error("--aov: expected a list of albedo, normal, depth, complexity, patch, got '%s'",
                                    optarg);
+            break;
+        case OPT_COMPRESSION:
+            if (!lie_exr_set_compression(optarg))
+                return usage_error("--compression: expected zip, zips, piz, rle or none, got '%s'", optarg);
             break;
         case OPT_EXPOSURE:
             if (!lie_parse_float(optarg, -64.0f, 64.0f, &exposure))
