@@ -312,7 +312,6 @@ static void setup_2d(const lie_lie_vis *v, const uint32_t *blockers, int nb, lie
         W[W_E0 + 0][j] = e00, W[W_E0 + 1][j] = e0s, W[W_E0 + 2][j] = e0t;
         W[W_E1 + 0][j] = e10, W[W_E1 + 1][j] = e1s, W[W_E1 + 2][j] = e1t;
         W[W_E2 + 0][j] = e20, W[W_E2 + 1][j] = e2s, W[W_E2 + 2][j] = e2t;
-
         int none = (lmax < 0.0f) | (lmin > end) | (det == 0.0f); /* behind o, unreached, edge-on */
         int reaches = lmax >= hi;
         /* A blocker reaching the plane whose depth forms keep one sign over
