@@ -998,6 +998,8 @@ std::vector<double> morph_weights(const tinygltf::Model &m, size_t mi, const std
         if (g.primitives[pi].targets.size() != nt)
             fail(LIE_ERR_FORMAT, "mesh %zu: primitives have %zu and %zu morph targets (they must agree)", mi, nt,
                  g.primitives[pi].targets.size());
+    if (nt == 0)
+        return std::vector<double>(); /* weights without targets change nothing */
     const std::vector<double> &src = node_w && !node_w->empty() ? *node_w : g.weights;
     if (!src.empty() && src.size() != nt)
         fail(LIE_ERR_FORMAT, "%s: %zu morph weights for %zu targets", w.c_str(), src.size(), nt);
