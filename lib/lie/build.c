@@ -566,6 +566,14 @@ static void expand_instances(const build_ctx *c, worker *w, uint32_t tri, const 
 
 /* ---- sampled blocker lists (§4.1, §4.3.2) ------------------------------ */
 
+/* A patch large enough to split (§4.1.1): the one size test of splits()
+ * and of sample_pair's early stop, which must agree. */
+static int patch_may_split(const build_ctx *c, uint32_t tri, lie_patch_path path)
+{
+    float area = c->s->tri_area[tri] / (float)(1u << (2 * (path.depth < 15 ? path.depth : 15)));
+    return area > c->min_area && path.depth < LIE_PATCH_MAX_DEPTH;
+}
+
 /* The pair's sampling: segment i runs from a patch point (Halton bases 2,
  * 3) to an emitter point (bases 5, 7), each shifted by a hash of the pair. */
 typedef struct pair_sampler {
@@ -669,8 +677,7 @@ static lie_class sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_pa
                              lie_hash_to_unit(h << 24),
                              lie_hash_to_unit(h2),
                              lie_hash_to_unit(h2 << 24)};
-    float area = s->tri_area[tri] / (float)(1u << (2 * (path.depth < 15 ? path.depth : 15)));
-    const int can_split = area > c->min_area && path.depth < LIE_PATCH_MAX_DEPTH;
+    const int can_split = patch_may_split(c, tri, path);
     /* the list length past which this node's class is settled, once partial */
     const size_t settled = can_split ? (em->n_tris <= c->p->complex_cap ? c->p->max_blockers : SIZE_MAX)
                                      : c->p->complex_cap;
@@ -851,9 +858,7 @@ static int splits(const build_ctx *c, uint32_t tri, lie_patch_path path, int e, 
                   size_t n_list)
 {
     const lie_scene *s = c->s;
-    float area = s->tri_area[tri] / (float)(1u << (2 * (path.depth < 15 ? path.depth : 15)));
-    if (!(cls == LIE_CLASS_PARTIAL && n_list > c->p->max_blockers && area > c->min_area &&
-          path.depth < LIE_PATCH_MAX_DEPTH))
+    if (!(cls == LIE_CLASS_PARTIAL && n_list > c->p->max_blockers && patch_may_split(c, tri, path)))
         return 0;
     const lie_emitter *em = &s->emitters[e];
     size_t own = 0;
