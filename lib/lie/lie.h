@@ -17,6 +17,8 @@
 #include "rt/rt.h"
 #include "scene/scene.h"
 
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -161,4 +163,6 @@ static inline const lie_pnode *lie_env_find_leaf_path(const lie_env *env, uint32
 #ifdef __cplusplus
 }
 #endif
+#pragma GCC visibility pop
+
 #endif
