@@ -8,6 +8,7 @@
 #include "lie/lie.h"
 #include "lie/shaft.h"
 
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -39,8 +40,8 @@ lie_status lie_build_params_check(const lie_build_params *p, lie_error *err)
         return lie_error_set(err, LIE_ERR_ARG, NULL, "max-samples must be in samples..%u", 1u << 24);
     if (p->max_blockers > (1u << 20) || p->complex_cap > (1u << 24))
         return lie_error_set(err, LIE_ERR_ARG, NULL, "max-blockers or complex-cap too large");
-    if (!(p->min_patch > 0.0f) || !(p->min_patch <= 1.0f))
-        return lie_error_set(err, LIE_ERR_ARG, NULL, "min-patch must be in (0, 1]");
+    if (!(p->min_patch >= LIE_MIN_PATCH_MIN) || !(p->min_patch <= 1.0f))
+        return lie_error_set(err, LIE_ERR_ARG, NULL, "min-patch must be in [%g, 1]", (double)LIE_MIN_PATCH_MIN);
     if (p->mode != LIE_BLOCKERS_SAMPLED && p->mode != LIE_BLOCKERS_CONSERVATIVE)
         return lie_error_set(err, LIE_ERR_ARG, NULL, "unknown blocker mode");
     return LIE_OK;
@@ -69,6 +70,9 @@ typedef struct worker {
     int cap_hull;
     lie_build_stats st;
     int nomem;
+    int over;                 /* the node budget ran out (nomem is set too, to stop) */
+    atomic_uint_least64_t *nodes_made; /* shared by all workers */
+    uint64_t max_nodes;
 } worker;
 
 typedef struct build_ctx {
@@ -130,6 +134,12 @@ static int32_t memo_find_new(const build_ctx *c, uint32_t tri, lie_patch_path pa
 
 static int push_node(unit_buf *u, worker *w)
 {
+    /* the total only grows, so it passes the budget in some schedule iff
+     * it does in all: the outcome does not depend on the threads */
+    if (atomic_fetch_add_explicit(w->nodes_made, 1, memory_order_relaxed) >= w->max_nodes) {
+        w->over = w->nomem = 1;
+        return -1;
+    }
     if (u->n_nodes == u->cap_nodes) {
         uint32_t nc = u->cap_nodes ? 2 * u->cap_nodes : 8;
         lie_pnode *nn = realloc(u->nodes, sizeof *nn * nc);
@@ -1254,6 +1264,11 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
         threads = lie_cpu_count();
     c.workers = calloc((size_t)threads, sizeof *c.workers);
     c.out = calloc((size_t)s->n_tris + 1, sizeof *c.out);
+    atomic_uint_least64_t nodes_made = 0;
+    for (int i = 0; c.workers && i < threads; i++) {
+        c.workers[i].nodes_made = &nodes_made;
+        c.workers[i].max_nodes = c.p->max_nodes ? c.p->max_nodes : LIE_MAX_NODES_DEFAULT;
+    }
     c.n_halton = c.p->max_samples < HALTON_TABLE_MAX ? c.p->max_samples : HALTON_TABLE_MAX;
     c.halton = malloc(sizeof *c.halton * 4 * (size_t)c.n_halton + 1);
     for (int d = 0; c.halton && d < 4; d++)
@@ -1267,8 +1282,8 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
         st = lie_parallel_for(s->n_tris, threads, build_triangle, &c, progress ? lie_progress_cb : NULL, progress);
     memo_free(&c, n_memo);
     for (int i = 0; c.workers && i < threads; i++) {
-        if (c.workers[i].nomem)
-            st = LIE_ERR_NOMEM;
+        if (c.workers[i].nomem && st != LIE_ERR_LIMIT)
+            st = c.workers[i].over ? LIE_ERR_LIMIT : LIE_ERR_NOMEM;
         if (stats)
             stats_merge(stats, &c.workers[i].st);
     }
@@ -1380,6 +1395,13 @@ static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t n_tris, int n_
     return LIE_OK;
 }
 
+static lie_status budget_error(lie_error *err, const lie_scene *s, const lie_build_params *p)
+{
+    return lie_error_set(err, LIE_ERR_LIMIT, s->path,
+                         "the patch trees need more than %llu nodes (max-nodes): raise min-patch or max-nodes",
+                         (unsigned long long)(p->max_nodes ? p->max_nodes : LIE_MAX_NODES_DEFAULT));
+}
+
 lie_status lie_env_build(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
                          lie_progress *progress, lie_env **out, lie_build_stats *stats, lie_error *err)
 {
@@ -1407,6 +1429,8 @@ lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_
     lie_status st = run_build(env, s, rt, NULL, NULL, tri_mask, p->threads, progress, stats);
     if (st != LIE_OK) {
         lie_env_destroy(env);
+        if (st == LIE_ERR_LIMIT)
+            return budget_error(err, s, p);
         return lie_error_set(err, st, s->path, "building local illumination environments: %s",
                              lie_status_str(st));
     }
@@ -1445,6 +1469,8 @@ lie_status lie_env_update(lie_env *env, const lie_scene *s, const lie_rt *rt, co
     lie_status st = run_build(env, s, rt, old_unit, node_flags, NULL, threads, NULL, stats);
     if (stats)
         stats->seconds = lie_time_now() - t0;
+    if (st == LIE_ERR_LIMIT)
+        return budget_error(err, s, &env->params);
     if (st != LIE_OK)
         return lie_error_set(err, st, s->path, "updating local illumination environments: %s",
                              lie_status_str(st));
