@@ -18,6 +18,8 @@
 #include "rt/rt.h"
 #include "scene/scene.h"
 
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -150,4 +152,6 @@ static inline const lie_pnode *lie_env_find_leaf_path(const lie_env *env, uint32
 #ifdef __cplusplus
 }
 #endif
+#pragma GCC visibility pop
+
 #endif
