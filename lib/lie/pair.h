@@ -7,6 +7,8 @@
 #include "core/core.h"
 #include "scene/scene.h"
 
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -32,4 +34,6 @@ int lie_pair_unlit(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], int tw
 #ifdef __cplusplus
 }
 #endif
+#pragma GCC visibility pop
+
 #endif
