@@ -150,8 +150,10 @@ rm sc/cornell.gltf && mkfifo sc/cornell.gltf
 (cd sc && quick "$B/lie-render" ../sc.lie -q --size 8x8 -o "$T/o.exr")
 expect_fail_line lie-render "cornell.gltf: cannot read a FIFO" "a FIFO as a cache's scene path"
 rm sc/cornell.gltf && ln -s "$T/zero" sc/cornell.gltf
+(cd sc && quick "$B/lie-render" ../sc.lie -q --size 8x8 -o "$T/o.exr")
+expect_fail_line lie-render "cornell.gltf: cannot read a character device" "a device (/dev/zero) as a cache's scene path"
 (cd sc && quick "$B/lie-inspect" verify ../sc.lie --scene cornell.gltf)
-expect_fail_line lie-inspect "cornell.gltf: cannot read a character device" "a device as a cache's scene"
+expect_fail_line lie-inspect "cornell.gltf: cannot read a character device" "and as verify --scene"
 quick "$B/lie-build" "$T" -q -o "$T/o.lie"
 expect_fail_line lie-build "cannot read a directory" "a directory as scene"
 
