@@ -66,6 +66,12 @@ $(BINDIR)/%: $$(call TOOL_OBJ,$$*) $(LIB_A)
 	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
 .SECONDARY:
 
+# lie-view opens a window with SDL2 (its software renderer: no GPU needed).
+SDL_CFLAGS := $(shell sdl2-config --cflags 2>/dev/null)
+SDL_LIBS   := $(shell sdl2-config --libs 2>/dev/null)
+$(BUILD)/tools/lie-view/%.o: CFLAGS += $(SDL_CFLAGS)
+$(BINDIR)/lie-view: LDLIBS += $(SDL_LIBS)
+
 $(BUILD)/tests/%: $(BUILD)/tests/unit/%.o $(LIB_A)
 	@mkdir -p $(dir $@)
 	$(CC) $(LDFLAGS) $^ $(LDLIBS) -lcmocka -o $@

@@ -209,6 +209,15 @@ lie_status lie_render(const lie_scene *s, const lie_rt *rt, const lie_camera *ca
                       const lie_render_options *opt, lie_frame **out, lie_render_stats *stats,
                       lie_error *err);
 
+/* Render only the pixels [x0, x1) x [y0, y1) of that image into f, a frame
+ * of opt's size holding the AOV layers opt asks for (as lie_render names
+ * them); other pixels are left as they are.  Each pixel gets exactly the
+ * value lie_render gives it, so an image assembled from regions (lie-view's
+ * progressive bands) is the same bytes. */
+lie_status lie_render_region(const lie_scene *s, const lie_rt *rt, const lie_camera *cam,
+                             const lie_render_options *opt, int x0, int y0, int x1, int y1, lie_frame *f,
+                             lie_render_stats *stats, lie_error *err);
+
 /* A camera's rays for a width x height image: perspective from the eye,
  * or orthographic (ymag > 0) along forward from the image plane through
  * the eye.  The image's aspect ratio wins over the camera's, so pixels stay
