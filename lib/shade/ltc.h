@@ -44,6 +44,7 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
 
 struct lie_surface;
 
@@ -125,6 +126,7 @@ void lie_ltc_polygon_once(const lie_ltc_table *t, lie_vec3 n, lie_vec3 wo, float
  * Lambert's edge sum).  pi times it with m = NULL is int_P cos. */
 float lie_ltc_integrate(const float *m, const lie_vec3 *verts, int n);
 
+#pragma GCC visibility pop
 #ifdef __cplusplus
 }
 #endif

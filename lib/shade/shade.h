@@ -13,6 +13,8 @@
 #include "rt/rt.h"
 #include "scene/scene.h"
 
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -261,4 +263,6 @@ void lie_camera_path_destroy(lie_camera_path *p);
 #ifdef __cplusplus
 }
 #endif
+#pragma GCC visibility pop
+
 #endif
