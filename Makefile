@@ -33,6 +33,14 @@ LIB_C    := $(sort $(wildcard lib/*/*.c))
 LIB_CXX  := $(sort $(wildcard lib/*/*.cpp))
 LIB_OBJ  := $(LIB_C:%.c=$(BUILD)/%.o) $(LIB_CXX:%.cpp=$(BUILD)/%.o)
 LIB_A    := $(BUILD)/liblie.a
+# The shared library: SONAME liblie.so.MAJOR, only the lie_ symbols of the public headers
+# exported (-fvisibility=hidden, the headers' `visibility push(default)`, lib/liblie.map).
+SOVERSION := 0
+LIBVERSION := 0.1.0
+LIB_SO   := $(BUILD)/liblie.so.$(LIBVERSION)
+# The library's objects are position-independent, so one set serves liblie.a and liblie.so.
+$(LIB_OBJ): CFLAGS += -fPIC -fvisibility=hidden -fno-semantic-interposition
+$(LIB_OBJ): CXXFLAGS += -fPIC -fvisibility=hidden -fvisibility-inlines-hidden -fno-semantic-interposition
 
 TOOLS    := $(notdir $(wildcard tools/*))
 BINDIR   := $(if $(filter release,$(VARIANT)),bin,$(BUILD)/bin)
@@ -41,7 +49,8 @@ TOOL_BIN := $(TOOLS:%=$(BINDIR)/%)
 UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
 UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/tests/%)
 
-.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench scenes fuzz clean
+.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench scenes fuzz clean \
+        install uninstall man shared ltc-tables ltc-bench
 all: $(TOOL_BIN)
 
 deps:
@@ -57,6 +66,21 @@ $(BUILD)/%.o: %.cpp
 $(LIB_A): $(LIB_OBJ)
 	@rm -f $@
 	ar rcs $@ $^
+
+$(LIB_SO): $(LIB_OBJ) lib/liblie.map
+	$(CC) -shared -Wl,-soname,liblie.so.$(SOVERSION) -Wl,--version-script=lib/liblie.map \
+	    -Wl,--no-undefined $(LDFLAGS) $(LIB_OBJ) $(LDLIBS) -o $@
+shared: $(LIB_SO)
+
+# The commit goes into one object only, rebuilt when HEAD (or the dirty state) changes.
+COMMIT := $(shell git describe --always --dirty 2>/dev/null || echo unknown)
+$(BUILD)/commit.txt: FORCE
+	@mkdir -p $(dir $@)
+	@echo '$(COMMIT)' | cmp -s - $@ || echo '$(COMMIT)' > $@
+$(BUILD)/lib/version/version.o: $(BUILD)/commit.txt
+$(BUILD)/lib/version/version.o: CFLAGS += -DLIE_COMMIT=\"$(COMMIT)\"
+.PHONY: FORCE
+FORCE:
 
 # A tool links every object of its folder (tools/NAME/*.c).
 TOOL_OBJ = $(patsubst %.c,$(BUILD)/%.o,$(wildcard tools/$(1)/*.c))
@@ -88,6 +112,16 @@ $(GEN): $(BUILD)/tests/scenes/gen/gen_scenes.o $(BUILD)/tests/scenes/gen/gen_glt
 	$(CC) $(LDFLAGS) $^ -lpng -lz -lm -o $@
 scenes: $(GEN)
 	$(GEN) tests/scenes
+
+# ---- LTC tables (lib/shade/ltc.h): fitted by scripts/ltc-fit.c, the output committed ----
+LTC_FIT := $(BUILD)/ltc-fit
+$(LTC_FIT): scripts/ltc-fit.c
+	@mkdir -p $(dir $@)
+	$(CC) -std=c11 -O2 -ffp-contract=off $(WARN) $< -lm -o $@
+ltc-tables: $(LTC_FIT)
+	$(LTC_FIT) -o lib/shade/ltc_table.c.tmp && mv lib/shade/ltc_table.c.tmp lib/shade/ltc_table.c
+ltc-bench: $(BUILD)/tests/ltc-bench
+	$(BUILD)/tests/ltc-bench
 
 # ---- the two commands -----------------------------------------------------
 demo: deps
@@ -132,5 +166,7 @@ test-valgrind: all
 
 clean:
 	rm -rf build bin out
+
+include mk/install.mk
 
 -include $(shell find build -name '*.d' 2>/dev/null)

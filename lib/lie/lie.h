@@ -13,9 +13,12 @@
 #define LIE_LIE_H
 
 #include "core/core.h"
+#include "lie/pair.h"
 #include "patch/patch.h"
 #include "rt/rt.h"
 #include "scene/scene.h"
+
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
 
 #ifdef __cplusplus
 extern "C" {
@@ -46,6 +49,8 @@ typedef struct lie_build_params {
     float min_patch;       /* smallest patch area / largest triangle area (--min-patch) */
     lie_blocker_mode mode;
     int threads;           /* not stored in caches: results never depend on it */
+    uint64_t max_nodes;    /* patch-tree nodes a build may make (--max-nodes); 0: the default.
+                              Not stored in caches: a build within it gives the same cache */
 } lie_build_params;
 
 #define LIE_SAMPLES_DEFAULT 128u
@@ -53,6 +58,13 @@ typedef struct lie_build_params {
 #define LIE_MAX_BLOCKERS_DEFAULT 8u
 #define LIE_COMPLEX_CAP_DEFAULT 128u
 #define LIE_MIN_PATCH_DEFAULT 1e-4f
+/* --min-patch's lower bound: 1e-8 of the largest triangle is about 13
+ * subdivision levels; below that the trees grow by 4x a level for nothing
+ * an image can show. */
+#define LIE_MIN_PATCH_MIN 1e-8f
+/* The node budget: a node is 20 bytes (lie_pnode), held twice while the
+ * trees are joined, so the default is about 5 GiB at most. */
+#define LIE_MAX_NODES_DEFAULT (UINT64_C(1) << 27)
 lie_build_params lie_build_params_default(void);
 /* Check ranges; fills err with which parameter is wrong. */
 lie_status lie_build_params_check(const lie_build_params *p, lie_error *err);
@@ -106,18 +118,6 @@ lie_status lie_env_rebuild_units(lie_env *env, const lie_scene *s, const lie_rt 
                                  const uint32_t *units, size_t n_units, int threads,
                                  lie_build_stats *stats, lie_error *err);
 
-/* How far shadow segments towards directional emitters reach. */
-float lie_ray_far(const lie_scene *s);
-/* The renderer's largest shadow-ray offset on triangle tri. */
-float lie_pair_eps(const lie_scene *s, uint32_t tri);
-/* The hull of a pair, as lie-build and the ray segment trees see it: the
- * patch's corners V, lifted by lie_pair_eps on the side(s) it is shaded
- * from, and the emitter's points (vertices; a point light's position; for a
- * directional light the patch moved lie_ray_far towards it).  `out` must
- * hold lie_pair_hull_cap(s, e) points; returns how many were written. */
-int lie_pair_hull_cap(const lie_scene *s, int e);
-int lie_pair_hull_points(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], int e, lie_vec3 *out);
-
 /* Update env for scene s (its state after edits).  old_unit has one entry
  * per unit of s: the unit of env it continues (copied, or updated where
  * node_flags marks env nodes to recompute), or -1 to build it afresh.  The
@@ -161,4 +161,6 @@ static inline const lie_pnode *lie_env_find_leaf_path(const lie_env *env, uint32
 #ifdef __cplusplus
 }
 #endif
+#pragma GCC visibility pop
+
 #endif

@@ -16,6 +16,8 @@
 
 #include "core/core.h"
 
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -303,8 +305,8 @@ lie_material lie_material_default(void);
 /* Write the document as glTF 2.0, which lie_scene_load reads back into the
  * same world (the same hash when no node was removed).  Path
  * "DIR/NAME.gltf" also gets DIR/NAME.bin (every vertex and index) and
- * DIR/NAME_texN.png (image N), each written atomically, the .gltf last; on
- * failure the files this call already put in place are removed again.
+ * DIR/NAME_texN.png (image N), all complete on disk before any is renamed
+ * into place (the .gltf last); on failure none is.
  * Left out: removed nodes with their subtrees, nodes outside the default
  * scene, unused meshes, cameras and lights, and textures no material
  * uses.  Every material is
@@ -313,6 +315,9 @@ lie_material lie_material_default(void);
  * else 16-bit), in the colour space of the slot that uses them.  "-"
  * (stdout) is refused: the output is several files. */
 lie_status lie_gltf_export(const lie_scene *s, const char *path, lie_error *err);
+/* The same into `group` (lib/core): nothing is visible until the caller
+ * commits the group, with whatever else the run writes. */
+lie_status lie_gltf_export_group(const lie_scene *s, const char *path, lie_atomic_group *group, lie_error *err);
 
 /* Internal to lib/scene: the importer (gltf.cpp) fills the document. */
 lie_status lie_gltf_import(lie_scene *s, const char *path, const lie_scene_options *opt,
@@ -327,4 +332,6 @@ lie_status lie_scene_png_write(FILE *fp, const char *path, int width, int height
 #ifdef __cplusplus
 }
 #endif
+#pragma GCC visibility pop
+
 #endif
