@@ -55,7 +55,7 @@ static lie_status read_edits(char **files, int n, lie_edit **edits, unsigned cha
                              lie_error *err)
 {
     for (int i = 0; i < n; i++)
-        if (lie_read_file(files[i], &texts[i], &sizes[i], err) != LIE_OK ||
+        if (lie_read_file_max(files[i], LIE_READ_MAX_TEXT, &texts[i], &sizes[i], err) != LIE_OK ||
             lie_edit_parse(texts[i], sizes[i], files[i], &edits[i], err) != LIE_OK)
             return err->status;
     return LIE_OK;
@@ -146,10 +146,8 @@ static lie_status run(const char *input, char **files, int n_files, const char *
     if (st == LIE_OK && scene->n_emitters == 0 && !quiet)
         fprintf(stderr, "%s: %s: warning: the edited scene has no emitters: every pixel is black\n", prog, input);
     double ta = lie_time_now();
-    if (st == LIE_OK && scene_out)
-        st = lie_gltf_export(scene, scene_out, err);
     if (st == LIE_OK)
-        st = lie_cache_write(output, cache, &bytes, err);
+        st = lie_cache_write_with_scene(output, cache, scene, scene_out, &bytes, err);
     if (st == LIE_OK && stats) {
         lie_update_get_stats(u, &ust);
         print_stats(input, scene, &ust, t_load, lie_time_now() - ta, bytes, stats == 2);
