@@ -2008,7 +2008,7 @@ int add_view(Export &ex, const void *data, size_t bytes, int target)
 
 int add_accessor(Export &ex, const void *data, size_t count, int type, int ctype, int target)
 {
-    size_t ncomp = type_components(type), bytes = mul_size(count, ncomp * 4, "accessor");
+    size_t ncomp = type_components(type), bytes = mul_size(count, ncomp * component_size(ctype), "accessor");
     tinygltf::Accessor a;
     a.bufferView = add_view(ex, data, bytes, target);
     a.byteOffset = 0;
@@ -2051,6 +2051,12 @@ tinygltf::Primitive export_primitive(Export &ex, const lie_primitive &p)
     if (p.color)
         g.attributes["COLOR_0"] = add_accessor(ex, p.color, p.n_verts, TINYGLTF_TYPE_VEC4,
                                                TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TARGET_ARRAY_BUFFER);
+    if (p.joints && p.weights) { /* skins (§3.7.3): the joints and weights as read */
+        g.attributes["JOINTS_0"] = add_accessor(ex, p.joints, p.n_verts, TINYGLTF_TYPE_VEC4,
+                                                TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TARGET_ARRAY_BUFFER);
+        g.attributes["WEIGHTS_0"] = add_accessor(ex, p.weights, p.n_verts, TINYGLTF_TYPE_VEC4,
+                                                 TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TARGET_ARRAY_BUFFER);
+    }
     g.indices = add_accessor(ex, p.idx, size_t(p.n_tris) * 3, TINYGLTF_TYPE_SCALAR,
                              TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
     return g;
@@ -2313,6 +2319,34 @@ void export_document(Export &ex)
                 g.children.push_back(new_index[size_t(ch)]);
         }
         m.nodes.push_back(g);
+    }
+    /* skins of kept skinned nodes; every joint must be kept too */
+    std::vector<int> skin_map(size_t(s.n_skins), -1);
+    for (size_t k = 0; k < order.size(); k++) {
+        const lie_node &n = s.nodes[order[k]];
+        if (n.skin < 0 || n.skin >= s.n_skins || m.nodes[k].mesh < 0)
+            continue;
+        if (skin_map[size_t(n.skin)] < 0) {
+            const lie_skin &sk = s.skins[n.skin];
+            tinygltf::Skin g;
+            if (sk.name)
+                g.name = sk.name;
+            std::vector<float> ibm(size_t(sk.n_joints) * 16);
+            for (int j = 0; j < sk.n_joints; j++) {
+                int nj = sk.joints[j] >= 0 && sk.joints[j] < s.n_nodes ? new_index[size_t(sk.joints[j])] : -1;
+                if (nj < 0)
+                    fail(LIE_ERR_UNSUPPORTED, "skin %d: joint node %d is not in the written scene", n.skin,
+                         sk.joints[j]);
+                g.joints.push_back(nj);
+                for (int c = 0; c < 16; c++) /* read as floats: exact */
+                    ibm[size_t(j) * 16 + size_t(c)] = float(sk.inverse_bind[j].m[c]);
+            }
+            g.inverseBindMatrices = add_accessor(ex, ibm.data(), size_t(sk.n_joints), TINYGLTF_TYPE_MAT4,
+                                                 TINYGLTF_COMPONENT_TYPE_FLOAT, 0);
+            skin_map[size_t(n.skin)] = int(m.skins.size());
+            m.skins.push_back(g);
+        }
+        m.nodes[k].skin = skin_map[size_t(n.skin)];
     }
     tinygltf::Scene scene;
     for (int r = 0; r < s.n_roots; r++)
