@@ -5,6 +5,7 @@
 
 #include <SDL.h>
 #include <getopt.h>
+#include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -383,7 +384,7 @@ static int script_step(session *S, script_run *R, uint64_t images, int idle)
 {
     if (R->waiting == 1 && images < R->until_images && !idle)
         return 0;
-    if (R->waiting == 2 && view_world_pending(S->w) > 0)
+    if (R->waiting == 2 && view_world_busy(S->w))
         return 0;
     R->waiting = 0;
     while (R->next < R->sc->n) {

@@ -59,6 +59,7 @@ const lie_vis_oracle *view_world_oracle(const view_world *w); /* NULL without a 
 /* Changes on every edit and every constructor step: frames older than it are stale. */
 uint64_t view_world_version(const view_world *w);
 int64_t view_world_pending(const view_world *w);   /* units not yet rebuilt */
+int view_world_busy(const view_world *w);          /* units pending, or the update not yet committed */
 int64_t view_world_pending_max(const view_world *w);
 double view_world_last_update_ms(const view_world *w);
 int view_world_has_cache(const view_world *w);

@@ -1,66 +1,27 @@
 /* The viewer's world: the scene, its cache, the ray tracer, and the edits
  * made in the session, with the asynchronous constructor of §4.3.1.
  *
- * An edit is applied at once (§5): the scene changes, the ray segment
- * trees flag the units whose dependency regions the edited objects' boxes
- * meet, and those units become *pending*.  The renderer answers a pending
- * unit's pairs with Embree over the whole scene (the oracle wrapper below),
- * so no frame is ever stale; the constructor thread rebuilds pending units
- * a step at a time and swaps them in, after which they are fast again. */
+ * An edit goes through lib/update at once (§5, phase 1): the scene
+ * changes and the units the ray segment trees flag become pending.  The
+ * renderer draws from the update's snapshot, in which pending pairs are
+ * LIE_CLASS_NONE and so answered by Embree over the whole scene: no frame
+ * is ever stale.  The constructor thread recomputes pending units a step at
+ * a time (phase 2) and publishes a new snapshot after each step, after
+ * which those units are fast again (update.c). */
 #include "world_internal.h"
 
 #include <stdlib.h>
 #include <string.h>
 
-/* ---- the oracle: pending units go to Embree -------------------------- */
+/* ---- the oracle ------------------------------------------------------ */
 
-static lie_vis_class pending_classify(void *ctx, const lie_surface *sf, int e, const void **pair)
-{
-    const view_world *w = ctx;
-    if (w->pending[(size_t)sf->tri * (size_t)w->scene->n_emitters + (size_t)e])
-        return LIE_VISCLASS_TEST_ALL;
-    return w->inner->classify(w->inner->ctx, sf, e, pair);
-}
-
-static int pending_select(void *ctx, const void *pair, int e, lie_vec3 o, float eps, uint32_t *out)
-{
-    const view_world *w = ctx;
-    return w->inner->select(w->inner->ctx, pair, e, o, eps, out);
-}
-
-static void pending_occluded(void *ctx, const uint32_t *b, int n, lie_shadow_query *q, uint32_t *occ)
-{
-    const view_world *w = ctx;
-    w->inner->occluded(w->inner->ctx, b, n, q, occ);
-}
-
-static void pending_describe(void *ctx, const lie_surface *sf, int e, int *cls, uint32_t *count, uint64_t *patch)
-{
-    const view_world *w = ctx;
-    w->inner->describe(w->inner->ctx, sf, e, cls, count, patch);
-    if (w->pending[(size_t)sf->tri * (size_t)w->scene->n_emitters + (size_t)e])
-        *cls = -1; /* Figure 10's red: answered by Embree until rebuilt */
-}
-
-/* (Re)create the LIE oracle for the current scene and env. */
 lie_status world_make_oracle(view_world *w, lie_error *err)
 {
     lie_lie_vis_destroy(w->vis);
     w->vis = NULL;
-    w->inner = NULL;
-    if (!w->cache)
+    if (!w->render_env)
         return LIE_OK;
-    lie_status st = lie_lie_vis_create(w->scene, w->cache->env, &w->vis, err);
-    if (st != LIE_OK)
-        return st;
-    w->inner = lie_lie_vis_oracle(w->vis);
-    w->oracle = *w->inner;
-    w->oracle.ctx = w;
-    w->oracle.classify = pending_classify;
-    w->oracle.select = pending_select;
-    w->oracle.occluded = pending_occluded;
-    w->oracle.describe = pending_describe;
-    return LIE_OK;
+    return lie_lie_vis_create(w->scene, w->render_env, &w->vis, err);
 }
 
 /* ---- reading ---------------------------------------------------------- */
@@ -69,9 +30,14 @@ void view_world_read_lock(view_world *w) { pthread_rwlock_rdlock(&w->lock); }
 void view_world_read_unlock(view_world *w) { pthread_rwlock_unlock(&w->lock); }
 const lie_scene *view_world_scene(const view_world *w) { return w->scene; }
 const lie_rt *view_world_rt(const view_world *w) { return w->rt; }
-const lie_vis_oracle *view_world_oracle(const view_world *w) { return w->inner ? &w->oracle : NULL; }
+const lie_vis_oracle *view_world_oracle(const view_world *w) { return w->vis ? lie_lie_vis_oracle(w->vis) : NULL; }
 uint64_t view_world_version(const view_world *w) { return atomic_load(&((view_world *)w)->version); }
 int64_t view_world_pending(const view_world *w) { return atomic_load(&((view_world *)w)->n_pending); }
+int view_world_busy(const view_world *w)
+{
+    view_world *m = (view_world *)w;
+    return !m->failed && (atomic_load(&m->n_pending) > 0 || atomic_load(&m->dirty));
+}
 int64_t view_world_pending_max(const view_world *w) { return w->pending_max; }
 double view_world_last_update_ms(const view_world *w) { return w->last_ms; }
 int view_world_has_cache(const view_world *w) { return w->cache != NULL; }
@@ -143,24 +109,6 @@ int view_node_under(const lie_scene *s, const lie_rt *rt, const lie_camera *cam,
     return s->instances[s->tri_instance[hit.tri]].node;
 }
 
-/* World bounds of every node's own triangles (empty boxes for none). */
-lie_box3 *world_own_boxes(const lie_scene *s)
-{
-    lie_box3 *b = malloc(sizeof *b * ((size_t)s->n_nodes + 1));
-    if (!b)
-        return NULL;
-    for (int i = 0; i < s->n_nodes; i++)
-        b[i] = lie_box3_empty();
-    for (int i = 0; i < s->n_instances; i++) {
-        const lie_instance *in = &s->instances[i];
-        for (uint32_t t = in->first_tri; t < in->first_tri + in->n_tris; t++)
-            if (!s->tri_removed[t])
-                for (int k = 0; k < 3; k++)
-                    lie_box3_grow(&b[in->node], s->tri_p[3 * (size_t)t + k]);
-    }
-    return b;
-}
-
 /* ---- opening ---------------------------------------------------------- */
 
 static int looks_like_gltf(const unsigned char *d, size_t n)
@@ -176,7 +124,7 @@ static int looks_like_gltf(const unsigned char *d, size_t n)
 }
 
 /* The scene as the session started: the glTF file, with the cache's log. */
-lie_status world_load_base(view_world *w, lie_scene **out, lie_error *err)
+static lie_status load_base(view_world *w, lie_scene **out, lie_error *err)
 {
     if (w->cache)
         return lie_cache_load_scene(w->cache, w->input, NULL, &w->opt.so, out, err);
@@ -209,14 +157,18 @@ lie_status view_world_open(const char *input, const view_world_options *opt, vie
     if (st == LIE_OK && strcmp(input, "-") == 0 && !w->cache)
         st = lie_error_set(err, LIE_ERR_UNSUPPORTED, input, "a glTF scene cannot be read from stdin");
     if (st == LIE_OK)
-        st = world_load_base(w, &w->scene, err);
+        st = load_base(w, &w->scene, err);
     if (st == LIE_OK)
         st = lie_rt_create(w->scene, &w->rt, err);
-    if (st == LIE_OK) {
-        w->n_units = (size_t)w->scene->n_tris * (size_t)w->scene->n_emitters;
-        w->pending = calloc(w->n_units + 1, 1);
-        if (!w->pending)
-            st = lie_error_set(err, LIE_ERR_NOMEM, input, "out of memory");
+    if (st == LIE_OK && w->cache) {
+        w->n_edits0 = w->cache->n_edits;
+        lie_update_options uo = lie_update_options_default();
+        uo.threads = opt->threads;
+        uo.keep_trees = 1; /* the next edit finds the trees ready */
+        uo.scene = opt->so;
+        st = lie_update_create(w->cache, w->scene, &uo, &w->up, err);
+        if (st == LIE_OK)
+            st = lie_update_snapshot(w->up, &w->render_env, err);
     }
     if (st == LIE_OK)
         st = world_make_oracle(w, err);
@@ -246,14 +198,10 @@ void view_world_close(view_world *w)
         pthread_mutex_unlock(&w->cm);
         pthread_join(w->ctor, NULL);
     }
-    for (int i = 0; i < w->n_live; i++)
-        free(w->live[i]);
-    for (int i = 0; i < w->n_undone; i++)
-        free(w->undone[i]);
-    free(w->live);
-    free(w->undone);
+    world_free_session(w);
     free(w->update_ms);
-    free(w->pending);
+    lie_update_destroy(w->up);
+    lie_env_destroy(w->render_env);
     lie_lie_vis_destroy(w->vis);
     lie_rt_destroy(w->rt);
     lie_scene_destroy(w->scene);
@@ -263,25 +211,4 @@ void view_world_close(view_world *w)
     pthread_mutex_destroy(&w->cm);
     pthread_cond_destroy(&w->ccv);
     free(w);
-}
-
-lie_status world_rebuild_all(view_world *w, lie_error *err)
-{
-    size_t n = (size_t)w->scene->n_tris * (size_t)w->scene->n_emitters;
-    int32_t *old_unit = malloc(sizeof *old_unit * (n + 1));
-    uint8_t *pending = calloc(n + 1, 1);
-    if (!old_unit || !pending) {
-        free(old_unit);
-        free(pending);
-        return lie_error_set(err, LIE_ERR_NOMEM, w->input, "out of memory");
-    }
-    for (size_t u = 0; u < n; u++)
-        old_unit[u] = -1;
-    lie_status st = lie_env_update(w->cache->env, w->scene, w->rt, old_unit, NULL, w->opt.threads, NULL, err);
-    free(old_unit);
-    free(w->pending);
-    w->pending = pending;
-    w->n_units = n;
-    w->env_gen++;
-    return st;
 }
