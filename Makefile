@@ -49,7 +49,7 @@ TOOL_BIN := $(TOOLS:%=$(BINDIR)/%)
 UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
 UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/tests/%)
 
-.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench scenes fuzz clean \
+.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench bench-view scenes fuzz clean \
         install uninstall man shared ltc-tables ltc-bench
 all: $(TOOL_BIN)
 
@@ -155,6 +155,10 @@ test-asan:
 
 bench: all
 	@sh bench/run.sh
+
+# lie-view's interactive loop under Xvfb (not a timed test: figures depend on the load)
+bench-view: all
+	@sh bench/view.sh
 
 fuzz:
 	@sh tests/fuzz/run.sh

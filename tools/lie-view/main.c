@@ -101,7 +101,32 @@ typedef struct session {
     uint64_t level_pixels;
     char message[160];
     double message_until;
+    /* edit latency: the first image of an edit's world version, the constructor's catch-up */
+    double await_t0, last_edit_end;
+    uint64_t await_version;
+    int catching_up;
+    double *first_ms, *catchup_ms;
+    int n_first, n_catchup;
 } session;
+
+static void push_ms(double **arr, int *n, double ms)
+{
+    double *a = realloc(*arr, sizeof *a * ((size_t)*n + 1));
+    if (a) {
+        a[(*n)++] = ms;
+        *arr = a;
+    }
+}
+
+/* After an edit that started at t0: wait for its first image and for the
+ * constructor (the benchmark's latencies). */
+static void edited(session *S, double t0)
+{
+    S->await_t0 = t0;
+    S->await_version = view_world_version(S->w);
+    S->last_edit_end = lie_time_now();
+    S->catching_up = 1;
+}
 
 static void say(session *S, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 static void say(session *S, const char *fmt, ...)
@@ -159,7 +184,11 @@ static lie_status edit(session *S, int join, lie_error *err, const char *fmt, ..
     va_start(ap, fmt);
     vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
-    return view_world_edit(S->w, text, join, err);
+    double t0 = lie_time_now();
+    lie_status st = view_world_edit(S->w, text, join, err);
+    if (st == LIE_OK)
+        edited(S, t0);
+    return st;
 }
 
 static lie_status edit_move(session *S, lie_vec3 d, int join, lie_error *err)
@@ -271,12 +300,18 @@ static void handle_key(session *S, const SDL_KeyboardEvent *k, int *quit)
         *quit = 1;
     } else if (ctrl && key == SDLK_z && !shift) {
         int done;
+        double t0 = lie_time_now();
         st = view_world_undo(S->w, &done, &err);
+        if (st == LIE_OK && done)
+            edited(S, t0);
         if (st == LIE_OK)
             say(S, done ? "undone" : "nothing to undo");
     } else if (ctrl && (key == SDLK_y || (key == SDLK_z && shift))) {
         int done;
+        double t0 = lie_time_now();
         st = view_world_redo(S->w, &done, &err);
+        if (st == LIE_OK && done)
+            edited(S, t0);
         if (st == LIE_OK)
             say(S, done ? "redone" : "nothing to redo");
     } else if (ctrl && key == SDLK_s) {
@@ -445,7 +480,10 @@ static int script_step(session *S, script_run *R, uint64_t images, int idle)
         case VIEW_CMD_UNDO:
         case VIEW_CMD_REDO: {
             int done;
+            double t0 = lie_time_now();
             st = c->kind == VIEW_CMD_UNDO ? view_world_undo(S->w, &done, &err) : view_world_redo(S->w, &done, &err);
+            if (st == LIE_OK && done)
+                edited(S, t0);
             break;
         }
         case VIEW_CMD_WAIT:
@@ -486,6 +524,12 @@ static void print_stats(session *S, int json)
                 (unsigned long long)S->frames, (unsigned long long)S->moving_frames, fps);
         for (int i = 0; i < n; i++)
             fprintf(stderr, "%s%.3f", i ? "," : "", ms[i]);
+        fprintf(stderr, "],\"first_frame_ms\":[");
+        for (int i = 0; i < S->n_first; i++)
+            fprintf(stderr, "%s%.3f", i ? "," : "", S->first_ms[i]);
+        fprintf(stderr, "],\"catchup_ms\":[");
+        for (int i = 0; i < S->n_catchup; i++)
+            fprintf(stderr, "%s%.3f", i ? "," : "", S->catchup_ms[i]);
         fprintf(stderr, "],\"pending_max\":%lld,\"camera\":", (long long)view_world_pending_max(S->w));
         lie_json_string(stderr, S->spec);
         fprintf(stderr, "}\n");
@@ -728,17 +772,26 @@ int main(int argc, char **argv)
         if (D.dragging)
             flush_drag(&S, &D); /* at most one edit per frame while dragging */
         if (R.sc && !quit) {
-            uint64_t images, px;
+            uint64_t images, px, iv;
             int idle;
-            view_render_fetch(S.r, NULL, &images, &px, &idle);
+            view_render_fetch(S.r, NULL, &images, &px, &idle, &iv);
             if (script_step(&S, &R, images, idle))
                 quit = 1;
         }
         camera_update(&S);
         view_render_request(S.r, &S.cam, S.mode, S.sel);
-        uint64_t images;
+        uint64_t images, image_version;
         int idle;
-        if (view_render_fetch(S.r, image, &images, &S.level_pixels, &idle)) {
+        int fresh = view_render_fetch(S.r, image, &images, &S.level_pixels, &idle, &image_version);
+        if (S.await_version && image_version >= S.await_version) {
+            push_ms(&S.first_ms, &S.n_first, 1e3 * (lie_time_now() - S.await_t0));
+            S.await_version = 0;
+        }
+        if (S.catching_up && !view_world_busy(S.w)) {
+            push_ms(&S.catchup_ms, &S.n_catchup, 1e3 * (lie_time_now() - S.last_edit_end));
+            S.catching_up = 0;
+        }
+        if (fresh) {
             double now = lie_time_now();
             S.frames++;
             if (S.shown_cam_gen != S.cam_gen && have_image) {
@@ -778,6 +831,8 @@ int main(int argc, char **argv)
         print_stats(&S, stats == 2);
     free(image);
     free(shown);
+    free(S.first_ms);
+    free(S.catchup_ms);
     if (tex)
         SDL_DestroyTexture(tex);
     if (ren)

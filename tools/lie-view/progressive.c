@@ -31,6 +31,7 @@ struct view_render {
     uint64_t images, level_pixels;
     uint64_t full_gen, full_version; /* the request and world version `full` shows, 0: none */
     uint64_t done_gen, done_version; /* every level of these is finished: idle */
+    uint64_t image_version;          /* the world version of the last image finished */
     lie_frame *full;
     /* the render thread's own */
     lie_frame *level[LEVELS];
@@ -185,6 +186,7 @@ static void *render_main(void *arg)
             pthread_mutex_lock(&r->m);
             r->images++;
             r->level_pixels = (uint64_t)lw * (uint64_t)lh;
+            r->image_version = version;
             if (lv == LEVELS - 1 && mode == VIEW_MODE_SHADE) {
                 lie_frame *t = r->full;
                 r->full = f;
@@ -286,9 +288,11 @@ void view_render_request(view_render *r, const lie_camera *cam, int mode, int se
     pthread_mutex_unlock(&r->m);
 }
 
-int view_render_fetch(view_render *r, uint32_t *argb, uint64_t *images, uint64_t *level_pixels, int *idle)
+int view_render_fetch(view_render *r, uint32_t *argb, uint64_t *images, uint64_t *level_pixels, int *idle,
+                      uint64_t *image_version)
 {
     pthread_mutex_lock(&r->m);
+    *image_version = r->image_version;
     *idle = r->done_gen == r->gen && r->done_version == view_world_version(r->w);
     int d = argb ? r->dirty : 0; /* NULL: only the counters */
     if (d)

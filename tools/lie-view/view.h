@@ -107,8 +107,10 @@ void view_render_request(view_render *r, const lie_camera *cam, int mode, int se
 /* Copy the display image (ARGB8888, width x height) if it changed since the
  * last call; returns 1 then.  *level_pixels: pixels of the last image
  * finished; *images: images finished so far; *idle: every level of the
- * current request is finished. */
-int view_render_fetch(view_render *r, uint32_t *argb, uint64_t *images, uint64_t *level_pixels, int *idle);
+ * current request is finished; *image_version: the world version the last
+ * finished image shows. */
+int view_render_fetch(view_render *r, uint32_t *argb, uint64_t *images, uint64_t *level_pixels, int *idle,
+                      uint64_t *image_version);
 /* Block until the full-resolution frame of the current request and world
  * version is complete, then write it as lie-render would (by extension). */
 lie_status view_render_screenshot(view_render *r, const char *path, lie_error *err);
