@@ -94,7 +94,9 @@ typedef struct session {
     /* statistics */
     uint64_t frames, moving_frames;
     double moving_seconds, last_present;
-    uint64_t last_present_gen, cam_gen, shown_cam_gen;
+    uint64_t last_images, cam_gen, shown_cam_gen;
+    double change_t;        /* the first camera change since the last image */
+    int prev_moving;
     double fps_window_start;
     int fps_window_frames;
     float fps;
@@ -156,6 +158,8 @@ static void camera_update(session *S)
         return; /* a degenerate view (eye on target): keep the last camera */
     snprintf(S->spec, sizeof S->spec, "%s", spec);
     S->cam = c;
+    if (S->cam_gen == S->shown_cam_gen)
+        S->change_t = lie_time_now();
     S->cam_gen++;
 }
 
@@ -694,7 +698,7 @@ int main(int argc, char **argv)
         rc = fail_line(&err);
     drag_state D;
     memset(&D, 0, sizeof D);
-    int quit = rc != 0, have_image = 0;
+    int quit = rc != 0;
     S.fps_window_start = lie_time_now();
     while (!quit) {
         SDL_Event ev;
@@ -791,17 +795,23 @@ int main(int argc, char **argv)
             push_ms(&S.catchup_ms, &S.n_catchup, 1e3 * (lie_time_now() - S.last_edit_end));
             S.catching_up = 0;
         }
-        if (fresh) {
+        (void)fresh;
+        if (images > S.last_images) {
+            /* a whole image (a level) is on screen: a frame; while the
+             * camera moves, fps counts the time from the previous moving
+             * frame, or from the change that started the motion */
             double now = lie_time_now();
-            S.frames++;
-            if (S.shown_cam_gen != S.cam_gen && have_image) {
+            S.frames += images - S.last_images;
+            S.fps_window_frames += (int)(images - S.last_images);
+            S.last_images = images;
+            int moving = S.shown_cam_gen != S.cam_gen;
+            if (moving) {
                 S.moving_frames++;
-                S.moving_seconds += now - S.last_present;
+                S.moving_seconds += now - (S.prev_moving ? S.last_present : S.change_t);
             }
+            S.prev_moving = moving;
             S.shown_cam_gen = S.cam_gen;
             S.last_present = now;
-            have_image = 1;
-            S.fps_window_frames++;
         }
         double now = lie_time_now();
         if (now - S.fps_window_start >= 0.5) {
