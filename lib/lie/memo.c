@@ -53,14 +53,13 @@ static void memo_compute(void *ctx, size_t item, int worker_id)
     const lie_scene *s = c->s;
     lie_vec3 V[3];
     lie_patch_world(m->path, &s->tri_p[3 * (size_t)m->tri], V);
-    int two_sided = lie_scene_material(s, s->tri_material[m->tri])->double_sided != 0;
+    int two_sided = lie_pair_two_sided(s, m->tri);
     size_t n_list = 0;
     m->quality = 0;
     if (lie_pair_unlit(c->s, m->tri, V, two_sided, m->e))
         m->cls = LIE_CLASS_UNLIT;
     else
-        m->cls = lie_sample_pair(c, w, m->tri, m->path, V, two_sided, m->e, lie_pair_eps(s, m->tri),
-                                 &m->quality, &n_list);
+        m->cls = lie_sample_pair(c, w, m->tri, m->path, V, two_sided, m->e, &m->quality, &n_list);
     m->n_list = (uint32_t)n_list;
     m->list = NULL;
     if (n_list && !w->nomem) {
