@@ -11,17 +11,8 @@
 static void collect_candidate(void *ctx, uint32_t tri)
 {
     worker *w = ctx;
-    if (w->n_cand == w->cap_cand) {
-        size_t nc = w->cap_cand ? 2 * w->cap_cand : 64;
-        uint32_t *nb = realloc(w->cand, nc * sizeof *nb);
-        if (!nb) {
-            w->nomem = 1;
-            return;
-        }
-        w->cand = nb;
-        w->cap_cand = nc;
-    }
-    w->cand[w->n_cand++] = tri;
+    if (!LIE_PUSH(w->cand, w->n_cand, w->cap_cand, tri))
+        w->nomem = 1;
 }
 
 static float v3_axis(lie_vec3 v, int a) { return a == 0 ? v.x : a == 1 ? v.y : v.z; }
@@ -105,15 +96,9 @@ static void pair_sat(const build_ctx *c, const worker *w, int nh, uint32_t tri, 
 /* The pair's hull into w->hull (see lie_pair_hull_points). */
 static int pair_hull(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int e)
 {
-    int need = lie_pair_hull_cap(c->s, e);
-    if (need > w->cap_hull) {
-        lie_vec3 *nh = realloc(w->hull, sizeof *nh * (size_t)need);
-        if (!nh) {
-            w->nomem = 1;
-            return 0;
-        }
-        w->hull = nh;
-        w->cap_hull = need;
+    if (!LIE_GROW(w->hull, w->cap_hull, lie_pair_hull_cap(c->s, e))) {
+        w->nomem = 1;
+        return 0;
     }
     return lie_pair_hull_points(c->s, tri, V, e, w->hull);
 }
@@ -204,17 +189,10 @@ void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3
             if (lie_sat_rejects(&sat, &s->tri_p[3 * (size_t)t]) ||
                 !lie_hull_meets_triangle(w->hull, nh, &s->tri_p[3 * (size_t)t], tol))
                 continue;
-            if (w->n_hits == w->cap_hits) {
-                size_t ncap = 2 * w->cap_hits + 16;
-                uint32_t *nb = realloc(w->hits, ncap * sizeof *nb);
-                if (!nb) {
-                    w->nomem = 1;
-                    return;
-                }
-                w->hits = nb;
-                w->cap_hits = ncap;
+            if (!LIE_PUSH(w->hits, w->n_hits, w->cap_hits, t)) {
+                w->nomem = 1;
+                return;
             }
-            w->hits[w->n_hits++] = t;
         }
     }
     w->n_hits = lie_sort_unique(w->hits, w->n_hits);
@@ -249,18 +227,10 @@ lie_class lie_cull_conservative(const build_ctx *c, worker *w, uint32_t tri, con
             continue;
         if (lie_sat_rejects(&sat, &s->tri_p[3 * (size_t)t]))
             continue;
-        if (lie_hull_meets_triangle(w->hull, nh, &s->tri_p[3 * (size_t)t], tol)) {
-            if (w->n_hits == w->cap_hits) {
-                size_t ncap = w->cap_hits ? 2 * w->cap_hits : 64;
-                uint32_t *nb = realloc(w->hits, ncap * sizeof *nb);
-                if (!nb) {
-                    w->nomem = 1;
-                    return LIE_CLASS_VISIBLE;
-                }
-                w->hits = nb;
-                w->cap_hits = ncap;
-            }
-            w->hits[w->n_hits++] = t;
+        if (lie_hull_meets_triangle(w->hull, nh, &s->tri_p[3 * (size_t)t], tol) &&
+            !LIE_PUSH(w->hits, w->n_hits, w->cap_hits, t)) {
+            w->nomem = 1;
+            return LIE_CLASS_VISIBLE;
         }
     }
     *n_list = w->n_hits;

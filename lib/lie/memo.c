@@ -73,14 +73,8 @@ static void memo_compute(void *ctx, size_t item, int worker_id)
 
 static int memo_push(build_ctx *c, size_t *n, size_t *cap, uint32_t old, uint32_t tri, lie_patch_path path, int e)
 {
-    if (*n == *cap) {
-        size_t nc = *cap ? 2 * *cap : 256;
-        memo_entry *nm = realloc(c->memo, nc * sizeof *nm);
-        if (!nm)
-            return 0;
-        c->memo = nm;
-        *cap = nc;
-    }
+    if (!LIE_GROW(c->memo, *cap, *n + 1))
+        return 0;
     memo_entry *m = &c->memo[(*n)++];
     memset(m, 0, sizeof *m);
     m->old = old;

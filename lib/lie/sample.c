@@ -230,14 +230,9 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
             if (n_shaft <= c->p->max_blockers) {
                 *quality = total;
                 *n_list = n_shaft;
-                if (n_shaft > w->cap_hits) {
-                    uint32_t *nb = realloc(w->hits, n_shaft * sizeof *nb);
-                    if (!nb) {
-                        w->nomem = 1;
-                        return LIE_CLASS_VISIBLE;
-                    }
-                    w->hits = nb;
-                    w->cap_hits = n_shaft;
+                if (!LIE_GROW(w->hits, w->cap_hits, n_shaft)) {
+                    w->nomem = 1;
+                    return LIE_CLASS_VISIBLE;
                 }
                 memcpy(w->hits, w->cand, n_shaft * sizeof *w->hits);
                 w->n_hits = n_shaft;

@@ -12,15 +12,9 @@
 
 static int push_node(unit_buf *u, worker *w)
 {
-    if (u->n_nodes == u->cap_nodes) {
-        uint32_t nc = u->cap_nodes ? 2 * u->cap_nodes : 8;
-        lie_pnode *nn = realloc(u->nodes, sizeof *nn * nc);
-        if (!nn) {
-            w->nomem = 1;
-            return -1;
-        }
-        u->nodes = nn;
-        u->cap_nodes = nc;
+    if (!LIE_GROW(u->nodes, u->cap_nodes, (size_t)u->n_nodes + 1)) {
+        w->nomem = 1;
+        return -1;
     }
     memset(&u->nodes[u->n_nodes], 0, sizeof *u->nodes);
     return (int)u->n_nodes++;
@@ -28,17 +22,9 @@ static int push_node(unit_buf *u, worker *w)
 
 static int push_list(unit_buf *u, worker *w, const uint32_t *list, uint32_t n)
 {
-    if (u->n_pool + n > u->cap_pool) {
-        uint32_t nc = u->cap_pool ? u->cap_pool : 16;
-        while (nc < u->n_pool + n)
-            nc *= 2;
-        uint32_t *np = realloc(u->pool, sizeof *np * nc);
-        if (!np) {
-            w->nomem = 1;
-            return 0;
-        }
-        u->pool = np;
-        u->cap_pool = nc;
+    if (!LIE_GROW(u->pool, u->cap_pool, (size_t)u->n_pool + n)) {
+        w->nomem = 1;
+        return 0;
     }
     memcpy(u->pool + u->n_pool, list, sizeof *list * n);
     u->n_pool += n;
@@ -98,14 +84,9 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
         cls = m->cls;
         quality = m->quality;
         n_list = m->n_list;
-        if (n_list > w->cap_hits) {
-            uint32_t *nb = realloc(w->hits, n_list * sizeof *nb);
-            if (!nb) {
-                w->nomem = 1;
-                return;
-            }
-            w->hits = nb;
-            w->cap_hits = n_list;
+        if (!LIE_GROW(w->hits, w->cap_hits, n_list)) {
+            w->nomem = 1;
+            return;
         }
         if (n_list)
             memcpy(w->hits, m->list, n_list * sizeof *w->hits);

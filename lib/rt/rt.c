@@ -111,17 +111,8 @@ static void intersect_filter(const struct RTCFilterFunctionNArguments *args)
         args->valid[i] = 0;
         if (skip || q->nomem)
             continue;
-        if (*q->n == *q->cap) {
-            size_t nc = *q->cap ? 2 * *q->cap : 16;
-            uint32_t *nb = realloc(*q->out, nc * sizeof **q->out);
-            if (!nb) {
-                q->nomem = 1;
-                continue;
-            }
-            *q->out = nb;
-            *q->cap = nc;
-        }
-        (*q->out)[(*q->n)++] = prim;
+        if (!LIE_PUSH(*q->out, *q->n, *q->cap, prim))
+            q->nomem = 1;
     }
 }
 
