@@ -12,6 +12,12 @@
 
 static int push_node(unit_buf *u, worker *w)
 {
+    /* the total only grows, so it passes the budget in some schedule iff
+     * it does in all: the outcome does not depend on the threads */
+    if (atomic_fetch_add_explicit(w->nodes_made, 1, memory_order_relaxed) >= w->max_nodes) {
+        w->over = w->nomem = 1;
+        return -1;
+    }
     if (!LIE_GROW(u->nodes, u->cap_nodes, (size_t)u->n_nodes + 1)) {
         w->nomem = 1;
         return -1;

@@ -147,6 +147,7 @@ size_t mul_size(size_t a, size_t b, const char *what)
 
 struct FsState {
     std::string prefix; /* the scene's folder as tinygltf joins it, ending in '/' */
+    std::string root;   /* the same folder resolved (realpath), ending in '/' */
     bool allow_external;
     std::string refused, refused_why;            /* first URI refused by policy */
     std::map<std::string, std::string> missing;  /* URI -> why it could not be opened */
@@ -252,24 +253,67 @@ bool fs_exists(const std::string &path, void *user)
     return true;
 }
 
-bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *)
+/* The file an open descriptor reads, with every symlink resolved. */
+std::string fd_realpath(int fd, const std::string &path)
 {
-    FILE *f = fopen(path.c_str(), "rb");
-    if (!f) {
+    char link[64], buf[PATH_MAX + 1];
+    snprintf(link, sizeof link, "/proc/self/fd/%d", fd);
+    ssize_t n = readlink(link, buf, sizeof buf - 1);
+    if (n > 0 && buf[0] == '/') {
+        buf[n] = 0;
+        return buf;
+    }
+    char *r = realpath(path.c_str(), nullptr); /* no /proc: resolve the name instead */
+    std::string out = r ? r : "";
+    free(r);
+    return out;
+}
+
+/* Buffers and images: opened non-blocking and fstat-checked (a FIFO cannot
+ * hang, a device cannot stream forever), and, unless external URIs are
+ * allowed, the file actually opened must lie inside the scene's folder:
+ * the URI's text may stay inside while a symlink leads out. */
+bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *user)
+{
+    FsState &fs = *static_cast<FsState *>(user);
+    int fd;
+    uint64_t size;
+    lie_error e{};
+    if (lie_input_open(path.c_str(), LIE_READ_MAX_GLTF, &fd, &size, &e) != LIE_OK) {
         if (err)
-            *err = strerror(errno);
+            *err = e.msg;
+        if (!fs.last_uri.empty() && !fs.missing.count(fs.last_uri))
+            fs.missing[fs.last_uri] = e.msg;
         return false;
     }
-    out->clear();
-    unsigned char buf[65536];
-    size_t n;
-    while ((n = fread(buf, 1, sizeof buf, f)) > 0)
-        out->insert(out->end(), buf, buf + n);
-    bool ok = !ferror(f);
-    if (!ok && err)
-        *err = strerror(errno);
-    fclose(f);
-    return ok;
+    if (!fs.allow_external) {
+        std::string real = fd_realpath(fd, path);
+        if (fs.root.empty() || real.compare(0, fs.root.size(), fs.root) != 0) {
+            close(fd);
+            fs_refuse(fs, fs.last_uri.empty() ? path : fs.last_uri,
+                      "resolves (through a symlink) outside the scene's folder (--allow-external-uris permits it)");
+            if (err)
+                *err = "outside the scene's folder";
+            return false;
+        }
+    }
+    unsigned char *data = nullptr;
+    size_t n = 0;
+    lie_status st = lie_read_fd(fd, path.c_str(), LIE_READ_MAX_GLTF, size, &data, &n, &e);
+    close(fd);
+    if (st != LIE_OK) {
+        if (err)
+            *err = e.msg;
+        return false;
+    }
+    try {
+        out->assign(data, data + n);
+    } catch (...) {
+        free(data);
+        throw;
+    }
+    free(data);
+    return true;
 }
 
 bool fs_write(std::string *err, const std::string &, const std::vector<unsigned char> &, void *)
@@ -364,25 +408,25 @@ bool image_load(tinygltf::Image *image, const int index, std::string *err, std::
 
 std::vector<unsigned char> read_input(const char *path)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        fail(LIE_ERR_IO, "cannot open: %s", strerror(errno));
+    int fd;
+    uint64_t size;
+    lie_error e{};
+    if (lie_input_open(path, LIE_READ_MAX_GLTF, &fd, &size, &e) != LIE_OK)
+        throw ImportError{e.status, e.msg, 0, 0};
+    unsigned char *buf = nullptr;
+    size_t n = 0;
+    lie_status st = lie_read_fd(fd, path, LIE_READ_MAX_GLTF, size, &buf, &n, &e);
+    close(fd);
+    if (st != LIE_OK)
+        throw ImportError{e.status, e.msg, 0, 0};
     std::vector<unsigned char> data;
-    unsigned char buf[65536];
-    size_t n;
-    while ((n = fread(buf, 1, sizeof buf, f)) > 0) {
-        data.insert(data.end(), buf, buf + n);
-        if (data.size() > UINT32_MAX - 1) {
-            fclose(f);
-            fail(LIE_ERR_LIMIT, "file is 4 GiB or more");
-        }
+    try {
+        data.assign(buf, buf + n);
+    } catch (...) {
+        free(buf);
+        throw;
     }
-    if (ferror(f)) {
-        int e = errno;
-        fclose(f);
-        fail(LIE_ERR_IO, "cannot read: %s", strerror(e));
-    }
-    fclose(f);
+    free(buf);
     if (data.empty())
         fail(LIE_ERR_FORMAT, "empty file");
     return data;
@@ -468,6 +512,178 @@ void fail_if_unsupported_required(const std::vector<unsigned char> &d)
     }
 }
 
+/* ---- JSON checks before tinygltf ----------------------------------------
+ * tinygltf and nlohmann recurse once per level of JSON nesting, so a file
+ * nested 20,000 deep (in extras, say) overflows the stack.  The raw text is
+ * scanned first: no parser sees nesting past MAX_JSON_DEPTH. */
+
+const int MAX_JSON_DEPTH = 128;
+
+void check_json_depth(const unsigned char *p, size_t n)
+{
+    int depth = 0, line = 1, col = 0;
+    bool in_string = false, escaped = false;
+    for (size_t i = 0; i < n; i++) {
+        unsigned char c = p[i];
+        col++;
+        if (c == '\n') {
+            line++;
+            col = 0;
+        }
+        if (in_string) {
+            if (escaped)
+                escaped = false;
+            else if (c == '\\')
+                escaped = true;
+            else if (c == '"')
+                in_string = false;
+        } else if (c == '"') {
+            in_string = true;
+        } else if (c == '[' || c == '{') {
+            if (++depth > MAX_JSON_DEPTH)
+                throw ImportError{LIE_ERR_LIMIT,
+                                  "JSON nested deeper than " + std::to_string(MAX_JSON_DEPTH) + " levels", line, col};
+        } else if (c == ']' || c == '}') {
+            depth--;
+        }
+    }
+}
+
+/* tinygltf drops an optional property of the wrong type or sign and uses
+ * its default: a negative byteOffset becomes 0, "bufferView": -1 a view of
+ * zeros, "material": -2 the default material.  The glTF 2.0 schema makes
+ * every index (glTFid) and every offset, length and count an integer >= 0
+ * (byteStride: 4 to 252, a multiple of 4), and a URI an IRI, which holds no
+ * NUL.  These are checked on the JSON itself, outside extras and outside
+ * extensions this importer does not read. */
+struct StrictCheck {
+    std::string path;
+
+    [[noreturn]] void refuse(const std::string &key, const std::string &what)
+    {
+        fail(LIE_ERR_FORMAT, "%s%s%s: %s", path.c_str(), path.empty() ? "" : ".", clean(key).c_str(), what.c_str());
+    }
+
+    /* an integer in [lo, hi], or refuse */
+    void integer(const nlohmann::json &v, const std::string &key, double lo, double hi)
+    {
+        double d;
+        if (v.is_number_unsigned())
+            d = double(v.get<uint64_t>());
+        else if (v.is_number_integer())
+            d = double(v.get<int64_t>());
+        else if (v.is_number_float())
+            d = v.get<double>();
+        else
+            refuse(key, std::string("expected an integer, found ") + v.type_name());
+        char num[64];
+        if (v.is_number_float())
+            snprintf(num, sizeof num, "%.17g", d);
+        else
+            snprintf(num, sizeof num, "%s", v.dump().c_str());
+        if (!(d == floor(d)))
+            refuse(key, std::string(num) + " is not an integer");
+        if (d < lo || d > hi) {
+            char range[96];
+            snprintf(range, sizeof range, "%s is not in [%.0f, %.0f]", num, lo, hi);
+            refuse(key, range);
+        }
+    }
+
+    static bool is_index_key(const std::string &k)
+    {
+        static const char *const keys[] = {"buffer",  "bufferView", "camera", "index",  "indices",
+                                           "input",   "inverseBindMatrices",  "light",  "material",
+                                           "mesh",    "node",       "output", "sampler", "scene",
+                                           "skeleton", "skin",      "source", "texCoord"};
+        for (const char *x : keys)
+            if (k == x)
+                return true;
+        return false;
+    }
+
+    void object(const nlohmann::json &o, bool top)
+    {
+        for (auto it = o.begin(); it != o.end(); ++it) {
+            const std::string &k = it.key();
+            const nlohmann::json &v = it.value();
+            if (k == "extras")
+                continue;
+            if (k == "extensions" && v.is_object()) {
+                for (auto e = v.begin(); e != v.end(); ++e) {
+                    bool known = false;
+                    for (const char *x : SUPPORTED_REQUIRED)
+                        known |= e.key() == x;
+                    if (known)
+                        descend(e.value(), "extensions." + e.key());
+                }
+                continue;
+            }
+            if (k == "uri" && v.is_string() && v.get_ref<const std::string &>().find('\0') != std::string::npos)
+                refuse(k, "contains a NUL byte");
+            if (is_index_key(k) && !(k == "indices" && v.is_object())) {
+                integer(v, k, 0, INT32_MAX);
+            } else if (k == "byteOffset" || k == "byteLength" || k == "count") {
+                integer(v, k, 0, 9007199254740991.0); /* 2^53 - 1, JSON's exact integers */
+            } else if (k == "byteStride") {
+                integer(v, k, 4, 252);
+                if (v.get<double>() != 4 * floor(v.get<double>() / 4))
+                    refuse(k, v.dump() + " is not a multiple of 4");
+            } else if ((k == "children" || k == "joints" || (k == "nodes" && !top)) && v.is_array()) {
+                for (size_t i = 0; i < v.size(); i++)
+                    integer(v[i], k + "[" + std::to_string(i) + "]", 0, INT32_MAX);
+            } else if (k == "attributes" && v.is_object()) {
+                for (auto a = v.begin(); a != v.end(); ++a)
+                    integer(a.value(), k + "." + a.key(), 0, INT32_MAX);
+            } else if (k == "targets" && v.is_array()) {
+                for (size_t i = 0; i < v.size(); i++)
+                    if (v[i].is_object())
+                        for (auto a = v[i].begin(); a != v[i].end(); ++a)
+                            integer(a.value(), k + "[" + std::to_string(i) + "]." + a.key(), 0, INT32_MAX);
+            } else {
+                descend(v, k);
+            }
+        }
+    }
+
+    void descend(const nlohmann::json &v, const std::string &key)
+    {
+        if (!v.is_object() && !v.is_array())
+            return;
+        size_t keep = path.size();
+        path += (path.empty() ? "" : ".") + clean(key, 60);
+        if (v.is_object()) {
+            object(v, false);
+        } else {
+            std::string base = path;
+            for (size_t i = 0; i < v.size(); i++) {
+                path = base + "[" + std::to_string(i) + "]";
+                if (v[i].is_object())
+                    object(v[i], false);
+            }
+        }
+        path.resize(keep);
+    }
+};
+
+/* The JSON text of a .gltf, or of a GLB's first chunk (checked by glb_check). */
+void check_json(const std::vector<unsigned char> &d, bool glb)
+{
+    const unsigned char *json = d.data();
+    size_t len = d.size();
+    if (glb) {
+        uint32_t jl = uint32_t(d[12]) | uint32_t(d[13]) << 8 | uint32_t(d[14]) << 16 | uint32_t(d[15]) << 24;
+        len = std::min<size_t>(jl, len - 20);
+        json += 20;
+    }
+    check_json_depth(json, len);
+    nlohmann::json j = nlohmann::json::parse(json, json + len, nullptr, false);
+    if (j.is_discarded() || !j.is_object())
+        return; /* tinygltf reports the syntax error, with its position */
+    StrictCheck c;
+    c.object(j, true);
+}
+
 /* Parse the file into `model`; `image_errors` gets why external images that
  * tinygltf skipped (with a warning) could not be opened. */
 void load_model(tinygltf::Model &model, const char *path, const lie_scene_options &opt,
@@ -482,6 +698,12 @@ void load_model(tinygltf::Model &model, const char *path, const lie_scene_option
     std::string base = slash == std::string::npos ? std::string(".") : p.substr(0, slash == 0 ? 1 : slash);
     fs.prefix = base.back() == '/' ? base : base + "/";
     fs.allow_external = opt.allow_external_uris != 0;
+    if (char *r = realpath(base.c_str(), nullptr)) {
+        fs.root = r;
+        free(r);
+        if (fs.root.back() != '/')
+            fs.root += '/';
+    }
 
     ImageState images{&model, std::string()};
     tinygltf::TinyGLTF loader;
@@ -498,8 +720,10 @@ void load_model(tinygltf::Model &model, const char *path, const lie_scene_option
     bool ok;
     if (data.size() >= 4 && memcmp(data.data(), "glTF", 4) == 0) {
         uint32_t length = glb_check(data);
+        check_json(data, true);
         ok = loader.LoadBinaryFromMemory(&model, &err, &warn, data.data(), length, base);
     } else {
+        check_json(data, false);
         ok = loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char *>(data.data()),
                                         (unsigned)data.size(), base);
     }
@@ -2103,11 +2327,11 @@ std::string export_json(Export &ex)
     return j.dump(2) + "\n";
 }
 
-/* Write one output through a temporary file; `body` fills it. */
-template <class F> lie_status write_atomic(const std::string &path, lie_error *err, F body)
+/* Write one output through a temporary file of `group`; `body` fills it. */
+template <class F> lie_status write_atomic(const std::string &path, lie_atomic_group *group, lie_error *err, F body)
 {
     lie_atomic_file af;
-    lie_status st = lie_atomic_open(&af, path.c_str(), err);
+    lie_status st = lie_atomic_open_group(&af, path.c_str(), group, err);
     if (st != LIE_OK)
         return st;
     st = body(af.fp);
@@ -2129,6 +2353,19 @@ lie_status write_bytes(FILE *fp, const std::string &path, const void *data, size
 
 extern "C" lie_status lie_gltf_export(const lie_scene *s, const char *path, lie_error *err)
 {
+    lie_atomic_group *group = lie_atomic_group_create();
+    if (!group)
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    lie_status st = lie_gltf_export_group(s, path, group, err);
+    if (st == LIE_OK)
+        st = lie_atomic_group_commit(group, err);
+    lie_atomic_group_destroy(group);
+    return st;
+}
+
+extern "C" lie_status lie_gltf_export_group(const lie_scene *s, const char *path, lie_atomic_group *group,
+                                            lie_error *err)
+{
     if (!s || !path || !*path)
         return lie_error_set(err, LIE_ERR_ARG, path, "lie_gltf_export: NULL scene or empty path");
     if (strcmp(path, "-") == 0)
@@ -2146,7 +2383,6 @@ extern "C" lie_status lie_gltf_export(const lie_scene *s, const char *path, lie_
                                   base.size() > 4 && base.compare(base.size() - 4, 4, ".png") == 0))
         return lie_error_set(err, LIE_ERR_ARG, path, "the glTF would share its name with its .bin or a texture");
 
-    std::vector<std::string> done; /* files already renamed into place */
     lie_status st = LIE_OK;
     try {
         Export ex{*s, dir, stem, tinygltf::Model(), {}, {}};
@@ -2154,7 +2390,7 @@ extern "C" lie_status lie_gltf_export(const lie_scene *s, const char *path, lie_
         std::string json = export_json(ex);
         /* the side files first, the .gltf last: a .gltf never names a missing file */
         for (const Png &png : ex.pngs) {
-            st = write_atomic(png.path, err, [&](FILE *fp) {
+            st = write_atomic(png.path, group, err, [&](FILE *fp) {
                 const void *codes = png.bits == 16 ? static_cast<const void *>(png.b16.data())
                                                    : static_cast<const void *>(png.b8.data());
                 return lie_scene_png_write(fp, png.path.c_str(), png.width, png.height, png.bits, png.channels,
@@ -2162,17 +2398,14 @@ extern "C" lie_status lie_gltf_export(const lie_scene *s, const char *path, lie_
             });
             if (st != LIE_OK)
                 break;
-            done.push_back(png.path);
         }
         std::string bin_path = dir + stem + ".bin";
         if (st == LIE_OK && !ex.bin.empty()) {
-            st = write_atomic(bin_path, err,
+            st = write_atomic(bin_path, group, err,
                               [&](FILE *fp) { return write_bytes(fp, bin_path, ex.bin.data(), ex.bin.size(), err); });
-            if (st == LIE_OK)
-                done.push_back(bin_path);
         }
         if (st == LIE_OK)
-            st = write_atomic(p, err, [&](FILE *fp) { return write_bytes(fp, p, json.data(), json.size(), err); });
+            st = write_atomic(p, group, err, [&](FILE *fp) { return write_bytes(fp, p, json.data(), json.size(), err); });
     } catch (const ImportError &e) {
         st = lie_error_set(err, e.status, path, "%s", e.msg.c_str());
     } catch (const std::bad_alloc &) {
@@ -2182,8 +2415,5 @@ extern "C" lie_status lie_gltf_export(const lie_scene *s, const char *path, lie_
     } catch (...) {
         st = lie_error_set(err, LIE_ERR_FORMAT, path, "unexpected error while exporting");
     }
-    if (st != LIE_OK)
-        for (const std::string &f : done)
-            unlink(f.c_str());
-    return st;
+    return st; /* on failure the caller's group destroy removes the temporaries */
 }

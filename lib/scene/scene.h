@@ -305,8 +305,8 @@ lie_material lie_material_default(void);
 /* Write the document as glTF 2.0, which lie_scene_load reads back into the
  * same world (the same hash when no node was removed).  Path
  * "DIR/NAME.gltf" also gets DIR/NAME.bin (every vertex and index) and
- * DIR/NAME_texN.png (image N), each written atomically, the .gltf last; on
- * failure the files this call already put in place are removed again.
+ * DIR/NAME_texN.png (image N), all complete on disk before any is renamed
+ * into place (the .gltf last); on failure none is.
  * Left out: removed nodes with their subtrees, nodes outside the default
  * scene, unused meshes, cameras and lights, and textures no material
  * uses.  Every material is
@@ -315,6 +315,9 @@ lie_material lie_material_default(void);
  * else 16-bit), in the colour space of the slot that uses them.  "-"
  * (stdout) is refused: the output is several files. */
 lie_status lie_gltf_export(const lie_scene *s, const char *path, lie_error *err);
+/* The same into `group` (lib/core): nothing is visible until the caller
+ * commits the group, with whatever else the run writes. */
+lie_status lie_gltf_export_group(const lie_scene *s, const char *path, lie_atomic_group *group, lie_error *err);
 
 /* Internal to lib/scene: the importer (gltf.cpp) fills the document. */
 lie_status lie_gltf_import(lie_scene *s, const char *path, const lie_scene_options *opt,

@@ -164,7 +164,7 @@ lie_status lie_camera_path_read(const char *path, lie_camera_path **out, lie_err
 {
     unsigned char *data;
     size_t size;
-    lie_status st = lie_read_file(path, &data, &size, err);
+    lie_status st = lie_read_file_max(path, LIE_READ_MAX_TEXT, &data, &size, err);
     if (st != LIE_OK)
         return st;
     st = lie_camera_path_parse(data, size, path, out, err);
