@@ -263,6 +263,19 @@ static void test_vector_shading_matches_scalar_brdf(void **state)
     lie_scene_destroy(s);
 }
 
+/* A 37 x 23 image with stratified pixels and a rotated pattern: every
+ * pixel's value depends on its own index. */
+static lie_render_options odd_frame_options(void)
+{
+    lie_render_options o = lie_render_options_default();
+    o.width = 37;
+    o.height = 23;
+    o.light_samples = 20;
+    o.pattern = LIE_PATTERN_ROTATED;
+    o.spp = 2;
+    return o;
+}
+
 static void test_render_is_identical_for_any_thread_count(void **state)
 {
     (void)state;
@@ -271,12 +284,7 @@ static void test_render_is_identical_for_any_thread_count(void **state)
     lie_rt *rt = NULL;
     assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
     lie_camera cam = lie_scene_default_camera(s);
-    lie_render_options o = lie_render_options_default();
-    o.width = 37;
-    o.height = 23;
-    o.light_samples = 20;
-    o.pattern = LIE_PATTERN_ROTATED;
-    o.spp = 2;
+    lie_render_options o = odd_frame_options();
     lie_frame *f1 = NULL, *f3 = NULL;
     o.threads = 1;
     assert_int_equal(lie_render(s, rt, &cam, &o, &f1, NULL, &err), LIE_OK);
@@ -297,12 +305,7 @@ static void test_render_regions_assemble_the_whole_frame(void **state)
     lie_rt *rt = NULL;
     assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
     lie_camera cam = lie_scene_default_camera(s);
-    lie_render_options o = lie_render_options_default();
-    o.width = 37;
-    o.height = 23;
-    o.light_samples = 20;
-    o.pattern = LIE_PATTERN_ROTATED;
-    o.spp = 2;
+    lie_render_options o = odd_frame_options();
     o.aovs = LIE_AOV_DEPTH;
     lie_frame *whole = NULL;
     assert_int_equal(lie_render(s, rt, &cam, &o, &whole, NULL, &err), LIE_OK);
