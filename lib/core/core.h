@@ -272,6 +272,10 @@ void lie_escape_controls(char *out, size_t size, const char *s);
 /* Strict parses: the whole string must be the number, within [min, max]. */
 int lie_parse_long(const char *s, long min, long max, long *out);
 int lie_parse_float(const char *s, float min, float max, float *out);
+/* A printf pattern with exactly one integer conversion: %d, %5d, %05d (frame names). */
+int lie_frame_pattern_ok(const char *s);
+/* "A-B" with min <= A <= B <= max (frame ranges). */
+int lie_parse_range(const char *s, long min, long max, long *a, long *b);
 /* Write s as a JSON string literal (with quotes) to fp. */
 void lie_json_string(FILE *fp, const char *s);
 
