@@ -82,6 +82,8 @@ typedef struct build_ctx {
                                  build afresh (NULL: build everything) */
     const uint8_t *node_flags; /* update: per old node, 1 = recompute (NULL: none) */
     const uint8_t *tri_mask;   /* build only these triangles (NULL: all) */
+    uint64_t unit_lo, unit_hi; /* build only units [unit_lo, unit_hi) ... */
+    uint32_t tri_lo;           /* ... of triangles tri_lo + item (out[item]) */
     unit_buf *out;        /* per triangle: its units, in emitter order, each contiguous */
     worker *workers;
     /* update: flagged old nodes already recomputed in parallel (see
@@ -837,7 +839,8 @@ static lie_class conservative_pair(const build_ctx *c, worker *w, uint32_t tri, 
     return w->n_hits ? LIE_CLASS_PARTIAL : LIE_CLASS_VISIBLE;
 }
 
-static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t n_tris, int n_emitters, const int32_t *old_unit);
+static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32_t n_tris, int n_emitters,
+                           const int32_t *old_unit, uint64_t unit_lo, uint64_t unit_hi);
 
 /* ---- the patch tree of one unit ----------------------------------------- */
 
@@ -1029,7 +1032,7 @@ static void build_triangle(void *ctx, size_t item, int worker_id)
 {
     build_ctx *c = ctx;
     worker *w = &c->workers[worker_id];
-    uint32_t tri = (uint32_t)item;
+    uint32_t tri = c->tri_lo + (uint32_t)item;
     unit_buf *u = &c->out[item];
     const lie_scene *s = c->s;
     size_t ne = (size_t)s->n_emitters;
@@ -1044,6 +1047,8 @@ static void build_triangle(void *ctx, size_t item, int worker_id)
     float eps = lie_pair_eps(s, tri);
     for (size_t e = 0; e < ne; e++) {
         size_t unit = (size_t)tri * ne + e;
+        if (unit < c->unit_lo || unit >= c->unit_hi)
+            continue; /* lie_env_build_range: another part's */
         int root = push_node(u, w);
         if (root < 0)
             return;
@@ -1080,6 +1085,8 @@ static void stats_merge(lie_build_stats *dst, const lie_build_stats *src)
     dst->segments += src->segments;
     dst->blocker_total += src->blocker_total;
 }
+
+void lie_build_stats_add(lie_build_stats *a, const lie_build_stats *b) { stats_merge(a, b); }
 
 /* ---- update: flagged nodes recomputed in parallel ------------------------ */
 
@@ -1236,8 +1243,8 @@ static lie_status precompute_flagged(build_ctx *c, int threads, size_t *n_memo)
 /* Build (or, with a mask, rebuild some units of) every triangle, then
  * concatenate the per-triangle buffers in unit order. */
 static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, const int32_t *old_unit,
-                           const uint8_t *node_flags, const uint8_t *tri_mask, int threads, lie_progress *progress,
-                           lie_build_stats *stats)
+                           const uint8_t *node_flags, const uint8_t *tri_mask, uint64_t unit_lo, uint64_t unit_hi,
+                           int threads, lie_progress *progress, lie_build_stats *stats)
 {
     build_ctx c;
     memset(&c, 0, sizeof c);
@@ -1250,10 +1257,20 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     c.old_unit = old_unit;
     c.node_flags = node_flags;
     c.tri_mask = tri_mask;
+    /* the triangles holding units [unit_lo, unit_hi) */
+    size_t ne = s->n_emitters > 0 ? (size_t)s->n_emitters : 1;
+    c.unit_lo = unit_lo;
+    c.unit_hi = unit_hi;
+    c.tri_lo = (uint32_t)(unit_lo / ne);
+    uint32_t n_items = unit_hi > unit_lo ? (uint32_t)((unit_hi - 1) / ne + 1 - c.tri_lo) : 0;
+    if (s->n_emitters == 0) {
+        c.tri_lo = 0;
+        n_items = s->n_tris;
+    }
     if (threads <= 0)
         threads = lie_cpu_count();
     c.workers = calloc((size_t)threads, sizeof *c.workers);
-    c.out = calloc((size_t)s->n_tris + 1, sizeof *c.out);
+    c.out = calloc((size_t)n_items + 1, sizeof *c.out);
     c.n_halton = c.p->max_samples < HALTON_TABLE_MAX ? c.p->max_samples : HALTON_TABLE_MAX;
     c.halton = malloc(sizeof *c.halton * 4 * (size_t)c.n_halton + 1);
     for (int d = 0; c.halton && d < 4; d++)
@@ -1264,7 +1281,7 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     if (st == LIE_OK && node_flags && old_unit && c.p->mode == LIE_BLOCKERS_SAMPLED)
         st = precompute_flagged(&c, threads, &n_memo);
     if (st == LIE_OK)
-        st = lie_parallel_for(s->n_tris, threads, build_triangle, &c, progress ? lie_progress_cb : NULL, progress);
+        st = lie_parallel_for(n_items, threads, build_triangle, &c, progress ? lie_progress_cb : NULL, progress);
     memo_free(&c, n_memo);
     for (int i = 0; c.workers && i < threads; i++) {
         if (c.workers[i].nomem)
@@ -1273,8 +1290,8 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
             stats_merge(stats, &c.workers[i].st);
     }
     if (st == LIE_OK)
-        st = assemble(env, c.out, s->n_tris, s->n_emitters, old_unit);
-    for (uint32_t t = 0; c.out && t < s->n_tris; t++) {
+        st = assemble(env, c.out, c.tri_lo, n_items, s->n_emitters, old_unit, unit_lo, unit_hi);
+    for (uint32_t t = 0; c.out && t < n_items; t++) {
         free(c.out[t].roots);
         free(c.out[t].nodes);
         free(c.out[t].pool);
@@ -1319,9 +1336,12 @@ static void copy_direct(const lie_env *old, uint32_t from, lie_pnode *nd, uint32
     nd[idx] = x;
 }
 
-/* Concatenate per-triangle unit buffers into env's flat arrays (copied
- * triangles straight from env's old arrays, which are freed last). */
-static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t n_tris, int n_emitters, const int32_t *old_unit)
+/* Concatenate per-triangle unit buffers (of triangles tri_lo + t) into
+ * env's flat arrays (copied triangles straight from env's old arrays, which
+ * are freed last); env->root[unit - unit_lo] for the units in
+ * [unit_lo, unit_hi). */
+static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32_t n_tris, int n_emitters,
+                           const int32_t *old_unit, uint64_t unit_lo, uint64_t unit_hi)
 {
     uint64_t nodes = 0, pool = 0;
     for (uint32_t t = 0; t < n_tris; t++) {
@@ -1330,7 +1350,7 @@ static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t n_tris, int n_
     }
     if (nodes >= 0xFFFFFFF0u || pool >= 0xFFFFFFF0u)
         return LIE_ERR_LIMIT;
-    uint32_t *root = malloc(sizeof *root * ((size_t)n_tris * (size_t)n_emitters + 1));
+    uint32_t *root = malloc(sizeof *root * ((size_t)(unit_hi - unit_lo) + 1));
     lie_pnode *nd = malloc(sizeof *nd * (size_t)(nodes + 1));
     uint32_t *pl = malloc(sizeof *pl * (size_t)(pool + 1));
     if (!root || !nd || !pl) {
@@ -1345,17 +1365,20 @@ static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t n_tris, int n_
         if (u->copied) {
             uint32_t next_node = nb, next_pool = pb;
             for (int e = 0; e < n_emitters; e++) {
-                size_t unit = (size_t)t * (size_t)n_emitters + (size_t)e;
+                size_t unit = (size_t)(tri_lo + t) * (size_t)n_emitters + (size_t)e;
                 uint32_t idx = next_node++;
-                root[unit] = idx;
+                root[unit - unit_lo] = idx;
                 copy_direct(env, env->root[old_unit[unit]], nd, pl, idx, &next_node, &next_pool);
             }
             nb += u->n_nodes;
             pb += u->n_pool;
             continue;
         }
-        for (int e = 0; e < n_emitters; e++)
-            root[(size_t)t * (size_t)n_emitters + (size_t)e] = nb + u->roots[e];
+        for (int e = 0; e < n_emitters; e++) {
+            uint64_t unit = (uint64_t)(tri_lo + t) * (uint64_t)n_emitters + (uint64_t)e;
+            if (unit >= unit_lo && unit < unit_hi)
+                root[unit - unit_lo] = nb + u->roots[e];
+        }
         for (uint32_t i = 0; i < u->n_nodes; i++) {
             lie_pnode x = u->nodes[i];
             if (x.child)
@@ -1404,7 +1427,8 @@ lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_
     env->scene_hash = s->hash;
     if (stats)
         memset(stats, 0, sizeof *stats);
-    lie_status st = run_build(env, s, rt, NULL, NULL, tri_mask, p->threads, progress, stats);
+    uint64_t n_units = (uint64_t)s->n_tris * (uint64_t)s->n_emitters;
+    lie_status st = run_build(env, s, rt, NULL, NULL, tri_mask, 0, n_units, p->threads, progress, stats);
     if (st != LIE_OK) {
         lie_env_destroy(env);
         return lie_error_set(err, st, s->path, "building local illumination environments: %s",
@@ -1413,6 +1437,45 @@ lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_
     if (stats)
         stats->seconds = lie_time_now() - t0;
     *out = env;
+    return LIE_OK;
+}
+
+lie_status lie_env_build_range(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                               const uint8_t *tri_mask, uint64_t first_unit, uint64_t n_units, lie_env_part *out,
+                               lie_build_stats *stats, lie_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (lie_build_params_check(p, err) != LIE_OK)
+        return LIE_ERR_ARG;
+    uint64_t total = (uint64_t)s->n_tris * (uint64_t)s->n_emitters;
+    if (first_unit > total || n_units > total - first_unit)
+        return lie_error_set(err, LIE_ERR_ARG, s->path, "units %llu..%llu out of range (%llu)",
+                             (unsigned long long)first_unit, (unsigned long long)(first_unit + n_units),
+                             (unsigned long long)total);
+    double t0 = lie_time_now();
+    lie_env part;
+    memset(&part, 0, sizeof part);
+    part.params = *p;
+    if (stats)
+        memset(stats, 0, sizeof *stats);
+    lie_status st = LIE_OK;
+    if (n_units)
+        st = run_build(&part, s, rt, NULL, NULL, tri_mask, first_unit, first_unit + n_units, p->threads, NULL, stats);
+    if (st != LIE_OK) {
+        free(part.root);
+        free(part.nodes);
+        free(part.pool);
+        return lie_error_set(err, st, s->path, "building local illumination environments: %s", lie_status_str(st));
+    }
+    if (stats)
+        stats->seconds = lie_time_now() - t0;
+    out->first_unit = first_unit;
+    out->n_units = n_units;
+    out->root = part.root;
+    out->nodes = part.nodes;
+    out->n_nodes = part.n_nodes;
+    out->pool = part.pool;
+    out->n_pool = part.n_pool;
     return LIE_OK;
 }
 
@@ -1442,7 +1505,8 @@ lie_status lie_env_update(lie_env *env, const lie_scene *s, const lie_rt *rt, co
     double t0 = lie_time_now();
     if (stats)
         memset(stats, 0, sizeof *stats);
-    lie_status st = run_build(env, s, rt, old_unit, node_flags, NULL, threads, NULL, stats);
+    lie_status st = run_build(env, s, rt, old_unit, node_flags, NULL, 0, (uint64_t)s->n_tris * (uint64_t)s->n_emitters,
+                              threads, NULL, stats);
     if (stats)
         stats->seconds = lie_time_now() - t0;
     if (st != LIE_OK)
