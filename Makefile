@@ -33,6 +33,14 @@ LIB_C    := $(sort $(filter-out lib/dist/%,$(wildcard lib/*/*.c)))
 LIB_CXX  := $(sort $(wildcard lib/*/*.cpp))
 LIB_OBJ  := $(LIB_C:%.c=$(BUILD)/%.o) $(LIB_CXX:%.cpp=$(BUILD)/%.o)
 LIB_A    := $(BUILD)/liblie.a
+# The shared library: SONAME liblie.so.MAJOR, only the lie_ symbols of the public headers
+# exported (-fvisibility=hidden, the headers' `visibility push(default)`, lib/liblie.map).
+SOVERSION := 0
+LIBVERSION := 0.1.0
+LIB_SO   := $(BUILD)/liblie.so.$(LIBVERSION)
+# The library's objects are position-independent, so one set serves liblie.a and liblie.so.
+$(LIB_OBJ): CFLAGS += -fPIC -fvisibility=hidden -fno-semantic-interposition
+$(LIB_OBJ): CXXFLAGS += -fPIC -fvisibility=hidden -fvisibility-inlines-hidden -fno-semantic-interposition
 
 TOOLS    := $(notdir $(wildcard tools/*))
 BINDIR   := $(if $(filter release,$(VARIANT)),bin,$(BUILD)/bin)
@@ -41,7 +49,8 @@ TOOL_BIN := $(TOOLS:%=$(BINDIR)/%)
 UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
 UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/tests/%)
 
-.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench scenes fuzz clean
+.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench scenes fuzz clean \
+        install uninstall man shared
 all: $(TOOL_BIN)
 
 deps:
@@ -57,6 +66,21 @@ $(BUILD)/%.o: %.cpp
 $(LIB_A): $(LIB_OBJ)
 	@rm -f $@
 	ar rcs $@ $^
+
+$(LIB_SO): $(LIB_OBJ) lib/liblie.map
+	$(CC) -shared -Wl,-soname,liblie.so.$(SOVERSION) -Wl,--version-script=lib/liblie.map \
+	    -Wl,--no-undefined $(LDFLAGS) $(LIB_OBJ) $(LDLIBS) -o $@
+shared: $(LIB_SO)
+
+# The commit goes into one object only, rebuilt when HEAD (or the dirty state) changes.
+COMMIT := $(shell git describe --always --dirty 2>/dev/null || echo unknown)
+$(BUILD)/commit.txt: FORCE
+	@mkdir -p $(dir $@)
+	@echo '$(COMMIT)' | cmp -s - $@ || echo '$(COMMIT)' > $@
+$(BUILD)/lib/version/version.o: $(BUILD)/commit.txt
+$(BUILD)/lib/version/version.o: CFLAGS += -DLIE_COMMIT=\"$(COMMIT)\"
+.PHONY: FORCE
+FORCE:
 
 # A tool links every object of its folder (tools/NAME/*.c).
 TOOL_OBJ = $(patsubst %.c,$(BUILD)/%.o,$(wildcard tools/$(1)/*.c))
@@ -139,5 +163,7 @@ test-valgrind: all
 
 clean:
 	rm -rf build bin out
+
+include mk/install.mk
 
 -include $(shell find build -name '*.d' 2>/dev/null)

@@ -14,5 +14,6 @@
 #include "rt/rt.h"
 #include "scene/scene.h"
 #include "shade/shade.h"
+#include "version/version.h"
 
 #endif

@@ -9,6 +9,8 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -239,4 +241,6 @@ int lie_report_error(const char *prog, const lie_error *err, int code);
 #ifdef __cplusplus
 }
 #endif
+#pragma GCC visibility pop
+
 #endif

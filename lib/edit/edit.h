@@ -10,6 +10,8 @@
 #include "core/core.h"
 #include "scene/scene.h"
 
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -84,4 +86,6 @@ lie_status lie_edit_find_node(const lie_scene *s, const char *name, int *node, c
 #ifdef __cplusplus
 }
 #endif
+#pragma GCC visibility pop
+
 #endif

@@ -6,6 +6,8 @@
 
 #include "core/core.h"
 
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -114,4 +116,6 @@ float lie_srgb_to_linear(float x);
 #ifdef __cplusplus
 }
 #endif
+#pragma GCC visibility pop
+
 #endif

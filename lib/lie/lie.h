@@ -13,9 +13,12 @@
 #define LIE_LIE_H
 
 #include "core/core.h"
+#include "lie/pair.h"
 #include "patch/patch.h"
 #include "rt/rt.h"
 #include "scene/scene.h"
+
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
 
 #ifdef __cplusplus
 extern "C" {
@@ -135,18 +138,6 @@ lie_status lie_env_rebuild_units(lie_env *env, const lie_scene *s, const lie_rt 
                                  const uint32_t *units, size_t n_units, int threads,
                                  lie_build_stats *stats, lie_error *err);
 
-/* How far shadow segments towards directional emitters reach. */
-float lie_ray_far(const lie_scene *s);
-/* The renderer's largest shadow-ray offset on triangle tri. */
-float lie_pair_eps(const lie_scene *s, uint32_t tri);
-/* The hull of a pair, as lie-build and the ray segment trees see it: the
- * patch's corners V, lifted by lie_pair_eps on the side(s) it is shaded
- * from, and the emitter's points (vertices; a point light's position; for a
- * directional light the patch moved lie_ray_far towards it).  `out` must
- * hold lie_pair_hull_cap(s, e) points; returns how many were written. */
-int lie_pair_hull_cap(const lie_scene *s, int e);
-int lie_pair_hull_points(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], int e, lie_vec3 *out);
-
 /* Update env for scene s (its state after edits).  old_unit has one entry
  * per unit of s: the unit of env it continues (copied, or updated where
  * node_flags marks env nodes to recompute), or -1 to build it afresh.  The
@@ -190,4 +181,6 @@ static inline const lie_pnode *lie_env_find_leaf_path(const lie_env *env, uint32
 #ifdef __cplusplus
 }
 #endif
+#pragma GCC visibility pop
+
 #endif

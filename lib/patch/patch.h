@@ -12,6 +12,8 @@
 
 #include "core/core.h"
 
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -81,4 +83,6 @@ int lie_patch_parse(const char *s, uint32_t *tri, lie_patch_path *p);
 #ifdef __cplusplus
 }
 #endif
+#pragma GCC visibility pop
+
 #endif

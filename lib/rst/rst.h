@@ -23,6 +23,8 @@
 #include "lie/lie.h"
 #include "scene/scene.h"
 
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -68,4 +70,6 @@ void lie_rst_spread(const lie_env *env, uint8_t *flags);
 #ifdef __cplusplus
 }
 #endif
+#pragma GCC visibility pop
+
 #endif

@@ -10,6 +10,8 @@
 #include "core/core.h"
 #include "scene/scene.h"
 
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -95,4 +97,6 @@ float lie_rt_scale(const lie_rt *rt);
 #ifdef __cplusplus
 }
 #endif
+#pragma GCC visibility pop
+
 #endif

@@ -16,6 +16,8 @@
 
 #include "core/core.h"
 
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -327,4 +329,6 @@ lie_status lie_scene_png_write(FILE *fp, const char *path, int width, int height
 #ifdef __cplusplus
 }
 #endif
+#pragma GCC visibility pop
+
 #endif

@@ -42,7 +42,7 @@ lie_status lie_shade_scratch_init(lie_shade_scratch *sc, int cap, int max_blocke
     sc->bwork = aligned_alloc(64, sizeof(float) * LIE_BLOCKER_WORK * sc->bstride);
     sc->bkind = malloc(sizeof *sc->bkind * sc->bstride);
     if (!sc->batch.occluded || !sc->blockers || !sc->bwork || !sc->bkind ||
-        lie_light_samples_alloc(&sc->rotated, cap) != LIE_OK) {
+        lie_light_samples_alloc(&sc->rotated, cap) != LIE_OK || lie_polylight_work_init(&sc->poly, max_blockers) != LIE_OK) {
         lie_shade_scratch_free(sc);
         return LIE_ERR_NOMEM;
     }
@@ -62,6 +62,7 @@ void lie_shade_scratch_free(lie_shade_scratch *sc)
     free(sc->bwork);
     free(sc->bkind);
     lie_light_samples_free(&sc->rotated);
+    lie_polylight_work_free(&sc->poly);
     memset(sc, 0, sizeof *sc);
 }
 
@@ -338,6 +339,24 @@ void lie_shadow_segments(lie_shadow_query *q)
     }
 }
 
+/* Where the closed form serves a pair: the colour that multiplies its
+ * projected solid angle, radiance x diffuse / pi. */
+static void closed_colour(const lie_polylight *pl, const lie_surface *sf, float k[3])
+{
+    for (int c = 0; c < 3; c++)
+        k[c] = pl->radiance[c] * sf->diffuse[c] * (float)M_1_PI;
+}
+
+static void add_scaled(const float k[3], double omega, float rgb[3])
+{
+    float w = (float)omega;
+    rgb[0] += k[0] * w;
+    rgb[1] += k[1] * w;
+    rgb[2] += k[2] * w;
+}
+
+static inline double clock_if(int on) { return on ? lie_time_now() : 0.0; }
+
 void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pixel, int depth,
                       lie_shade_scratch *sc, float rgb[3])
 {
@@ -352,6 +371,8 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
     mag = mag > az ? mag : az;
     float eps = 1e-4f * (mag > 1.0f ? mag : 1.0f);
     lie_vec3 o = lie_v3_add(sf->p, lie_v3_scale(sf->ng, eps));
+    const int timers = opt->timers;
+    lie_render_stats *st = &sc->stats;
     for (int e = 0; e < s->n_emitters; e++) {
         const lie_emitter *em = &s->emitters[e];
         if (em->type == LIE_EMITTER_AREA && em->first_tri <= sf->tri && sf->tri < em->first_tri + em->n_tris)
@@ -363,6 +384,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
             cls = opt->oracle->classify(opt->oracle->ctx, sf, e, &pair);
             if (cls == LIE_VISCLASS_OCCLUDED) {
                 sc->stats.shadow_rays_skipped += (uint64_t)(em->type == LIE_EMITTER_AREA ? opt->light_samples : 1);
+                st->pairs_occluded++;
                 continue;
             }
             if (cls == LIE_VISCLASS_BLOCKERS) {
@@ -376,6 +398,40 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
         } else if (opt->visibility == LIE_VIS_NONE) {
             cls = LIE_VISCLASS_VISIBLE;
         }
+        /* A Lambert receiver under a planar emitter of one radiance: the
+         * closed form (polylight.h) for the unshadowed part, and for the
+         * visible part of a partial pair. */
+        const lie_polylight *pl = c->analytic && sf->lambert && c->poly ? c->poly[e] : NULL;
+        double omega = 0.0;
+        float kc[3] = {0.0f, 0.0f, 0.0f};
+        if (pl) {
+            closed_colour(pl, sf, kc);
+            if (cls == LIE_VISCLASS_BLOCKERS && c->exact) {
+                double t0 = clock_if(timers);
+                int ok = lie_polylight_visible(pl, o, sf->n, sf->ng, s->tri_p, opt->oracle->solid, sc->blockers, n_blockers, eps,
+                                               &sc->poly, &omega) == 0;
+                if (timers)
+                    st->t_exact += lie_time_now() - t0;
+                if (ok) {
+                    add_scaled(kc, omega, rgb);
+                    st->pairs_exact++;
+                    st->shadow_rays_skipped += (uint64_t)opt->light_samples;
+                    continue;
+                }
+                st->exact_overflows++;
+            }
+            double t0 = clock_if(timers);
+            omega = lie_polylight_unshadowed(pl, o, sf->n, sf->ng, &sc->poly);
+            if (timers)
+                st->t_analytic += lie_time_now() - t0;
+            if (cls == LIE_VISCLASS_VISIBLE) {
+                add_scaled(kc, omega, rgb);
+                st->pairs_analytic++;
+                st->shadow_rays_skipped += (uint64_t)opt->light_samples;
+                continue;
+            }
+        }
+        double t_shade = clock_if(timers);
         int n;
         const lie_light_samples *ls = NULL;
         if (em->type == LIE_EMITTER_AREA) {
@@ -392,9 +448,12 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
             kernel_punctual(c, sf, o, em, sc);
             n = 1;
         }
+        if (timers)
+            st->t_sampled_shading += lie_time_now() - t_shade;
         sc->stats.light_samples += (uint64_t)n;
         if (cls == LIE_VISCLASS_VISIBLE) {
             sc->stats.shadow_rays_skipped += (uint64_t)n;
+            st->pairs_unshadowed++;
             add_pair(sc, NULL, n, rgb);
             continue;
         }
@@ -409,10 +468,14 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                 sdy[0] *= len;
                 sdz[0] *= len;
             }
+            double t0 = clock_if(timers);
             if (cls == LIE_VISCLASS_BLOCKERS) {
                 /* short lists: test every sample, no compaction */
                 opt->oracle->occluded(opt->oracle->ctx, sc->blockers, n_blockers, &q, sc->occ);
                 sc->stats.shadow_rays_skipped += (uint64_t)n;
+                st->pairs_blockers++;
+                if (timers)
+                    st->t_blockers += lie_time_now() - t0;
             } else {
                 /* Embree: rays only for samples that would contribute */
                 lie_shadow_segments(&q);
@@ -440,7 +503,19 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                         sc->occ[sc->idx[k]] = b->occluded[k] ? ~0u : 0u;
                 }
                 sc->stats.shadow_rays += (uint64_t)m;
+                st->pairs_embree++;
+                if (timers)
+                    st->t_embree += lie_time_now() - t0;
             }
+        }
+        if (pl) {
+            /* the ratio estimator: the closed form times the share of the
+             * samples' weight that is visible (sc->scalar: a Lambert
+             * receiver under an emitter of one colour) */
+            float all = plain_sum(sc->wr, n);
+            float vis = unblocked_sum(sc->wr, sc->occ, n);
+            add_scaled(kc, all > 0.0f ? omega * (double)(vis / all) : omega, rgb);
+            continue;
         }
         add_pair(sc, sc->occ, n, rgb);
     }

@@ -25,6 +25,29 @@ lie_render_options lie_render_options_default(void)
     return o;
 }
 
+void lie_render_stats_add(lie_render_stats *acc, const lie_render_stats *w)
+{
+    acc->eye_rays += w->eye_rays;
+    acc->reflection_rays += w->reflection_rays;
+    acc->shadow_rays += w->shadow_rays;
+    acc->shadow_rays_skipped += w->shadow_rays_skipped;
+    acc->shading_points += w->shading_points;
+    acc->light_samples += w->light_samples;
+    acc->pairs_occluded += w->pairs_occluded;
+    acc->pairs_analytic += w->pairs_analytic;
+    acc->pairs_exact += w->pairs_exact;
+    acc->pairs_blockers += w->pairs_blockers;
+    acc->pairs_embree += w->pairs_embree;
+    acc->pairs_unshadowed += w->pairs_unshadowed;
+    acc->exact_overflows += w->exact_overflows;
+    acc->t_analytic += w->t_analytic;
+    acc->t_exact += w->t_exact;
+    acc->t_blockers += w->t_blockers;
+    acc->t_embree += w->t_embree;
+    acc->t_sampled_shading += w->t_sampled_shading;
+    acc->seconds += w->seconds;
+}
+
 typedef struct render_job {
     lie_shade_ctx sc;
     const lie_camera *cam;
@@ -323,6 +346,18 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
     for (int t = 0; st == LIE_OK && t < threads; t++)
         st = lie_shade_scratch_init(&j.scratch[t], opt->light_samples, opt->oracle ? opt->oracle->max_blockers : 0);
     j.sc.fixed = fixed;
+    /* closed forms from LIE_ANALYTIC_MIN_SAMPLES on: below, a few samples
+     * cost less than an edge sum */
+    j.sc.analytic = opt->exact == LIE_EXACT_ONLY || opt->light_samples >= LIE_ANALYTIC_MIN_SAMPLES;
+    j.sc.exact = opt->visibility == LIE_VIS_LIE &&
+                 (opt->exact == LIE_EXACT_ONLY ||
+                  (opt->exact == LIE_EXACT_AUTO && opt->light_samples >= LIE_EXACT_MIN_SAMPLES));
+    if (st == LIE_OK && j.sc.analytic) {
+        j.sc.poly = calloc((size_t)s->n_emitters + 1, sizeof *j.sc.poly);
+        st = j.sc.poly ? LIE_OK : LIE_ERR_NOMEM;
+        for (int e = 0; st == LIE_OK && e < s->n_emitters; e++)
+            st = lie_polylight_create(s, e, &j.sc.poly[e]);
+    }
     if (st == LIE_OK) {
         j.tiles_x = (opt->width + LIE_TILE - 1) / LIE_TILE;
         tile_range r = {&j, first};
@@ -333,15 +368,8 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
     }
     if (stats) {
         memset(stats, 0, sizeof *stats);
-        for (int t = 0; j.scratch && t < threads; t++) {
-            const lie_render_stats *w = &j.scratch[t].stats;
-            stats->eye_rays += w->eye_rays;
-            stats->reflection_rays += w->reflection_rays;
-            stats->shadow_rays += w->shadow_rays;
-            stats->shadow_rays_skipped += w->shadow_rays_skipped;
-            stats->shading_points += w->shading_points;
-            stats->light_samples += w->light_samples;
-        }
+        for (int t = 0; j.scratch && t < threads; t++)
+            lie_render_stats_add(stats, &j.scratch[t].stats);
         stats->seconds = lie_time_now() - t0;
     }
     for (int t = 0; j.scratch && t < threads; t++)
@@ -350,6 +378,9 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
     for (int e = 0; fixed && e < s->n_emitters; e++)
         lie_light_samples_free(&fixed[e]);
     free(fixed);
+    for (int e = 0; j.sc.poly && e < s->n_emitters; e++)
+        lie_polylight_destroy(j.sc.poly[e]);
+    free(j.sc.poly);
     if (st != LIE_OK)
         return lie_error_set(err, st, path, "%s", lie_status_str(st));
     return LIE_OK;

@@ -13,6 +13,8 @@
 #include "rt/rt.h"
 #include "scene/scene.h"
 
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -133,6 +135,8 @@ typedef struct lie_vis_oracle {
     /* For AOVs: the pair's class (lie_class), list length and a patch id. */
     void (*describe)(void *ctx, const lie_surface *sf, int emitter, int *cls, uint32_t *count,
                      uint64_t *patch_id);
+    /* per triangle, its closed convex solid or -1 (lie_convex_solids); may be NULL */
+    const int32_t *solid;
 } lie_vis_oracle;
 
 /* The LIE strategy (§4.2): the hit's patch finds its leaf per emitter;
@@ -167,6 +171,22 @@ void lie_complexity_colour(int cls, uint32_t count, float rgb[3]);
  * (occluded) over the lit emitters, black if none is lit. */
 void lie_complexity_colour_all(const int *cls, const uint32_t *count, int n, float rgb[3]);
 
+/* Lambert receivers under planar emitters of one radiance are shaded in
+ * closed form (Lambert's edge sum) from LIE_ANALYTIC_MIN_SAMPLES light
+ * samples on, with any visibility: a pair seen whole takes no samples, a
+ * pair whose visibility is sampled is scaled by the ratio of its visible
+ * samples' weight to all its samples' (Heitz, Hill, McGuire 2018).  With
+ * LIE visibility, a partial pair's visible part is then found exactly by
+ * back-projecting its blockers (LIE_EXACT_AUTO, from
+ * LIE_EXACT_MIN_SAMPLES samples on; LIE_EXACT_ONLY at any count). */
+typedef enum lie_exact_mode {
+    LIE_EXACT_AUTO = 0,
+    LIE_EXACT_OFF = 1,     /* partial pairs sampled (the oracle: LIE image = full image) */
+    LIE_EXACT_ONLY = 2     /* closed forms and exact visibility wherever they apply */
+} lie_exact_mode;
+#define LIE_ANALYTIC_MIN_SAMPLES 16
+#define LIE_EXACT_MIN_SAMPLES 16
+
 typedef struct lie_render_options {
     int width, height;
     int spp;               /* eye rays per pixel, stratified; 1 = pixel centre */
@@ -182,6 +202,8 @@ typedef struct lie_render_options {
     int eye_only;          /* trace eye rays only (benchmark baseline) */
     unsigned lie_skip;     /* LIE_SKIP_*: benchmark ablations (wrong images) */
     int progress;          /* progress bar on stderr if a terminal */
+    lie_exact_mode exact;  /* closed-form shading and exact visibility (polylight.h) */
+    int timers;            /* per-worker timers of each path into the stats (costs a clock read per pair) */
 } lie_render_options;
 
 /* Benchmark ablations of --visibility=lie: answer partial pairs (their
@@ -199,8 +221,20 @@ lie_render_options lie_render_options_default(void);
 typedef struct lie_render_stats {
     uint64_t eye_rays, reflection_rays, shadow_rays, shadow_rays_skipped;
     uint64_t shading_points, light_samples;
+    /* (shading point, area or punctual emitter) pairs by the path they took */
+    uint64_t pairs_occluded;  /* no contribution: occluded or unlit */
+    uint64_t pairs_analytic;  /* seen whole, closed form */
+    uint64_t pairs_exact;     /* partial, exact back-projection */
+    uint64_t pairs_blockers;  /* partial, samples against the blocker list */
+    uint64_t pairs_embree;    /* samples against the whole scene */
+    uint64_t pairs_unshadowed; /* seen whole, sampled shading */
+    uint64_t exact_overflows; /* exact pairs that fell back to samples */
+    /* with lie_render_options.timers: seconds summed over workers */
+    double t_analytic, t_exact, t_blockers, t_embree, t_sampled_shading;
     double seconds;
 } lie_render_stats;
+/* acc += w, field by field */
+void lie_render_stats_add(lie_render_stats *acc, const lie_render_stats *w);
 
 /* Render the scene from camera `cam` into a new frame (RGB + requested AOVs).
  * The result is a function of the inputs only: any thread count gives the
@@ -277,4 +311,6 @@ void lie_camera_path_destroy(lie_camera_path *p);
 #ifdef __cplusplus
 }
 #endif
+#pragma GCC visibility pop
+
 #endif

@@ -143,12 +143,7 @@ static lie_status take(void *ctx, size_t i, int rank, const unsigned char *data,
                              "expected %zu", rank, size, it->first, it->first + it->count, it->frame,
                              sizeof fs + n * sizeof(float));
     memcpy(&fs, data, sizeof fs);
-    j->rs.eye_rays += fs.eye_rays;
-    j->rs.reflection_rays += fs.reflection_rays;
-    j->rs.shadow_rays += fs.shadow_rays;
-    j->rs.shadow_rays_skipped += fs.shadow_rays_skipped;
-    j->rs.shading_points += fs.shading_points;
-    j->rs.light_samples += fs.light_samples;
+    lie_render_stats_add(&j->rs, &fs);
     /* the floats may be unaligned in the message: copy through */
     float *tmp = malloc(n * sizeof(float) + 1);
     if (!tmp)

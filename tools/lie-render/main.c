@@ -34,7 +34,13 @@ static void usage(FILE *fp)
             "      --size WxH          image size (default %dx%d)\n"
             "      --spp N             eye rays per pixel, stratified (default %d: pixel centre)\n"
             "      --light-samples N   shadow rays per area emitter per shading point\n"
-            "                          (default %d; 0 = eye rays only)\n"
+            "                          (default %d; 0 = eye rays only), or 'exact': Lambert\n"
+            "                          surfaces under planar lights of one colour in closed\n"
+            "                          form with exact shadows, the default count elsewhere\n"
+            "      --exact MODE        auto (default: closed forms and, from a cache, exact\n"
+            "                          shadows once there are 16 light samples or more)\n"
+            "                          | off (shadows from the samples: the oracle's mode)\n"
+            "      --timers            --stats also reports per-path times (benchmarks)\n"
             "      --pattern P         fixed (default: the same emitter samples everywhere)\n"
             "                          | rotated (a per-pixel rotation of the pattern)\n"
             "      --visibility MODE   lie (default with a cache: blocker lists only)\n"
@@ -66,6 +72,11 @@ static void usage(FILE *fp)
             prog, d.width, d.height, d.spp, d.light_samples, d.max_depth);
 }
 
+static const char *exact_name(const lie_render_options *o)
+{
+    return o->exact == LIE_EXACT_ONLY ? "only" : o->exact == LIE_EXACT_OFF ? "off" : "auto";
+}
+
 #define usage_error(...) lie_usage_error(prog, __VA_ARGS__)
 
 static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
@@ -73,7 +84,7 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 enum {
     OPT_CAMERA = 256, OPT_SIZE, OPT_SPP, OPT_LIGHT_SAMPLES, OPT_PATTERN, OPT_VISIBILITY, OPT_RAYS, OPT_LIE_SKIP,
     OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_SCENE,
-    OPT_EMITTER, OPT_PATH
+    OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS
 };
 
 static const struct option long_opts[] = {
@@ -86,6 +97,8 @@ static const struct option long_opts[] = {
     {"spp", required_argument, NULL, OPT_SPP},
     {"light-samples", required_argument, NULL, OPT_LIGHT_SAMPLES},
     {"pattern", required_argument, NULL, OPT_PATTERN},
+    {"exact", required_argument, NULL, OPT_EXACT},
+    {"timers", no_argument, NULL, OPT_TIMERS},
     {"visibility", required_argument, NULL, OPT_VISIBILITY},
     {"rays", required_argument, NULL, OPT_RAYS},
     {"lie-skip", required_argument, NULL, OPT_LIE_SKIP},
@@ -263,9 +276,24 @@ int main(int argc, char **argv)
             ro.spp = (int)v;
             break;
         case OPT_LIGHT_SAMPLES:
+            if (strcmp(optarg, "exact") == 0) {
+                ro.exact = LIE_EXACT_ONLY;
+                ro.light_samples = LIE_LIGHT_SAMPLES_DEFAULT;
+                break;
+            }
             if (!lie_parse_long(optarg, 0, 1000000, &v))
-                return usage_error("--light-samples: expected an integer in 0..1000000, got '%s'", optarg);
+                return usage_error("--light-samples: expected an integer in 0..1000000 or exact, got '%s'", optarg);
             ro.light_samples = (int)v;
+            if (ro.exact == LIE_EXACT_ONLY)
+                ro.exact = LIE_EXACT_AUTO;
+            break;
+        case OPT_EXACT:
+            if (strcmp(optarg, "auto") == 0) ro.exact = LIE_EXACT_AUTO;
+            else if (strcmp(optarg, "off") == 0) ro.exact = LIE_EXACT_OFF;
+            else return usage_error("--exact: expected auto or off, got '%s'", optarg);
+            break;
+        case OPT_TIMERS:
+            ro.timers = 1;
             break;
         case OPT_PATTERN:
             if (strcmp(optarg, "fixed") == 0) ro.pattern = LIE_PATTERN_FIXED;
@@ -329,7 +357,7 @@ int main(int argc, char **argv)
             break;
         case 'q': quiet = 1; break;
         case 'h': usage(stdout); return 0;
-        case OPT_VERSION: printf("%s %s\n", prog, LIE_VERSION); return 0;
+        case OPT_VERSION: { char vr[512]; lie_version_report(prog, vr, sizeof vr); fputs(vr, stdout); return 0; }
         case ':': return usage_error("%s: missing value", argv[optind - 1]);
         default: return usage_error("unknown option '%s'", argv[optind - 1]);
         }
@@ -441,12 +469,7 @@ int main(int argc, char **argv)
         if (st != LIE_OK)
             break;
         double tb = lie_time_now();
-        rs.eye_rays += fs.eye_rays;
-        rs.reflection_rays += fs.reflection_rays;
-        rs.shadow_rays += fs.shadow_rays;
-        rs.shadow_rays_skipped += fs.shadow_rays_skipped;
-        rs.shading_points += fs.shading_points;
-        rs.light_samples += fs.light_samples;
+        lie_render_stats_add(&rs, &fs);
         st = write_frame(&fo, fi, &fc, frame, &err);
         lie_frame_destroy(frame);
         t_render += tb - ta;
@@ -467,13 +490,24 @@ int main(int argc, char **argv)
                     "\"shadow_rays\":%llu,\"shading_points\":%llu,\"seconds_load\":%.6f,"
                     "\"seconds_bvh\":%.6f,\"seconds_render\":%.6f,\"seconds_write\":%.6f,"
                     "\"shadow_mrays_per_second\":%.3f,\"shadow_tests_without_embree\":%llu,"
-                    "\"light_samples_total\":%llu",
+                    "\"light_samples_total\":%llu,",
                     n_frames, scene->n_tris, scene->n_emitters, ro.width, ro.height, ro.spp,
                     ro.eye_only ? 0 : ro.light_samples, vis_name(ro.visibility), rays_name(ro.rays), threads,
                     (unsigned long long)rs.eye_rays, (unsigned long long)rs.reflection_rays,
                     (unsigned long long)rs.shadow_rays, (unsigned long long)rs.shading_points, t1 - t0,
                     t2 - t1, render, t4 - t3, mrays, (unsigned long long)rs.shadow_rays_skipped,
                     (unsigned long long)rs.light_samples);
+            fprintf(stderr,
+                    "\"exact\":\"%s\",\"pairs_occluded\":%llu,\"pairs_analytic\":%llu,\"pairs_exact\":%llu,"
+                    "\"pairs_blockers\":%llu,\"pairs_embree\":%llu,\"pairs_unshadowed\":%llu,"
+                    "\"exact_overflows\":%llu,\"timers\":%s,\"cpu_seconds_analytic\":%.6f,"
+                    "\"cpu_seconds_exact\":%.6f,\"cpu_seconds_blockers\":%.6f,\"cpu_seconds_embree\":%.6f,"
+                    "\"cpu_seconds_sampled_shading\":%.6f",
+                    exact_name(&ro), (unsigned long long)rs.pairs_occluded, (unsigned long long)rs.pairs_analytic,
+                    (unsigned long long)rs.pairs_exact, (unsigned long long)rs.pairs_blockers,
+                    (unsigned long long)rs.pairs_embree, (unsigned long long)rs.pairs_unshadowed,
+                    (unsigned long long)rs.exact_overflows, ro.timers ? "true" : "false", rs.t_analytic,
+                    rs.t_exact, rs.t_blockers, rs.t_embree, rs.t_sampled_shading);
             render_dist_stats(stderr, 1);
             fprintf(stderr, "}\n");
         } else {
@@ -490,6 +524,19 @@ int main(int argc, char **argv)
                     (unsigned long long)rs.eye_rays, (unsigned long long)rs.reflection_rays,
                     (unsigned long long)rs.shadow_rays, (unsigned long long)rs.light_samples,
                     (unsigned long long)rs.shadow_rays_skipped, t1 - t0, t2 - t1, render, t4 - t3, mrays);
+            fprintf(stderr,
+                    "  pairs (exact %s): %llu occluded, %llu seen whole in closed form, %llu partial exact,\n"
+                    "    %llu partial sampled against blockers, %llu sampled against the scene (Embree),\n"
+                    "    %llu seen whole and sampled; %llu exact pairs fell back to samples\n",
+                    exact_name(&ro), (unsigned long long)rs.pairs_occluded, (unsigned long long)rs.pairs_analytic,
+                    (unsigned long long)rs.pairs_exact, (unsigned long long)rs.pairs_blockers,
+                    (unsigned long long)rs.pairs_embree, (unsigned long long)rs.pairs_unshadowed,
+                    (unsigned long long)rs.exact_overflows);
+            if (ro.timers)
+                fprintf(stderr,
+                        "  worker seconds: closed form %.3f, exact shadows %.3f, blocker samples %.3f,\n"
+                        "    Embree %.3f, sampled shading %.3f\n",
+                        rs.t_analytic, rs.t_exact, rs.t_blockers, rs.t_embree, rs.t_sampled_shading);
             render_dist_stats(stderr, 0);
         }
     }

@@ -1,0 +1,66 @@
+/* Private to lib/lie: the shared state of a build (lib/lie/build.c) and
+ * the helpers every part of it uses. */
+#ifndef LIE_INTERNAL_H
+#define LIE_INTERNAL_H
+
+#include "lie/lie.h"
+
+/* ---- per-unit output and per-worker scratch ----------------------------- */
+
+typedef struct unit_buf {
+    uint32_t *roots;      /* per emitter: the unit's root, local index */
+    lie_pnode *nodes;
+    uint32_t n_nodes, cap_nodes;
+    uint32_t *pool;
+    uint32_t n_pool, cap_pool;
+    int copied;           /* update: every unit is copied whole from the old env at
+                             assembly; nothing is held here but the sizes */
+} unit_buf;
+
+typedef struct worker {
+    uint32_t *hits;      /* all-hits results of a pair, each triangle once */
+    size_t n_hits, cap_hits;
+    uint32_t *stamp;     /* per triangle: the pair that last added it to hits */
+    uint32_t stamp_id;
+    uint32_t *cand;      /* conservative candidates */
+    size_t n_cand, cap_cand;
+    lie_vec3 *hull;      /* conservative hull points */
+    int cap_hull;
+    lie_build_stats st;
+    int nomem;
+} worker;
+
+typedef struct build_ctx {
+    const lie_scene *s;
+    const lie_rt *rt;
+    const lie_build_params *p;
+    float min_area;       /* absolute smallest patch area that may still split */
+    float ray_far;        /* towards directional emitters */
+    const lie_env *old;   /* rebuild: units not in the mask are copied from here */
+    const int32_t *old_unit;  /* update: per unit, the old unit to copy or update, or -1 to
+                                 build afresh (NULL: build everything) */
+    const uint8_t *node_flags; /* update: per old node, 1 = recompute (NULL: none) */
+    const uint8_t *tri_mask;   /* build only these triangles (NULL: all) */
+    uint64_t unit_lo, unit_hi; /* build only units [unit_lo, unit_hi) ... */
+    uint32_t tri_lo;           /* ... of triangles tri_lo + item (out[item]) */
+    unit_buf *out;        /* per triangle: its units, in emitter order, each contiguous */
+    worker *workers;
+    /* update: flagged old nodes already recomputed in parallel (see
+     * lie_memo_precompute); memo_of[old node] indexes memo, or -1 */
+    int32_t *memo_of;
+    struct memo_entry *memo;
+    int32_t *memo_new;    /* open-addressing table of the memo entries of new nodes */
+    size_t memo_new_mask;
+    double *halton;       /* radical inverses in bases 2, 3, 5, 7 of 0..n_halton-1 */
+    uint32_t n_halton;
+} build_ctx;
+
+/* Sort v[0..n) and drop repeats; returns the new length. */
+size_t lie_sort_unique(uint32_t *v, size_t n);
+
+/* Count a partial list of n blockers in the list-length histogram. */
+void lie_stats_hist_add(lie_build_stats *st, uint32_t n);
+/* Add src's counts to dst's. */
+void lie_stats_merge(lie_build_stats *dst, const lie_build_stats *src);
+
+#endif

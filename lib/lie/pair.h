@@ -1,0 +1,39 @@
+/* Pair geometry (lib/lie/pair.c): what a patch-emitter pair is, as
+ * lie-build, the ray segment trees (lib/rst) and the renderer must all see
+ * it for the LIE image to equal the reference. */
+#ifndef LIE_PAIR_H
+#define LIE_PAIR_H
+
+#include "core/core.h"
+#include "scene/scene.h"
+
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* How far shadow segments towards directional emitters reach. */
+float lie_ray_far(const lie_scene *s);
+/* The renderer's largest shadow-ray offset on triangle tri. */
+float lie_pair_eps(const lie_scene *s, uint32_t tri);
+/* The hull of a pair, as lie-build and the ray segment trees see it: the
+ * patch's corners V, lifted by lie_pair_eps on the side(s) it is shaded
+ * from, and the emitter's points (vertices; a point light's position; for a
+ * directional light the patch moved lie_ray_far towards it).  `out` must
+ * hold lie_pair_hull_cap(s, e) points; returns how many were written. */
+int lie_pair_hull_cap(const lie_scene *s, int e);
+int lie_pair_hull_points(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], int e, lie_vec3 *out);
+
+/* 1 when no point of patch V of triangle tri (shaded from both sides when
+ * two_sided) can receive light from any point of emitter e with a non-zero
+ * geometric term: exactly the pairs whose every shadow sample the renderer
+ * would weight 0. */
+int lie_pair_unlit(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], int two_sided, int e);
+
+#ifdef __cplusplus
+}
+#endif
+#pragma GCC visibility pop
+
+#endif

@@ -1,0 +1,87 @@
+/* Build parameters, class names and statistics of local illumination
+ * environments (lib/lie/lie.h). */
+#include "lie/internal.h"
+
+#include <string.h>
+
+const char *lie_class_name(lie_class c)
+{
+    static const char *const names[LIE_CLASS_COUNT] = {"unlit",   "visible", "occluded", "partial",
+                                                       "complex", "split",   "none"};
+    return (unsigned)c < LIE_CLASS_COUNT ? names[c] : "invalid";
+}
+
+lie_build_params lie_build_params_default(void)
+{
+    lie_build_params p;
+    memset(&p, 0, sizeof p);
+    p.samples = LIE_SAMPLES_DEFAULT;
+    p.max_samples = LIE_MAX_SAMPLES_DEFAULT;
+    p.max_blockers = LIE_MAX_BLOCKERS_DEFAULT;
+    p.complex_cap = LIE_COMPLEX_CAP_DEFAULT;
+    p.min_patch = LIE_MIN_PATCH_DEFAULT;
+    p.mode = LIE_BLOCKERS_SAMPLED;
+    return p;
+}
+
+lie_status lie_build_params_check(const lie_build_params *p, lie_error *err)
+{
+    if (p->samples < 1 || p->samples > (1u << 20))
+        return lie_error_set(err, LIE_ERR_ARG, NULL, "samples must be in 1..%u", 1u << 20);
+    if (p->max_samples < p->samples || p->max_samples > (1u << 24))
+        return lie_error_set(err, LIE_ERR_ARG, NULL, "max-samples must be in samples..%u", 1u << 24);
+    if (p->max_blockers > (1u << 20) || p->complex_cap > (1u << 24))
+        return lie_error_set(err, LIE_ERR_ARG, NULL, "max-blockers or complex-cap too large");
+    if (!(p->min_patch > 0.0f) || !(p->min_patch <= 1.0f))
+        return lie_error_set(err, LIE_ERR_ARG, NULL, "min-patch must be in (0, 1]");
+    if (p->mode != LIE_BLOCKERS_SAMPLED && p->mode != LIE_BLOCKERS_CONSERVATIVE)
+        return lie_error_set(err, LIE_ERR_ARG, NULL, "unknown blocker mode");
+    return LIE_OK;
+}
+
+void lie_stats_hist_add(lie_build_stats *st, uint32_t n)
+{
+    int b = 0;
+    while (b < 17 && n > (1u << b))
+        b++;
+    st->list_hist[b]++;
+}
+
+void lie_build_stats_add(lie_build_stats *a, const lie_build_stats *b) { lie_stats_merge(a, b); }
+
+void lie_stats_merge(lie_build_stats *dst, const lie_build_stats *src)
+{
+    for (int k = 0; k < LIE_CLASS_COUNT; k++)
+        dst->pairs[k] += src->pairs[k];
+    for (int k = 0; k <= LIE_PATCH_MAX_DEPTH; k++)
+        dst->patches_per_depth[k] += src->patches_per_depth[k];
+    for (int k = 0; k < 18; k++)
+        dst->list_hist[k] += src->list_hist[k];
+    dst->segments += src->segments;
+    dst->blocker_total += src->blocker_total;
+}
+
+static void stats_walk(const lie_env *env, uint32_t idx, int depth, lie_build_stats *st)
+{
+    const lie_pnode *x = &env->nodes[idx];
+    st->patches_per_depth[depth < LIE_PATCH_MAX_DEPTH ? depth : LIE_PATCH_MAX_DEPTH]++;
+    if (x->child) {
+        for (uint32_t k = 0; k < 4; k++)
+            stats_walk(env, x->child + k, depth + 1, st);
+        return;
+    }
+    st->pairs[x->cls < LIE_CLASS_COUNT ? x->cls : LIE_CLASS_COMPLEX]++;
+    st->segments += x->quality;
+    if (x->cls == LIE_CLASS_PARTIAL) {
+        st->blocker_total += x->count;
+        lie_stats_hist_add(st, x->count);
+    }
+}
+
+void lie_env_stats(const lie_env *env, lie_build_stats *stats)
+{
+    memset(stats, 0, sizeof *stats);
+    size_t n = (size_t)env->n_tris * (size_t)env->n_emitters;
+    for (size_t u = 0; u < n; u++)
+        stats_walk(env, env->root[u], 0, stats);
+}

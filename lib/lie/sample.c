@@ -1,0 +1,261 @@
+/* Sampled blocker lists (§4.1, §4.3.2): shadow segments between a patch
+ * and an emitter, in adaptive rounds (lib/lie/sample.h). */
+#include "lie/sample.h"
+#include "lie/cull.h"
+#include "lie/subdiv.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static double radical_inverse(uint32_t base, uint32_t i)
+{
+    double inv = 1.0 / base, f = inv, r = 0.0;
+    while (i) {
+        r += (double)(i % base) * f;
+        i /= base;
+        f *= inv;
+    }
+    return r;
+}
+
+/* Sample i's coordinate `dim` (bases 2, 3, 5, 7), from the table when it
+ * holds it (the same values: the table is filled by radical_inverse). */
+static const uint32_t HALTON_BASE[4] = {2, 3, 5, 7};
+#define HALTON_TABLE_MAX 4096u
+
+static double halton(const build_ctx *c, int dim, uint32_t i)
+{
+    return i < c->n_halton ? c->halton[(size_t)dim * c->n_halton + i] : radical_inverse(HALTON_BASE[dim], i);
+}
+
+static float frac_shift(double x, float shift)
+{
+    double v = x + shift;
+    v -= floor(v);
+    return (float)(v < 1.0 ? v : 0.0);
+}
+
+lie_status lie_sample_tables(build_ctx *c)
+{
+    c->n_halton = c->p->max_samples < HALTON_TABLE_MAX ? c->p->max_samples : HALTON_TABLE_MAX;
+    c->halton = malloc(sizeof *c->halton * 4 * (size_t)c->n_halton + 1);
+    for (int d = 0; c->halton && d < 4; d++)
+        for (uint32_t i = 0; i < c->n_halton; i++)
+            c->halton[(size_t)d * c->n_halton + i] = radical_inverse(HALTON_BASE[d], i);
+    return c->halton ? LIE_OK : LIE_ERR_NOMEM;
+}
+
+/* ---- sampled blocker lists (§4.1, §4.3.2) ------------------------------ */
+
+/* The pair's sampling: segment i runs from a patch point (Halton bases 2,
+ * 3) to an emitter point (bases 5, 7), each shifted by a hash of the pair. */
+typedef struct pair_sampler {
+    const build_ctx *c;
+    uint32_t tri;
+    const lie_vec3 *V;
+    int two_sided, e;
+    float sp1, sp2, se1, se2;
+} pair_sampler;
+
+/* Segment i, if it counts (it leaves the patch's lit side and, for a
+ * one-sided emitter, reaches its front); ex[] gets the triangles it must
+ * not report (the patch's own and the emitter point's), *n_ex their count. */
+static int pair_segment(const pair_sampler *ps, uint32_t i, lie_vec3 *org, lie_vec3 *dir, float *tnear, float *tfar,
+                        uint32_t ex[2], int *n_ex)
+{
+    const build_ctx *c = ps->c;
+    const lie_scene *s = c->s;
+    const lie_emitter *em = &s->emitters[ps->e];
+    const lie_vec3 *V = ps->V;
+    float b1, b2;
+    lie_sample_triangle(frac_shift(halton(c, 0, i), ps->sp1), frac_shift(halton(c, 1, i), ps->sp2), &b1, &b2);
+    float b0 = 1.0f - b1 - b2;
+    lie_vec3 p = lie_v3_add(lie_v3_add(lie_v3_scale(V[0], b0), lie_v3_scale(V[1], b1)), lie_v3_scale(V[2], b2));
+    lie_vec3 q, ne = lie_v3(0, 0, 0);
+    uint32_t target = LIE_NO_HIT;
+    if (em->type == LIE_EMITTER_AREA) {
+        float eb1, eb2;
+        target = lie_emitter_point(s, ps->e, frac_shift(halton(c, 2, i), ps->se1),
+                                   frac_shift(halton(c, 3, i), ps->se2), &q, &ne, &eb1, &eb2);
+    } else if (em->type == LIE_EMITTER_POINT) {
+        q = em->position;
+    } else {
+        q = lie_v3_add(p, lie_v3_scale(em->direction, -c->ray_far));
+    }
+    lie_vec3 d = lie_v3_sub(q, p);
+    lie_vec3 ng = s->tri_ng[ps->tri];
+    float cg = lie_v3_dot(ng, d);
+    if (!(cg > 0.0f) && !(ps->two_sided && cg < 0.0f))
+        return 0;
+    if (em->type == LIE_EMITTER_AREA && !em->double_sided && !(lie_v3_dot(ne, d) < 0.0f))
+        return 0;
+    lie_vec3 side = cg > 0.0f ? ng : lie_v3_scale(ng, -1.0f);
+    if (!lie_shadow_segment(p, side, q, org, dir, tnear, tfar))
+        return 0;
+    ex[0] = ps->tri;
+    ex[1] = target;
+    *n_ex = target == LIE_NO_HIT ? 1 : 2;
+    return 1;
+}
+
+/* After the first round found every segment blocked: are all the segments
+ * up to max_samples blocked too?  Any-hit queries, stopping at the first
+ * segment that is not. */
+static int all_blocked_to_max(const pair_sampler *ps, uint32_t from, worker *w)
+{
+    const build_ctx *c = ps->c;
+    for (uint32_t i = from; i < c->p->max_samples; i++) {
+        lie_vec3 org, dir;
+        float tnear, tfar;
+        uint32_t ex[2];
+        int n_ex;
+        if (!pair_segment(ps, i, &org, &dir, &tnear, &tfar, ex, &n_ex))
+            continue;
+        w->st.segments++;
+        if (!lie_rt_any_hit(c->rt, org, dir, tnear, tfar, ex, n_ex))
+            return 0;
+    }
+    return 1;
+}
+
+/* Classify one patch–emitter pair by sampling segments.  Leaves the sorted
+ * unique blocker list in w->hits[0..*n_list).
+ *
+ * Rounds of segments, doubling while a round finds a blocker the earlier
+ * ones missed (§4.3.2), up to max_samples.  Sampling stops early when the
+ * outcome can no longer change; only the informational quality and count
+ * of such nodes then differ from sampling on (formats/lie-cache.md):
+ * - the first round blocked every segment: any-hit queries for the rest
+ *   either find them all blocked (occluded, quality = max_samples) or
+ *   meet a free one, and the rounds go on as if the probe had not been;
+ * - the pair is partial (some segment blocked, some not) and its list is
+ *   already past what decides the node: past max_blockers where it will
+ *   split (the emitter cannot put more than complex_cap of its own
+ *   triangles in a list), past complex_cap where it cannot split; the
+ *   list is not stored then, so it is not expanded to whole instances. */
+lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch_path path, const lie_vec3 V[3],
+                          int two_sided, int e, float eps, uint32_t *quality, size_t *n_list)
+{
+    const lie_scene *s = c->s;
+    const lie_emitter *em = &s->emitters[e];
+    uint64_t h = lie_hash_u64x4(tri, path.digits, (uint64_t)path.depth, (uint64_t)e);
+    uint64_t h2 = lie_hash_u64x4(h, 0x656d6974ull, 0, 0);
+    const pair_sampler ps = {c,
+                             tri,
+                             V,
+                             two_sided,
+                             e,
+                             lie_hash_to_unit(h),
+                             lie_hash_to_unit(h << 24),
+                             lie_hash_to_unit(h2),
+                             lie_hash_to_unit(h2 << 24)};
+    const int can_split = lie_subdiv_may_split(c, tri, path);
+    /* the list length past which this node's class is settled, once partial */
+    const size_t settled = can_split ? (em->n_tris <= c->p->complex_cap ? c->p->max_blockers : SIZE_MAX)
+                                     : c->p->complex_cap;
+    uint32_t total = 0, round_n = c->p->samples;
+    uint64_t valid = 0, blocked = 0;
+    size_t known = 0; /* distinct blockers after the previous round */
+    int forced = 0;
+    w->n_hits = 0;
+    /* hits are kept unique as they come (a segment through an occluder
+     * hits it hundreds of times a pair), by stamping triangles */
+    if (!w->stamp) {
+        w->stamp = calloc((size_t)s->n_tris + 1, sizeof *w->stamp);
+        if (!w->stamp) {
+            w->nomem = 1;
+            return LIE_CLASS_VISIBLE;
+        }
+    }
+    if (++w->stamp_id == 0) {
+        memset(w->stamp, 0, sizeof *w->stamp * ((size_t)s->n_tris + 1));
+        w->stamp_id = 1;
+    }
+    const uint32_t id = w->stamp_id;
+    for (;;) {
+        for (uint32_t i = total; i < total + round_n; i++) {
+            lie_vec3 org, dir;
+            float tnear, tfar;
+            uint32_t ex[2];
+            int n_ex;
+            if (!pair_segment(&ps, i, &org, &dir, &tnear, &tfar, ex, &n_ex))
+                continue;
+            size_t before = w->n_hits;
+            if (lie_rt_all_hits(c->rt, org, dir, tnear, tfar, ex, n_ex, &w->hits, &w->n_hits, &w->cap_hits) !=
+                LIE_OK) {
+                w->nomem = 1;
+                return LIE_CLASS_VISIBLE;
+            }
+            valid++;
+            blocked += w->n_hits > before;
+            size_t k = before;
+            for (size_t j = before; j < w->n_hits; j++) {
+                uint32_t t = w->hits[j];
+                if (t < s->n_tris && w->stamp[t] == id)
+                    continue;
+                if (t < s->n_tris)
+                    w->stamp[t] = id;
+                w->hits[k++] = t;
+            }
+            w->n_hits = k;
+        }
+        w->st.segments += round_n;
+        total += round_n;
+        w->n_hits = lie_sort_unique(w->hits, w->n_hits);
+        int found_new = w->n_hits > known;
+        known = w->n_hits;
+        if (total >= c->p->max_samples)
+            break;
+        if (blocked > 0 && blocked < valid && w->n_hits > settled) {
+            *quality = total; /* partial, and the list already decides the node */
+            *n_list = w->n_hits;
+            return LIE_CLASS_PARTIAL;
+        }
+        if (total == c->p->samples && valid > 0 && blocked == valid && all_blocked_to_max(&ps, total, w)) {
+            *quality = c->p->max_samples;
+            *n_list = w->n_hits;
+            return LIE_CLASS_OCCLUDED;
+        }
+        /* §4.3.2: keep doubling while a round finds a blocker the earlier
+         * rounds missed */
+        if (!found_new && w->n_hits > 0)
+            break;
+        if (!found_new && !forced) {
+            /* Nothing found.  Only triangles in the shaft can block: none
+             * means visible, proven; a few become the list, exact; many
+             * mean sampling on to max_samples before calling it visible. */
+            size_t n_shaft = lie_cull_shaft(c, w, tri, V, two_sided, e, eps);
+            if (n_shaft == 0)
+                break;
+            if (n_shaft <= c->p->max_blockers) {
+                *quality = total;
+                *n_list = n_shaft;
+                if (n_shaft > w->cap_hits) {
+                    uint32_t *nb = realloc(w->hits, n_shaft * sizeof *nb);
+                    if (!nb) {
+                        w->nomem = 1;
+                        return LIE_CLASS_VISIBLE;
+                    }
+                    w->hits = nb;
+                    w->cap_hits = n_shaft;
+                }
+                memcpy(w->hits, w->cand, n_shaft * sizeof *w->hits);
+                w->n_hits = n_shaft;
+                return LIE_CLASS_PARTIAL;
+            }
+            forced = 1;
+        }
+        round_n = total;
+        if (total + round_n > c->p->max_samples)
+            round_n = c->p->max_samples - total;
+    }
+    if (blocked > 0 && blocked < valid)
+        lie_cull_expand(c, w, tri, V, two_sided, e, eps);
+    *quality = total;
+    *n_list = w->n_hits;
+    if (valid == 0 || blocked == 0)
+        return LIE_CLASS_VISIBLE;
+    if (blocked == valid)
+        return LIE_CLASS_OCCLUDED;
+    return LIE_CLASS_PARTIAL;
+}

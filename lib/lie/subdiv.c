@@ -1,0 +1,264 @@
+/* The patch tree of one unit (§4.1.1): classify a patch-emitter pair, split
+ * a patch whose list is too long while it is large, and in an update copy
+ * what no edit reached (lib/lie/subdiv.h). */
+#include "lie/subdiv.h"
+#include "lie/cull.h"
+#include "lie/memo.h"
+#include "lie/pair.h"
+#include "lie/sample.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static int push_node(unit_buf *u, worker *w)
+{
+    if (u->n_nodes == u->cap_nodes) {
+        uint32_t nc = u->cap_nodes ? 2 * u->cap_nodes : 8;
+        lie_pnode *nn = realloc(u->nodes, sizeof *nn * nc);
+        if (!nn) {
+            w->nomem = 1;
+            return -1;
+        }
+        u->nodes = nn;
+        u->cap_nodes = nc;
+    }
+    memset(&u->nodes[u->n_nodes], 0, sizeof *u->nodes);
+    return (int)u->n_nodes++;
+}
+
+static int push_list(unit_buf *u, worker *w, const uint32_t *list, uint32_t n)
+{
+    if (u->n_pool + n > u->cap_pool) {
+        uint32_t nc = u->cap_pool ? u->cap_pool : 16;
+        while (nc < u->n_pool + n)
+            nc *= 2;
+        uint32_t *np = realloc(u->pool, sizeof *np * nc);
+        if (!np) {
+            w->nomem = 1;
+            return 0;
+        }
+        u->pool = np;
+        u->cap_pool = nc;
+    }
+    memcpy(u->pool + u->n_pool, list, sizeof *list * n);
+    u->n_pool += n;
+    return 1;
+}
+
+/* A patch large enough to split (§4.1.1): the one size test of
+ * lie_subdiv_splits() and of lie_sample_pair's early stop, which must agree. */
+int lie_subdiv_may_split(const build_ctx *c, uint32_t tri, lie_patch_path path)
+{
+    float area = c->s->tri_area[tri] / (float)(1u << (2 * (path.depth < 15 ? path.depth : 15)));
+    return area > c->min_area && path.depth < LIE_PATCH_MAX_DEPTH;
+}
+
+/* §4.1.1: a patch whose list is too long is split while it is large.  But
+ * a closed, double-sided emitter hides its far side behind its near side:
+ * those blockers are the emitter's own triangles, and smaller patches keep
+ * seeing about as many; when they alone pass the complex cap, splitting
+ * cannot help and the pair is complex at once. */
+int lie_subdiv_splits(const build_ctx *c, uint32_t tri, lie_patch_path path, int e, lie_class cls,
+                      const uint32_t *list, size_t n_list)
+{
+    const lie_scene *s = c->s;
+    if (!(cls == LIE_CLASS_PARTIAL && n_list > c->p->max_blockers && lie_subdiv_may_split(c, tri, path)))
+        return 0;
+    const lie_emitter *em = &s->emitters[e];
+    size_t own = 0;
+    for (size_t k = 0; em->type == LIE_EMITTER_AREA && k < n_list; k++)
+        own += list[k] - em->first_tri < em->n_tris;
+    return own <= c->p->complex_cap;
+}
+
+static void copy_node(const lie_env *old, uint32_t from, worker *w, unit_buf *u, uint32_t idx);
+
+/* Build node `idx` for patch `path` of unit (tri, e).  In an update, `old`
+ * is the old env's node for the same patch (or -1): when both old and new
+ * split, children whose regions no edit touched are copied. */
+static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx, uint32_t tri,
+                       lie_patch_path path, int e, int two_sided, float eps, const uint32_t *parent,
+                       size_t n_parent, int64_t old)
+{
+    if (old >= 0 && !(c->node_flags && c->node_flags[old])) {
+        copy_node(c->old, (uint32_t)old, w, u, idx); /* no edit reached this patch's shaft */
+        return;
+    }
+    const lie_scene *s = c->s;
+    lie_vec3 V[3];
+    lie_patch_world(path, &s->tri_p[3 * (size_t)tri], V);
+    w->st.patches_per_depth[path.depth]++;
+    lie_class cls;
+    uint32_t quality = 0;
+    size_t n_list = 0;
+    int32_t mi = old >= 0 && c->memo_of ? c->memo_of[old] : lie_memo_find_new(c, tri, path, e);
+    if (mi >= 0) {
+        /* computed already, in parallel with the other flagged nodes */
+        const memo_entry *m = &c->memo[mi];
+        cls = m->cls;
+        quality = m->quality;
+        n_list = m->n_list;
+        if (n_list > w->cap_hits) {
+            uint32_t *nb = realloc(w->hits, n_list * sizeof *nb);
+            if (!nb) {
+                w->nomem = 1;
+                return;
+            }
+            w->hits = nb;
+            w->cap_hits = n_list;
+        }
+        if (n_list)
+            memcpy(w->hits, m->list, n_list * sizeof *w->hits);
+    } else if (lie_pair_unlit(c->s, tri, V, two_sided, e)) {
+        cls = LIE_CLASS_UNLIT;
+    } else if (c->p->mode == LIE_BLOCKERS_SAMPLED) {
+        cls = lie_sample_pair(c, w, tri, path, V, two_sided, e, eps, &quality, &n_list);
+    } else {
+        cls = lie_cull_conservative(c, w, tri, V, two_sided, e, eps, parent, n_parent, &n_list);
+    }
+    if (w->nomem)
+        return;
+    if (lie_subdiv_splits(c, tri, path, e, cls, w->hits, n_list)) {
+        /* §4.1.1: split a patch whose list is too long while it is large */
+        uint32_t *keep = NULL;
+        if (c->p->mode == LIE_BLOCKERS_CONSERVATIVE) {
+            keep = malloc(sizeof *keep * n_list);
+            if (!keep) {
+                w->nomem = 1;
+                return;
+            }
+            memcpy(keep, w->hits, sizeof *keep * n_list);
+        }
+        int first = push_node(u, w);
+        for (int k = 1; k < 4 && first >= 0; k++)
+            if (push_node(u, w) < 0)
+                first = -1;
+        if (first < 0) {
+            free(keep);
+            return;
+        }
+        u->nodes[idx].child = (uint32_t)first; /* unit-local; rebased on assembly */
+        u->nodes[idx].cls = LIE_CLASS_SPLIT;
+        u->nodes[idx].quality = quality;
+        u->nodes[idx].count = (uint32_t)n_list;
+        uint32_t old_child = old >= 0 ? c->old->nodes[old].child : 0;
+        for (int k = 0; k < 4; k++)
+            build_node(c, w, u, (uint32_t)first + (uint32_t)k, tri, lie_patch_child(path, k), e, two_sided, eps,
+                       keep, n_list, old_child ? (int64_t)old_child + k : -1);
+        free(keep);
+        return;
+    }
+    lie_pnode *nd = &u->nodes[idx];
+    nd->quality = quality;
+    nd->count = (uint32_t)n_list;
+    /* A list with an alpha-masked triangle goes to Embree as well: the
+     * renderer's segment test knows nothing of holes. */
+    int masked = 0;
+    for (size_t k = 0; cls == LIE_CLASS_PARTIAL && k < n_list && !masked; k++)
+        masked = lie_scene_material(s, s->tri_material[w->hits[k]])->alpha_mask;
+    int complex = cls == LIE_CLASS_PARTIAL && (n_list > c->p->complex_cap || masked);
+    w->st.pairs[complex ? LIE_CLASS_COMPLEX : cls]++;
+    if (complex) {
+        nd->cls = LIE_CLASS_COMPLEX; /* the renderer asks the whole scene */
+        return;
+    }
+    nd->cls = cls;
+    if (cls == LIE_CLASS_PARTIAL) {
+        nd->list = u->n_pool;
+        push_list(u, w, w->hits, (uint32_t)n_list);
+        w->st.blocker_total += n_list;
+        lie_stats_hist_add(&w->st, (uint32_t)n_list);
+    }
+}
+
+/* Copy node `from` of the old env (and its subtree) into node `idx` of u,
+ * in the order a build would have produced it. */
+static void copy_node(const lie_env *old, uint32_t from, worker *w, unit_buf *u, uint32_t idx)
+{
+    lie_pnode x = old->nodes[from];
+    if (x.child) {
+        int first = push_node(u, w);
+        for (int k = 1; k < 4 && first >= 0; k++)
+            if (push_node(u, w) < 0)
+                first = -1;
+        if (first < 0)
+            return;
+        u->nodes[idx] = x;
+        u->nodes[idx].child = (uint32_t)first;
+        for (int k = 0; k < 4; k++)
+            copy_node(old, x.child + (uint32_t)k, w, u, (uint32_t)first + (uint32_t)k);
+        return;
+    }
+    if (x.cls == LIE_CLASS_PARTIAL) {
+        uint32_t list = u->n_pool;
+        if (!push_list(u, w, old->pool + x.list, x.count))
+            return;
+        x.list = list;
+    }
+    u->nodes[idx] = x;
+}
+
+/* The nodes and pool entries of old node `from` and its subtree. */
+static void subtree_size(const lie_env *old, uint32_t from, uint32_t *n_nodes, uint32_t *n_pool)
+{
+    const lie_pnode *x = &old->nodes[from];
+    ++*n_nodes;
+    if (x->child)
+        for (uint32_t k = 0; k < 4; k++)
+            subtree_size(old, x->child + k, n_nodes, n_pool);
+    else if (x->cls == LIE_CLASS_PARTIAL)
+        *n_pool += x->count;
+}
+
+/* An update's triangle whose every unit continues an old one that no edit
+ * reached: it is copied at assembly, straight into the new arrays. */
+static int copied_whole(const build_ctx *c, uint32_t tri, unit_buf *u)
+{
+    size_t ne = (size_t)c->s->n_emitters;
+    if (!c->old_unit || c->tri_mask)
+        return 0;
+    for (size_t e = 0; e < ne; e++) {
+        int32_t ou = c->old_unit[(size_t)tri * ne + e];
+        if (ou < 0 || (c->node_flags && c->node_flags[c->old->root[ou]]))
+            return 0;
+    }
+    for (size_t e = 0; e < ne; e++)
+        subtree_size(c->old, c->old->root[c->old_unit[(size_t)tri * ne + e]], &u->n_nodes, &u->n_pool);
+    u->copied = 1;
+    return 1;
+}
+
+void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
+{
+    build_ctx *c = ctx;
+    worker *w = &c->workers[worker_id];
+    uint32_t tri = c->tri_lo + (uint32_t)item;
+    unit_buf *u = &c->out[item];
+    const lie_scene *s = c->s;
+    size_t ne = (size_t)s->n_emitters;
+    if (copied_whole(c, tri, u))
+        return;
+    u->roots = malloc(sizeof *u->roots * (ne + 1));
+    if (!u->roots) {
+        w->nomem = 1;
+        return;
+    }
+    int two_sided = lie_scene_material(s, s->tri_material[tri])->double_sided != 0;
+    float eps = lie_pair_eps(s, tri);
+    for (size_t e = 0; e < ne; e++) {
+        size_t unit = (size_t)tri * ne + e;
+        if (unit < c->unit_lo || unit >= c->unit_hi)
+            continue; /* lie_env_build_range: another part's */
+        int root = push_node(u, w);
+        if (root < 0)
+            return;
+        u->roots[e] = (uint32_t)root;
+        int64_t old = c->old_unit && c->old_unit[unit] >= 0 ? (int64_t)c->old->root[c->old_unit[unit]] : -1;
+        if (c->tri_mask && !c->tri_mask[tri]) {
+            u->nodes[root].cls = LIE_CLASS_NONE; /* outside the views: not built */
+            w->st.pairs[LIE_CLASS_NONE]++;
+            continue;
+        }
+        build_node(c, w, u, (uint32_t)root, tri, lie_patch_root(), (int)e, two_sided, eps, NULL, 0, old);
+    }
+}

@@ -1,0 +1,16 @@
+/* Private to lib/lie: the patch tree of one unit (§4.1.1; lib/lie/subdiv.c). */
+#ifndef LIE_SUBDIV_H
+#define LIE_SUBDIV_H
+
+#include "lie/internal.h"
+
+/* A patch large enough to split (§4.1.1). */
+int lie_subdiv_may_split(const build_ctx *c, uint32_t tri, lie_patch_path path);
+/* Whether a node of class cls with this list splits. */
+int lie_subdiv_splits(const build_ctx *c, uint32_t tri, lie_patch_path path, int e, lie_class cls,
+                      const uint32_t *list, size_t n_list);
+/* lie_parallel_for body: build (or copy) every unit of triangle `item`
+ * into c->out[item]. */
+void lie_subdiv_triangle(void *ctx, size_t item, int worker_id);
+
+#endif
