@@ -71,6 +71,12 @@ static void bcast_bytes(unsigned char *p, size_t n)
     }
 }
 
+void lie_dist_bcast(void *data, size_t size)
+{
+    if (dist.active)
+        bcast_bytes(data, size);
+}
+
 lie_status lie_dist_read_file(const char *path, unsigned char **data, size_t *size, lie_error *err)
 {
     if (!dist.active)

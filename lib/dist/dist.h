@@ -38,6 +38,9 @@ int lie_dist_size(void);
  * ranks; without mpirun, lie_read_file. */
 lie_status lie_dist_read_file(const char *path, unsigned char **data, size_t *size, lie_error *err);
 
+/* Rank 0's size bytes at data on every rank (without mpirun: nothing). */
+void lie_dist_bcast(void *data, size_t size);
+
 /* Every rank's setup ends here: ranks compare their binary (a hash of the
  * executable), version and scene and cache hashes with rank 0's.  Returns
  * LIE_OK on every rank when all agree; otherwise an error on every rank, on

@@ -10,7 +10,7 @@
 #include <string.h>
 
 typedef struct item {
-    int frame;
+    int frame;             /* index into job.list */
     uint32_t first, count; /* tiles */
 } item;
 
@@ -20,6 +20,7 @@ typedef struct job {
     const lie_render_options *ro;
     const lie_camera_path *path;
     const lie_camera *cam;
+    const int *list;        /* the frames to render (path frame indices) */
     item *items;
     size_t n_items;
     size_t n_tiles;
@@ -106,7 +107,7 @@ static lie_status run(void *ctx, size_t i, lie_dist_buf *out, lie_error *err)
         return j->setup;
     }
     const item *it = &j->items[i];
-    lie_camera cam = frame_camera(j, it->frame);
+    lie_camera cam = frame_camera(j, j->list[it->frame]);
     lie_render_stats fs;
     lie_status st = lie_render_tiles(j->s, j->rt, &cam, j->ro, j->scratch, it->first, it->count, &fs, err);
     if (st != LIE_OK)
@@ -155,8 +156,8 @@ static lie_status take(void *ctx, size_t i, int rank, const unsigned char *data,
     if (j->missing[it->frame])
         return LIE_OK;
     double t0 = lie_time_now();
-    lie_camera cam = frame_camera(j, it->frame);
-    lie_status st = j->write(j->write_ctx, it->frame, &cam, *f, err);
+    lie_camera cam = frame_camera(j, j->list[it->frame]);
+    lie_status st = j->write(j->write_ctx, j->list[it->frame], &cam, *f, err);
     j->t_write += lie_time_now() - t0;
     lie_frame_destroy(*f);
     *f = NULL;
@@ -208,8 +209,8 @@ static size_t plan(job *j, int n_frames, int ranks)
 }
 
 lie_status render_dist(const lie_scene *s, const lie_rt *rt, const lie_render_options *ro,
-                       const lie_camera_path *path, const lie_camera *cam, render_write_fn write, void *write_ctx,
-                       lie_render_stats *rs, double *t_write, lie_error *err)
+                       const lie_camera_path *path, const lie_camera *cam, const int *frames, int n_frames,
+                       render_write_fn write, void *write_ctx, lie_render_stats *rs, double *t_write, lie_error *err)
 {
     job j;
     memset(&j, 0, sizeof j);
@@ -218,10 +219,11 @@ lie_status render_dist(const lie_scene *s, const lie_rt *rt, const lie_render_op
     j.ro = ro;
     j.path = path;
     j.cam = cam;
+    j.list = frames;
     j.write = write;
     j.write_ctx = write_ctx;
     j.n_tiles = lie_render_tile_count(ro->width, ro->height);
-    int n_frames = path ? path->n_frames : 1, ranks = lie_dist_size();
+    int ranks = lie_dist_size();
     j.n_items = plan(&j, n_frames, ranks);
     j.frames = calloc((size_t)n_frames, sizeof *j.frames);
     j.missing = calloc((size_t)n_frames, sizeof *j.missing);

@@ -9,11 +9,13 @@
 typedef lie_status (*render_write_fn)(void *ctx, int frame, const lie_camera *cam, const lie_frame *f,
                                       lie_error *err);
 
-/* Render every frame (path's, or the one camera's) across the ranks;
- * rank 0 assembles each frame and writes it with write().  Sums of the
- * render statistics and the seconds spent writing are rank 0's. */
+/* Render frames[0 .. n_frames - 1] (the path's frames, or 0: the one
+ * camera's) across the ranks; rank 0 assembles each frame and writes it
+ * with write().  Sums of the render statistics and the seconds spent
+ * writing are rank 0's. */
 lie_status render_dist(const lie_scene *s, const lie_rt *rt, const lie_render_options *ro,
-                       const lie_camera_path *path, const lie_camera *cam, render_write_fn write, void *write_ctx,
+                       const lie_camera_path *path, const lie_camera *cam, const int *frames, int n_frames,
+                       render_write_fn write, void *write_ctx,
                        lie_render_stats *rs, double *t_write, lie_error *err);
 
 /* Rank 0: per-rank statistics of the last render_dist, JSON members
