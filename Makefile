@@ -49,7 +49,7 @@ TOOL_BIN := $(TOOLS:%=$(BINDIR)/%)
 UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
 UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/tests/%)
 
-.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench scenes fuzz clean \
+.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench bench-mpi scenes fuzz clean \
         install uninstall man shared ltc-tables ltc-bench
 all: $(TOOL_BIN)
 
@@ -162,6 +162,10 @@ test-asan:
 
 bench: all
 	@sh bench/run.sh
+
+# lie-render and lie-build under mpirun against one process (docs/mpi.md)
+bench-mpi: all
+	@sh bench/mpi.sh
 
 fuzz:
 	@sh tests/fuzz/run.sh
