@@ -301,20 +301,8 @@ int main(int argc, char **argv)
     lie_cache cache;
     memset(&cache, 0, sizeof cache);
     cache.scene_path = (char *)input;
-    cache.scene_hash = cache.state_hash = scene->hash;
-    cache.n_tris = scene->n_tris;
-    cache.n_emitters = scene->n_emitters;
-    cache.emitters = calloc((size_t)scene->n_emitters + 1, sizeof *cache.emitters);
-    if (!cache.emitters) {
-        lie_error_set(&err, LIE_ERR_NOMEM, output, "out of memory");
-        rc = LIE_ERR_NOMEM;
-    }
-    for (int e = 0; cache.emitters && e < scene->n_emitters; e++) {
-        cache.emitters[e].type = (uint32_t)scene->emitters[e].type;
-        cache.emitters[e].node = scene->emitters[e].node;
-        cache.emitters[e].first_tri = scene->emitters[e].first_tri;
-        cache.emitters[e].n_tris = scene->emitters[e].n_tris;
-    }
+    cache.scene_hash = scene->hash;
+    rc = lie_cache_set_state(&cache, scene, &err);
     cache.env = env;
     size_t bytes = 0;
     if (rc == LIE_OK)
