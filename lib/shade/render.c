@@ -54,7 +54,6 @@ typedef struct render_job {
     lie_frame *frame;
     float *albedo, *normal, *depth, *complexity, *patch;
     lie_view view;
-    int x0, y0, x1, y1;    /* the region rendered */
     int tiles_x;
     lie_shade_scratch *scratch; /* one per worker */
 } render_job;
@@ -169,9 +168,9 @@ static void render_tile(void *ctx, size_t item, int worker)
     const lie_render_options *opt = j->sc.opt;
     lie_shade_scratch *sc = &j->scratch[worker];
     int tx = (int)(item % (size_t)j->tiles_x), ty = (int)(item / (size_t)j->tiles_x);
-    int x0 = j->x0 + tx * LIE_TILE, y0 = j->y0 + ty * LIE_TILE;
-    int x1 = x0 + LIE_TILE < j->x1 ? x0 + LIE_TILE : j->x1;
-    int y1 = y0 + LIE_TILE < j->y1 ? y0 + LIE_TILE : j->y1;
+    int x0 = tx * LIE_TILE, y0 = ty * LIE_TILE;
+    int x1 = x0 + LIE_TILE < f->width ? x0 + LIE_TILE : f->width;
+    int y1 = y0 + LIE_TILE < f->height ? y0 + LIE_TILE : f->height;
     int spp = opt->spp > 0 ? opt->spp : 1;
     /* One eye ray per pixel: coherent camera rays go to Embree as 8-wide
      * packets, a row of a tile at a time. */
@@ -242,11 +241,66 @@ static void render_tile(void *ctx, size_t item, int worker)
     }
 }
 
-static lie_status render_check(const lie_scene *s, const lie_render_options *opt, lie_error *err)
+/* The frame lie_render fills for opt: RGB and the requested AOVs. */
+lie_status lie_render_frame_create(const lie_scene *s, const lie_render_options *opt, lie_frame **out, lie_error *err)
 {
+    *out = NULL;
     const char *path = s->path ? s->path : "";
     if (opt->width < 1 || opt->height < 1 || opt->width > 65536 || opt->height > 65536)
         return lie_error_set(err, LIE_ERR_ARG, path, "image size %dx%d out of range", opt->width, opt->height);
+    lie_frame *f = lie_frame_create(opt->width, opt->height);
+    if (!f)
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory for a %dx%d frame", opt->width, opt->height);
+    static const char *const rgb_names[3] = {"R", "G", "B"};
+    static const char *const xyz_names[3] = {"X", "Y", "Z"};
+    static const char *const z_name[1] = {"Z"};
+    static const struct {
+        unsigned bit;
+        const char *name;
+        int n;
+        const char *const *chans;
+    } layers[] = {
+        {LIE_AOV_ALBEDO, "albedo", 3, rgb_names},         {LIE_AOV_NORMAL, "normal", 3, xyz_names},
+        {LIE_AOV_DEPTH, "depth", 1, z_name},              {LIE_AOV_COMPLEXITY, "complexity", 3, rgb_names},
+        {LIE_AOV_PATCH, "patch", 3, rgb_names},
+    };
+    for (size_t k = 0; k < sizeof layers / sizeof layers[0]; k++)
+        if ((opt->aovs & layers[k].bit) && !lie_frame_add_aov(f, layers[k].name, layers[k].n, layers[k].chans)) {
+            lie_frame_destroy(f);
+            return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+        }
+    *out = f;
+    return LIE_OK;
+}
+
+static float *aov_data(const lie_frame *f, const char *name)
+{
+    const lie_aov *a = lie_frame_find_aov(f, name);
+    return a ? a->data : NULL;
+}
+
+typedef struct tile_range {
+    render_job *j;
+    size_t first;
+} tile_range;
+
+static void render_range_tile(void *ctx, size_t item, int worker)
+{
+    const tile_range *r = ctx;
+    render_tile(r->j, r->first + item, worker);
+}
+
+lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_camera *cam,
+                            const lie_render_options *opt, lie_frame *f, size_t first, size_t count,
+                            lie_render_stats *stats, lie_error *err)
+{
+    const char *path = s->path ? s->path : "";
+    if (opt->width != f->width || opt->height != f->height)
+        return lie_error_set(err, LIE_ERR_ARG, path, "frame %dx%d does not match image size %dx%d", f->width,
+                             f->height, opt->width, opt->height);
+    if (first > lie_render_tile_count(opt->width, opt->height) ||
+        count > lie_render_tile_count(opt->width, opt->height) - first)
+        return lie_error_set(err, LIE_ERR_ARG, path, "tiles %zu..%zu out of range", first, first + count);
     if (opt->light_samples < 1 || opt->light_samples > 1000000)
         return lie_error_set(err, LIE_ERR_ARG, path, "light samples %d out of range", opt->light_samples);
     if (opt->visibility == LIE_VIS_LIE && !opt->oracle)
@@ -256,66 +310,6 @@ static lie_status render_check(const lie_scene *s, const lie_render_options *opt
     if (opt->aov_emitter >= s->n_emitters)
         return lie_error_set(err, LIE_ERR_ARG, path, "emitter %d: the scene has %d", opt->aov_emitter,
                              s->n_emitters);
-    return LIE_OK;
-}
-
-static const char *const rgb_names[3] = {"R", "G", "B"};
-static const char *const xyz_names[3] = {"X", "Y", "Z"};
-static const char *const z_name[1] = {"Z"};
-
-/* The AOV layers opt->aovs asks for, by bit: name, channels. */
-static const struct {
-    unsigned bit;
-    const char *name;
-    int n;
-    const char *const *ch;
-} aov_layers[] = {
-    {LIE_AOV_ALBEDO, "albedo", 3, rgb_names},       {LIE_AOV_NORMAL, "normal", 3, xyz_names},
-    {LIE_AOV_DEPTH, "depth", 1, z_name},            {LIE_AOV_COMPLEXITY, "complexity", 3, rgb_names},
-    {LIE_AOV_PATCH, "patch", 3, rgb_names},
-};
-
-lie_status lie_render(const lie_scene *s, const lie_rt *rt, const lie_camera *cam,
-                      const lie_render_options *opt, lie_frame **out, lie_render_stats *stats,
-                      lie_error *err)
-{
-    *out = NULL;
-    lie_status st = render_check(s, opt, err);
-    if (st != LIE_OK)
-        return st;
-    lie_frame *f = lie_frame_create(opt->width, opt->height);
-    if (!f)
-        return lie_error_set(err, LIE_ERR_NOMEM, s->path ? s->path : "", "out of memory for a %dx%d frame",
-                             opt->width, opt->height);
-    for (size_t k = 0; k < sizeof aov_layers / sizeof aov_layers[0]; k++)
-        if ((opt->aovs & aov_layers[k].bit) && !lie_frame_add_aov(f, aov_layers[k].name, aov_layers[k].n,
-                                                                  aov_layers[k].ch)) {
-            lie_frame_destroy(f);
-            return lie_error_set(err, LIE_ERR_NOMEM, s->path ? s->path : "", "out of memory");
-        }
-    st = lie_render_region(s, rt, cam, opt, 0, 0, opt->width, opt->height, f, stats, err);
-    if (st != LIE_OK) {
-        lie_frame_destroy(f);
-        return st;
-    }
-    *out = f;
-    return LIE_OK;
-}
-
-lie_status lie_render_region(const lie_scene *s, const lie_rt *rt, const lie_camera *cam,
-                             const lie_render_options *opt, int x0, int y0, int x1, int y1, lie_frame *f,
-                             lie_render_stats *stats, lie_error *err)
-{
-    const char *path = s->path ? s->path : "";
-    lie_status st = render_check(s, opt, err);
-    if (st != LIE_OK)
-        return st;
-    if (f->width != opt->width || f->height != opt->height)
-        return lie_error_set(err, LIE_ERR_ARG, path, "a %dx%d frame for a %dx%d image", f->width, f->height,
-                             opt->width, opt->height);
-    if (x0 < 0 || y0 < 0 || x1 > opt->width || y1 > opt->height || x0 > x1 || y0 > y1)
-        return lie_error_set(err, LIE_ERR_ARG, path, "region %d,%d..%d,%d outside the %dx%d image", x0, y0, x1,
-                             y1, opt->width, opt->height);
     double t0 = lie_time_now();
     render_job j;
     memset(&j, 0, sizeof j);
@@ -328,25 +322,17 @@ lie_status lie_render_region(const lie_scene *s, const lie_rt *rt, const lie_cam
     j.cam = cam;
     j.view = lie_view_make(cam, opt->width, opt->height);
     j.frame = f;
-    j.x0 = x0;
-    j.y0 = y0;
-    j.x1 = x1;
-    j.y1 = y1;
-    float **aov_ptr[] = {&j.albedo, &j.normal, &j.depth, &j.complexity, &j.patch};
-    for (size_t k = 0; k < sizeof aov_layers / sizeof aov_layers[0]; k++) {
-        if (!(opt->aovs & aov_layers[k].bit))
-            continue;
-        const lie_aov *a = lie_frame_find_aov(f, aov_layers[k].name);
-        if (!a || a->n_channels != aov_layers[k].n)
-            return lie_error_set(err, LIE_ERR_ARG, path, "the frame has no %s layer", aov_layers[k].name);
-        *aov_ptr[k] = a->data;
-    }
+    j.albedo = aov_data(f, "albedo");
+    j.normal = aov_data(f, "normal");
+    j.depth = aov_data(f, "depth");
+    j.complexity = aov_data(f, "complexity");
+    j.patch = aov_data(f, "patch");
     int threads = opt->threads > 0 ? opt->threads : lie_cpu_count();
     lie_light_samples *fixed = calloc((size_t)s->n_emitters + 1, sizeof *fixed);
     j.scratch = aligned_alloc(128, sizeof *j.scratch * (size_t)threads);
     if (j.scratch)
         memset(j.scratch, 0, sizeof *j.scratch * (size_t)threads);
-    st = fixed && j.scratch ? LIE_OK : LIE_ERR_NOMEM;
+    lie_status st = fixed && j.scratch ? LIE_OK : LIE_ERR_NOMEM;
     for (int e = 0; st == LIE_OK && e < s->n_emitters; e++) {
         int n = s->emitters[e].type == LIE_EMITTER_AREA ? opt->light_samples : 1;
         st = lie_light_samples_alloc(&fixed[e], n);
@@ -371,13 +357,12 @@ lie_status lie_render_region(const lie_scene *s, const lie_rt *rt, const lie_cam
         for (int e = 0; st == LIE_OK && e < s->n_emitters; e++)
             st = lie_polylight_create(s, e, &j.sc.poly[e]);
     }
-    if (st == LIE_OK && x1 > x0 && y1 > y0) {
-        j.tiles_x = (x1 - x0 + LIE_TILE - 1) / LIE_TILE;
-        int tiles_y = (y1 - y0 + LIE_TILE - 1) / LIE_TILE;
+    if (st == LIE_OK) {
+        j.tiles_x = (opt->width + LIE_TILE - 1) / LIE_TILE;
+        tile_range r = {&j, first};
         lie_progress prog;
         lie_progress_begin(&prog, stderr, "render", opt->progress);
-        st = lie_parallel_for((size_t)j.tiles_x * (size_t)tiles_y, threads, render_tile, &j,
-                              lie_progress_cb, &prog);
+        st = lie_parallel_for(count, threads, render_range_tile, &r, lie_progress_cb, &prog);
         lie_progress_end(&prog);
     }
     if (stats) {
@@ -397,5 +382,22 @@ lie_status lie_render_region(const lie_scene *s, const lie_rt *rt, const lie_cam
     free(j.sc.poly);
     if (st != LIE_OK)
         return lie_error_set(err, st, path, "%s", lie_status_str(st));
+    return LIE_OK;
+}
+
+lie_status lie_render(const lie_scene *s, const lie_rt *rt, const lie_camera *cam,
+                      const lie_render_options *opt, lie_frame **out, lie_render_stats *stats,
+                      lie_error *err)
+{
+    *out = NULL;
+    lie_frame *f = NULL;
+    lie_status st = lie_render_frame_create(s, opt, &f, err);
+    if (st == LIE_OK)
+        st = lie_render_tiles(s, rt, cam, opt, f, 0, lie_render_tile_count(opt->width, opt->height), stats, err);
+    if (st != LIE_OK) {
+        lie_frame_destroy(f);
+        return st;
+    }
+    *out = f;
     return LIE_OK;
 }

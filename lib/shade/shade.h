@@ -243,14 +243,21 @@ lie_status lie_render(const lie_scene *s, const lie_rt *rt, const lie_camera *ca
                       const lie_render_options *opt, lie_frame **out, lie_render_stats *stats,
                       lie_error *err);
 
-/* Render only the pixels [x0, x1) x [y0, y1) of that image into f, a frame
- * of opt's size holding the AOV layers opt asks for (as lie_render names
- * them); other pixels are left as they are.  Each pixel gets exactly the
- * value lie_render gives it, so an image assembled from regions (lie-view's
- * progressive bands) is the same bytes. */
-lie_status lie_render_region(const lie_scene *s, const lie_rt *rt, const lie_camera *cam,
-                             const lie_render_options *opt, int x0, int y0, int x1, int y1, lie_frame *f,
-                             lie_render_stats *stats, lie_error *err);
+/* The same in pieces, for renderers that share a frame's tiles out (a
+ * cluster, lie-render under mpirun): the frame lie_render returns (RGB and
+ * opt's AOVs, zeroed), and the tiles [first, first + count) of it, LIE_TILE
+ * pixels square in row-major order, lie_render_tile_count of them.  A
+ * pixel's value depends only on its own rays, so any split of the tiles
+ * gives lie_render's bytes.  Other pixels of f are left as they are. */
+static inline size_t lie_render_tile_count(int width, int height)
+{
+    return (size_t)((width + LIE_TILE - 1) / LIE_TILE) * (size_t)((height + LIE_TILE - 1) / LIE_TILE);
+}
+lie_status lie_render_frame_create(const lie_scene *s, const lie_render_options *opt, lie_frame **out,
+                                   lie_error *err);
+lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_camera *cam,
+                            const lie_render_options *opt, lie_frame *f, size_t first, size_t count,
+                            lie_render_stats *stats, lie_error *err);
 
 /* A camera's rays for a width x height image: perspective from the eye,
  * or orthographic (ymag > 0) along forward from the image plane through

@@ -263,19 +263,6 @@ static void test_vector_shading_matches_scalar_brdf(void **state)
     lie_scene_destroy(s);
 }
 
-/* A 37 x 23 image with stratified pixels and a rotated pattern: every
- * pixel's value depends on its own index. */
-static lie_render_options odd_frame_options(void)
-{
-    lie_render_options o = lie_render_options_default();
-    o.width = 37;
-    o.height = 23;
-    o.light_samples = 20;
-    o.pattern = LIE_PATTERN_ROTATED;
-    o.spp = 2;
-    return o;
-}
-
 static void test_render_is_identical_for_any_thread_count(void **state)
 {
     (void)state;
@@ -284,7 +271,12 @@ static void test_render_is_identical_for_any_thread_count(void **state)
     lie_rt *rt = NULL;
     assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
     lie_camera cam = lie_scene_default_camera(s);
-    lie_render_options o = odd_frame_options();
+    lie_render_options o = lie_render_options_default();
+    o.width = 37;
+    o.height = 23;
+    o.light_samples = 20;
+    o.pattern = LIE_PATTERN_ROTATED;
+    o.spp = 2;
     lie_frame *f1 = NULL, *f3 = NULL;
     o.threads = 1;
     assert_int_equal(lie_render(s, rt, &cam, &o, &f1, NULL, &err), LIE_OK);
@@ -293,43 +285,6 @@ static void test_render_is_identical_for_any_thread_count(void **state)
     assert_memory_equal(f1->rgb, f3->rgb, sizeof(float) * 3 * 37 * 23);
     lie_frame_destroy(f1);
     lie_frame_destroy(f3);
-    lie_rt_destroy(rt);
-    lie_scene_destroy(s);
-}
-
-static void test_render_regions_assemble_the_whole_frame(void **state)
-{
-    (void)state;
-    lie_scene *s = square_over_floor(1.0f, 1.0f, 3.0f, 1, 0, 1);
-    lie_error err;
-    lie_rt *rt = NULL;
-    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
-    lie_camera cam = lie_scene_default_camera(s);
-    lie_render_options o = odd_frame_options();
-    o.aovs = LIE_AOV_DEPTH;
-    lie_frame *whole = NULL;
-    assert_int_equal(lie_render(s, rt, &cam, &o, &whole, NULL, &err), LIE_OK);
-    /* bands of uneven heights and a column split, as lie-view draws them */
-    lie_frame *parts = lie_frame_create(37, 23);
-    static const char *const z[1] = {"Z"};
-    assert_non_null(lie_frame_add_aov(parts, "depth", 1, z));
-    const int cuts[] = {0, 5, 6, 19, 23};
-    for (int i = 0; i + 1 < 5; i++) {
-        assert_int_equal(lie_render_region(s, rt, &cam, &o, 0, cuts[i], 11, cuts[i + 1], parts, NULL, &err), LIE_OK);
-        assert_int_equal(lie_render_region(s, rt, &cam, &o, 11, cuts[i], 37, cuts[i + 1], parts, NULL, &err), LIE_OK);
-    }
-    assert_memory_equal(whole->rgb, parts->rgb, sizeof(float) * 3 * 37 * 23);
-    assert_memory_equal(lie_frame_find_aov(whole, "depth")->data, lie_frame_find_aov(parts, "depth")->data,
-                        sizeof(float) * 37 * 23);
-    /* a region outside the image, a frame of another size, a missing layer */
-    assert_int_equal(lie_render_region(s, rt, &cam, &o, 0, 20, 37, 24, parts, NULL, &err), LIE_ERR_ARG);
-    o.width = 36;
-    assert_int_equal(lie_render_region(s, rt, &cam, &o, 0, 0, 1, 1, parts, NULL, &err), LIE_ERR_ARG);
-    o.width = 37;
-    o.aovs = LIE_AOV_ALBEDO;
-    assert_int_equal(lie_render_region(s, rt, &cam, &o, 0, 0, 1, 1, parts, NULL, &err), LIE_ERR_ARG);
-    lie_frame_destroy(whole);
-    lie_frame_destroy(parts);
     lie_rt_destroy(rt);
     lie_scene_destroy(s);
 }
@@ -739,7 +694,6 @@ int main(void)
         cmocka_unit_test(test_ggx_reflects_no_more_energy_than_it_receives),
         cmocka_unit_test(test_vector_shading_matches_scalar_brdf),
         cmocka_unit_test(test_render_is_identical_for_any_thread_count),
-        cmocka_unit_test(test_render_regions_assemble_the_whole_frame),
         cmocka_unit_test(test_ray_modes_agree),
         cmocka_unit_test(test_all_hits_reports_every_triangle_on_a_segment),
         cmocka_unit_test(test_alpha_mask_holes_for_every_ray),

@@ -4,15 +4,15 @@
  * in bands of rows drawn over the one before, so the window shows whatever
  * is ready and never waits on a whole frame.  A new request (the camera
  * moved, an edit, a constructor step) abandons the level at the next band.
- * Each band is lie_render_region on all workers, so the full level is the
- * very image lie-render makes. */
+ * Each band is whole rows of tiles rendered by lie_render_tiles on all
+ * workers, so the full level is the very image lie-render makes. */
 #include "view.h"
 
 #include <stdlib.h>
 #include <string.h>
 
 #define LEVELS 3
-#define BAND_ROWS 32
+#define BAND_TILE_ROWS 2 /* 32 pixel rows a band */
 
 struct view_render {
     view_world *w;
@@ -33,8 +33,9 @@ struct view_render {
     uint64_t done_gen, done_version; /* every level of these is finished: idle */
     uint64_t image_version;          /* the world version of the last image finished */
     lie_frame *full;
-    /* the render thread's own */
-    lie_frame *level[LEVELS];
+    /* the render thread's own: a frame per level and view mode (the modes'
+     * AOV layers are what lie_render_tiles fills) */
+    lie_frame *level[LEVELS][3];
     uint8_t *sel_mask;
 };
 
@@ -134,7 +135,6 @@ static void *render_main(void *arg)
         for (int lv = 0; lv < LEVELS && !abandoned; lv++) {
             int div = level_div[lv];
             int lw = (r->o.width + div - 1) / div, lh = (r->o.height + div - 1) / div;
-            lie_frame *f = r->level[lv];
             lie_render_options ro = lie_render_options_default();
             ro.width = lw;
             ro.height = lh;
@@ -149,18 +149,28 @@ static void *render_main(void *arg)
                 ro.aovs = LIE_AOV_PATCH;
             if (mode != VIEW_MODE_SHADE)
                 ro.eye_only = 1;
-            for (int y0 = 0; y0 < lh && !abandoned; y0 += BAND_ROWS) {
-                int y1 = y0 + BAND_ROWS < lh ? y0 + BAND_ROWS : lh;
+            lie_frame **fp = &r->level[lv][mode];
+            if (!*fp) {
+                lie_error ferr;
+                if (lie_render_frame_create(view_world_scene(r->w), &ro, fp, &ferr) != LIE_OK) {
+                    abandoned = 1;
+                    break;
+                }
+            }
+            lie_frame *f = *fp;
+            size_t tiles_x = (size_t)((lw + LIE_TILE - 1) / LIE_TILE), n_tiles = lie_render_tile_count(lw, lh);
+            for (size_t t0 = 0; t0 < n_tiles && !abandoned; t0 += BAND_TILE_ROWS * tiles_x) {
+                size_t nt = n_tiles - t0 < BAND_TILE_ROWS * tiles_x ? n_tiles - t0 : BAND_TILE_ROWS * tiles_x;
+                int y0 = (int)(t0 / tiles_x) * LIE_TILE;
+                int y1 = y0 + BAND_TILE_ROWS * LIE_TILE < lh ? y0 + BAND_TILE_ROWS * LIE_TILE : lh;
                 view_world_read_lock(r->w);
                 const lie_scene *s = view_world_scene(r->w);
                 ro.oracle = view_world_oracle(r->w);
                 ro.visibility = ro.oracle ? LIE_VIS_LIE : LIE_VIS_FULL;
-                if (!ro.oracle)
-                    ro.aovs = 0;
                 lie_error err;
-                lie_status st = view_world_version(r->w) != version
+                lie_status st = view_world_version(r->w) != version || (mode != VIEW_MODE_SHADE && !ro.oracle)
                                     ? LIE_ERR_ARG
-                                    : lie_render_region(s, view_world_rt(r->w), &cam, &ro, 0, y0, lw, y1, f, NULL, &err);
+                                    : lie_render_tiles(s, view_world_rt(r->w), &cam, &ro, f, t0, nt, NULL, &err);
                 uint8_t *in = sel >= 0 ? calloc((size_t)s->n_nodes + 1, 1) : NULL;
                 if (st == LIE_OK && in) {
                     view_node_subtree(s, sel, in);
@@ -190,7 +200,7 @@ static void *render_main(void *arg)
             if (lv == LEVELS - 1 && mode == VIEW_MODE_SHADE) {
                 lie_frame *t = r->full;
                 r->full = f;
-                r->level[lv] = t;
+                r->level[lv][mode] = t;
                 r->full_gen = gen;
                 r->full_version = version;
             }
@@ -209,17 +219,6 @@ static void *render_main(void *arg)
     return NULL;
 }
 
-static lie_frame *level_frame(int w, int h)
-{
-    lie_frame *f = lie_frame_create(w, h);
-    static const char *const rgb[3] = {"R", "G", "B"};
-    if (f && (!lie_frame_add_aov(f, "complexity", 3, rgb) || !lie_frame_add_aov(f, "patch", 3, rgb))) {
-        lie_frame_destroy(f);
-        return NULL;
-    }
-    return f;
-}
-
 lie_status view_render_start(view_world *w, const view_render_options *opt, view_render **out, lie_error *err)
 {
     *out = NULL;
@@ -234,14 +233,8 @@ lie_status view_render_start(view_world *w, const view_render_options *opt, view
     size_t n = (size_t)opt->width * (size_t)opt->height;
     r->display = calloc(n, sizeof *r->display);
     r->sel_mask = calloc(n, 1);
-    r->full = level_frame(opt->width, opt->height);
-    int ok = r->display && r->sel_mask && r->full;
-    for (int lv = 0; lv < LEVELS && ok; lv++) {
-        int d = level_div[lv];
-        r->level[lv] = level_frame((opt->width + d - 1) / d, (opt->height + d - 1) / d);
-        ok = r->level[lv] != NULL;
-    }
-    if (!ok) {
+    r->full = lie_frame_create(opt->width, opt->height);
+    if (!r->display || !r->sel_mask || !r->full) {
         view_render_stop(r);
         return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory for %dx%d frames", opt->width, opt->height);
     }
@@ -266,7 +259,8 @@ void view_render_stop(view_render *r)
         pthread_join(r->tid, NULL);
     }
     for (int lv = 0; lv < LEVELS; lv++)
-        lie_frame_destroy(r->level[lv]);
+        for (int m = 0; m < 3; m++)
+            lie_frame_destroy(r->level[lv][m]);
     lie_frame_destroy(r->full);
     free(r->display);
     free(r->sel_mask);
@@ -322,11 +316,8 @@ lie_status view_render_screenshot(view_render *r, const char *path, lie_error *e
         }
         pthread_cond_timedwait(&r->cv, &r->m, &ts);
     }
-    /* the frame stays ours while m is held; its AOV layers are the views' */
-    lie_frame rgb = *r->full;
-    rgb.aovs = NULL;
-    rgb.n_aovs = 0;
-    lie_status st = lie_frame_write(path, &rgb, NULL, 0, 0.0f, err);
+    /* the frame stays ours while m is held */
+    lie_status st = lie_frame_write(path, r->full, NULL, 0, 0.0f, err);
     pthread_mutex_unlock(&r->m);
     return st;
 }
