@@ -3,7 +3,7 @@
  * (§4.3.1) catches up with the edits (§5).
  *
  * Threads: the SDL thread (events, overlay, present), one progressive
- * renderer (progressive.c, which renders on lie_render_region's workers)
+ * renderer (progressive.c, which renders on lie_render_tiles' workers)
  * and the constructor (world.c).  The world lock is taken for reading by
  * the renderer per band and by picking, for writing by edits and by the
  * constructor when it swaps recomputed units in. */
