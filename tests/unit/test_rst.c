@@ -216,6 +216,8 @@ static void test_rst_refine_equals_brute_force_walk_of_every_patch_tree(void **s
             total += brute[i];
     }
     assert_true(total > 0); /* the boxes did meet something */
+    free(flags);
+    free(brute);
 }
 
 static void test_rst_query_of_a_box_outside_the_scene_flags_nothing(void **state)
