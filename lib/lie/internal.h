@@ -12,9 +12,11 @@
 typedef struct unit_buf {
     uint32_t *roots;      /* per emitter: the unit's root, local index */
     lie_pnode *nodes;
-    uint32_t n_nodes, cap_nodes;
+    uint32_t n_nodes;
+    size_t cap_nodes;
     uint32_t *pool;
-    uint32_t n_pool, cap_pool;
+    uint32_t n_pool;
+    size_t cap_pool;
     int copied;           /* update: every unit is copied whole from the old env at
                              assembly; nothing is held here but the sizes */
 } unit_buf;
@@ -27,7 +29,7 @@ typedef struct worker {
     uint32_t *cand;      /* conservative candidates */
     size_t n_cand, cap_cand;
     lie_vec3 *hull;      /* conservative hull points */
-    int cap_hull;
+    size_t cap_hull;
     lie_build_stats st;
     int nomem;
     int over;                 /* the node budget ran out (nomem is set too, to stop) */

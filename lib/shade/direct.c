@@ -332,7 +332,7 @@ void lie_shadow_segments(lie_shadow_query *q)
     for (int i = 0; i < n; i++) {
         float dx = lx[i] - ox, dy = ly[i] - oy, dz = lz[i] - oz;
         float d2 = dx * dx + dy * dy + dz * dz;
-        float k = d2 > 0.0f ? 1.0f - eps / sqrtf(d2) : 0.0f;
+        float k = lie_ray_end_scale(d2, eps);
         sdx[i] = dx * k;
         sdy[i] = dy * k;
         sdz[i] = dz * k;
@@ -365,12 +365,9 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
     if (sf->mirror)
         return; /* a delta BRDF sees area lights only through reflection rays */
     /* Shadow rays leave from the surface lifted along the geometric normal
-     * (as lie_shadow_segment does) and stop as far short of the emitter. */
-    float ax = fabsf(sf->p.x), ay = fabsf(sf->p.y), az = fabsf(sf->p.z);
-    float mag = ax > ay ? ax : ay;
-    mag = mag > az ? mag : az;
-    float eps = 1e-4f * (mag > 1.0f ? mag : 1.0f);
-    lie_vec3 o = lie_v3_add(sf->p, lie_v3_scale(sf->ng, eps));
+     * and stop as far short of the emitter (lib/rt/rt.h). */
+    float eps = lie_ray_eps(sf->p);
+    lie_vec3 o = lie_ray_origin(sf->p, sf->ng, eps);
     const int timers = opt->timers;
     lie_render_stats *st = &sc->stats;
     for (int e = 0; e < s->n_emitters; e++) {
@@ -463,7 +460,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                                   sc->bwork, sc->bkind, sc->bstride};
             float *sdx = sc->dx, *sdy = sc->dy, *sdz = sc->dz;
             if (!ls) {
-                float len = sc->dist[0] - eps;
+                float len = lie_ray_end(sc->dist[0], eps);
                 sdx[0] *= len;
                 sdy[0] *= len;
                 sdz[0] *= len;

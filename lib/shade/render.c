@@ -95,8 +95,7 @@ static void shade_hit(const render_job *j, const lie_hit *hitp, lie_vec3 dir, in
             return; /* shading normal bent the reflection below the surface */
         float cosv = fminf(fmaxf(-dn, 0.0f), 1.0f);
         float x = 1.0f - cosv, s5 = x * x * x * x * x;
-        float mag = fmaxf(fabsf(sf->p.x), fmaxf(fabsf(sf->p.y), fabsf(sf->p.z)));
-        lie_vec3 o = lie_v3_add(sf->p, lie_v3_scale(sf->ng, 1e-4f * fmaxf(1.0f, mag)));
+        lie_vec3 o = lie_ray_origin(sf->p, sf->ng, lie_ray_eps(sf->p));
         float sub[3] = {0.0f, 0.0f, 0.0f};
         sc->stats.reflection_rays++;
         trace(j, o, r, depth + 1, pixel, sc, sub, NULL);
