@@ -217,9 +217,12 @@ lie_status lie_atomic_open_group(lie_atomic_file *af, const char *path, lie_atom
 
     /* The temporary lives next to the target so rename() is atomic. */
     const char *slash = strrchr(af->target, '/');
-    size_t dirlen = slash ? (size_t)(slash - af->target + 1) : 0;
-    snprintf(af->tmp, sizeof af->tmp, "%.*s.%s.tmpXXXXXX", (int)dirlen, af->target,
-             slash ? slash + 1 : af->target);
+    size_t dirlen = slash ? (size_t)(slash - af->target + 1) : 0, len = strlen(af->target);
+    /* "DIR/.NAME.tmpXXXXXX": the length was checked above */
+    memcpy(af->tmp, af->target, dirlen);
+    af->tmp[dirlen] = '.';
+    memcpy(af->tmp + dirlen + 1, af->target + dirlen, len - dirlen);
+    memcpy(af->tmp + len + 1, ".tmpXXXXXX", sizeof ".tmpXXXXXX");
     /* signals between mkstemp and the registration would leave the file */
     sigset_t block, old;
     sigemptyset(&block);
