@@ -247,6 +247,7 @@ static void test_lie_quad_between_floor_and_light_is_the_only_blocker(void **sta
     lie_build_params p = lie_build_params_default();
     p.min_patch = 1e-3f;
     p.max_blockers = 1; /* split any list of two, to get small patches */
+    p.split_gain = 0.0f; /* the paper's rule: split wherever a list is too long */
     lie_env *env = build(s, &rt, p);
     occ_check c = {s, 0, 0, 0, 0};
     for (uint32_t t = 0; t < 2; t++)
@@ -299,6 +300,7 @@ static void test_lie_subdivision_stops_at_min_patch(void **state)
     lie_rt *rt = NULL;
     lie_build_params p = lie_build_params_default();
     p.max_blockers = 0; /* split every partial patch, as far as allowed */
+    p.split_gain = 0.0f;
     p.samples = 16;
     p.max_samples = 32;
     const float sizes[] = {1e-1f, 1e-2f, 2e-3f};
@@ -313,6 +315,91 @@ static void test_lie_subdivision_stops_at_min_patch(void **state)
         prev_nodes = env->n_nodes;
         lie_env_destroy(env);
     }
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+}
+
+/* The cost rule (split_gain): a split is kept only where it shortens the
+ * lists.  On museum1 it keeps far fewer nodes than the paper's rule and
+ * undoes some splits.  A leaf it keeps though it could split, with a long
+ * list, holds its exact list (the triangles meeting the pair's hull): that
+ * contains every blocker the paper's deeper tree found by sampling below
+ * the same patch. */
+typedef struct gain_check {
+    const lie_scene *s;
+    const lie_env *paper;    /* split_gain 0 */
+    const lie_build_params *p;
+    int checked;
+} gain_check;
+
+static int list_has(const uint32_t *list, uint32_t n, uint32_t t)
+{
+    uint32_t lo = 0, hi = n;
+    while (lo < hi) {
+        uint32_t mid = (lo + hi) / 2;
+        if (list[mid] < t)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < n && list[lo] == t;
+}
+
+static void paper_lists_inside(const lie_env *paper, uint32_t node, const uint32_t *list, uint32_t n, int *leaves)
+{
+    const lie_pnode *x = &paper->nodes[node];
+    if (x->child) {
+        for (uint32_t k = 0; k < 4; k++)
+            paper_lists_inside(paper, x->child + k, list, n, leaves);
+        return;
+    }
+    if (x->cls != LIE_CLASS_PARTIAL)
+        return;
+    ++*leaves;
+    for (uint32_t j = 0; j < x->count; j++)
+        assert_true(list_has(list, n, paper->pool[x->list + j]));
+}
+
+static void check_gain_leaf(const lie_env *env, const lie_pnode *n, uint32_t tri, lie_patch_path path, void *ctx)
+{
+    gain_check *g = ctx;
+    if (n->cls != LIE_CLASS_PARTIAL || n->count <= g->p->max_blockers)
+        return;
+    float area = g->s->tri_area[tri] / (float)(1u << (2 * path.depth));
+    if (!(area > g->p->min_patch * g->s->max_tri_area))
+        return;
+    /* the same patch in the paper's tree */
+    uint32_t node = g->paper->root[tri];
+    for (int d = 0; d < path.depth && g->paper->nodes[node].child; d++)
+        node = g->paper->nodes[node].child + (uint32_t)lie_patch_digit(path, d);
+    int leaves = 0;
+    paper_lists_inside(g->paper, node, &env->pool[n->list], n->count, &leaves);
+    g->checked += leaves > 0;
+}
+
+static void test_lie_split_kept_only_where_it_pays(void **state)
+{
+    (void)state;
+    lie_scene *s = NULL;
+    lie_error err;
+    assert_int_equal(lie_scene_load(TEST_SCENES "/museum1.gltf", NULL, &s, &err), LIE_OK);
+    lie_rt *rt = NULL;
+    lie_build_params p = lie_build_params_default();
+    p.min_patch = 1e-3f;
+    p.split_gain = 0.0f;
+    lie_env *paper = build(s, &rt, p);
+    lie_env *env = NULL;
+    lie_build_stats st;
+    p.split_gain = LIE_SPLIT_GAIN_DEFAULT;
+    assert_int_equal(lie_env_build(s, rt, &p, NULL, &env, &st, &err), LIE_OK);
+    assert_true(st.splits_undone > 0);
+    assert_true(env->n_nodes < paper->n_nodes);
+    gain_check g = {s, paper, &p, 0};
+    for (uint32_t t = 0; t < s->n_tris; t++)
+        walk(env, env->root[t], t, lie_patch_root(), check_gain_leaf, &g);
+    assert_true(g.checked > 0);
+    lie_env_destroy(env);
+    lie_env_destroy(paper);
     lie_rt_destroy(rt);
     lie_scene_destroy(s);
 }
@@ -490,6 +577,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_lie_quad_between_floor_and_light_is_the_only_blocker),
         cmocka_unit_test(test_lie_subdivision_stops_at_min_patch),
+        cmocka_unit_test(test_lie_split_kept_only_where_it_pays),
         cmocka_unit_test(test_lie_conservative_lists_contain_sampled_lists),
         cmocka_unit_test(test_lie_build_is_identical_for_any_thread_count),
         cmocka_unit_test(test_lie_rebuilding_units_equals_building),
