@@ -14,6 +14,8 @@
 #include "rt/rt.h"
 #include "scene/scene.h"
 #include "shade/shade.h"
+#include "shade/ltc.h"
+#include "update/update.h"
 #include "version/version.h"
 
 #endif

@@ -50,6 +50,8 @@ typedef struct lie_build_params {
     float split_gain;      /* a split is kept only if it shortens the lists by this share (--split-gain) */
     lie_blocker_mode mode;
     int threads;           /* not stored in caches: results never depend on it */
+    uint64_t max_nodes;    /* patch-tree nodes a build may make (--max-nodes); 0: the default.
+                              Not stored in caches: a build within it gives the same cache */
 } lie_build_params;
 
 #define LIE_SAMPLES_DEFAULT 128u
@@ -58,6 +60,13 @@ typedef struct lie_build_params {
 #define LIE_COMPLEX_CAP_DEFAULT 128u
 #define LIE_MIN_PATCH_DEFAULT 1e-4f
 #define LIE_SPLIT_GAIN_DEFAULT 0.25f
+/* --min-patch's lower bound: 1e-8 of the largest triangle is about 13
+ * subdivision levels; below that the trees grow by 4x a level for nothing
+ * an image can show. */
+#define LIE_MIN_PATCH_MIN 1e-8f
+/* The node budget: a node is 20 bytes (lie_pnode), held twice while the
+ * trees are joined, so the default is about 5 GiB at most. */
+#define LIE_MAX_NODES_DEFAULT (UINT64_C(1) << 27)
 lie_build_params lie_build_params_default(void);
 /* Check ranges; fills err with which parameter is wrong. */
 lie_status lie_build_params_check(const lie_build_params *p, lie_error *err);
@@ -105,6 +114,35 @@ lie_status lie_env_build(const lie_scene *s, const lie_rt *rt, const lie_build_p
 lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
                                 const uint8_t *tri_mask, lie_progress *progress, lie_env **out,
                                 lie_build_stats *stats, lie_error *err);
+
+/* Part of an env, for builds shared out among processes (lie-build under
+ * mpirun): units [first_unit, first_unit + n_units), root[i] the root of
+ * unit first_unit + i in nodes; child and list offsets index this part's
+ * own nodes and pool.  A unit depends on its triangle and emitter alone, so
+ * parts built anywhere join into the bytes of one build. */
+typedef struct lie_env_part {
+    uint64_t first_unit, n_units;
+    uint32_t *root;
+    lie_pnode *nodes;
+    uint32_t n_nodes;
+    uint32_t *pool;
+    uint32_t n_pool;
+} lie_env_part;
+
+/* Build units [first_unit, first_unit + n_units) of lie_env_build_masked's
+ * env into *out (freed by lie_env_part_free).  Statistics count these units
+ * only, so the sums over a partition are lie_env_build_masked's. */
+lie_status lie_env_build_range(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                               const uint8_t *tri_mask, uint64_t first_unit, uint64_t n_units, lie_env_part *out,
+                               lie_build_stats *stats, lie_error *err);
+/* Join parts that cover every unit of s in order (parts[i + 1] starts where
+ * parts[i] ends) into the env lie_env_build_masked builds.  Every child and
+ * list offset is checked against its part. */
+lie_status lie_env_join(const lie_scene *s, const lie_build_params *p, const lie_env_part *parts, size_t n_parts,
+                        lie_env **out, lie_error *err);
+void lie_env_part_free(lie_env_part *part);
+/* The sum of two build statistics (counts; seconds are a's). */
+void lie_build_stats_add(lie_build_stats *a, const lie_build_stats *b);
 
 /* Rebuild the listed units (sorted, unique) in place, with env's own
  * parameters, exactly as lie_env_build would.  Used by rst-update. */

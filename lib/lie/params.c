@@ -33,8 +33,8 @@ lie_status lie_build_params_check(const lie_build_params *p, lie_error *err)
         return lie_error_set(err, LIE_ERR_ARG, NULL, "max-samples must be in samples..%u", 1u << 24);
     if (p->max_blockers > (1u << 20) || p->complex_cap > (1u << 24))
         return lie_error_set(err, LIE_ERR_ARG, NULL, "max-blockers or complex-cap too large");
-    if (!(p->min_patch > 0.0f) || !(p->min_patch <= 1.0f))
-        return lie_error_set(err, LIE_ERR_ARG, NULL, "min-patch must be in (0, 1]");
+    if (!(p->min_patch >= LIE_MIN_PATCH_MIN) || !(p->min_patch <= 1.0f))
+        return lie_error_set(err, LIE_ERR_ARG, NULL, "min-patch must be in [%g, 1]", (double)LIE_MIN_PATCH_MIN);
     if (!(p->split_gain >= 0.0f) || !(p->split_gain < 1.0f))
         return lie_error_set(err, LIE_ERR_ARG, NULL, "split-gain must be in [0, 1)");
     if (p->mode != LIE_BLOCKERS_SAMPLED && p->mode != LIE_BLOCKERS_CONSERVATIVE)
@@ -49,6 +49,8 @@ void lie_stats_hist_add(lie_build_stats *st, uint32_t n)
         b++;
     st->list_hist[b]++;
 }
+
+void lie_build_stats_add(lie_build_stats *a, const lie_build_stats *b) { lie_stats_merge(a, b); }
 
 void lie_stats_merge(lie_build_stats *dst, const lie_build_stats *src)
 {

@@ -12,15 +12,15 @@
 
 static int push_node(unit_buf *u, worker *w)
 {
-    if (u->n_nodes == u->cap_nodes) {
-        uint32_t nc = u->cap_nodes ? 2 * u->cap_nodes : 8;
-        lie_pnode *nn = realloc(u->nodes, sizeof *nn * nc);
-        if (!nn) {
-            w->nomem = 1;
-            return -1;
-        }
-        u->nodes = nn;
-        u->cap_nodes = nc;
+    /* the total only grows, so it passes the budget in some schedule iff
+     * it does in all: the outcome does not depend on the threads */
+    if (atomic_fetch_add_explicit(w->nodes_made, 1, memory_order_relaxed) >= w->max_nodes) {
+        w->over = w->nomem = 1;
+        return -1;
+    }
+    if (!LIE_GROW(u->nodes, u->cap_nodes, (size_t)u->n_nodes + 1)) {
+        w->nomem = 1;
+        return -1;
     }
     memset(&u->nodes[u->n_nodes], 0, sizeof *u->nodes);
     return (int)u->n_nodes++;
@@ -28,17 +28,9 @@ static int push_node(unit_buf *u, worker *w)
 
 static int push_list(unit_buf *u, worker *w, const uint32_t *list, uint32_t n)
 {
-    if (u->n_pool + n > u->cap_pool) {
-        uint32_t nc = u->cap_pool ? u->cap_pool : 16;
-        while (nc < u->n_pool + n)
-            nc *= 2;
-        uint32_t *np = realloc(u->pool, sizeof *np * nc);
-        if (!np) {
-            w->nomem = 1;
-            return 0;
-        }
-        u->pool = np;
-        u->cap_pool = nc;
+    if (!LIE_GROW(u->pool, u->cap_pool, (size_t)u->n_pool + n)) {
+        w->nomem = 1;
+        return 0;
     }
     memcpy(u->pool + u->n_pool, list, sizeof *list * n);
     u->n_pool += n;
@@ -85,7 +77,7 @@ typedef struct node_class {
  * w->hits[0..n_list).  `old` is the old env's node in an update (its memo
  * entry, computed in parallel), or -1. */
 static void classify(const build_ctx *c, worker *w, uint32_t tri, lie_patch_path path, int e, int two_sided,
-                     float eps, const uint32_t *parent, size_t n_parent, int64_t old, node_class *nc)
+                     const uint32_t *parent, size_t n_parent, int64_t old, node_class *nc)
 {
     const lie_scene *s = c->s;
     lie_vec3 V[3];
@@ -100,60 +92,88 @@ static void classify(const build_ctx *c, worker *w, uint32_t tri, lie_patch_path
         nc->cls = m->cls;
         nc->quality = m->quality;
         nc->n_list = m->n_list;
-        if (nc->n_list > w->cap_hits) {
-            uint32_t *nb = realloc(w->hits, nc->n_list * sizeof *nb);
-            if (!nb) {
-                w->nomem = 1;
-                return;
-            }
-            w->hits = nb;
-            w->cap_hits = nc->n_list;
+        if (!LIE_GROW(w->hits, w->cap_hits, nc->n_list)) {
+            w->nomem = 1;
+            return;
         }
         if (nc->n_list)
             memcpy(w->hits, m->list, nc->n_list * sizeof *w->hits);
     } else if (lie_pair_unlit(c->s, tri, V, two_sided, e)) {
         nc->cls = LIE_CLASS_UNLIT;
     } else if (c->p->mode == LIE_BLOCKERS_SAMPLED) {
-        nc->cls = lie_sample_pair(c, w, tri, path, V, two_sided, e, eps, &nc->quality, &nc->n_list);
+        nc->cls = lie_sample_pair(c, w, tri, path, V, two_sided, e, &nc->quality, &nc->n_list);
     } else {
-        nc->cls = lie_cull_conservative(c, w, tri, V, two_sided, e, eps, parent, n_parent, SIZE_MAX, &nc->n_list);
+        nc->cls = lie_cull_conservative(c, w, tri, V, two_sided, e, parent, n_parent, SIZE_MAX, &nc->n_list);
     }
 }
 
 /* What a node costs the renderer per light sample, in blocker tests: none
- * for unlit, visible and occluded pairs, its list for a partial one, and
- * for a complex one an Embree ray, which complex_cap + 1 blockers are taken
- * to match (the cap is where a list stops paying for itself). */
-static double render_weight(const build_ctx *c, lie_class cls, size_t n_list)
+ * for unlit, visible and occluded pairs, its list's length otherwise (past
+ * complex_cap the pair is complex: an Embree ray, costlier than any list
+ * once visibility is exact, lib/shade/polylight.h). */
+static double render_weight(lie_class cls, size_t n_list)
 {
-    double cap1 = (double)c->p->complex_cap + 1.0;
-    if (cls == LIE_CLASS_COMPLEX)
-        return cap1;
-    if (cls == LIE_CLASS_PARTIAL || cls == LIE_CLASS_SPLIT)
-        return (double)n_list < cap1 ? (double)n_list : cap1;
-    return 0.0;
+    return cls == LIE_CLASS_PARTIAL || cls == LIE_CLASS_SPLIT || cls == LIE_CLASS_COMPLEX ? (double)n_list : 0.0;
 }
 
 /* The same for an old node an update copies (its class and count are
  * what a build would give: no edit reached it). */
-static double old_weight(const build_ctx *c, const lie_pnode *x)
+static double old_weight(const lie_pnode *x)
 {
-    return render_weight(c, (lie_class)x->cls, x->count);
+    return render_weight((lie_class)x->cls, x->count);
 }
 
-/* §4.1.1 with a cost test: a split is kept only if it pays, that is if the
- * children's lists are on average shorter than the parent's by at least
- * the share split_gain of it (0: every split is kept, as the paper does).  Where smaller patches keep seeing about the same
- * blockers (a patch shrinks towards a point, whose list is not empty), a
- * deeper tree costs build time and cache space and saves the renderer
- * nothing.  The decision uses only the node and its four children, all
- * inside the node's own shaft, so an update that copies an untouched node
- * copies the same decision. */
-static int split_pays(const build_ctx *c, lie_class cls, size_t n_list, const double child_w[4])
+/* The exact lengths of the node's and its children's lists, the triangles
+ * meeting each hull (§4.1.2), counted up to 8 complex_cap: a sampled list
+ * past the cap stops growing (lie_sample_pair settles it), so only these
+ * can tell a shaft whose lists shrink over several levels (a floor under
+ * many columns) from one whose lists never do (a patch outside a lamp's
+ * shade).  The split is kept if they shrink by split_gain on average. */
+static int exact_split_pays(const build_ctx *c, worker *w, uint32_t tri, lie_patch_path path, int e, int two_sided)
 {
-    double parent = render_weight(c, cls, n_list);
+    const lie_scene *s = c->s;
+    size_t limit = 8 * (size_t)c->p->complex_cap + 8, cnt[5];
+    for (int k = 0; k < 5; k++) {
+        lie_patch_path q = k == 0 ? path : lie_patch_child(path, k - 1);
+        lie_vec3 V[3];
+        lie_patch_world(q, &s->tri_p[3 * (size_t)tri], V);
+        lie_cull_conservative(c, w, tri, V, two_sided, e, NULL, 0, limit, &cnt[k]);
+        if (w->nomem)
+            return 0;
+        cnt[k] = cnt[k] < limit ? cnt[k] : limit;
+    }
+    double mean = 0.25 * (double)(cnt[1] + cnt[2] + cnt[3] + cnt[4]);
+    return mean <= (1.0 - (double)c->p->split_gain) * (double)cnt[0];
+}
+
+/* §4.1.1 with a cost test: a split is kept only if it pays.
+ * - A node short enough for a list splits if its children's lists are on
+ *   average shorter than its own by the share split_gain (0: every split
+ *   is kept, as the paper does).  Where smaller patches keep seeing about
+ *   the same blockers (a shrinking patch tends to a point, whose list is
+ *   not empty), a deeper tree costs build time and cache space and saves
+ *   the renderer nothing.
+ * - A node too long for a list (complex as a leaf) splits if a child gets
+ *   a list: part of its area leaves Embree.  If every child is too long as
+ *   well, the exact counts decide (exact_split_pays).
+ * The decision uses only the node and its four children, all inside the
+ * node's own shaft, so an update that copies an untouched node copies the
+ * same decision. */
+static int split_pays(const build_ctx *c, worker *w, uint32_t tri, lie_patch_path path, int e, int two_sided,
+                      lie_class cls, size_t n_list, const double child_w[4])
+{
+    if (c->p->split_gain <= 0.0f)
+        return 1;
+    double cap = (double)c->p->complex_cap, parent = render_weight(cls, n_list);
+    int all_long = 1;
+    for (int k = 0; k < 4; k++)
+        all_long &= child_w[k] > cap;
+    if (parent > cap && !all_long)
+        return 1;
+    if (parent > cap && c->p->mode == LIE_BLOCKERS_SAMPLED)
+        return exact_split_pays(c, w, tri, path, e, two_sided);
     double mean = 0.25 * (child_w[0] + child_w[1] + child_w[2] + child_w[3]);
-    return c->p->split_gain <= 0.0f || mean <= (1.0 - (double)c->p->split_gain) * parent;
+    return mean <= (1.0 - (double)c->p->split_gain) * parent;
 }
 
 /* Build node `idx` for patch `path` of unit (tri, e).  In an update, `old`
@@ -162,7 +182,7 @@ static int split_pays(const build_ctx *c, lie_class cls, size_t n_list, const do
  * not NULL, is the node's classification, already made by its parent's
  * lookahead. */
 static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx, uint32_t tri,
-                       lie_patch_path path, int e, int two_sided, float eps, const uint32_t *parent,
+                       lie_patch_path path, int e, int two_sided, const uint32_t *parent,
                        size_t n_parent, int64_t old, const node_class *pre)
 {
     if (old >= 0 && !(c->node_flags && c->node_flags[old])) {
@@ -173,20 +193,15 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
     node_class nc;
     if (pre) {
         nc = *pre;
-        if (nc.n_list > w->cap_hits) {
-            uint32_t *nb = realloc(w->hits, nc.n_list * sizeof *nb);
-            if (!nb) {
-                w->nomem = 1;
-                return;
-            }
-            w->hits = nb;
-            w->cap_hits = nc.n_list;
+        if (!LIE_GROW(w->hits, w->cap_hits, nc.n_list)) {
+            w->nomem = 1;
+            return;
         }
         if (nc.n_list)
             memcpy(w->hits, nc.list, nc.n_list * sizeof *w->hits);
         nc.list = NULL;
     } else {
-        classify(c, w, tri, path, e, two_sided, eps, parent, n_parent, old, &nc);
+        classify(c, w, tri, path, e, two_sided, parent, n_parent, old, &nc);
     }
     if (w->nomem)
         return;
@@ -210,13 +225,13 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
             kid[n_kid].list = NULL;
             kid[n_kid].n_list = 0;
             if (ok >= 0 && !(c->node_flags && c->node_flags[ok])) {
-                kid_w[n_kid] = old_weight(c, &c->old->nodes[ok]);
+                kid_w[n_kid] = old_weight(&c->old->nodes[ok]);
                 continue;
             }
-            classify(c, w, tri, lie_patch_child(path, n_kid), e, two_sided, eps, keep, n_list, ok, &kid[n_kid]);
+            classify(c, w, tri, lie_patch_child(path, n_kid), e, two_sided, keep, n_list, ok, &kid[n_kid]);
             if (w->nomem)
                 break;
-            kid_w[n_kid] = render_weight(c, kid[n_kid].cls, kid[n_kid].n_list);
+            kid_w[n_kid] = render_weight(kid[n_kid].cls, kid[n_kid].n_list);
             if (kid[n_kid].n_list) {
                 kid[n_kid].list = malloc(sizeof *kid[n_kid].list * kid[n_kid].n_list);
                 if (!kid[n_kid].list) {
@@ -226,7 +241,7 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
                 memcpy(kid[n_kid].list, w->hits, sizeof *kid[n_kid].list * kid[n_kid].n_list);
             }
         }
-        int pays = !w->nomem && split_pays(c, nc.cls, n_list, kid_w);
+        int pays = !w->nomem && split_pays(c, w, tri, path, e, two_sided, nc.cls, n_list, kid_w);
         int first = -1;
         if (pays) {
             first = push_node(u, w);
@@ -243,7 +258,7 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
                 int64_t ok = old_child ? (int64_t)old_child + k : -1;
                 int copied = ok >= 0 && !(c->node_flags && c->node_flags[ok]);
                 build_node(c, w, u, (uint32_t)first + (uint32_t)k, tri, lie_patch_child(path, k), e, two_sided,
-                           eps, keep, n_list, ok, copied ? NULL : &kid[k]);
+                           keep, n_list, ok, copied ? NULL : &kid[k]);
             }
         }
         for (int k = 0; k < n_kid && k < 4; k++)
@@ -260,7 +275,7 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
         if (c->p->mode == LIE_BLOCKERS_SAMPLED && n_list <= c->p->complex_cap) {
             lie_vec3 V[3];
             lie_patch_world(path, &s->tri_p[3 * (size_t)tri], V);
-            nc.cls = lie_cull_conservative(c, w, tri, V, two_sided, e, eps, NULL, 0, c->p->complex_cap, &n_list);
+            nc.cls = lie_cull_conservative(c, w, tri, V, two_sided, e, NULL, 0, c->p->complex_cap, &n_list);
             /* a planar emitter's own triangles end every segment: they block none */
             const lie_emitter *em = &s->emitters[e];
             if (em->type == LIE_EMITTER_AREA && em->planar && n_list <= c->p->complex_cap) {
@@ -273,15 +288,10 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
                     nc.cls = LIE_CLASS_VISIBLE;
             }
         } else {
-            if (n_list > w->cap_hits) {
-                uint32_t *nb = realloc(w->hits, n_list * sizeof *nb);
-                if (!nb) {
-                    free(keep);
-                    w->nomem = 1;
-                    return;
-                }
-                w->hits = nb;
-                w->cap_hits = n_list;
+            if (!LIE_GROW(w->hits, w->cap_hits, n_list)) {
+                free(keep);
+                w->nomem = 1;
+                return;
             }
             memcpy(w->hits, keep, sizeof *keep * n_list);
         }
@@ -375,7 +385,7 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
 {
     build_ctx *c = ctx;
     worker *w = &c->workers[worker_id];
-    uint32_t tri = (uint32_t)item;
+    uint32_t tri = c->tri_lo + (uint32_t)item;
     unit_buf *u = &c->out[item];
     const lie_scene *s = c->s;
     size_t ne = (size_t)s->n_emitters;
@@ -386,10 +396,11 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
         w->nomem = 1;
         return;
     }
-    int two_sided = lie_scene_material(s, s->tri_material[tri])->double_sided != 0;
-    float eps = lie_pair_eps(s, tri);
+    int two_sided = lie_pair_two_sided(s, tri);
     for (size_t e = 0; e < ne; e++) {
         size_t unit = (size_t)tri * ne + e;
+        if (unit < c->unit_lo || unit >= c->unit_hi)
+            continue; /* lie_env_build_range: another part's */
         int root = push_node(u, w);
         if (root < 0)
             return;
@@ -400,6 +411,6 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
             w->st.pairs[LIE_CLASS_NONE]++;
             continue;
         }
-        build_node(c, w, u, (uint32_t)root, tri, lie_patch_root(), (int)e, two_sided, eps, NULL, 0, old, NULL);
+        build_node(c, w, u, (uint32_t)root, tri, lie_patch_root(), (int)e, two_sided, NULL, 0, old, NULL);
     }
 }

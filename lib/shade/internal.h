@@ -2,6 +2,7 @@
 #ifndef LIE_SHADE_INTERNAL_H
 #define LIE_SHADE_INTERNAL_H
 
+#include "shade/polylight.h"
 #include "shade/shade.h"
 
 /* Per-worker buffers, sized once for the largest sample count, so the
@@ -20,6 +21,7 @@ typedef struct lie_shade_scratch {
     int *idx;                  /* batch slot -> sample */
     lie_ray_batch batch;
     lie_light_samples rotated; /* --pattern rotated: this point's samples */
+    lie_polylight_work poly;   /* closed-form shading's pieces */
     lie_render_stats stats;
 } lie_shade_scratch;
 
@@ -32,6 +34,9 @@ typedef struct lie_shade_ctx {
     const lie_render_options *opt;
     const lie_light_samples *fixed; /* one per emitter (fixed pattern) */
     float ray_far;                  /* shadow ray length toward directional lights */
+    lie_polylight **poly;           /* per emitter, NULL where the closed form does not serve */
+    int analytic;                   /* this frame shades Lambert receivers of poly[e] in closed form */
+    int exact;                      /* ... and answers their partial pairs by back-projection */
 } lie_shade_ctx;
 
 /* Per triangle, the instance it belongs to if that instance is a closed

@@ -585,6 +585,7 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
             longest = env->nodes[i].count;
     v->oracle.max_blockers = (int)longest;
     v->oracle.describe = describe;
+    v->oracle.solid = v->solid;
     *out = v;
     return LIE_OK;
 }

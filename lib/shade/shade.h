@@ -135,6 +135,8 @@ typedef struct lie_vis_oracle {
     /* For AOVs: the pair's class (lie_class), list length and a patch id. */
     void (*describe)(void *ctx, const lie_surface *sf, int emitter, int *cls, uint32_t *count,
                      uint64_t *patch_id);
+    /* per triangle, its closed convex solid or -1 (lie_convex_solids); may be NULL */
+    const int32_t *solid;
 } lie_vis_oracle;
 
 /* The LIE strategy (§4.2): the hit's patch finds its leaf per emitter;
@@ -169,6 +171,22 @@ void lie_complexity_colour(int cls, uint32_t count, float rgb[3]);
  * (occluded) over the lit emitters, black if none is lit. */
 void lie_complexity_colour_all(const int *cls, const uint32_t *count, int n, float rgb[3]);
 
+/* Lambert receivers under planar emitters of one radiance are shaded in
+ * closed form (Lambert's edge sum) from LIE_ANALYTIC_MIN_SAMPLES light
+ * samples on, with any visibility: a pair seen whole takes no samples, a
+ * pair whose visibility is sampled is scaled by the ratio of its visible
+ * samples' weight to all its samples' (Heitz, Hill, McGuire 2018).  With
+ * LIE visibility, a partial pair's visible part is then found exactly by
+ * back-projecting its blockers (LIE_EXACT_AUTO, from
+ * LIE_EXACT_MIN_SAMPLES samples on; LIE_EXACT_ONLY at any count). */
+typedef enum lie_exact_mode {
+    LIE_EXACT_AUTO = 0,
+    LIE_EXACT_OFF = 1,     /* partial pairs sampled (the oracle: LIE image = full image) */
+    LIE_EXACT_ONLY = 2     /* closed forms and exact visibility wherever they apply */
+} lie_exact_mode;
+#define LIE_ANALYTIC_MIN_SAMPLES 16
+#define LIE_EXACT_MIN_SAMPLES 16
+
 typedef struct lie_render_options {
     int width, height;
     int spp;               /* eye rays per pixel, stratified; 1 = pixel centre */
@@ -184,6 +202,8 @@ typedef struct lie_render_options {
     int eye_only;          /* trace eye rays only (benchmark baseline) */
     unsigned lie_skip;     /* LIE_SKIP_*: benchmark ablations (wrong images) */
     int progress;          /* progress bar on stderr if a terminal */
+    lie_exact_mode exact;  /* closed-form shading and exact visibility (polylight.h) */
+    int timers;            /* per-worker timers of each path into the stats (costs a clock read per pair) */
 } lie_render_options;
 
 /* Benchmark ablations of --visibility=lie: answer partial pairs (their
@@ -201,8 +221,20 @@ lie_render_options lie_render_options_default(void);
 typedef struct lie_render_stats {
     uint64_t eye_rays, reflection_rays, shadow_rays, shadow_rays_skipped;
     uint64_t shading_points, light_samples;
+    /* (shading point, area or punctual emitter) pairs by the path they took */
+    uint64_t pairs_occluded;  /* no contribution: occluded or unlit */
+    uint64_t pairs_analytic;  /* seen whole, closed form */
+    uint64_t pairs_exact;     /* partial, exact back-projection */
+    uint64_t pairs_blockers;  /* partial, samples against the blocker list */
+    uint64_t pairs_embree;    /* samples against the whole scene */
+    uint64_t pairs_unshadowed; /* seen whole, sampled shading */
+    uint64_t exact_overflows; /* exact pairs that fell back to samples */
+    /* with lie_render_options.timers: seconds summed over workers */
+    double t_analytic, t_exact, t_blockers, t_embree, t_sampled_shading;
     double seconds;
 } lie_render_stats;
+/* acc += w, field by field */
+void lie_render_stats_add(lie_render_stats *acc, const lie_render_stats *w);
 
 /* Render the scene from camera `cam` into a new frame (RGB + requested AOVs).
  * The result is a function of the inputs only: any thread count gives the
@@ -210,6 +242,22 @@ typedef struct lie_render_stats {
 lie_status lie_render(const lie_scene *s, const lie_rt *rt, const lie_camera *cam,
                       const lie_render_options *opt, lie_frame **out, lie_render_stats *stats,
                       lie_error *err);
+
+/* The same in pieces, for renderers that share a frame's tiles out (a
+ * cluster, lie-render under mpirun): the frame lie_render returns (RGB and
+ * opt's AOVs, zeroed), and the tiles [first, first + count) of it, LIE_TILE
+ * pixels square in row-major order, lie_render_tile_count of them.  A
+ * pixel's value depends only on its own rays, so any split of the tiles
+ * gives lie_render's bytes.  Other pixels of f are left as they are. */
+static inline size_t lie_render_tile_count(int width, int height)
+{
+    return (size_t)((width + LIE_TILE - 1) / LIE_TILE) * (size_t)((height + LIE_TILE - 1) / LIE_TILE);
+}
+lie_status lie_render_frame_create(const lie_scene *s, const lie_render_options *opt, lie_frame **out,
+                                   lie_error *err);
+lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_camera *cam,
+                            const lie_render_options *opt, lie_frame *f, size_t first, size_t count,
+                            lie_render_stats *stats, lie_error *err);
 
 /* A camera's rays for a width x height image: perspective from the eye,
  * or orthographic (ymag > 0) along forward from the image plane through
@@ -249,6 +297,7 @@ typedef struct lie_camera_path {
     int n_keys;
     int smooth;            /* Catmull-Rom (1) or linear (0) */
     int n_frames;
+    int first;             /* the number of frame 0 (first-frame), 0 by default */
 } lie_camera_path;
 
 /* Parse a camera path from YAML text; `name` is used in messages, which
@@ -258,6 +307,9 @@ lie_status lie_camera_path_parse(const unsigned char *text, size_t size, const c
 lie_status lie_camera_path_read(const char *path, lie_camera_path **out, lie_error *err);
 /* The camera of frame `frame` (0 .. n_frames - 1). */
 lie_camera lie_camera_path_frame(const lie_camera_path *p, int frame);
+/* Write p as YAML (formats/camera-path.md) to path ("-": stdout),
+ * atomically; numbers as %.9g, so the floats read back exactly. */
+lie_status lie_camera_path_write(const lie_camera_path *p, const char *path, lie_error *err);
 void lie_camera_path_destroy(lie_camera_path *p);
 
 #ifdef __cplusplus

@@ -4,9 +4,18 @@
 
 #include "lie.h"
 
+/* Form factor from a point to a parallel rectangle a x b whose corner is
+ * straight above it at height h (Howell's catalogue, configuration B-3). */
+static inline double ff_corner(double a, double b, double h)
+{
+    double X = a / h, Y = b / h;
+    double sx = sqrt(1.0 + X * X), sy = sqrt(1.0 + Y * Y);
+    return (X / sx * atan(Y / sx) + Y / sy * atan(X / sy)) / (2.0 * M_PI);
+}
+
 /* floor 4x4 at y=0 (2 triangles, tris 0-1), an occluder quad 0.6x0.6 at
  * y=1 (tris 2-3, double-sided), a 1x1 light at y=2 facing down (tris 4-5). */
-static lie_scene *occluder_scene(void)
+static inline lie_scene *occluder_scene(void)
 {
     lie_scene *s = lie_scene_new("occluder");
     lie_material white = lie_material_default();

@@ -11,6 +11,7 @@
 
 #include "lie.h"
 #include "shade/internal.h"
+#include "fixtures.h"
 
 /* A square of side `a` centred at (0, h, 0) in the plane y = h, front face
  * pointing down (-y), emitting radiance L; and a large floor at y = 0. */
@@ -66,15 +67,6 @@ static void render_pixel(const lie_scene *s, lie_vec3 eye, lie_vec3 target, int 
     memcpy(rgb, f->rgb, 3 * sizeof(float));
     lie_frame_destroy(f);
     lie_rt_destroy(rt);
-}
-
-/* Form factor from a point to a parallel rectangle a x b whose corner is
- * straight above it at height h (Howell's catalogue, configuration B-3). */
-static double ff_corner(double a, double b, double h)
-{
-    double X = a / h, Y = b / h;
-    double sx = sqrt(1.0 + X * X), sy = sqrt(1.0 + Y * Y);
-    return (X / sx * atan(Y / sx) + Y / sy * atan(X / sy)) / (2.0 * M_PI);
 }
 
 static void test_lambert_point_under_square_matches_form_factor(void **state)

@@ -1,6 +1,7 @@
 /* lie-build: build the local illumination environments of a scene and write
  * them to a cache.
  *   lie-build SCENE.gltf|SCENE.glb -o CACHE|- [options] */
+#include "dist.h"
 #include "lie.h"
 
 #include <getopt.h>
@@ -25,10 +26,12 @@ static void usage(FILE *fp)
             "                        segments (default %u)\n"
             "      --max-blockers B  subdivide a patch whose blocker list is longer (default %u)\n"
             "      --min-patch F     smallest patch area, as a fraction of the largest\n"
-            "                        triangle's area (default %g, the paper's 0.01%%): a floor\n"
+            "                        triangle's area, in [%g, 1] (default %g, the paper's 0.01%%): a floor\n"
             "      --split-gain G    keep a split only if the children's lists are shorter\n"
             "                        than the parent's by this share on average (default %g;\n"
             "                        0 splits wherever a list is too long, as the paper)\n"
+            "      --max-nodes N     refuse to build more patch-tree nodes than N, about\n"
+            "                        20 bytes each (default %llu)\n"
             "      --complex-cap C   a list still longer at the smallest size is 'complex':\n"
             "                        its shadow rays go to the whole scene (default %u)\n"
             "      --blockers MODE   sampled (default, the paper's shaft sampling) |\n"
@@ -44,18 +47,22 @@ static void usage(FILE *fp)
             "      --stats[=json]    print statistics to stderr\n"
             "  -q, --quiet           no progress bar\n"
             "  -h, --help            this help\n"
-            "      --version         print the version\n",
-            prog, d.samples, d.max_samples, d.max_blockers, (double)d.min_patch, (double)d.split_gain,
-            d.complex_cap);
+            "      --version         print the version\n"
+            "\n"
+            "Under mpirun the ranks share the units out and rank 0 writes the cache one\n"
+            "process writes (docs/mpi.md).\n",
+            prog, d.samples, d.max_samples, d.max_blockers, (double)LIE_MIN_PATCH_MIN, (double)d.min_patch,
+            (double)d.split_gain,
+            (unsigned long long)LIE_MAX_NODES_DEFAULT, d.complex_cap);
 }
 
 #define usage_error(...) lie_usage_error(prog, __VA_ARGS__)
 
-static int fail(const lie_error *err) { return lie_report_error(prog, err, 1); }
+static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 
 enum {
     OPT_SAMPLES = 256, OPT_MAX_SAMPLES, OPT_MAX_BLOCKERS, OPT_MIN_PATCH, OPT_SPLIT_GAIN, OPT_COMPLEX_CAP, OPT_BLOCKERS,
-    OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_VIEW, OPT_VIEW_SIZE
+    OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_VIEW, OPT_VIEW_SIZE, OPT_MAX_NODES
 };
 
 static const struct option long_opts[] = {
@@ -65,6 +72,7 @@ static const struct option long_opts[] = {
     {"max-blockers", required_argument, NULL, OPT_MAX_BLOCKERS},
     {"min-patch", required_argument, NULL, OPT_MIN_PATCH},
     {"split-gain", required_argument, NULL, OPT_SPLIT_GAIN},
+    {"max-nodes", required_argument, NULL, OPT_MAX_NODES},
     {"complex-cap", required_argument, NULL, OPT_COMPLEX_CAP},
     {"blockers", required_argument, NULL, OPT_BLOCKERS},
     {"view", required_argument, NULL, OPT_VIEW},
@@ -109,9 +117,12 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
         fprintf(stderr,
                 "],\"mean_list_length\":%.3f,\"segments\":%llu,\"splits_undone\":%llu,\"nodes\":%u,\"pool\":%u,"
                 "\"seconds_load\":%.6f,\"seconds_bvh\":%.6f,\"seconds_build\":%.6f,\"seconds_write\":%.6f,"
-                "\"bytes\":%zu}\n",
-                mean, (unsigned long long)st->segments, (unsigned long long)st->splits_undone, env->n_nodes, env->n_pool, t_load, t_bvh, t_build, t_write,
+                "\"bytes\":%zu",
+                mean, (unsigned long long)st->segments, (unsigned long long)st->splits_undone,
+                env->n_nodes, env->n_pool, t_load, t_bvh, t_build, t_write,
                 bytes);
+        lie_dist_stats_print(stderr, "units", 1);
+        fprintf(stderr, "}\n");
         return;
     }
     fprintf(stderr, "%s: %s: %u triangles, %d emitters, %llu units\n", prog, input, s->n_tris, s->n_emitters,
@@ -139,6 +150,7 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
             (unsigned long long)st->segments, (unsigned long long)st->splits_undone, env->n_nodes, env->n_pool, bytes);
     fprintf(stderr, "  time: load %.3f s, bvh %.3f s, build %.3f s, write %.3f s\n", t_load, t_bvh, t_build,
             t_write);
+    lie_dist_stats_print(stderr, "units", 0);
 }
 
 int main(int argc, char **argv)
@@ -177,14 +189,20 @@ int main(int argc, char **argv)
             bp.complex_cap = (uint32_t)v;
             break;
         case OPT_MIN_PATCH:
-            if (!lie_parse_float(optarg, 1e-12f, 1.0f, &f))
-                return usage_error("--min-patch: expected a fraction in (0, 1], got '%s'", optarg);
+            if (!lie_parse_float(optarg, LIE_MIN_PATCH_MIN, 1.0f, &f))
+                return usage_error("--min-patch: expected a fraction in [%g, 1], got '%s'", (double)LIE_MIN_PATCH_MIN,
+                                   optarg);
             bp.min_patch = f;
             break;
         case OPT_SPLIT_GAIN:
             if (!lie_parse_float(optarg, 0.0f, 0.999f, &f))
                 return usage_error("--split-gain: expected a share in [0, 1), got '%s'", optarg);
             bp.split_gain = f;
+            break;
+        case OPT_MAX_NODES:
+            if (!lie_parse_long(optarg, 1, 0xFFFFFFF0L, &v))
+                return usage_error("--max-nodes: expected an integer in 1..4294967280, got '%s'", optarg);
+            bp.max_nodes = (uint64_t)v;
             break;
         case OPT_BLOCKERS:
             if (strcmp(optarg, "sampled") == 0) bp.mode = LIE_BLOCKERS_SAMPLED;
@@ -227,6 +245,11 @@ int main(int argc, char **argv)
         bp.max_samples = bp.samples; /* --samples above the default cap: one round */
     const char *input = argv[optind];
 
+    if (lie_dist_start(&argc, &argv) > 1) {
+        quiet = 1; /* rank 0 prints the statistics */
+        if (lie_dist_rank() != 0)
+            stats = 0;
+    }
     lie_error err;
     lie_error_clear(&err);
     double t0 = lie_time_now();
@@ -262,11 +285,18 @@ int main(int argc, char **argv)
             return fail(&err);
         }
     }
+    if (lie_dist_check(scene->hash, scene->hash, &err) != LIE_OK) {
+        free(mask);
+        lie_rt_destroy(rt);
+        lie_scene_destroy(scene);
+        return fail(&err);
+    }
     lie_progress prog_bar;
     lie_progress_begin(&prog_bar, stderr, "lie-build", !quiet);
     lie_env *env = NULL;
     lie_build_stats st;
-    lie_status rc = lie_env_build_masked(scene, rt, &bp, mask, &prog_bar, &env, &st, &err);
+    lie_status rc = lie_dist_size() > 1 ? build_dist(scene, rt, &bp, mask, &env, &st, &err)
+                                         : lie_env_build_masked(scene, rt, &bp, mask, &prog_bar, &env, &st, &err);
     free(mask);
     lie_progress_end(&prog_bar);
     if (rc != LIE_OK) {
@@ -274,24 +304,17 @@ int main(int argc, char **argv)
         lie_scene_destroy(scene);
         return fail(&err);
     }
+    if (!env) { /* another rank than 0 under mpirun: rank 0 writes */
+        lie_rt_destroy(rt);
+        lie_scene_destroy(scene);
+        return 0;
+    }
     double t3 = lie_time_now();
     lie_cache cache;
     memset(&cache, 0, sizeof cache);
     cache.scene_path = (char *)input;
-    cache.scene_hash = cache.state_hash = scene->hash;
-    cache.n_tris = scene->n_tris;
-    cache.n_emitters = scene->n_emitters;
-    cache.emitters = calloc((size_t)scene->n_emitters + 1, sizeof *cache.emitters);
-    if (!cache.emitters) {
-        lie_error_set(&err, LIE_ERR_NOMEM, output, "out of memory");
-        rc = LIE_ERR_NOMEM;
-    }
-    for (int e = 0; cache.emitters && e < scene->n_emitters; e++) {
-        cache.emitters[e].type = (uint32_t)scene->emitters[e].type;
-        cache.emitters[e].node = scene->emitters[e].node;
-        cache.emitters[e].first_tri = scene->emitters[e].first_tri;
-        cache.emitters[e].n_tris = scene->emitters[e].n_tris;
-    }
+    cache.scene_hash = scene->hash;
+    rc = lie_cache_set_state(&cache, scene, &err);
     cache.env = env;
     size_t bytes = 0;
     if (rc == LIE_OK)

@@ -3,11 +3,13 @@
  * From a cache (lie-build), shadow rays are answered by the local
  * illumination environments (--visibility=lie, the default); from a scene,
  * or with --visibility=full, by Embree over the whole scene: the reference. */
+#include "dist.h"
 #include "lie.h"
 
 #include <getopt.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 static const char *prog = "lie-render";
 
@@ -30,10 +32,20 @@ static void usage(FILE *fp)
             "                          orthographic view HEIGHT world units tall)\n"
             "      --path PATH.yaml    a camera path (formats/camera-path.md): one frame per\n"
             "                          step, -o must hold a %%d conversion (frame_%%04d.exr)\n"
+            "      --frames A-B        with --path: only frames A to B (numbered from the\n"
+            "                          path's first-frame)\n"
+            "      --skip-existing     leave out frames whose output file exists already\n"
             "      --size WxH          image size (default %dx%d)\n"
             "      --spp N             eye rays per pixel, stratified (default %d: pixel centre)\n"
             "      --light-samples N   shadow rays per area emitter per shading point\n"
-            "                          (default %d; 0 = eye rays only)\n"
+            "                          (default %d; 0 = eye rays only), or 'exact': Lambert\n"
+            "                          and glossy (LTC) surfaces under planar lights of one\n"
+            "                          colour in closed form with exact shadows, the default\n"
+            "                          count elsewhere\n"
+            "      --exact MODE        auto (default: closed forms and, from a cache, exact\n"
+            "                          shadows once there are 16 light samples or more)\n"
+            "                          | off (shadows from the samples: the oracle's mode)\n"
+            "      --timers            --stats also reports per-path times (benchmarks)\n"
             "      --pattern P         fixed (default: the same emitter samples everywhere)\n"
             "                          | rotated (a per-pixel rotation of the pattern)\n"
             "      --visibility MODE   lie (default with a cache: blocker lists only)\n"
@@ -58,30 +70,42 @@ static void usage(FILE *fp)
             "      --stats[=json]      print statistics to stderr\n"
             "  -q, --quiet             no progress bar\n"
             "  -h, --help              this help\n"
-            "      --version           print the version\n",
+            "      --version           print the version\n"
+            "\n"
+            "Under mpirun the ranks share the frames out (tiles, or whole frames of a path)\n"
+            "and rank 0 writes the bytes one process writes (docs/mpi.md).\n",
             prog, d.width, d.height, d.spp, d.light_samples, d.max_depth);
+}
+
+static const char *exact_name(const lie_render_options *o)
+{
+    return o->exact == LIE_EXACT_ONLY ? "only" : o->exact == LIE_EXACT_OFF ? "off" : "auto";
 }
 
 #define usage_error(...) lie_usage_error(prog, __VA_ARGS__)
 
-static int fail(const lie_error *err) { return lie_report_error(prog, err, 1); }
+static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 
 enum {
     OPT_CAMERA = 256, OPT_SIZE, OPT_SPP, OPT_LIGHT_SAMPLES, OPT_PATTERN, OPT_VISIBILITY, OPT_RAYS, OPT_LIE_SKIP,
     OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_SCENE,
-    OPT_EMITTER, OPT_PATH
+    OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS, OPT_FRAMES, OPT_SKIP_EXISTING
 };
 
 static const struct option long_opts[] = {
     {"output", required_argument, NULL, 'o'},
     {"scene", required_argument, NULL, OPT_SCENE},
     {"path", required_argument, NULL, OPT_PATH},
+    {"frames", required_argument, NULL, OPT_FRAMES},
+    {"skip-existing", no_argument, NULL, OPT_SKIP_EXISTING},
     {"emitter", required_argument, NULL, OPT_EMITTER},
     {"camera", required_argument, NULL, OPT_CAMERA},
     {"size", required_argument, NULL, OPT_SIZE},
     {"spp", required_argument, NULL, OPT_SPP},
     {"light-samples", required_argument, NULL, OPT_LIGHT_SAMPLES},
     {"pattern", required_argument, NULL, OPT_PATTERN},
+    {"exact", required_argument, NULL, OPT_EXACT},
+    {"timers", no_argument, NULL, OPT_TIMERS},
     {"visibility", required_argument, NULL, OPT_VISIBILITY},
     {"rays", required_argument, NULL, OPT_RAYS},
     {"lie-skip", required_argument, NULL, OPT_LIE_SKIP},
@@ -140,7 +164,7 @@ static lie_status load_input(const char *input, const char *override, const lie_
     *cache = NULL;
     unsigned char *data = NULL;
     size_t size = 0;
-    lie_status st = lie_read_file(input, &data, &size, err);
+    lie_status st = lie_dist_read_file(input, &data, &size, err); /* under mpirun: read once, broadcast */
     if (st != LIE_OK)
         return st;
     if (looks_like_gltf(data, size)) {
@@ -161,32 +185,6 @@ static lie_status load_input(const char *input, const char *override, const lie_
     return st;
 }
 
-/* A printf pattern with exactly one integer conversion: %d, %5d, %05d. */
-static int frame_pattern_ok(const char *s)
-{
-    int convs = 0;
-    for (const char *p = s; *p; p++) {
-        if (*p != '%')
-            continue;
-        if (p[1] == '%') {
-            p++;
-            continue;
-        }
-        p++;
-        if (*p == '0')
-            p++;
-        int digits = 0;
-        while (*p >= '0' && *p <= '9' && digits < 2) {
-            p++;
-            digits++;
-        }
-        if (*p != 'd')
-            return 0;
-        convs++;
-    }
-    return convs == 1;
-}
-
 static const char *vis_name(lie_visibility_mode m)
 {
     return m == LIE_VIS_FULL ? "full" : m == LIE_VIS_LIE ? "lie" : "none";
@@ -196,11 +194,53 @@ static const char *rays_name(lie_ray_mode m)
     return m == LIE_RAYS_SINGLE ? "single" : m == LIE_RAYS_PACKET ? "packet" : "stream";
 }
 
+/* What every frame's file is written with. */
+typedef struct frame_out {
+    const char *output, *input, *hash;
+    const lie_render_options *ro;
+    int path;
+    float exposure;
+    int first; /* the number of the path's frame 0 */
+} frame_out;
+
+static lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame, lie_error *err)
+{
+    const frame_out *o = ctx;
+    const lie_render_options *ro = o->ro;
+    char name[4096];
+    int number = o->first + fi;
+    if (o->path)
+        snprintf(name, sizeof name, o->output, number);
+    else
+        snprintf(name, sizeof name, "%s", o->output);
+    float yfov_deg = fc->yfov * 180.0f / (float)M_PI;
+    lie_attr attrs[] = {
+        {.name = "software", .type = LIE_ATTR_STRING, .s = "lie-render " LIE_VERSION},
+        {.name = "lie.input", .type = LIE_ATTR_STRING, .s = o->input},
+        {.name = "lie.sceneHash", .type = LIE_ATTR_STRING, .s = o->hash},
+        {.name = "lie.visibility", .type = LIE_ATTR_STRING, .s = vis_name(ro->visibility)},
+        {.name = "lie.pattern", .type = LIE_ATTR_STRING, .s = ro->pattern == LIE_PATTERN_FIXED ? "fixed" : "rotated"},
+        {.name = "lie.lightSamples", .type = LIE_ATTR_INT, .i = ro->eye_only ? 0 : ro->light_samples},
+        {.name = "lie.spp", .type = LIE_ATTR_INT, .i = ro->spp},
+        {.name = "lie.maxDepth", .type = LIE_ATTR_INT, .i = ro->max_depth},
+        {.name = "lie.frame", .type = LIE_ATTR_INT, .i = number},
+        {.name = "lie.cameraEye", .type = LIE_ATTR_V3F, .v = {fc->eye.x, fc->eye.y, fc->eye.z}},
+        {.name = "lie.cameraForward", .type = LIE_ATTR_V3F, .v = {fc->forward.x, fc->forward.y, fc->forward.z}},
+        {.name = "lie.cameraUp", .type = LIE_ATTR_V3F, .v = {fc->up.x, fc->up.y, fc->up.z}},
+        {.name = "lie.cameraYFovDegrees", .type = LIE_ATTR_FLOAT, .f = yfov_deg},
+        /* orthographic views: their height in world units (0: perspective) */
+        {.name = "lie.cameraOrthoHeight", .type = LIE_ATTR_FLOAT, .f = 2.0f * fc->ymag},
+    };
+    return lie_frame_write(name, frame, attrs, (int)(sizeof attrs / sizeof attrs[0]), o->exposure, err);
+}
+
 int main(int argc, char **argv)
 {
     lie_render_options ro = lie_render_options_default();
     lie_scene_options so = lie_scene_options_default();
     const char *output = NULL, *camera = NULL, *scene_override = NULL, *path_file = NULL;
+    long frame_a = -1, frame_b = -1;
+    int skip_existing = 0;
     int visibility_set = 0;
     float exposure = 0.0f;
     int stats = 0, quiet = 0; /* stats: 1 human, 2 json */
@@ -221,9 +261,24 @@ int main(int argc, char **argv)
             ro.spp = (int)v;
             break;
         case OPT_LIGHT_SAMPLES:
+            if (strcmp(optarg, "exact") == 0) {
+                ro.exact = LIE_EXACT_ONLY;
+                ro.light_samples = LIE_LIGHT_SAMPLES_DEFAULT;
+                break;
+            }
             if (!lie_parse_long(optarg, 0, 1000000, &v))
-                return usage_error("--light-samples: expected an integer in 0..1000000, got '%s'", optarg);
+                return usage_error("--light-samples: expected an integer in 0..1000000 or exact, got '%s'", optarg);
             ro.light_samples = (int)v;
+            if (ro.exact == LIE_EXACT_ONLY)
+                ro.exact = LIE_EXACT_AUTO;
+            break;
+        case OPT_EXACT:
+            if (strcmp(optarg, "auto") == 0) ro.exact = LIE_EXACT_AUTO;
+            else if (strcmp(optarg, "off") == 0) ro.exact = LIE_EXACT_OFF;
+            else return usage_error("--exact: expected auto or off, got '%s'", optarg);
+            break;
+        case OPT_TIMERS:
+            ro.timers = 1;
             break;
         case OPT_PATTERN:
             if (strcmp(optarg, "fixed") == 0) ro.pattern = LIE_PATTERN_FIXED;
@@ -276,6 +331,11 @@ int main(int argc, char **argv)
         case OPT_EXTERNAL: so.allow_external_uris = 1; break;
         case OPT_SCENE: scene_override = optarg; break;
         case OPT_PATH: path_file = optarg; break;
+        case OPT_FRAMES:
+            if (!lie_parse_range(optarg, 0, 999999, &frame_a, &frame_b))
+                return usage_error("--frames: expected A-B with 0 <= A <= B <= 999999, got '%s'", optarg);
+            break;
+        case OPT_SKIP_EXISTING: skip_existing = 1; break;
         case OPT_EMITTER:
             if (!lie_parse_long(optarg, 0, 1 << 30, &v))
                 return usage_error("--emitter: expected an emitter index, got '%s'", optarg);
@@ -299,13 +359,20 @@ int main(int argc, char **argv)
     if (!output)
         return usage_error("%s", "missing -o OUTPUT");
     const char *input = argv[optind];
-    if (path_file && !frame_pattern_ok(output))
+    if (path_file && !lie_frame_pattern_ok(output))
         return usage_error("--path: -o must hold one %%d conversion (e.g. frame_%%04d.exr), got '%s'", output);
     if (path_file && camera)
         return usage_error("%s", "--path and --camera exclude each other");
+    if (frame_a >= 0 && !path_file)
+        return usage_error("%s", "--frames needs --path");
     if (ro.light_samples == 0) {
         ro.eye_only = 1;
         ro.light_samples = 1;
+    }
+    if (lie_dist_start(&argc, &argv) > 1) {
+        quiet = 1; /* progress and warnings: one process's are enough; rank 0 prints the statistics */
+        if (lie_dist_rank() != 0)
+            stats = 0;
     }
     ro.progress = !quiet;
 
@@ -362,22 +429,68 @@ int main(int argc, char **argv)
         lie_scene_destroy(scene);
         return fail(&err);
     }
+    if (lie_dist_check(scene->hash, cache ? cache->state_hash : 0, &err) != LIE_OK) {
+        lie_rt_destroy(rt);
+        lie_camera_path_destroy(cpath);
+        lie_lie_vis_destroy(lv);
+        lie_cache_destroy(cache);
+        lie_scene_destroy(scene);
+        return fail(&err);
+    }
     double t2 = lie_time_now();
     char hash[32], size[32];
     snprintf(hash, sizeof hash, "%016llx", (unsigned long long)scene->hash);
     snprintf(size, sizeof size, "%dx%d", ro.width, ro.height);
-    int n_frames = cpath ? cpath->n_frames : 1;
+    int n_frames = cpath ? cpath->n_frames : 1, first = cpath ? cpath->first : 0, rendered = 0, skipped = 0;
+    if (cpath && frame_a >= 0 && (frame_a < first || frame_b > (long)first + n_frames - 1)) {
+        lie_error_set(&err, LIE_ERR_ARG, path_file, "--frames %ld-%ld: the path has frames %d-%d", frame_a, frame_b,
+                      first, first + n_frames - 1);
+        lie_rt_destroy(rt);
+        lie_camera_path_destroy(cpath);
+        lie_lie_vis_destroy(lv);
+        lie_cache_destroy(cache);
+        lie_scene_destroy(scene);
+        return fail(&err);
+    }
     lie_render_stats rs;
     memset(&rs, 0, sizeof rs);
     double t_render = 0.0, t_write = 0.0;
     lie_status st = LIE_OK;
-    for (int fi = 0; fi < n_frames && st == LIE_OK; fi++) {
-        lie_camera fc = cpath ? lie_camera_path_frame(cpath, fi) : cam;
+    /* the frames to render: --frames, and --skip-existing's files as rank 0 sees them */
+    int *todo = malloc(sizeof *todo * ((size_t)n_frames + 1)), n_todo = 0;
+    if (!todo) {
+        lie_error_set(&err, LIE_ERR_NOMEM, input, "out of memory");
+        st = LIE_ERR_NOMEM;
+    }
+    for (int fi = 0; todo && fi < n_frames; fi++) {
+        int number = first + fi;
+        if (frame_a >= 0 && (number < frame_a || number > frame_b))
+            continue;
         char name[4096];
         if (cpath)
-            snprintf(name, sizeof name, output, fi);
+            snprintf(name, sizeof name, output, number);
         else
             snprintf(name, sizeof name, "%s", output);
+        struct stat sb;
+        if (skip_existing && strcmp(name, "-") != 0 && stat(name, &sb) == 0) {
+            skipped++; /* a resumed run: the frame was written (atomically) before */
+            continue;
+        }
+        todo[n_todo++] = fi;
+    }
+    frame_out fo = {output, input, hash, &ro, cpath != NULL, exposure, first};
+    if (todo && lie_dist_size() > 1) {
+        lie_dist_bcast(&n_todo, sizeof n_todo);
+        lie_dist_bcast(todo, sizeof *todo * (size_t)n_todo);
+        double ta = lie_time_now();
+        st = render_dist(scene, rt, &ro, cpath, &cam, todo, n_todo, write_frame, &fo, &rs, &t_write, &err);
+        t_render = lie_time_now() - ta - t_write;
+        rendered = n_todo;
+    }
+    for (int k = 0; todo && lie_dist_size() == 1 && k < n_todo && st == LIE_OK; k++) {
+        int fi = todo[k];
+        lie_camera fc = cpath ? lie_camera_path_frame(cpath, fi) : cam;
+        rendered++;
         double ta = lie_time_now();
         lie_frame *frame = NULL;
         lie_render_stats fs;
@@ -385,35 +498,13 @@ int main(int argc, char **argv)
         if (st != LIE_OK)
             break;
         double tb = lie_time_now();
-        rs.eye_rays += fs.eye_rays;
-        rs.reflection_rays += fs.reflection_rays;
-        rs.shadow_rays += fs.shadow_rays;
-        rs.shadow_rays_skipped += fs.shadow_rays_skipped;
-        rs.shading_points += fs.shading_points;
-        rs.light_samples += fs.light_samples;
-        float yfov_deg = fc.yfov * 180.0f / (float)M_PI;
-        lie_attr attrs[] = {
-            {.name = "software", .type = LIE_ATTR_STRING, .s = "lie-render " LIE_VERSION},
-            {.name = "lie.input", .type = LIE_ATTR_STRING, .s = input},
-            {.name = "lie.sceneHash", .type = LIE_ATTR_STRING, .s = hash},
-            {.name = "lie.visibility", .type = LIE_ATTR_STRING, .s = vis_name(ro.visibility)},
-            {.name = "lie.pattern", .type = LIE_ATTR_STRING, .s = ro.pattern == LIE_PATTERN_FIXED ? "fixed" : "rotated"},
-            {.name = "lie.lightSamples", .type = LIE_ATTR_INT, .i = ro.eye_only ? 0 : ro.light_samples},
-            {.name = "lie.spp", .type = LIE_ATTR_INT, .i = ro.spp},
-            {.name = "lie.maxDepth", .type = LIE_ATTR_INT, .i = ro.max_depth},
-            {.name = "lie.frame", .type = LIE_ATTR_INT, .i = fi},
-            {.name = "lie.cameraEye", .type = LIE_ATTR_V3F, .v = {fc.eye.x, fc.eye.y, fc.eye.z}},
-            {.name = "lie.cameraForward", .type = LIE_ATTR_V3F, .v = {fc.forward.x, fc.forward.y, fc.forward.z}},
-            {.name = "lie.cameraUp", .type = LIE_ATTR_V3F, .v = {fc.up.x, fc.up.y, fc.up.z}},
-            {.name = "lie.cameraYFovDegrees", .type = LIE_ATTR_FLOAT, .f = yfov_deg},
-            /* orthographic views: their height in world units (0: perspective) */
-            {.name = "lie.cameraOrthoHeight", .type = LIE_ATTR_FLOAT, .f = 2.0f * fc.ymag},
-        };
-        st = lie_frame_write(name, frame, attrs, (int)(sizeof attrs / sizeof attrs[0]), exposure, &err);
+        lie_render_stats_add(&rs, &fs);
+        st = write_frame(&fo, fi, &fc, frame, &err);
         lie_frame_destroy(frame);
         t_render += tb - ta;
         t_write += lie_time_now() - tb;
     }
+    free(todo);
     double t3 = t2 + t_render, t4 = t3 + t_write;
     int threads = ro.threads > 0 ? ro.threads : lie_cpu_count();
     if (st == LIE_OK && stats) {
@@ -423,33 +514,60 @@ int main(int argc, char **argv)
             fprintf(stderr, "{\"tool\":\"lie-render\",\"input\":");
             lie_json_string(stderr, input);
             fprintf(stderr,
-                    ",\"frames\":%d,\"triangles\":%u,\"emitters\":%d,"
+                    ",\"frames\":%d,\"frames_skipped\":%d,\"triangles\":%u,\"emitters\":%d,"
                     "\"width\":%d,\"height\":%d,\"spp\":%d,\"light_samples\":%d,\"visibility\":\"%s\","
                     "\"rays\":\"%s\",\"threads\":%d,\"eye_rays\":%llu,\"reflection_rays\":%llu,"
                     "\"shadow_rays\":%llu,\"shading_points\":%llu,\"seconds_load\":%.6f,"
                     "\"seconds_bvh\":%.6f,\"seconds_render\":%.6f,\"seconds_write\":%.6f,"
                     "\"shadow_mrays_per_second\":%.3f,\"shadow_tests_without_embree\":%llu,"
-                    "\"light_samples_total\":%llu}\n",
-                    n_frames, scene->n_tris, scene->n_emitters, ro.width, ro.height, ro.spp,
+                    "\"light_samples_total\":%llu,",
+                    rendered, skipped, scene->n_tris, scene->n_emitters, ro.width, ro.height, ro.spp,
                     ro.eye_only ? 0 : ro.light_samples, vis_name(ro.visibility), rays_name(ro.rays), threads,
                     (unsigned long long)rs.eye_rays, (unsigned long long)rs.reflection_rays,
                     (unsigned long long)rs.shadow_rays, (unsigned long long)rs.shading_points, t1 - t0,
                     t2 - t1, render, t4 - t3, mrays, (unsigned long long)rs.shadow_rays_skipped,
                     (unsigned long long)rs.light_samples);
+            fprintf(stderr,
+                    "\"exact\":\"%s\",\"pairs_occluded\":%llu,\"pairs_analytic\":%llu,\"pairs_exact\":%llu,"
+                    "\"pairs_blockers\":%llu,\"pairs_embree\":%llu,\"pairs_unshadowed\":%llu,"
+                    "\"exact_overflows\":%llu,\"timers\":%s,\"cpu_seconds_analytic\":%.6f,"
+                    "\"cpu_seconds_exact\":%.6f,\"cpu_seconds_blockers\":%.6f,\"cpu_seconds_embree\":%.6f,"
+                    "\"cpu_seconds_sampled_shading\":%.6f",
+                    exact_name(&ro), (unsigned long long)rs.pairs_occluded, (unsigned long long)rs.pairs_analytic,
+                    (unsigned long long)rs.pairs_exact, (unsigned long long)rs.pairs_blockers,
+                    (unsigned long long)rs.pairs_embree, (unsigned long long)rs.pairs_unshadowed,
+                    (unsigned long long)rs.exact_overflows, ro.timers ? "true" : "false", rs.t_analytic,
+                    rs.t_exact, rs.t_blockers, rs.t_embree, rs.t_sampled_shading);
+            render_dist_stats(stderr, 1);
+            fprintf(stderr, "}\n");
         } else {
             fprintf(stderr,
                     "%s: %s: %u triangles, %d emitters, %d points and %d lines skipped\n"
                     "  image %s, %d spp, %d light samples, visibility %s, rays %s, %d threads\n"
-                    "  %d frame%s; rays: %llu eye, %llu reflection, %llu shadow (Embree); %llu light samples\n"
+                    "  %d frame%s (%d skipped: their files exist); rays: %llu eye, %llu reflection, %llu shadow (Embree); %llu light samples\n"
                     "  answered without Embree: %llu (visible pairs, blocker lists, or no shadows)\n"
                     "  time: load %.3f s, bvh %.3f s, render %.3f s, write %.3f s\n"
                     "  %.1f million Embree shadow rays per second of render time\n",
                     prog, input, scene->n_tris, scene->n_emitters, scene->stats.points_skipped,
                     scene->stats.lines_skipped, size, ro.spp, ro.eye_only ? 0 : ro.light_samples,
-                    vis_name(ro.visibility), rays_name(ro.rays), threads, n_frames, n_frames == 1 ? "" : "s",
+                    vis_name(ro.visibility), rays_name(ro.rays), threads, rendered, rendered == 1 ? "" : "s", skipped,
                     (unsigned long long)rs.eye_rays, (unsigned long long)rs.reflection_rays,
                     (unsigned long long)rs.shadow_rays, (unsigned long long)rs.light_samples,
                     (unsigned long long)rs.shadow_rays_skipped, t1 - t0, t2 - t1, render, t4 - t3, mrays);
+            fprintf(stderr,
+                    "  pairs (exact %s): %llu occluded, %llu seen whole in closed form, %llu partial exact,\n"
+                    "    %llu partial sampled against blockers, %llu sampled against the scene (Embree),\n"
+                    "    %llu seen whole and sampled; %llu exact pairs fell back to samples\n",
+                    exact_name(&ro), (unsigned long long)rs.pairs_occluded, (unsigned long long)rs.pairs_analytic,
+                    (unsigned long long)rs.pairs_exact, (unsigned long long)rs.pairs_blockers,
+                    (unsigned long long)rs.pairs_embree, (unsigned long long)rs.pairs_unshadowed,
+                    (unsigned long long)rs.exact_overflows);
+            if (ro.timers)
+                fprintf(stderr,
+                        "  worker seconds: closed form %.3f, exact shadows %.3f, blocker samples %.3f,\n"
+                        "    Embree %.3f, sampled shading %.3f\n",
+                        rs.t_analytic, rs.t_exact, rs.t_blockers, rs.t_embree, rs.t_sampled_shading);
+            render_dist_stats(stderr, 0);
         }
     }
     lie_camera_path_destroy(cpath);
