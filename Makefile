@@ -137,7 +137,7 @@ test-asan:
 	$(MAKE) -j$(NPROC) VARIANT=asan build-tests
 	$(MAKE) VARIANT=asan test-unit test-tools
 
-bench: all
+bench: all build-tests
 	@sh bench/run.sh
 
 fuzz:
