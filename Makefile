@@ -50,7 +50,7 @@ UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
 UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/tests/%)
 
 .PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench scenes fuzz clean \
-        install uninstall man shared
+        install uninstall man shared ltc-tables ltc-bench
 all: $(TOOL_BIN)
 
 deps:
@@ -106,6 +106,16 @@ $(GEN): $(BUILD)/tests/scenes/gen/gen_scenes.o $(BUILD)/tests/scenes/gen/gen_glt
 	$(CC) $(LDFLAGS) $^ -lpng -lz -lm -o $@
 scenes: $(GEN)
 	$(GEN) tests/scenes
+
+# ---- LTC tables (lib/shade/ltc.h): fitted by scripts/ltc-fit.c, the output committed ----
+LTC_FIT := $(BUILD)/ltc-fit
+$(LTC_FIT): scripts/ltc-fit.c
+	@mkdir -p $(dir $@)
+	$(CC) -std=c11 -O2 -ffp-contract=off $(WARN) $< -lm -o $@
+ltc-tables: $(LTC_FIT)
+	$(LTC_FIT) -o lib/shade/ltc_table.c.tmp && mv lib/shade/ltc_table.c.tmp lib/shade/ltc_table.c
+ltc-bench: $(BUILD)/tests/ltc-bench
+	$(BUILD)/tests/ltc-bench
 
 # ---- the two commands -----------------------------------------------------
 demo: deps

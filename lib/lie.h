@@ -14,6 +14,7 @@
 #include "rt/rt.h"
 #include "scene/scene.h"
 #include "shade/shade.h"
+#include "shade/ltc.h"
 #include "version/version.h"
 
 #endif

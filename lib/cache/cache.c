@@ -227,7 +227,8 @@ lie_status lie_cache_encode(const lie_cache *c, unsigned char **data, size_t *si
     return encode(c, NULL, data, size, err);
 }
 
-lie_status lie_cache_write(const char *path, const lie_cache *c, size_t *bytes, lie_error *err)
+static lie_status write_group(const char *path, const lie_cache *c, size_t *bytes, lie_atomic_group *group,
+                              lie_error *err)
 {
     unsigned char *data = NULL;
     size_t size = 0;
@@ -237,7 +238,7 @@ lie_status lie_cache_write(const char *path, const lie_cache *c, size_t *bytes, 
     if (st != LIE_OK)
         return st;
     lie_atomic_file af;
-    st = lie_atomic_open(&af, path, err);
+    st = lie_atomic_open_group(&af, path, group, err);
     if (st != LIE_OK) {
         free(data);
         return st;
@@ -252,6 +253,26 @@ lie_status lie_cache_write(const char *path, const lie_cache *c, size_t *bytes, 
     st = lie_atomic_commit(&af, err);
     if (st == LIE_OK && bytes)
         *bytes = size;
+    return st;
+}
+
+lie_status lie_cache_write(const char *path, const lie_cache *c, size_t *bytes, lie_error *err)
+{
+    return write_group(path, c, bytes, NULL, err);
+}
+
+lie_status lie_cache_write_with_scene(const char *path, const lie_cache *c, const lie_scene *s,
+                                      const char *scene_out, size_t *bytes, lie_error *err)
+{
+    lie_atomic_group *group = lie_atomic_group_create();
+    if (!group)
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    lie_status st = scene_out ? lie_gltf_export_group(s, scene_out, group, err) : LIE_OK;
+    if (st == LIE_OK)
+        st = write_group(path, c, bytes, group, err);
+    if (st == LIE_OK)
+        st = lie_atomic_group_commit(group, err);
+    lie_atomic_group_destroy(group);
     return st;
 }
 

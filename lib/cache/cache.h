@@ -54,6 +54,11 @@ lie_status lie_cache_encode(const lie_cache *c, unsigned char **data, size_t *si
 /* Encode and write atomically (temporary file, fsync, rename); "-" = stdout.
  * *bytes (may be NULL) receives the size written. */
 lie_status lie_cache_write(const char *path, const lie_cache *c, size_t *bytes, lie_error *err);
+/* Write the cache and, when scene_out is not NULL, scene `s` as glTF there
+ * (lie_gltf_export): every file is complete on disk before any is renamed
+ * into place, so a failure (a full disk, say) leaves all or none. */
+lie_status lie_cache_write_with_scene(const char *path, const lie_cache *c, const lie_scene *s,
+                                      const char *scene_out, size_t *bytes, lie_error *err);
 
 /* Parse and validate a whole cache held in memory: magic, version, section
  * table, every size and offset, every checksum, then the structure (tree

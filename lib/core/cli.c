@@ -19,6 +19,42 @@ int lie_parse_long(const char *s, long min, long max, long *out)
     return 1;
 }
 
+int lie_frame_pattern_ok(const char *s)
+{
+    int convs = 0;
+    for (const char *p = s; *p; p++) {
+        if (*p != '%')
+            continue;
+        if (p[1] == '%') {
+            p++;
+            continue;
+        }
+        p++;
+        if (*p == '0')
+            p++;
+        int digits = 0;
+        while (*p >= '0' && *p <= '9' && digits < 2) {
+            p++;
+            digits++;
+        }
+        if (*p != 'd')
+            return 0;
+        convs++;
+    }
+    return convs == 1;
+}
+
+int lie_parse_range(const char *s, long min, long max, long *a, long *b)
+{
+    const char *dash = s ? strchr(s, '-') : NULL;
+    char first[32];
+    if (!dash || dash == s || (size_t)(dash - s) >= sizeof first)
+        return 0;
+    memcpy(first, s, (size_t)(dash - s));
+    first[dash - s] = 0;
+    return lie_parse_long(first, min, max, a) && lie_parse_long(dash + 1, min, max, b) && *a <= *b;
+}
+
 int lie_parse_float(const char *s, float min, float max, float *out)
 {
     if (!s || !*s)

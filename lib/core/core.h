@@ -204,25 +204,78 @@ void lie_progress_cb(void *pctx, size_t done, size_t total);
 
 /* Writes go to a temporary file in the target's directory; commit fsyncs
  * and renames it over the target, abort removes it.  Path "-" writes
- * straight to stdout (commit flushes).  Owns the FILE. */
+ * straight to stdout (commit flushes).  A symlink is followed and its target
+ * replaced in the target's folder; an existing device or FIFO is written in
+ * place, without a temporary.  Temporaries are removed on SIGINT, SIGTERM
+ * and SIGHUP (where those still have their default action: a handler is
+ * installed on first use, unlinks, then re-raises); SIGKILL leaves them, see
+ * lie_tmp_clean.  Owns the FILE. */
+typedef struct lie_atomic_group lie_atomic_group;
 typedef struct lie_atomic_file {
     FILE *fp;
-    char path[4096];
+    char path[4096];   /* as given, for messages */
+    char target[4096]; /* the file replaced: path with symlinks followed */
     char tmp[4096];
-    int is_stdout;
+    int is_stdout, in_place, slot;
+    lie_atomic_group *group;
 } lie_atomic_file;
 lie_status lie_atomic_open(lie_atomic_file *af, const char *path, lie_error *err);
 lie_status lie_atomic_commit(lie_atomic_file *af, lie_error *err);
 void lie_atomic_abort(lie_atomic_file *af);
 
-/* Read a whole file ("-" = stdin) into a malloc'd buffer; *size set. */
+/* All outputs of one run visible together or none: a file opened into a
+ * group is, on commit, complete and fsynced but left as its temporary;
+ * lie_atomic_group_commit renames them all, in commit order (a rename failing
+ * part way, which needs an I/O error on the folder itself, leaves the earlier
+ * ones in place).  Destroy removes temporaries not renamed; accepts NULL. */
+lie_atomic_group *lie_atomic_group_create(void);
+lie_status lie_atomic_open_group(lie_atomic_file *af, const char *path, lie_atomic_group *group, lie_error *err);
+lie_status lie_atomic_group_commit(lie_atomic_group *g, lie_error *err);
+void lie_atomic_group_destroy(lie_atomic_group *g);
+
+/* Remove the stale temporaries lie_atomic_open leaves when a process is
+ * killed (".NAME.tmpXXXXXX"): regular files of this user in `dir` not
+ * modified for `min_age` seconds; `fn` (may be NULL) is told each name. */
+typedef void (*lie_tmp_clean_fn)(void *ctx, const char *name, uint64_t bytes);
+lie_status lie_tmp_clean(const char *dir, double min_age, int dry_run, lie_tmp_clean_fn fn, void *ctx,
+                         lie_error *err);
+
+/* ---- inputs ------------------------------------------------------------- */
+
+/* Size limits of inputs: caches, EXR images (the default), glTF files and
+ * their buffers and images (4 GiB - 1: a GLB's length is 32-bit), YAML edit
+ * files and camera paths. */
+#define LIE_READ_MAX_DEFAULT (UINT64_C(16) << 30)
+#define LIE_READ_MAX_GLTF (UINT64_C(0xFFFFFFFF) - 1)
+#define LIE_READ_MAX_TEXT (UINT64_C(64) << 20)
+
+/* Open an input: non-blocking, so a FIFO or device cannot hang the open,
+ * then fstat: only a regular file of at most `max` bytes.  The descriptor
+ * (blocking again, close-on-exec) is the caller's. */
+lie_status lie_input_open(const char *path, uint64_t max, int *fd, uint64_t *size, lie_error *err);
+/* Read fd to its end into a malloc'd buffer, failing beyond `max` bytes;
+ * `hint` is the expected size (0: unknown).  `name` is for messages. */
+lie_status lie_read_fd(int fd, const char *name, uint64_t max, uint64_t hint, unsigned char **data, size_t *size,
+                       lie_error *err);
+/* Read a whole input ("-" = stdin) into a malloc'd buffer; *size set.
+ * lie_read_file allows LIE_READ_MAX_DEFAULT bytes. */
+lie_status lie_read_file_max(const char *path, uint64_t max, unsigned char **data, size_t *size, lie_error *err);
 lie_status lie_read_file(const char *path, unsigned char **data, size_t *size, lie_error *err);
+
+/* Escape control bytes (C0, DEL, C1) and invalid UTF-8 in s for a one-line
+ * message, as git quotes paths: \n \t \r \033 ...  Writes at most size bytes
+ * with a terminating NUL. */
+void lie_escape_controls(char *out, size_t size, const char *s);
 
 /* ---- command-line values (shared by the tools) ------------------------ */
 
 /* Strict parses: the whole string must be the number, within [min, max]. */
 int lie_parse_long(const char *s, long min, long max, long *out);
 int lie_parse_float(const char *s, float min, float max, float *out);
+/* A printf pattern with exactly one integer conversion: %d, %5d, %05d (frame names). */
+int lie_frame_pattern_ok(const char *s);
+/* "A-B" with min <= A <= B <= max (frame ranges). */
+int lie_parse_range(const char *s, long min, long max, long *a, long *b);
 /* Write s as a JSON string literal (with quotes) to fp. */
 void lie_json_string(FILE *fp, const char *s);
 

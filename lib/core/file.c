@@ -1,17 +1,175 @@
-/* Whole-file reads and atomic writes: a temporary file in the target's
- * directory, fsync, rename (STYLE.md 15). */
+/* Inputs and outputs that respect what is there.
+ *
+ * Inputs: opened non-blocking (a FIFO or a device cannot hang the open),
+ * checked with fstat (only regular files, or "-" for stdin) and read within
+ * a stated size limit.
+ *
+ * Outputs: a temporary file in the target's directory, fsync, rename
+ * (STYLE.md 15).  A symlink is followed to its target and the target is
+ * replaced atomically in its own folder; an existing non-regular file (a
+ * character device such as /dev/null, a FIFO) is written in place.  A group
+ * holds finished temporaries until every output of a run is complete, then
+ * renames them all.  Temporaries still open are unlinked on SIGINT, SIGTERM
+ * and SIGHUP by a handler that then re-raises the signal; SIGKILL cannot be
+ * caught, so lie_tmp_clean removes stale ones of our naming when asked. */
 #include "core/core.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
+#include <pthread.h>
+#include <signal.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
-lie_status lie_atomic_open(lie_atomic_file *af, const char *path, lie_error *err)
+/* ---- the temporaries a signal must remove ------------------------------
+ * Process-wide by nature (a signal handler has no context pointer): the one
+ * piece of mutable global state in the library.  Slots are claimed with an
+ * atomic exchange; the handler reads only slots marked live and calls only
+ * async-signal-safe functions (unlink, signal, raise). */
+
+enum { TMP_SLOTS = 64, SLOT_FREE = 0, SLOT_FILLING = 1, SLOT_LIVE = 2 };
+static char tmp_paths[TMP_SLOTS][4096];
+static atomic_int tmp_state[TMP_SLOTS];
+static pthread_once_t tmp_once = PTHREAD_ONCE_INIT;
+static const int tmp_signals[] = {SIGINT, SIGTERM, SIGHUP};
+
+static void tmp_on_signal(int sig)
+{
+    int saved = errno;
+    for (int i = 0; i < TMP_SLOTS; i++)
+        if (atomic_load(&tmp_state[i]) == SLOT_LIVE)
+            unlink(tmp_paths[i]);
+    errno = saved;
+    signal(sig, SIG_DFL);
+    raise(sig); /* delivered with the default action once the handler returns */
+}
+
+/* Installed only where the signal still has its default action: a program
+ * that handles or ignores a signal itself keeps its choice. */
+static void tmp_install(void)
+{
+    for (size_t i = 0; i < sizeof tmp_signals / sizeof *tmp_signals; i++) {
+        struct sigaction old, sa;
+        if (sigaction(tmp_signals[i], NULL, &old) != 0 || old.sa_handler != SIG_DFL ||
+            (old.sa_flags & SA_SIGINFO))
+            continue;
+        memset(&sa, 0, sizeof sa);
+        sa.sa_handler = tmp_on_signal;
+        sigemptyset(&sa.sa_mask);
+        for (size_t j = 0; j < sizeof tmp_signals / sizeof *tmp_signals; j++)
+            sigaddset(&sa.sa_mask, tmp_signals[j]);
+        sigaction(tmp_signals[i], &sa, NULL);
+    }
+}
+
+/* Returns the slot, or -1 when all are taken (the file is then not removed
+ * on a signal, which is all that is lost). */
+static int tmp_register(const char *path)
+{
+    pthread_once(&tmp_once, tmp_install);
+    for (int i = 0; i < TMP_SLOTS; i++) {
+        int expect = SLOT_FREE;
+        if (atomic_compare_exchange_strong(&tmp_state[i], &expect, SLOT_FILLING)) {
+            snprintf(tmp_paths[i], sizeof tmp_paths[i], "%s", path);
+            atomic_store(&tmp_state[i], SLOT_LIVE);
+            return i;
+        }
+    }
+    return -1;
+}
+
+static void tmp_release(int slot)
+{
+    if (slot >= 0 && slot < TMP_SLOTS)
+        atomic_store(&tmp_state[slot], SLOT_FREE);
+}
+
+/* ---- outputs ------------------------------------------------------------ */
+
+struct lie_atomic_group {
+    size_t n, cap;
+    struct pending {
+        char *tmp, *target;
+        int slot;
+    } *files;
+};
+
+lie_atomic_group *lie_atomic_group_create(void) { return calloc(1, sizeof(lie_atomic_group)); }
+
+void lie_atomic_group_destroy(lie_atomic_group *g)
+{
+    if (!g)
+        return;
+    for (size_t i = 0; i < g->n; i++) {
+        unlink(g->files[i].tmp);
+        tmp_release(g->files[i].slot);
+        free(g->files[i].tmp);
+        free(g->files[i].target);
+    }
+    free(g->files);
+    free(g);
+}
+
+lie_status lie_atomic_group_commit(lie_atomic_group *g, lie_error *err)
+{
+    lie_status st = LIE_OK;
+    size_t i = 0;
+    for (; i < g->n; i++) {
+        struct pending *p = &g->files[i];
+        if (rename(p->tmp, p->target) != 0) {
+            st = lie_error_set(err, LIE_ERR_IO, p->target, "cannot rename into place: %s", strerror(errno));
+            break;
+        }
+        tmp_release(p->slot);
+        free(p->tmp);
+        free(p->target);
+    }
+    /* what was not renamed stays for lie_atomic_group_destroy to remove */
+    memmove(g->files, g->files + i, (g->n - i) * sizeof *g->files);
+    g->n -= i;
+    return st;
+}
+
+/* Follow symlinks from `path` to the file they name, which may not exist yet
+ * (a dangling link names the file to create).  At most 40 links, as the
+ * kernel allows; the result is the last name reached. */
+static void resolve_links(const char *path, char *out, size_t size)
+{
+    snprintf(out, size, "%s", path);
+    for (int hops = 0; hops < 40; hops++) {
+        struct stat st;
+        if (lstat(out, &st) != 0 || !S_ISLNK(st.st_mode))
+            return;
+        char link[4096];
+        ssize_t n = readlink(out, link, sizeof link - 1);
+        if (n <= 0)
+            return;
+        link[n] = 0;
+        if (link[0] == '/') {
+            snprintf(out, size, "%s", link);
+        } else {
+            char *slash = strrchr(out, '/');
+            int dirlen = slash ? (int)(slash - out + 1) : 0;
+            char joined[8192];
+            snprintf(joined, sizeof joined, "%.*s%s", dirlen, out, link);
+            if (strlen(joined) >= size)
+                return;
+            snprintf(out, size, "%s", joined);
+        }
+    }
+}
+
+lie_status lie_atomic_open_group(lie_atomic_file *af, const char *path, lie_atomic_group *group, lie_error *err)
 {
     memset(af, 0, sizeof *af);
+    af->slot = -1;
+    af->group = group;
     if (strcmp(path, "-") == 0) {
         af->fp = stdout;
         af->is_stdout = 1;
@@ -21,26 +179,68 @@ lie_status lie_atomic_open(lie_atomic_file *af, const char *path, lie_error *err
     if (strlen(path) + 16 >= sizeof af->tmp)
         return lie_error_set(err, LIE_ERR_ARG, path, "path too long");
     snprintf(af->path, sizeof af->path, "%s", path);
+    resolve_links(path, af->target, sizeof af->target);
+    if (strlen(af->target) + 16 >= sizeof af->tmp)
+        return lie_error_set(err, LIE_ERR_ARG, path, "the path a symlink names is too long");
+
+    struct stat st;
+    int exists = stat(af->target, &st) == 0;
+    if (exists && S_ISDIR(st.st_mode))
+        return lie_error_set(err, LIE_ERR_IO, path, "cannot write: is a directory");
+    if (exists && !S_ISREG(st.st_mode)) {
+        /* a device or FIFO: replacing it with a regular file would destroy
+         * it (think /dev/null as root), so write into it as a shell would */
+        int fd = open(af->target, O_WRONLY | O_NOCTTY | O_CLOEXEC);
+        if (fd < 0)
+            return lie_error_set(err, LIE_ERR_IO, path, "cannot open: %s", strerror(errno));
+        af->fp = fdopen(fd, "wb");
+        if (!af->fp) {
+            int e = errno;
+            close(fd);
+            return lie_error_set(err, LIE_ERR_IO, path, "cannot open: %s", strerror(e));
+        }
+        af->in_place = 1;
+        return LIE_OK;
+    }
+
     /* The temporary lives next to the target so rename() is atomic. */
-    const char *slash = strrchr(path, '/');
-    size_t dirlen = slash ? (size_t)(slash - path + 1) : 0;
-    snprintf(af->tmp, sizeof af->tmp, "%.*s.%s.tmpXXXXXX", (int)dirlen, path,
-             slash ? slash + 1 : path);
-    int fd = mkstemp(af->tmp);
-    if (fd < 0)
-        return lie_error_set(err, LIE_ERR_IO, path, "cannot create: %s", strerror(errno));
-    /* mkstemp makes 0600; outputs should get the usual umask-derived mode. */
+    const char *slash = strrchr(af->target, '/');
+    size_t dirlen = slash ? (size_t)(slash - af->target + 1) : 0;
+    snprintf(af->tmp, sizeof af->tmp, "%.*s.%s.tmpXXXXXX", (int)dirlen, af->target,
+             slash ? slash + 1 : af->target);
+    /* signals between mkstemp and the registration would leave the file */
+    sigset_t block, old;
+    sigemptyset(&block);
+    for (size_t i = 0; i < sizeof tmp_signals / sizeof *tmp_signals; i++)
+        sigaddset(&block, tmp_signals[i]);
+    pthread_sigmask(SIG_BLOCK, &block, &old);
+    int fd = mkostemp(af->tmp, O_CLOEXEC);
+    int e = errno;
+    if (fd >= 0)
+        af->slot = tmp_register(af->tmp);
+    pthread_sigmask(SIG_SETMASK, &old, NULL);
+    if (fd < 0) {
+        af->tmp[0] = 0;
+        return lie_error_set(err, LIE_ERR_IO, path, "cannot create: %s", strerror(e));
+    }
+    /* mkstemp makes 0600: a replaced file keeps its mode, a new one gets
+     * the usual umask-derived mode. */
     mode_t um = umask(0);
     umask(um);
-    fchmod(fd, 0666 & ~um);
+    fchmod(fd, exists ? (st.st_mode & 07777) : (0666 & ~um));
     af->fp = fdopen(fd, "wb");
     if (!af->fp) {
-        int e = errno;
+        e = errno;
         close(fd);
-        unlink(af->tmp);
+        lie_atomic_abort(af);
         return lie_error_set(err, LIE_ERR_IO, path, "cannot create: %s", strerror(e));
     }
     return LIE_OK;
+}
+
+lie_status lie_atomic_open(lie_atomic_file *af, const char *path, lie_error *err)
+{
+    return lie_atomic_open_group(af, path, NULL, err);
 }
 
 lie_status lie_atomic_commit(lie_atomic_file *af, lie_error *err)
@@ -51,7 +251,7 @@ lie_status lie_atomic_commit(lie_atomic_file *af, lie_error *err)
         af->fp = NULL;
         return LIE_OK;
     }
-    int bad = ferror(af->fp) || fflush(af->fp) != 0 || fsync(fileno(af->fp)) != 0;
+    int bad = ferror(af->fp) || fflush(af->fp) != 0 || (!af->in_place && fsync(fileno(af->fp)) != 0);
     int e = errno;
     if (fclose(af->fp) != 0 && !bad) {
         bad = 1;
@@ -59,14 +259,43 @@ lie_status lie_atomic_commit(lie_atomic_file *af, lie_error *err)
     }
     af->fp = NULL;
     if (bad) {
-        unlink(af->tmp);
+        lie_atomic_abort(af);
         return lie_error_set(err, LIE_ERR_IO, af->path, "write failed: %s", strerror(e ? e : EIO));
     }
-    if (rename(af->tmp, af->path) != 0) {
+    if (af->in_place)
+        return LIE_OK;
+    if (af->group) {
+        lie_atomic_group *g = af->group;
+        if (g->n == g->cap) {
+            size_t cap = g->cap ? g->cap * 2 : 4;
+            struct pending *nf = realloc(g->files, cap * sizeof *nf);
+            if (!nf) {
+                lie_atomic_abort(af);
+                return lie_error_set(err, LIE_ERR_NOMEM, af->path, "out of memory");
+            }
+            g->files = nf;
+            g->cap = cap;
+        }
+        struct pending p = {strdup(af->tmp), strdup(af->target), af->slot};
+        if (!p.tmp || !p.target) {
+            free(p.tmp);
+            free(p.target);
+            lie_atomic_abort(af);
+            return lie_error_set(err, LIE_ERR_NOMEM, af->path, "out of memory");
+        }
+        g->files[g->n++] = p;
+        af->tmp[0] = 0;
+        af->slot = -1;
+        return LIE_OK;
+    }
+    if (rename(af->tmp, af->target) != 0) {
         e = errno;
-        unlink(af->tmp);
+        lie_atomic_abort(af);
         return lie_error_set(err, LIE_ERR_IO, af->path, "cannot rename into place: %s", strerror(e));
     }
+    tmp_release(af->slot);
+    af->slot = -1;
+    af->tmp[0] = 0;
     return LIE_OK;
 }
 
@@ -83,48 +312,168 @@ void lie_atomic_abort(lie_atomic_file *af)
     if (af->tmp[0])
         unlink(af->tmp);
     af->tmp[0] = 0;
+    tmp_release(af->slot);
+    af->slot = -1;
 }
 
-lie_status lie_read_file(const char *path, unsigned char **data, size_t *size, lie_error *err)
+/* ".NAME.tmpXXXXXX", as lie_atomic_open names its temporaries (mkstemp's
+ * six characters are letters and digits). */
+static int is_our_tmp(const char *name)
+{
+    size_t n = strlen(name);
+    if (n < 1 + 1 + 4 + 6 || name[0] != '.')
+        return 0;
+    const char *x = name + n - 6;
+    if (memcmp(x - 4, ".tmp", 4) != 0)
+        return 0;
+    for (int i = 0; i < 6; i++)
+        if (!((x[i] >= 'a' && x[i] <= 'z') || (x[i] >= 'A' && x[i] <= 'Z') || (x[i] >= '0' && x[i] <= '9')))
+            return 0;
+    return 1;
+}
+
+lie_status lie_tmp_clean(const char *dir, double min_age, int dry_run, lie_tmp_clean_fn fn, void *ctx,
+                         lie_error *err)
+{
+    DIR *d = opendir(dir);
+    if (!d)
+        return lie_error_set(err, LIE_ERR_IO, dir, "cannot open directory: %s", strerror(errno));
+    int dfd = dirfd(d);
+    time_t now = time(NULL);
+    lie_status st = LIE_OK;
+    struct dirent *de;
+    while ((de = readdir(d)) != NULL) {
+        if (!is_our_tmp(de->d_name))
+            continue;
+        struct stat sb;
+        /* regular files of ours only: never a symlink, never another user's */
+        if (fstatat(dfd, de->d_name, &sb, AT_SYMLINK_NOFOLLOW) != 0 || !S_ISREG(sb.st_mode) ||
+            sb.st_uid != geteuid() || difftime(now, sb.st_mtime) < min_age)
+            continue;
+        if (!dry_run && unlinkat(dfd, de->d_name, 0) != 0 && errno != ENOENT) {
+            st = lie_error_set(err, LIE_ERR_IO, dir, "cannot remove %s: %s", de->d_name, strerror(errno));
+            break;
+        }
+        if (fn)
+            fn(ctx, de->d_name, (uint64_t)sb.st_size);
+    }
+    closedir(d);
+    return st;
+}
+
+/* ---- inputs ------------------------------------------------------------- */
+
+static const char *kind_of(mode_t m)
+{
+    if (S_ISDIR(m))
+        return "a directory";
+    if (S_ISFIFO(m))
+        return "a FIFO";
+    if (S_ISCHR(m))
+        return "a character device";
+    if (S_ISBLK(m))
+        return "a block device";
+    if (S_ISSOCK(m))
+        return "a socket";
+    return "not a regular file";
+}
+
+lie_status lie_input_open(const char *path, uint64_t max, int *fdp, uint64_t *sizep, lie_error *err)
+{
+    *fdp = -1;
+    *sizep = 0;
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+    if (fd < 0)
+        return lie_error_set(err, LIE_ERR_IO, path, "cannot open: %s", strerror(errno));
+    struct stat st;
+    if (fstat(fd, &st) != 0) {
+        int e = errno;
+        close(fd);
+        return lie_error_set(err, LIE_ERR_IO, path, "cannot open: %s", strerror(e));
+    }
+    if (!S_ISREG(st.st_mode)) {
+        close(fd);
+        return lie_error_set(err, LIE_ERR_IO, path, "cannot read %s: only regular files (or - for stdin)",
+                             kind_of(st.st_mode));
+    }
+    if ((uint64_t)st.st_size > max) {
+        close(fd);
+        return lie_error_set(err, LIE_ERR_LIMIT, path, "file is %llu bytes, beyond the limit of %llu",
+                             (unsigned long long)st.st_size, (unsigned long long)max);
+    }
+    int fl = fcntl(fd, F_GETFL);
+    if (fl >= 0)
+        fcntl(fd, F_SETFL, fl & ~O_NONBLOCK);
+    *fdp = fd;
+    *sizep = (uint64_t)st.st_size;
+    return LIE_OK;
+}
+
+lie_status lie_read_fd(int fd, const char *name, uint64_t max, uint64_t hint, unsigned char **data, size_t *size,
+                       lie_error *err)
 {
     *data = NULL;
     *size = 0;
-    FILE *fp = strcmp(path, "-") == 0 ? stdin : fopen(path, "rb");
-    if (!fp)
-        return lie_error_set(err, LIE_ERR_IO, path, "cannot open: %s", strerror(errno));
-    size_t cap = 1 << 16, n = 0;
+    if (max > SIZE_MAX - 1)
+        max = SIZE_MAX - 1;
+    /* a regular file's size is known; the loop still reads to the end, as
+     * files can grow, but never beyond max */
+    size_t cap = hint > 0 && hint <= max ? (size_t)hint + 1 : 1 << 16, n = 0;
     unsigned char *buf = malloc(cap);
-    if (!buf) {
-        if (fp != stdin)
-            fclose(fp);
-        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
-    }
+    if (!buf)
+        return lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory");
     for (;;) {
         if (n == cap) {
-            unsigned char *nb = cap > SIZE_MAX / 2 ? NULL : realloc(buf, cap * 2);
+            size_t ncap = cap > SIZE_MAX / 2 ? SIZE_MAX : cap * 2;
+            if (ncap > max + 1)
+                ncap = (size_t)max + 1;
+            unsigned char *nb = ncap > cap ? realloc(buf, ncap) : NULL;
             if (!nb) {
                 free(buf);
-                if (fp != stdin)
-                    fclose(fp);
-                return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+                return lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory");
             }
             buf = nb;
-            cap *= 2;
+            cap = ncap;
         }
-        size_t got = fread(buf + n, 1, cap - n, fp);
-        n += got;
+        ssize_t got = read(fd, buf + n, cap - n);
+        if (got < 0) {
+            if (errno == EINTR)
+                continue;
+            int e = errno;
+            free(buf);
+            return lie_error_set(err, LIE_ERR_IO, name, "read failed: %s", strerror(e));
+        }
         if (got == 0)
             break;
-    }
-    int bad = ferror(fp);
-    int e = errno;
-    if (fp != stdin)
-        fclose(fp);
-    if (bad) {
-        free(buf);
-        return lie_error_set(err, LIE_ERR_IO, path, "read failed: %s", strerror(e));
+        n += (size_t)got;
+        if (n > max) {
+            free(buf);
+            return lie_error_set(err, LIE_ERR_LIMIT, name, "input is larger than the limit of %llu bytes",
+                                 (unsigned long long)max);
+        }
     }
     *data = buf;
     *size = n;
     return LIE_OK;
+}
+
+lie_status lie_read_file_max(const char *path, uint64_t max, unsigned char **data, size_t *size, lie_error *err)
+{
+    *data = NULL;
+    *size = 0;
+    if (strcmp(path, "-") == 0)
+        return lie_read_fd(STDIN_FILENO, path, max, 0, data, size, err);
+    int fd;
+    uint64_t fsize;
+    lie_status st = lie_input_open(path, max, &fd, &fsize, err);
+    if (st != LIE_OK)
+        return st;
+    st = lie_read_fd(fd, path, max, fsize, data, size, err);
+    close(fd);
+    return st;
+}
+
+lie_status lie_read_file(const char *path, unsigned char **data, size_t *size, lie_error *err)
+{
+    return lie_read_file_max(path, LIE_READ_MAX_DEFAULT, data, size, err);
 }

@@ -14,7 +14,11 @@ typedef struct lie_yaml {
     lie_error *err;
 } lie_yaml;
 
-/* Parse text into y->doc; on a syntax error sets err at the problem's line
+/* Deepest nesting of sequences and mappings accepted (an edit file needs 4). */
+#define LIE_YAML_MAX_DEPTH 64
+
+/* Parse text into y->doc (exactly one document, nested at most
+ * LIE_YAML_MAX_DEPTH deep); on a syntax error sets err at the problem's line
  * and column.  On success the caller frees with lie_yaml_free. */
 lie_status lie_yaml_load(lie_yaml *y, const unsigned char *text, size_t size, const char *name, lie_error *err);
 void lie_yaml_free(lie_yaml *y);

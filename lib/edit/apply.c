@@ -255,6 +255,160 @@ static lie_status add_from(lie_scene *s, const lie_scene *src, int src_node, con
     return st;
 }
 
+static int is_joint(const lie_scene *s, int node)
+{
+    for (int k = 0; k < s->n_skins; k++)
+        for (int j = 0; j < s->skins[k].n_joints; j++)
+            if (s->skins[k].joints[j] == node)
+                return 1;
+    return 0;
+}
+
+int lie_edit_transform_matters(const lie_scene *s, int node)
+{
+    int *sub = NULL, nsub = 0, any = 0;
+    if (!collect_subtree(s, node, &sub, &nsub)) {
+        free(sub);
+        return 1; /* out of memory: let the edit go ahead */
+    }
+    for (int k = 0; k < nsub && !any; k++) {
+        const lie_node *nd = &s->nodes[sub[k]];
+        /* a skinned mesh follows its joints, not its node (glTF 2.0 §3.7.3.3) */
+        any = (nd->mesh >= 0 && nd->skin < 0) || nd->light >= 0 || nd->camera >= 0 || is_joint(s, sub[k]);
+    }
+    free(sub);
+    return any;
+}
+
+/* Push every live node whose skin has a joint among sub[0..nsub). */
+static int push_skinned(const lie_scene *s, const int *sub, int nsub, lie_edit_effect *fx)
+{
+    for (int i = 0; i < s->n_nodes; i++) {
+        const lie_node *nd = &s->nodes[i];
+        if (nd->skin < 0 || nd->skin >= s->n_skins || nd->mesh < 0)
+            continue;
+        const lie_skin *sk = &s->skins[nd->skin];
+        int hit = 0;
+        for (int j = 0; j < sk->n_joints && !hit; j++)
+            for (int k = 0; k < nsub && !hit; k++)
+                hit = sk->joints[j] == sub[k];
+        if (hit && !push_int(&fx->nodes, &fx->n_nodes, i))
+            return 0;
+    }
+    return 1;
+}
+
+/* Give `node` a mesh no other node draws (a copy when shared); 0 when out of memory. */
+static int own_mesh(lie_scene *s, int node)
+{
+    int mi = s->nodes[node].mesh, shared = 0;
+    for (int i = 0; i < s->n_nodes && !shared; i++)
+        shared = i != node && s->nodes[i].mesh == mi;
+    if (!shared)
+        return 1;
+    const lie_mesh *src = &s->meshes[mi];
+    lie_primitive *prims = calloc((size_t)src->n_prims + 1, sizeof *prims);
+    if (!prims)
+        return 0;
+    for (int i = 0; i < src->n_prims; i++)
+        if (!lie_primitive_copy(&src->prims[i], &prims[i])) {
+            for (int k = 0; k < i; k++)
+                lie_primitive_free(&prims[k]);
+            free(prims);
+            return 0;
+        }
+    lie_mesh *nm = realloc(s->meshes, sizeof *nm * ((size_t)s->n_meshes + 1));
+    if (!nm) {
+        for (int k = 0; k < src->n_prims; k++)
+            lie_primitive_free(&prims[k]);
+        free(prims);
+        return 0;
+    }
+    s->meshes = nm;
+    lie_mesh *m = &s->meshes[s->n_meshes];
+    m->name = s->meshes[mi].name ? strdup(s->meshes[mi].name) : NULL;
+    m->prims = prims;
+    m->n_prims = s->meshes[mi].n_prims;
+    s->nodes[node].mesh = s->n_meshes++;
+    return 1;
+}
+
+/* set-weights: the node's own mesh morphed with the new weights. */
+static lie_status set_weights(lie_scene *s, const char *file, const lie_edit_op *op, int node, int *changed,
+                              lie_error *err)
+{
+    lie_node *nd = &s->nodes[node];
+    *changed = 0;
+    if (nd->mesh < 0 || nd->n_weights == 0)
+        return lie_error_set_at(err, LIE_ERR_FORMAT, file, op->line, op->col,
+                                "set-weights: node '%s' has no mesh with morph targets", op->node);
+    if (op->n_weights != nd->n_weights)
+        return lie_error_set_at(err, LIE_ERR_FORMAT, file, op->line, op->col,
+                                "set-weights.weights: %d weights, node '%s' has %d morph targets", op->n_weights,
+                                op->node, nd->n_weights);
+    if (memcmp(nd->weights, op->weights, sizeof(double) * (size_t)op->n_weights) == 0)
+        return LIE_OK;
+    if (!own_mesh(s, node))
+        return lie_error_set(err, LIE_ERR_NOMEM, file, "out of memory");
+    nd = &s->nodes[node];
+    memcpy(nd->weights, op->weights, sizeof(double) * (size_t)op->n_weights);
+    lie_mesh *m = &s->meshes[nd->mesh];
+    for (int pi = 0; pi < m->n_prims; pi++)
+        if (lie_primitive_morph(&m->prims[pi], nd->weights, nd->n_weights) != LIE_OK)
+            return lie_error_set_at(err, LIE_ERR_FORMAT, file, op->line, op->col,
+                                    "set-weights: node '%s': a morphed position is not a finite number", op->node);
+    *changed = 1;
+    return LIE_OK;
+}
+
+/* set-light: KHR_lights_punctual colour, intensity, range and spot cones
+ * of the node's light (its own copy when other nodes share it). */
+static lie_status set_light(lie_scene *s, const char *file, const lie_edit_op *op, int node, lie_error *err)
+{
+    lie_node *nd = &s->nodes[node];
+    if (nd->light < 0 || nd->light >= s->n_light_defs)
+        return lie_error_set_at(err, LIE_ERR_FORMAT, file, op->line, op->col,
+                                "set-light: node '%s' has no KHR_lights_punctual light%s", op->node,
+                                nd->mesh >= 0 ? " (an emissive mesh is changed by set-emission)" : "");
+    lie_light_def l = s->light_defs[nd->light];
+    static const char *const type_name[3] = {"point", "spot", "directional"};
+    if ((op->has & (LIE_EDIT_HAS_INNER | LIE_EDIT_HAS_OUTER)) && l.type != LIE_LIGHT_SPOT)
+        return lie_error_set_at(err, LIE_ERR_FORMAT, file, op->line, op->col,
+                                "set-light: node '%s' holds a %s light, which has no cone", op->node,
+                                type_name[l.type]);
+    if ((op->has & LIE_EDIT_HAS_RANGE) && l.type == LIE_LIGHT_DIRECTIONAL)
+        return lie_error_set_at(err, LIE_ERR_FORMAT, file, op->line, op->col,
+                                "set-light.range: node '%s' holds a directional light, which has no range", op->node);
+    if (op->has & LIE_EDIT_HAS_COLOR)
+        memcpy(l.color, op->color, sizeof l.color);
+    if (op->has & LIE_EDIT_HAS_INTENSITY)
+        l.intensity = op->intensity;
+    if (op->has & LIE_EDIT_HAS_RANGE)
+        l.range = op->range;
+    if (op->has & LIE_EDIT_HAS_INNER)
+        l.inner_cone = (float)(op->inner_deg * M_PI / 180.0);
+    if (op->has & LIE_EDIT_HAS_OUTER)
+        l.outer_cone = (float)(op->outer_deg * M_PI / 180.0);
+    if (l.type == LIE_LIGHT_SPOT && !(l.inner_cone >= 0.0f && l.inner_cone < l.outer_cone))
+        return lie_error_set_at(err, LIE_ERR_FORMAT, file, op->line, op->col,
+                                "set-light: node '%s': the inner cone must be smaller than the outer one", op->node);
+    int shared = 0;
+    for (int i = 0; i < s->n_nodes && !shared; i++)
+        shared = i != node && s->nodes[i].light == nd->light;
+    if (shared) {
+        l.name = l.name ? strdup(l.name) : NULL;
+        int li = lie_scene_add_light_def(s, &l);
+        free(l.name);
+        if (li < 0)
+            return lie_error_set(err, LIE_ERR_NOMEM, file, "out of memory");
+        s->nodes[node].light = li;
+    } else {
+        l.name = s->light_defs[nd->light].name;
+        s->light_defs[nd->light] = l;
+    }
+    return LIE_OK;
+}
+
 static lie_status apply_op(lie_scene *s, const lie_edit *e, const lie_edit_op *op, const lie_scene_options *opt,
                            lie_edit_effect *fx, lie_error *err)
 {
@@ -270,6 +424,13 @@ static lie_status apply_op(lie_scene *s, const lie_edit *e, const lie_edit_op *o
                                     "node '%s' was removed by an earlier edit", op->node);
     }
     int geometry = 1;
+    if ((op->kind == LIE_EDIT_MOVE_BY || op->kind == LIE_EDIT_MOVE_TO || op->kind == LIE_EDIT_ROTATE ||
+         op->kind == LIE_EDIT_SCALE || op->kind == LIE_EDIT_SET_TRANSFORM) &&
+        !lie_edit_transform_matters(s, node))
+        return lie_error_set_at(err, LIE_ERR_FORMAT, file, op->line, op->col,
+                                "node '%s': nothing a transform moves is in its subtree (no unskinned mesh, light, "
+                                "camera or skin joint)",
+                                op->node);
     switch (op->kind) {
     case LIE_EDIT_MOVE_BY:
     case LIE_EDIT_MOVE_TO: {
@@ -305,7 +466,20 @@ static lie_status apply_op(lie_scene *s, const lie_edit *e, const lie_edit_op *o
         break;
     }
     case LIE_EDIT_SET_TRANSFORM:
+        /* an absolute transform equal to the node's own moves nothing (lie-animate's frames) */
+        geometry = memcmp(s->nodes[node].local.m, op->matrix, sizeof op->matrix) != 0;
         memcpy(s->nodes[node].local.m, op->matrix, sizeof op->matrix);
+        break;
+    case LIE_EDIT_SET_WEIGHTS:
+        st = set_weights(s, file, op, node, &geometry, err);
+        if (st != LIE_OK)
+            return st;
+        break;
+    case LIE_EDIT_SET_LIGHT:
+        geometry = 0; /* blocker lists do not depend on a light's colour, intensity, range or cone */
+        st = set_light(s, file, op, node, err);
+        if (st != LIE_OK)
+            return st;
         break;
     case LIE_EDIT_REMOVE:
         s->nodes[node].removed = 1;
@@ -348,6 +522,17 @@ static lie_status apply_op(lie_scene *s, const lie_edit *e, const lie_edit_op *o
         int *sub = NULL, nsub = 0;
         if (!collect_subtree(s, node, &sub, &nsub))
             return lie_error_set(err, LIE_ERR_NOMEM, file, "out of memory");
+        int meshes = 0;
+        for (int k = 0; k < nsub; k++)
+            meshes += s->nodes[sub[k]].mesh >= 0;
+        if (!meshes) {
+            free(sub);
+            int light = s->nodes[node].light >= 0;
+            return lie_error_set_at(err, LIE_ERR_FORMAT, file, op->line, op->col,
+                                    "%s: node '%s' has no mesh in its subtree%s",
+                                    op->kind == LIE_EDIT_SET_EMISSION ? "set-emission" : "set-material", op->node,
+                                    light ? " (it holds a KHR_lights_punctual light: use set-light)" : "");
+        }
         for (int k = 0; k < nsub; k++) {
             int nd = sub[k];
             if (s->nodes[nd].mesh < 0)
@@ -399,6 +584,8 @@ static lie_status apply_op(lie_scene *s, const lie_edit *e, const lie_edit_op *o
         int ok = collect_subtree(s, node, &sub, &nsub);
         for (int k = 0; ok && k < nsub; k++)
             ok = push_int(&fx->nodes, &fx->n_nodes, sub[k]);
+        /* a joint's edit is an edit of every mesh its skin deforms */
+        ok = ok && push_skinned(s, sub, nsub, fx);
         free(sub);
         if (!ok)
             return lie_error_set(err, LIE_ERR_NOMEM, file, "out of memory");

@@ -25,7 +25,9 @@ typedef enum lie_edit_kind {
     LIE_EDIT_REMOVE = 5,
     LIE_EDIT_ADD = 6,
     LIE_EDIT_SET_MATERIAL = 7,
-    LIE_EDIT_SET_EMISSION = 8
+    LIE_EDIT_SET_EMISSION = 8,
+    LIE_EDIT_SET_WEIGHTS = 9,
+    LIE_EDIT_SET_LIGHT = 10
 } lie_edit_kind;
 
 /* Which optional fields of set-material / set-emission were given. */
@@ -34,7 +36,12 @@ enum {
     LIE_EDIT_HAS_METALLIC = 1 << 1,
     LIE_EDIT_HAS_ROUGHNESS = 1 << 2,
     LIE_EDIT_HAS_EMISSIVE = 1 << 3,
-    LIE_EDIT_HAS_STRENGTH = 1 << 4
+    LIE_EDIT_HAS_STRENGTH = 1 << 4,
+    LIE_EDIT_HAS_COLOR = 1 << 5,     /* set-light */
+    LIE_EDIT_HAS_INTENSITY = 1 << 6,
+    LIE_EDIT_HAS_RANGE = 1 << 7,
+    LIE_EDIT_HAS_INNER = 1 << 9,     /* (1 << 8: add's transform) */
+    LIE_EDIT_HAS_OUTER = 1 << 10
 };
 
 typedef struct lie_edit_op {
@@ -48,6 +55,9 @@ typedef struct lie_edit_op {
     char *as;              /* add: the new node's name */
     unsigned has;          /* LIE_EDIT_HAS_* */
     float base_color[3], metallic, roughness, emissive[3], strength;
+    double *weights;       /* set-weights: n_weights morph weights */
+    int n_weights;
+    float color[3], intensity, range, inner_deg, outer_deg; /* set-light */
 } lie_edit_op;
 
 typedef struct lie_edit {
@@ -72,12 +82,23 @@ typedef struct lie_edit_effect {
 void lie_edit_effect_free(lie_edit_effect *fx);
 
 /* Apply the operations to s's document in order, then re-flatten s.
+ * An operation that cannot change what it names (set-emission or
+ * set-material on a subtree without meshes, set-light on a node without a
+ * punctual light, set-weights on a mesh without morph targets, a transform
+ * of a subtree that holds nothing a transform moves) is an error: no edit
+ * is silently ignored.  An edit of a skin's joint counts as an edit of
+ * every node that skin deforms (fx->nodes).  A set-transform or set-weights
+ * to the values a node already has changes nothing and touches nothing.
  * Removed nodes keep their triangle slots as empty (zero-area) triangles
  * and added objects take new slots after all others, so the global
  * triangle indices of untouched objects never change.  `fx` (may be NULL)
  * collects the nodes touched.  On error s may be partly edited. */
 lie_status lie_edit_apply(lie_scene *s, const lie_edit *e, const lie_scene_options *opt,
                           lie_edit_effect *fx, lie_error *err);
+
+/* Whether a transform of `node` changes anything: its subtree holds an
+ * unskinned mesh, a light, a camera or a skin's joint. */
+int lie_edit_transform_matters(const lie_scene *s, int node);
 
 /* Find a node by name or "#index"; a missing or ambiguous name is an error. */
 lie_status lie_edit_find_node(const lie_scene *s, const char *name, int *node, const char *file, int line,

@@ -93,14 +93,98 @@ static lie_status collect(lie_yaml *p, const yaml_node_t *map, const char *op, f
     return LIE_OK;
 }
 
+/* set-weights: {node, weights: [w0, w1, ...]} (glTF 2.0 §3.7.2.2 morph weights). */
+static lie_status parse_set_weights(lie_yaml *p, const yaml_node_t *vn, const char *opk, lie_edit_op *op)
+{
+    field f[] = {{"node", 0, 0, 0}, {"weights", 0, 0, 0}};
+    lie_status st = collect(p, vn, opk, f, 2);
+    if (st != LIE_OK)
+        return st;
+    if (!f[0].seen || !f[1].seen)
+        return lie_yaml_error(p, vn, f[0].seen ? "set-weights.weights" : "set-weights.node", "missing");
+    op->kind = LIE_EDIT_SET_WEIGHTS;
+    if ((st = get_string(p, f[0].value, "set-weights.node", &op->node)) != LIE_OK)
+        return st;
+    const yaml_node_t *w = f[1].value;
+    if (w->type != YAML_SEQUENCE_NODE || w->data.sequence.items.top == w->data.sequence.items.start)
+        return lie_yaml_error(p, w, "set-weights.weights", "expected a sequence of one or more numbers");
+    int n = (int)(w->data.sequence.items.top - w->data.sequence.items.start);
+    if (n > 65536)
+        return lie_yaml_error(p, w, "set-weights.weights", "more than 65536 weights");
+    op->weights = calloc((size_t)n, sizeof *op->weights);
+    if (!op->weights)
+        return lie_error_set(p->err, LIE_ERR_NOMEM, p->name, "out of memory");
+    op->n_weights = n;
+    for (int i = 0; i < n; i++) {
+        yaml_node_t *it = yaml_document_get_node(&p->doc, w->data.sequence.items.start[i]);
+        if (!it)
+            return lie_yaml_error(p, w, "set-weights.weights", "malformed sequence");
+        if ((st = lie_yaml_number(p, it, "set-weights.weights", &op->weights[i])) != LIE_OK)
+            return st;
+    }
+    return LIE_OK;
+}
+
+/* set-light: {node, color, intensity, range, inner-cone, outer-cone}
+ * (KHR_lights_punctual; cone angles in degrees). */
+static lie_status parse_set_light(lie_yaml *p, const yaml_node_t *vn, const char *opk, lie_edit_op *op)
+{
+    field f[] = {{"node", 0, 0, 0},  {"color", 0, 0, 0},      {"intensity", 0, 0, 0},
+                 {"range", 0, 0, 0}, {"inner-cone", 0, 0, 0}, {"outer-cone", 0, 0, 0}};
+    lie_status st = collect(p, vn, opk, f, 6);
+    if (st != LIE_OK)
+        return st;
+    if (!f[0].seen)
+        return lie_yaml_error(p, vn, "set-light.node", "missing");
+    if (!f[1].seen && !f[2].seen && !f[3].seen && !f[4].seen && !f[5].seen)
+        return lie_yaml_error(p, vn, opk, "needs at least one of color, intensity, range, inner-cone, outer-cone");
+    op->kind = LIE_EDIT_SET_LIGHT;
+    if ((st = get_string(p, f[0].value, "set-light.node", &op->node)) != LIE_OK)
+        return st;
+    double c[3], x;
+    if (f[1].seen) {
+        if ((st = lie_yaml_numbers(p, f[1].value, "set-light.color", c, 3)) != LIE_OK)
+            return st;
+        for (int k = 0; k < 3; k++) {
+            if (!(c[k] >= 0.0 && c[k] <= 1e9))
+                return lie_yaml_error(p, f[1].value, "set-light.color", "components must be in [0, 1e9]");
+            op->color[k] = (float)c[k];
+        }
+        op->has |= LIE_EDIT_HAS_COLOR;
+    }
+    static const struct {
+        const char *key;
+        double lo, hi;
+        unsigned bit;
+    } num[4] = {{"set-light.intensity", 0.0, 1e12, LIE_EDIT_HAS_INTENSITY},
+                {"set-light.range", 0.0, 1e12, LIE_EDIT_HAS_RANGE},
+                {"set-light.inner-cone", 0.0, 90.0, LIE_EDIT_HAS_INNER},
+                {"set-light.outer-cone", 0.0, 90.0, LIE_EDIT_HAS_OUTER}};
+    float *dst[4] = {&op->intensity, &op->range, &op->inner_deg, &op->outer_deg};
+    for (int i = 0; i < 4; i++) {
+        if (!f[2 + i].seen)
+            continue;
+        if ((st = lie_yaml_number(p, f[2 + i].value, num[i].key, &x)) != LIE_OK)
+            return st;
+        if (!(x >= num[i].lo && x <= num[i].hi)) {
+            char what[64];
+            snprintf(what, sizeof what, "must be in [%g, %g]", num[i].lo, num[i].hi);
+            return lie_yaml_error(p, f[2 + i].value, num[i].key, what);
+        }
+        *dst[i] = (float)x;
+        op->has |= num[i].bit;
+    }
+    return LIE_OK;
+}
+
 static lie_status parse_op(lie_yaml *p, const yaml_node_t *item, int index, lie_edit_op *op)
 {
     char key[64];
     snprintf(key, sizeof key, "[%d]", index);
     if (item->type != YAML_MAPPING_NODE || item->data.mapping.pairs.top - item->data.mapping.pairs.start != 1)
         return lie_yaml_error(p, item, key,
-                    "expected one operation: move, rotate, scale, set-transform, remove, add, set-material or "
-                    "set-emission");
+                    "expected one operation: move, rotate, scale, set-transform, remove, add, set-material, "
+                    "set-emission, set-weights or set-light");
     yaml_node_pair_t *pr = item->data.mapping.pairs.start;
     yaml_node_t *kn = yaml_document_get_node(&p->doc, pr->key), *vn = yaml_document_get_node(&p->doc, pr->value);
     const char *name = lie_yaml_scalar(kn);
@@ -259,10 +343,14 @@ static lie_status parse_op(lie_yaml *p, const yaml_node_t *item, int index, lie_
             op->strength = (float)x;
             op->has |= LIE_EDIT_HAS_STRENGTH;
         }
+    } else if (strcmp(name, "set-weights") == 0) {
+        st = parse_set_weights(p, vn, opk, op);
+    } else if (strcmp(name, "set-light") == 0) {
+        st = parse_set_light(p, vn, opk, op);
     } else {
         return lie_yaml_error(p, kn, opk,
-                    "unknown operation (expected move, rotate, scale, set-transform, remove, add, set-material or "
-                    "set-emission)");
+                    "unknown operation (expected move, rotate, scale, set-transform, remove, add, set-material, "
+                    "set-emission, set-weights or set-light)");
     }
     return st;
 }
@@ -275,6 +363,7 @@ void lie_edit_destroy(lie_edit *e)
         free(e->ops[i].node);
         free(e->ops[i].file);
         free(e->ops[i].as);
+        free(e->ops[i].weights);
     }
     free(e->ops);
     free(e->name);

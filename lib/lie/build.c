@@ -52,6 +52,11 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
         threads = lie_cpu_count();
     c.workers = calloc((size_t)threads, sizeof *c.workers);
     c.out = calloc((size_t)s->n_tris + 1, sizeof *c.out);
+    atomic_uint_least64_t nodes_made = 0;
+    for (int i = 0; c.workers && i < threads; i++) {
+        c.workers[i].nodes_made = &nodes_made;
+        c.workers[i].max_nodes = c.p->max_nodes ? c.p->max_nodes : LIE_MAX_NODES_DEFAULT;
+    }
     lie_status st = c.workers && c.out ? lie_sample_tables(&c) : LIE_ERR_NOMEM;
     size_t n_memo = 0;
     if (st == LIE_OK && node_flags && old_unit && c.p->mode == LIE_BLOCKERS_SAMPLED)
@@ -60,8 +65,8 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
         st = lie_parallel_for(s->n_tris, threads, lie_subdiv_triangle, &c, progress ? lie_progress_cb : NULL, progress);
     lie_memo_free(&c, n_memo);
     for (int i = 0; c.workers && i < threads; i++) {
-        if (c.workers[i].nomem)
-            st = LIE_ERR_NOMEM;
+        if (c.workers[i].nomem && st != LIE_ERR_LIMIT)
+            st = c.workers[i].over ? LIE_ERR_LIMIT : LIE_ERR_NOMEM;
         if (stats)
             lie_stats_merge(stats, &c.workers[i].st);
     }
@@ -173,6 +178,13 @@ static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t n_tris, int n_
     return LIE_OK;
 }
 
+static lie_status budget_error(lie_error *err, const lie_scene *s, const lie_build_params *p)
+{
+    return lie_error_set(err, LIE_ERR_LIMIT, s->path,
+                         "the patch trees need more than %llu nodes (max-nodes): raise min-patch or max-nodes",
+                         (unsigned long long)(p->max_nodes ? p->max_nodes : LIE_MAX_NODES_DEFAULT));
+}
+
 lie_status lie_env_build(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
                          lie_progress *progress, lie_env **out, lie_build_stats *stats, lie_error *err)
 {
@@ -200,6 +212,8 @@ lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_
     lie_status st = run_build(env, s, rt, NULL, NULL, tri_mask, p->threads, progress, stats);
     if (st != LIE_OK) {
         lie_env_destroy(env);
+        if (st == LIE_ERR_LIMIT)
+            return budget_error(err, s, p);
         return lie_error_set(err, st, s->path, "building local illumination environments: %s",
                              lie_status_str(st));
     }
@@ -238,6 +252,8 @@ lie_status lie_env_update(lie_env *env, const lie_scene *s, const lie_rt *rt, co
     lie_status st = run_build(env, s, rt, old_unit, node_flags, NULL, threads, NULL, stats);
     if (stats)
         stats->seconds = lie_time_now() - t0;
+    if (st == LIE_ERR_LIMIT)
+        return budget_error(err, s, &env->params);
     if (st != LIE_OK)
         return lie_error_set(err, st, s->path, "updating local illumination environments: %s",
                              lie_status_str(st));

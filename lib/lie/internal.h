@@ -5,6 +5,8 @@
 
 #include "lie/lie.h"
 
+#include <stdatomic.h>
+
 /* ---- per-unit output and per-worker scratch ----------------------------- */
 
 typedef struct unit_buf {
@@ -28,6 +30,9 @@ typedef struct worker {
     int cap_hull;
     lie_build_stats st;
     int nomem;
+    int over;                 /* the node budget ran out (nomem is set too, to stop) */
+    atomic_uint_least64_t *nodes_made; /* shared by all workers */
+    uint64_t max_nodes;
 } worker;
 
 typedef struct build_ctx {

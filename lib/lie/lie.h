@@ -49,6 +49,8 @@ typedef struct lie_build_params {
     float min_patch;       /* smallest patch area / largest triangle area (--min-patch) */
     lie_blocker_mode mode;
     int threads;           /* not stored in caches: results never depend on it */
+    uint64_t max_nodes;    /* patch-tree nodes a build may make (--max-nodes); 0: the default.
+                              Not stored in caches: a build within it gives the same cache */
 } lie_build_params;
 
 #define LIE_SAMPLES_DEFAULT 128u
@@ -56,6 +58,13 @@ typedef struct lie_build_params {
 #define LIE_MAX_BLOCKERS_DEFAULT 8u
 #define LIE_COMPLEX_CAP_DEFAULT 128u
 #define LIE_MIN_PATCH_DEFAULT 1e-4f
+/* --min-patch's lower bound: 1e-8 of the largest triangle is about 13
+ * subdivision levels; below that the trees grow by 4x a level for nothing
+ * an image can show. */
+#define LIE_MIN_PATCH_MIN 1e-8f
+/* The node budget: a node is 20 bytes (lie_pnode), held twice while the
+ * trees are joined, so the default is about 5 GiB at most. */
+#define LIE_MAX_NODES_DEFAULT (UINT64_C(1) << 27)
 lie_build_params lie_build_params_default(void);
 /* Check ranges; fills err with which parameter is wrong. */
 lie_status lie_build_params_check(const lie_build_params *p, lie_error *err);

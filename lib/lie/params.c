@@ -32,8 +32,8 @@ lie_status lie_build_params_check(const lie_build_params *p, lie_error *err)
         return lie_error_set(err, LIE_ERR_ARG, NULL, "max-samples must be in samples..%u", 1u << 24);
     if (p->max_blockers > (1u << 20) || p->complex_cap > (1u << 24))
         return lie_error_set(err, LIE_ERR_ARG, NULL, "max-blockers or complex-cap too large");
-    if (!(p->min_patch > 0.0f) || !(p->min_patch <= 1.0f))
-        return lie_error_set(err, LIE_ERR_ARG, NULL, "min-patch must be in (0, 1]");
+    if (!(p->min_patch >= LIE_MIN_PATCH_MIN) || !(p->min_patch <= 1.0f))
+        return lie_error_set(err, LIE_ERR_ARG, NULL, "min-patch must be in [%g, 1]", (double)LIE_MIN_PATCH_MIN);
     if (p->mode != LIE_BLOCKERS_SAMPLED && p->mode != LIE_BLOCKERS_CONSERVATIVE)
         return lie_error_set(err, LIE_ERR_ARG, NULL, "unknown blocker mode");
     return LIE_OK;

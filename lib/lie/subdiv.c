@@ -12,6 +12,12 @@
 
 static int push_node(unit_buf *u, worker *w)
 {
+    /* the total only grows, so it passes the budget in some schedule iff
+     * it does in all: the outcome does not depend on the threads */
+    if (atomic_fetch_add_explicit(w->nodes_made, 1, memory_order_relaxed) >= w->max_nodes) {
+        w->over = w->nomem = 1;
+        return -1;
+    }
     if (u->n_nodes == u->cap_nodes) {
         uint32_t nc = u->cap_nodes ? 2 * u->cap_nodes : 8;
         lie_pnode *nn = realloc(u->nodes, sizeof *nn * nc);

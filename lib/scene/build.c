@@ -108,6 +108,12 @@ void lie_primitive_free(lie_primitive *p)
     free(p->uv1);
     free(p->color);
     free(p->idx);
+    free(p->base_pos);
+    free(p->base_nrm);
+    free(p->tpos);
+    free(p->tnrm);
+    free(p->joints);
+    free(p->weights);
 }
 
 int lie_primitive_copy(const lie_primitive *src, lie_primitive *out)
@@ -119,8 +125,17 @@ int lie_primitive_copy(const lie_primitive *src, lie_primitive *out)
     p.uv1 = dup_array(src->uv1, sizeof(float) * 2 * src->n_verts);
     p.color = dup_array(src->color, sizeof(float) * 4 * src->n_verts);
     p.idx = dup_array(src->idx, sizeof(uint32_t) * 3 * src->n_tris);
+    size_t tn = sizeof(float) * 3 * src->n_verts * (size_t)src->n_targets;
+    p.base_pos = dup_array(src->base_pos, sizeof(float) * 3 * src->n_verts);
+    p.base_nrm = dup_array(src->base_nrm, sizeof(float) * 3 * src->n_verts);
+    p.tpos = dup_array(src->tpos, tn);
+    p.tnrm = dup_array(src->tnrm, tn);
+    p.joints = dup_array(src->joints, sizeof(uint16_t) * 4 * src->n_verts);
+    p.weights = dup_array(src->weights, sizeof(float) * 4 * src->n_verts);
     if ((src->pos && !p.pos) || (src->nrm && !p.nrm) || (src->uv && !p.uv) || (src->uv1 && !p.uv1) ||
-        (src->color && !p.color) || (src->idx && !p.idx)) {
+        (src->color && !p.color) || (src->idx && !p.idx) || (src->base_pos && !p.base_pos) ||
+        (src->base_nrm && !p.base_nrm) || (src->tpos && !p.tpos) || (src->tnrm && !p.tnrm) ||
+        (src->joints && !p.joints) || (src->weights && !p.weights)) {
         lie_primitive_free(&p);
         return 0;
     }
@@ -209,5 +224,38 @@ int lie_scene_add_node(lie_scene *s, const char *name, int parent, const lie_mat
     n->mesh = mesh;
     n->camera = camera;
     n->light = light;
+    n->removed = 0;
+    n->has_trs = 0;
+    n->weights = NULL;
+    n->n_weights = 0;
+    n->skin = -1;
+    n->children = NULL;
+    n->n_children = 0;
     return s->n_nodes - 1;
+}
+
+lie_status lie_primitive_morph(lie_primitive *p, const double *w, int n_w)
+{
+    if (p->n_targets <= 0 || !p->base_pos)
+        return LIE_OK;
+    size_t n = 3 * (size_t)p->n_verts;
+    memcpy(p->pos, p->base_pos, sizeof(float) * n);
+    if (p->nrm && p->base_nrm)
+        memcpy(p->nrm, p->base_nrm, sizeof(float) * n);
+    int moved = 0;
+    for (int t = 0; t < p->n_targets && t < n_w; t++) {
+        if (w[t] == 0.0)
+            continue;
+        moved = 1;
+        const float *dp = p->tpos + (size_t)t * n, *dn = p->tnrm ? p->tnrm + (size_t)t * n : NULL;
+        for (size_t i = 0; i < n; i++)
+            p->pos[i] = (float)((double)p->pos[i] + w[t] * (double)dp[i]);
+        if (p->nrm && dn)
+            for (size_t i = 0; i < n; i++)
+                p->nrm[i] = (float)((double)p->nrm[i] + w[t] * (double)dn[i]);
+    }
+    for (size_t i = 0; moved && i < n; i++)
+        if (!isfinite(p->pos[i]))
+            return LIE_ERR_FORMAT;
+    return LIE_OK;
 }

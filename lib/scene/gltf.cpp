@@ -147,6 +147,7 @@ size_t mul_size(size_t a, size_t b, const char *what)
 
 struct FsState {
     std::string prefix; /* the scene's folder as tinygltf joins it, ending in '/' */
+    std::string root;   /* the same folder resolved (realpath), ending in '/' */
     bool allow_external;
     std::string refused, refused_why;            /* first URI refused by policy */
     std::map<std::string, std::string> missing;  /* URI -> why it could not be opened */
@@ -252,24 +253,67 @@ bool fs_exists(const std::string &path, void *user)
     return true;
 }
 
-bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *)
+/* The file an open descriptor reads, with every symlink resolved. */
+std::string fd_realpath(int fd, const std::string &path)
 {
-    FILE *f = fopen(path.c_str(), "rb");
-    if (!f) {
+    char link[64], buf[PATH_MAX + 1];
+    snprintf(link, sizeof link, "/proc/self/fd/%d", fd);
+    ssize_t n = readlink(link, buf, sizeof buf - 1);
+    if (n > 0 && buf[0] == '/') {
+        buf[n] = 0;
+        return buf;
+    }
+    char *r = realpath(path.c_str(), nullptr); /* no /proc: resolve the name instead */
+    std::string out = r ? r : "";
+    free(r);
+    return out;
+}
+
+/* Buffers and images: opened non-blocking and fstat-checked (a FIFO cannot
+ * hang, a device cannot stream forever), and, unless external URIs are
+ * allowed, the file actually opened must lie inside the scene's folder:
+ * the URI's text may stay inside while a symlink leads out. */
+bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *user)
+{
+    FsState &fs = *static_cast<FsState *>(user);
+    int fd;
+    uint64_t size;
+    lie_error e{};
+    if (lie_input_open(path.c_str(), LIE_READ_MAX_GLTF, &fd, &size, &e) != LIE_OK) {
         if (err)
-            *err = strerror(errno);
+            *err = e.msg;
+        if (!fs.last_uri.empty() && !fs.missing.count(fs.last_uri))
+            fs.missing[fs.last_uri] = e.msg;
         return false;
     }
-    out->clear();
-    unsigned char buf[65536];
-    size_t n;
-    while ((n = fread(buf, 1, sizeof buf, f)) > 0)
-        out->insert(out->end(), buf, buf + n);
-    bool ok = !ferror(f);
-    if (!ok && err)
-        *err = strerror(errno);
-    fclose(f);
-    return ok;
+    if (!fs.allow_external) {
+        std::string real = fd_realpath(fd, path);
+        if (fs.root.empty() || real.compare(0, fs.root.size(), fs.root) != 0) {
+            close(fd);
+            fs_refuse(fs, fs.last_uri.empty() ? path : fs.last_uri,
+                      "resolves (through a symlink) outside the scene's folder (--allow-external-uris permits it)");
+            if (err)
+                *err = "outside the scene's folder";
+            return false;
+        }
+    }
+    unsigned char *data = nullptr;
+    size_t n = 0;
+    lie_status st = lie_read_fd(fd, path.c_str(), LIE_READ_MAX_GLTF, size, &data, &n, &e);
+    close(fd);
+    if (st != LIE_OK) {
+        if (err)
+            *err = e.msg;
+        return false;
+    }
+    try {
+        out->assign(data, data + n);
+    } catch (...) {
+        free(data);
+        throw;
+    }
+    free(data);
+    return true;
 }
 
 bool fs_write(std::string *err, const std::string &, const std::vector<unsigned char> &, void *)
@@ -364,25 +408,25 @@ bool image_load(tinygltf::Image *image, const int index, std::string *err, std::
 
 std::vector<unsigned char> read_input(const char *path)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        fail(LIE_ERR_IO, "cannot open: %s", strerror(errno));
+    int fd;
+    uint64_t size;
+    lie_error e{};
+    if (lie_input_open(path, LIE_READ_MAX_GLTF, &fd, &size, &e) != LIE_OK)
+        throw ImportError{e.status, e.msg, 0, 0};
+    unsigned char *buf = nullptr;
+    size_t n = 0;
+    lie_status st = lie_read_fd(fd, path, LIE_READ_MAX_GLTF, size, &buf, &n, &e);
+    close(fd);
+    if (st != LIE_OK)
+        throw ImportError{e.status, e.msg, 0, 0};
     std::vector<unsigned char> data;
-    unsigned char buf[65536];
-    size_t n;
-    while ((n = fread(buf, 1, sizeof buf, f)) > 0) {
-        data.insert(data.end(), buf, buf + n);
-        if (data.size() > UINT32_MAX - 1) {
-            fclose(f);
-            fail(LIE_ERR_LIMIT, "file is 4 GiB or more");
-        }
+    try {
+        data.assign(buf, buf + n);
+    } catch (...) {
+        free(buf);
+        throw;
     }
-    if (ferror(f)) {
-        int e = errno;
-        fclose(f);
-        fail(LIE_ERR_IO, "cannot read: %s", strerror(e));
-    }
-    fclose(f);
+    free(buf);
     if (data.empty())
         fail(LIE_ERR_FORMAT, "empty file");
     return data;
@@ -468,6 +512,178 @@ void fail_if_unsupported_required(const std::vector<unsigned char> &d)
     }
 }
 
+/* ---- JSON checks before tinygltf ----------------------------------------
+ * tinygltf and nlohmann recurse once per level of JSON nesting, so a file
+ * nested 20,000 deep (in extras, say) overflows the stack.  The raw text is
+ * scanned first: no parser sees nesting past MAX_JSON_DEPTH. */
+
+const int MAX_JSON_DEPTH = 128;
+
+void check_json_depth(const unsigned char *p, size_t n)
+{
+    int depth = 0, line = 1, col = 0;
+    bool in_string = false, escaped = false;
+    for (size_t i = 0; i < n; i++) {
+        unsigned char c = p[i];
+        col++;
+        if (c == '\n') {
+            line++;
+            col = 0;
+        }
+        if (in_string) {
+            if (escaped)
+                escaped = false;
+            else if (c == '\\')
+                escaped = true;
+            else if (c == '"')
+                in_string = false;
+        } else if (c == '"') {
+            in_string = true;
+        } else if (c == '[' || c == '{') {
+            if (++depth > MAX_JSON_DEPTH)
+                throw ImportError{LIE_ERR_LIMIT,
+                                  "JSON nested deeper than " + std::to_string(MAX_JSON_DEPTH) + " levels", line, col};
+        } else if (c == ']' || c == '}') {
+            depth--;
+        }
+    }
+}
+
+/* tinygltf drops an optional property of the wrong type or sign and uses
+ * its default: a negative byteOffset becomes 0, "bufferView": -1 a view of
+ * zeros, "material": -2 the default material.  The glTF 2.0 schema makes
+ * every index (glTFid) and every offset, length and count an integer >= 0
+ * (byteStride: 4 to 252, a multiple of 4), and a URI an IRI, which holds no
+ * NUL.  These are checked on the JSON itself, outside extras and outside
+ * extensions this importer does not read. */
+struct StrictCheck {
+    std::string path;
+
+    [[noreturn]] void refuse(const std::string &key, const std::string &what)
+    {
+        fail(LIE_ERR_FORMAT, "%s%s%s: %s", path.c_str(), path.empty() ? "" : ".", clean(key).c_str(), what.c_str());
+    }
+
+    /* an integer in [lo, hi], or refuse */
+    void integer(const nlohmann::json &v, const std::string &key, double lo, double hi)
+    {
+        double d;
+        if (v.is_number_unsigned())
+            d = double(v.get<uint64_t>());
+        else if (v.is_number_integer())
+            d = double(v.get<int64_t>());
+        else if (v.is_number_float())
+            d = v.get<double>();
+        else
+            refuse(key, std::string("expected an integer, found ") + v.type_name());
+        char num[64];
+        if (v.is_number_float())
+            snprintf(num, sizeof num, "%.17g", d);
+        else
+            snprintf(num, sizeof num, "%s", v.dump().c_str());
+        if (!(d == floor(d)))
+            refuse(key, std::string(num) + " is not an integer");
+        if (d < lo || d > hi) {
+            char range[96];
+            snprintf(range, sizeof range, "%s is not in [%.0f, %.0f]", num, lo, hi);
+            refuse(key, range);
+        }
+    }
+
+    static bool is_index_key(const std::string &k)
+    {
+        static const char *const keys[] = {"buffer",  "bufferView", "camera", "index",  "indices",
+                                           "input",   "inverseBindMatrices",  "light",  "material",
+                                           "mesh",    "node",       "output", "sampler", "scene",
+                                           "skeleton", "skin",      "source", "texCoord"};
+        for (const char *x : keys)
+            if (k == x)
+                return true;
+        return false;
+    }
+
+    void object(const nlohmann::json &o, bool top)
+    {
+        for (auto it = o.begin(); it != o.end(); ++it) {
+            const std::string &k = it.key();
+            const nlohmann::json &v = it.value();
+            if (k == "extras")
+                continue;
+            if (k == "extensions" && v.is_object()) {
+                for (auto e = v.begin(); e != v.end(); ++e) {
+                    bool known = false;
+                    for (const char *x : SUPPORTED_REQUIRED)
+                        known |= e.key() == x;
+                    if (known)
+                        descend(e.value(), "extensions." + e.key());
+                }
+                continue;
+            }
+            if (k == "uri" && v.is_string() && v.get_ref<const std::string &>().find('\0') != std::string::npos)
+                refuse(k, "contains a NUL byte");
+            if (is_index_key(k) && !(k == "indices" && v.is_object())) {
+                integer(v, k, 0, INT32_MAX);
+            } else if (k == "byteOffset" || k == "byteLength" || k == "count") {
+                integer(v, k, 0, 9007199254740991.0); /* 2^53 - 1, JSON's exact integers */
+            } else if (k == "byteStride") {
+                integer(v, k, 4, 252);
+                if (v.get<double>() != 4 * floor(v.get<double>() / 4))
+                    refuse(k, v.dump() + " is not a multiple of 4");
+            } else if ((k == "children" || k == "joints" || (k == "nodes" && !top)) && v.is_array()) {
+                for (size_t i = 0; i < v.size(); i++)
+                    integer(v[i], k + "[" + std::to_string(i) + "]", 0, INT32_MAX);
+            } else if (k == "attributes" && v.is_object()) {
+                for (auto a = v.begin(); a != v.end(); ++a)
+                    integer(a.value(), k + "." + a.key(), 0, INT32_MAX);
+            } else if (k == "targets" && v.is_array()) {
+                for (size_t i = 0; i < v.size(); i++)
+                    if (v[i].is_object())
+                        for (auto a = v[i].begin(); a != v[i].end(); ++a)
+                            integer(a.value(), k + "[" + std::to_string(i) + "]." + a.key(), 0, INT32_MAX);
+            } else {
+                descend(v, k);
+            }
+        }
+    }
+
+    void descend(const nlohmann::json &v, const std::string &key)
+    {
+        if (!v.is_object() && !v.is_array())
+            return;
+        size_t keep = path.size();
+        path += (path.empty() ? "" : ".") + clean(key, 60);
+        if (v.is_object()) {
+            object(v, false);
+        } else {
+            std::string base = path;
+            for (size_t i = 0; i < v.size(); i++) {
+                path = base + "[" + std::to_string(i) + "]";
+                if (v[i].is_object())
+                    object(v[i], false);
+            }
+        }
+        path.resize(keep);
+    }
+};
+
+/* The JSON text of a .gltf, or of a GLB's first chunk (checked by glb_check). */
+void check_json(const std::vector<unsigned char> &d, bool glb)
+{
+    const unsigned char *json = d.data();
+    size_t len = d.size();
+    if (glb) {
+        uint32_t jl = uint32_t(d[12]) | uint32_t(d[13]) << 8 | uint32_t(d[14]) << 16 | uint32_t(d[15]) << 24;
+        len = std::min<size_t>(jl, len - 20);
+        json += 20;
+    }
+    check_json_depth(json, len);
+    nlohmann::json j = nlohmann::json::parse(json, json + len, nullptr, false);
+    if (j.is_discarded() || !j.is_object())
+        return; /* tinygltf reports the syntax error, with its position */
+    StrictCheck c;
+    c.object(j, true);
+}
+
 /* Parse the file into `model`; `image_errors` gets why external images that
  * tinygltf skipped (with a warning) could not be opened. */
 void load_model(tinygltf::Model &model, const char *path, const lie_scene_options &opt,
@@ -482,6 +698,12 @@ void load_model(tinygltf::Model &model, const char *path, const lie_scene_option
     std::string base = slash == std::string::npos ? std::string(".") : p.substr(0, slash == 0 ? 1 : slash);
     fs.prefix = base.back() == '/' ? base : base + "/";
     fs.allow_external = opt.allow_external_uris != 0;
+    if (char *r = realpath(base.c_str(), nullptr)) {
+        fs.root = r;
+        free(r);
+        if (fs.root.back() != '/')
+            fs.root += '/';
+    }
 
     ImageState images{&model, std::string()};
     tinygltf::TinyGLTF loader;
@@ -498,8 +720,10 @@ void load_model(tinygltf::Model &model, const char *path, const lie_scene_option
     bool ok;
     if (data.size() >= 4 && memcmp(data.data(), "glTF", 4) == 0) {
         uint32_t length = glb_check(data);
+        check_json(data, true);
         ok = loader.LoadBinaryFromMemory(&model, &err, &warn, data.data(), length, base);
     } else {
+        check_json(data, false);
         ok = loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char *>(data.data()),
                                         (unsigned)data.size(), base);
     }
@@ -549,6 +773,7 @@ size_t type_components(int type)
     case TINYGLTF_TYPE_VEC2: return 2;
     case TINYGLTF_TYPE_VEC3: return 3;
     case TINYGLTF_TYPE_VEC4: return 4;
+    case TINYGLTF_TYPE_MAT4: return 16; /* float only where used (inverse bind matrices): no column padding */
     default: return 0;
     }
 }
@@ -726,6 +951,8 @@ struct PrimPlan {
     /* morph targets: position and normal displacements (index -1: none) */
     std::vector<Accessor> tpos, tnrm;
     std::vector<int> tpos_at, tnrm_at;
+    Accessor joints, wts;        /* JOINTS_0, WEIGHTS_0 (skins) */
+    bool has_skin;
 };
 
 int attribute(const tinygltf::Primitive &p, const char *name)
@@ -751,6 +978,32 @@ bool small_int(int ctype)
 {
     return ctype == TINYGLTF_COMPONENT_TYPE_BYTE || ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
            ctype == TINYGLTF_COMPONENT_TYPE_SHORT || ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+}
+
+/* JOINTS_0 and WEIGHTS_0 (glTF 2.0 §3.7.3.1): both or neither; sets
+ * beyond the first are not read. */
+void plan_skin_attributes(const tinygltf::Model &m, const tinygltf::Primitive &p, const std::string &what,
+                          PrimPlan &pl)
+{
+    int aj = attribute(p, "JOINTS_0"), aw = attribute(p, "WEIGHTS_0");
+    if (aj < 0 && aw < 0)
+        return;
+    if (aj < 0 || aw < 0)
+        fail(LIE_ERR_FORMAT, "%s: JOINTS_0 and WEIGHTS_0 come together", what.c_str());
+    pl.joints = check_accessor(m, aj, what + " JOINTS_0");
+    pl.wts = check_accessor(m, aw, what + " WEIGHTS_0");
+    if (pl.joints.ncomp != 4 || (pl.joints.ctype != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+                                 pl.joints.ctype != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT))
+        fail(LIE_ERR_FORMAT, "%s: JOINTS_0 must be VEC4 UNSIGNED_BYTE or UNSIGNED_SHORT", what.c_str());
+    if (pl.wts.ncomp != 4 ||
+        !(pl.wts.ctype == TINYGLTF_COMPONENT_TYPE_FLOAT ||
+          (pl.wts.normalized && (pl.wts.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                                 pl.wts.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT))))
+        fail(LIE_ERR_FORMAT, "%s: WEIGHTS_0 must be VEC4 FLOAT or normalized UNSIGNED_BYTE/SHORT", what.c_str());
+    if (pl.joints.count != pl.pos.count || pl.wts.count != pl.pos.count)
+        fail(LIE_ERR_FORMAT, "%s: JOINTS_0 and WEIGHTS_0 need one element per vertex (%zu)", what.c_str(),
+             pl.pos.count);
+    pl.has_skin = true;
 }
 
 /* Check a primitive and count its triangles; nothing is allocated yet. */
@@ -840,6 +1093,7 @@ PrimPlan plan_primitive(const tinygltf::Model &m, int mi, int pi, lie_scene *s)
             fail(LIE_ERR_FORMAT, "%s: COLOR_0 has %zu elements, POSITION %zu", what.c_str(), pl.col.count,
                  pl.n_verts);
     }
+    plan_skin_attributes(m, p, what, pl);
     /* Morph targets (glTF 2.0 §3.7.2.2): POSITION and NORMAL displacements
      * are applied with the default weights; TANGENT and others are not used. */
     for (size_t t = 0; t < p.targets.size(); t++) {
@@ -928,6 +1182,13 @@ void read_primitive(const PrimPlan &pl, int mi, int pi, lie_primitive *out)
             }
     }
 
+    if (pl.has_skin) {
+        out->joints = alloc_array<uint16_t>(pl.n_verts * 4);
+        out->weights = alloc_array<float>(pl.n_verts * 4);
+        accessor_each(pl.joints, [&](size_t i, size_t c, double x) { out->joints[i * 4 + c] = uint16_t(x); });
+        read_floats(pl.wts, out->weights, what + " WEIGHTS_0");
+    }
+
     std::vector<uint32_t> v(pl.n_idx);
     if (pl.has_idx) {
         accessor_each(pl.idx, [&](size_t i, size_t, double x) { v[i] = uint32_t(x); });
@@ -961,30 +1222,33 @@ void read_primitive(const PrimPlan &pl, int mi, int pi, lie_primitive *out)
     out->n_tris = uint32_t(pl.n_tris);
 }
 
-/* Add the weighted morph target displacements to a read primitive. */
+/* Keep a read primitive's targets (for edits of its weights) and morph it
+ * with weights w (lie_primitive_morph). */
 void apply_morph(const PrimPlan &pl, const std::vector<double> &w, int mi, int pi, lie_primitive *out)
 {
+    size_t nt = pl.tpos.size();
+    if (nt == 0)
+        return;
     std::string what = "mesh " + std::to_string(mi) + " primitive " + std::to_string(pi);
-    std::vector<float> d;
-    bool moved = false;
-    for (size_t t = 0; t < pl.tpos.size() && t < w.size(); t++) {
-        if (w[t] == 0.0)
-            continue;
-        d.resize(pl.n_verts * 3);
-        moved = moved || pl.tpos_at[t] >= 0;
-        for (int k = 0; k < 2; k++) {
-            float *dst = k ? out->nrm : out->pos;
-            if ((k ? pl.tnrm_at[t] : pl.tpos_at[t]) < 0 || !dst)
-                continue;
-            read_floats(k ? pl.tnrm[t] : pl.tpos[t], d.data(),
-                        what + " target " + std::to_string(t) + (k ? " NORMAL" : " POSITION"));
-            for (size_t i = 0; i < d.size(); i++)
-                dst[i] = float(double(dst[i]) + w[t] * double(d[i]));
-        }
+    size_t n = mul_size(pl.n_verts, 3, what.c_str());
+    out->n_targets = int(nt);
+    out->base_pos = alloc_array<float>(n);
+    memcpy(out->base_pos, out->pos, sizeof(float) * n);
+    out->tpos = alloc_array<float>(mul_size(n, nt, what.c_str()));
+    if (out->nrm) {
+        out->base_nrm = alloc_array<float>(n);
+        memcpy(out->base_nrm, out->nrm, sizeof(float) * n);
+        out->tnrm = alloc_array<float>(n * nt);
     }
-    for (size_t i = 0; moved && i < pl.n_verts * 3; i++)
-        if (!std::isfinite(out->pos[i]))
-            fail(LIE_ERR_FORMAT, "%s: a morphed position is not a finite number", what.c_str());
+    for (size_t t = 0; t < nt; t++) {
+        std::string tw = what + " target " + std::to_string(t);
+        if (pl.tpos_at[t] >= 0)
+            read_floats(pl.tpos[t], out->tpos + t * n, tw + " POSITION");
+        if (pl.tnrm_at[t] >= 0 && out->tnrm)
+            read_floats(pl.tnrm[t], out->tnrm + t * n, tw + " NORMAL");
+    }
+    if (lie_primitive_morph(out, w.data(), int(w.size())) != LIE_OK)
+        fail(LIE_ERR_FORMAT, "%s: a morphed position is not a finite number", what.c_str());
 }
 
 /* The weights a node's instance of mesh mi is drawn with: the node's, else
@@ -1311,6 +1575,22 @@ void import_nodes(const tinygltf::Model &m, lie_scene *s)
         std::string w = "node " + std::to_string(i);
         n.name = dup_name(g.name);
         n.local = node_local(g, w);
+        n.skin = -1;
+        if (g.matrix.empty()) { /* the TRS node_local checked; animations replace parts of it */
+            n.has_trs = 1;
+            double def[10] = {0, 0, 0, 0, 0, 0, 1, 1, 1, 1};
+            memcpy(n.trs, def, sizeof def);
+            for (size_t k = 0; k < g.translation.size() && k < 3; k++)
+                n.trs[k] = g.translation[k];
+            if (g.rotation.size() == 4) {
+                double len = sqrt(g.rotation[0] * g.rotation[0] + g.rotation[1] * g.rotation[1] +
+                                  g.rotation[2] * g.rotation[2] + g.rotation[3] * g.rotation[3]);
+                for (size_t k = 0; k < 4; k++)
+                    n.trs[3 + k] = g.rotation[k] / len;
+            }
+            for (size_t k = 0; k < g.scale.size() && k < 3; k++)
+                n.trs[7 + k] = g.scale[k];
+        }
         if (g.mesh >= 0 && size_t(g.mesh) >= m.meshes.size())
             fail(LIE_ERR_FORMAT, "%s: mesh %d out of range", w.c_str(), g.mesh);
         if (g.camera >= 0 && size_t(g.camera) >= m.cameras.size())
@@ -1569,6 +1849,196 @@ void import_document(const tinygltf::Model &m, lie_scene *s, const lie_scene_opt
         if (k >= m.meshes.size())
             s->nodes[copies[k - m.meshes.size()].first].mesh = int(k);
     }
+    /* every node drawing a mesh with targets knows its weights (for animations and edits) */
+    for (int i = 0; i < s->n_nodes; i++) {
+        int fm = m.nodes[size_t(i)].mesh;
+        if (fm < 0 || mesh_w[size_t(fm)].empty())
+            continue;
+        const std::vector<double> &g = m.nodes[size_t(i)].weights;
+        const std::vector<double> &w = g.empty() ? mesh_w[size_t(fm)] : g;
+        s->nodes[i].weights = alloc_array<double>(w.size());
+        memcpy(s->nodes[i].weights, w.data(), w.size() * sizeof(double));
+        s->nodes[i].n_weights = int(w.size());
+    }
+}
+
+/* ---- skins and animations ------------------------------------------------ */
+
+/* glTF 2.0 §3.7.3: joints, inverse bind matrices (MAT4 FLOAT, one per
+ * joint; identities when absent), and the skinned nodes' vertex joints
+ * within range. */
+void import_skins(const tinygltf::Model &m, lie_scene *s)
+{
+    if (m.skins.size() > size_t(INT_MAX))
+        fail(LIE_ERR_LIMIT, "too many skins");
+    s->skins = alloc_array<lie_skin>(m.skins.size());
+    s->n_skins = int(m.skins.size());
+    for (size_t i = 0; i < m.skins.size(); i++) {
+        const tinygltf::Skin &g = m.skins[i];
+        lie_skin &k = s->skins[i];
+        std::string w = "skin " + std::to_string(i);
+        k.name = dup_name(g.name);
+        if (g.joints.empty() || g.joints.size() > 65536)
+            fail(LIE_ERR_FORMAT, "%s: needs 1 to 65536 joints", w.c_str());
+        k.joints = alloc_array<int>(g.joints.size());
+        k.inverse_bind = alloc_array<lie_mat4>(g.joints.size());
+        k.n_joints = int(g.joints.size());
+        for (size_t j = 0; j < g.joints.size(); j++) {
+            if (g.joints[j] < 0 || size_t(g.joints[j]) >= m.nodes.size())
+                fail(LIE_ERR_FORMAT, "%s: joint %zu names node %d, out of range", w.c_str(), j, g.joints[j]);
+            k.joints[j] = g.joints[j];
+            k.inverse_bind[j] = lie_mat4_identity();
+        }
+        if (g.inverseBindMatrices >= 0) {
+            Accessor a = check_accessor(m, g.inverseBindMatrices, w + " inverseBindMatrices");
+            if (a.ncomp != 16 || a.ctype != TINYGLTF_COMPONENT_TYPE_FLOAT || a.count != g.joints.size())
+                fail(LIE_ERR_FORMAT, "%s: inverseBindMatrices must be %zu MAT4 FLOAT", w.c_str(), g.joints.size());
+            std::vector<float> v(a.count * 16);
+            read_floats(a, v.data(), w + " inverseBindMatrices");
+            for (size_t j = 0; j < a.count; j++)
+                for (int c = 0; c < 16; c++)
+                    k.inverse_bind[j].m[c] = v[j * 16 + size_t(c)];
+        }
+    }
+    for (size_t i = 0; i < m.nodes.size(); i++) {
+        int sk = m.nodes[i].skin;
+        if (sk < 0)
+            continue;
+        std::string w = "node " + std::to_string(i);
+        if (size_t(sk) >= m.skins.size())
+            fail(LIE_ERR_FORMAT, "%s: skin %d out of range", w.c_str(), sk);
+        int mi = s->nodes[i].mesh;
+        if (mi < 0)
+            fail(LIE_ERR_FORMAT, "%s has a skin but no mesh", w.c_str());
+        s->nodes[i].skin = sk;
+        const lie_mesh &mesh = s->meshes[mi];
+        for (int pi = 0; pi < mesh.n_prims; pi++) {
+            const lie_primitive &p = mesh.prims[pi];
+            if (p.n_tris && !p.joints)
+                fail(LIE_ERR_FORMAT, "%s: skinned mesh %d primitive %d has no JOINTS_0 and WEIGHTS_0", w.c_str(),
+                     mi, pi);
+            for (size_t v = 0; p.joints && v < 4 * size_t(p.n_verts); v++)
+                if (p.joints[v] >= s->skins[sk].n_joints && p.weights[v] != 0.0f)
+                    fail(LIE_ERR_FORMAT, "%s: mesh %d primitive %d: vertex %zu uses joint %u of skin %d's %d",
+                         w.c_str(), mi, pi, v / 4, unsigned(p.joints[v]), sk, s->skins[sk].n_joints);
+        }
+    }
+}
+
+/* glTF 2.0 §3.11: samplers (input times strictly increasing, output
+ * element counts matching the interpolation and the target) and channels
+ * (a node of the file, a path of translation, rotation, scale or weights).
+ * A channel without a target node (left to extensions) is not read. */
+void import_animations(const tinygltf::Model &m, lie_scene *s)
+{
+    if (m.animations.size() > size_t(INT_MAX))
+        fail(LIE_ERR_LIMIT, "too many animations");
+    s->animations = alloc_array<lie_animation>(m.animations.size());
+    s->n_animations = int(m.animations.size());
+    for (size_t ai = 0; ai < m.animations.size(); ai++) {
+        const tinygltf::Animation &g = m.animations[ai];
+        lie_animation &a = s->animations[ai];
+        std::string aw = "animation " + std::to_string(ai);
+        if (!g.name.empty())
+            aw += " '" + clean(g.name) + "'";
+        a.name = dup_name(g.name);
+        if (g.samplers.size() > size_t(INT_MAX) || g.channels.size() > size_t(INT_MAX))
+            fail(LIE_ERR_LIMIT, "%s: too many samplers or channels", aw.c_str());
+        a.samplers = alloc_array<lie_anim_sampler>(g.samplers.size());
+        a.n_samplers = int(g.samplers.size());
+        a.channels = alloc_array<lie_anim_channel>(g.channels.size());
+        std::vector<int> comp(g.samplers.size(), 0); /* floats per key, from the channels using it */
+        for (size_t ci = 0; ci < g.channels.size(); ci++) {
+            const tinygltf::AnimationChannel &c = g.channels[ci];
+            std::string cw = aw + " channel " + std::to_string(ci);
+            if (c.target_node < 0)
+                continue;
+            if (size_t(c.target_node) >= m.nodes.size())
+                fail(LIE_ERR_FORMAT, "%s: target node %d does not exist (the file has %zu nodes)", cw.c_str(),
+                     c.target_node, m.nodes.size());
+            if (c.sampler < 0 || size_t(c.sampler) >= g.samplers.size())
+                fail(LIE_ERR_FORMAT, "%s: sampler %d does not exist", cw.c_str(), c.sampler);
+            lie_anim_channel &ch = a.channels[a.n_channels++];
+            ch.node = c.target_node;
+            ch.sampler = c.sampler;
+            const lie_node &n = s->nodes[c.target_node];
+            int nc;
+            if (c.target_path == "translation")
+                ch.path = LIE_ANIM_TRANSLATION, nc = 3;
+            else if (c.target_path == "rotation")
+                ch.path = LIE_ANIM_ROTATION, nc = 4;
+            else if (c.target_path == "scale")
+                ch.path = LIE_ANIM_SCALE, nc = 3;
+            else if (c.target_path == "weights")
+                ch.path = LIE_ANIM_WEIGHTS, nc = n.n_weights;
+            else
+                fail(LIE_ERR_FORMAT, "%s: target path '%s' does not exist (translation, rotation, scale or weights)",
+                     cw.c_str(), clean(c.target_path).c_str());
+            if (ch.path != LIE_ANIM_WEIGHTS && !n.has_trs)
+                fail(LIE_ERR_FORMAT, "%s: node %d has a matrix, and an animated node must use TRS", cw.c_str(),
+                     c.target_node);
+            if (ch.path == LIE_ANIM_WEIGHTS && nc == 0)
+                fail(LIE_ERR_FORMAT, "%s: node %d has no morph targets to weigh", cw.c_str(), c.target_node);
+            if (comp[size_t(c.sampler)] && comp[size_t(c.sampler)] != nc)
+                fail(LIE_ERR_FORMAT, "%s: sampler %d also drives a target of another size", cw.c_str(), c.sampler);
+            comp[size_t(c.sampler)] = nc;
+            for (int k = 0; k + 1 < a.n_channels; k++)
+                if (a.channels[k].node == ch.node && a.channels[k].path == ch.path)
+                    fail(LIE_ERR_FORMAT, "%s: node %d's %s is already animated by channel %d", cw.c_str(),
+                         c.target_node, c.target_path.c_str(), k);
+        }
+        bool first = true;
+        for (size_t si = 0; si < g.samplers.size(); si++) {
+            const tinygltf::AnimationSampler &gs = g.samplers[si];
+            lie_anim_sampler &sp = a.samplers[si];
+            std::string sw = aw + " sampler " + std::to_string(si);
+            if (gs.interpolation == "LINEAR")
+                sp.interp = LIE_INTERP_LINEAR;
+            else if (gs.interpolation == "STEP")
+                sp.interp = LIE_INTERP_STEP;
+            else if (gs.interpolation == "CUBICSPLINE")
+                sp.interp = LIE_INTERP_CUBICSPLINE;
+            else
+                fail(LIE_ERR_FORMAT, "%s: interpolation '%s' is not LINEAR, STEP or CUBICSPLINE", sw.c_str(),
+                     clean(gs.interpolation).c_str());
+            Accessor in = check_accessor(m, gs.input, sw + " input");
+            if (in.ncomp != 1 || in.ctype != TINYGLTF_COMPONENT_TYPE_FLOAT || in.count == 0)
+                fail(LIE_ERR_FORMAT, "%s: input must be SCALAR FLOAT with at least one key", sw.c_str());
+            if (in.count > 100000000)
+                fail(LIE_ERR_LIMIT, "%s: %zu keys", sw.c_str(), in.count);
+            sp.n_keys = uint32_t(in.count);
+            sp.times = alloc_array<float>(in.count);
+            read_floats(in, sp.times, sw + " input");
+            for (size_t k = 1; k < in.count; k++)
+                if (!(sp.times[k] > sp.times[k - 1]))
+                    fail(LIE_ERR_FORMAT, "%s: input times are not strictly increasing (key %zu: %g after %g)",
+                         sw.c_str(), k, double(sp.times[k]), double(sp.times[k - 1]));
+            if (sp.times[0] < 0.0f)
+                fail(LIE_ERR_FORMAT, "%s: input time %g is negative", sw.c_str(), double(sp.times[0]));
+            if (first || sp.times[0] < a.start)
+                a.start = sp.times[0];
+            if (first || sp.times[in.count - 1] > a.end)
+                a.end = sp.times[in.count - 1];
+            first = false;
+            int nc = comp[si];
+            if (nc == 0)
+                continue; /* no channel uses it */
+            Accessor out = check_accessor(m, gs.output, sw + " output");
+            size_t per_key = size_t(nc) * (sp.interp == LIE_INTERP_CUBICSPLINE ? 3 : 1);
+            size_t want = in.count * per_key; /* floats */
+            bool type_ok = nc == 3 || nc == 4 ? out.ncomp == size_t(nc) : out.ncomp == 1;
+            bool ctype_ok = out.ctype == TINYGLTF_COMPONENT_TYPE_FLOAT || (out.normalized && nc != 3);
+            if (!type_ok || !ctype_ok)
+                fail(LIE_ERR_FORMAT, "%s: output must be %s FLOAT%s", sw.c_str(),
+                     nc == 3 ? "VEC3" : nc == 4 ? "VEC4" : "SCALAR", nc != 3 ? " or normalized integers" : "");
+            if (out.count * out.ncomp != want)
+                fail(LIE_ERR_FORMAT, "%s: output has %zu elements, %zu input keys need %zu%s", sw.c_str(), out.count,
+                     in.count, want / out.ncomp, sp.interp == LIE_INTERP_CUBICSPLINE ? " (3 per key, CUBICSPLINE)" : "");
+            sp.n_comp = nc;
+            sp.values = alloc_array<float>(want);
+            read_floats(out, sp.values, sw + " output");
+        }
+    }
 }
 
 } // namespace
@@ -1591,6 +2061,8 @@ extern "C" lie_status lie_gltf_import(lie_scene *s, const char *path, const lie_
         import_materials(im);
         import_cameras(model, s);
         import_lights(model, s);
+        import_skins(model, s);
+        import_animations(model, s);
         return LIE_OK;
     } catch (const ImportError &e) {
         if (e.line > 0)
@@ -1760,7 +2232,7 @@ int add_view(Export &ex, const void *data, size_t bytes, int target)
 
 int add_accessor(Export &ex, const void *data, size_t count, int type, int ctype, int target)
 {
-    size_t ncomp = type_components(type), bytes = mul_size(count, ncomp * 4, "accessor");
+    size_t ncomp = type_components(type), bytes = mul_size(count, ncomp * component_size(ctype), "accessor");
     tinygltf::Accessor a;
     a.bufferView = add_view(ex, data, bytes, target);
     a.byteOffset = 0;
@@ -1803,6 +2275,12 @@ tinygltf::Primitive export_primitive(Export &ex, const lie_primitive &p)
     if (p.color)
         g.attributes["COLOR_0"] = add_accessor(ex, p.color, p.n_verts, TINYGLTF_TYPE_VEC4,
                                                TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TARGET_ARRAY_BUFFER);
+    if (p.joints && p.weights) { /* skins (§3.7.3): the joints and weights as read */
+        g.attributes["JOINTS_0"] = add_accessor(ex, p.joints, p.n_verts, TINYGLTF_TYPE_VEC4,
+                                                TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TARGET_ARRAY_BUFFER);
+        g.attributes["WEIGHTS_0"] = add_accessor(ex, p.weights, p.n_verts, TINYGLTF_TYPE_VEC4,
+                                                 TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TARGET_ARRAY_BUFFER);
+    }
     g.indices = add_accessor(ex, p.idx, size_t(p.n_tris) * 3, TINYGLTF_TYPE_SCALAR,
                              TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
     return g;
@@ -2066,6 +2544,34 @@ void export_document(Export &ex)
         }
         m.nodes.push_back(g);
     }
+    /* skins of kept skinned nodes; every joint must be kept too */
+    std::vector<int> skin_map(size_t(s.n_skins), -1);
+    for (size_t k = 0; k < order.size(); k++) {
+        const lie_node &n = s.nodes[order[k]];
+        if (n.skin < 0 || n.skin >= s.n_skins || m.nodes[k].mesh < 0)
+            continue;
+        if (skin_map[size_t(n.skin)] < 0) {
+            const lie_skin &sk = s.skins[n.skin];
+            tinygltf::Skin g;
+            if (sk.name)
+                g.name = sk.name;
+            std::vector<float> ibm(size_t(sk.n_joints) * 16);
+            for (int j = 0; j < sk.n_joints; j++) {
+                int nj = sk.joints[j] >= 0 && sk.joints[j] < s.n_nodes ? new_index[size_t(sk.joints[j])] : -1;
+                if (nj < 0)
+                    fail(LIE_ERR_UNSUPPORTED, "skin %d: joint node %d is not in the written scene", n.skin,
+                         sk.joints[j]);
+                g.joints.push_back(nj);
+                for (int c = 0; c < 16; c++) /* read as floats: exact */
+                    ibm[size_t(j) * 16 + size_t(c)] = float(sk.inverse_bind[j].m[c]);
+            }
+            g.inverseBindMatrices = add_accessor(ex, ibm.data(), size_t(sk.n_joints), TINYGLTF_TYPE_MAT4,
+                                                 TINYGLTF_COMPONENT_TYPE_FLOAT, 0);
+            skin_map[size_t(n.skin)] = int(m.skins.size());
+            m.skins.push_back(g);
+        }
+        m.nodes[k].skin = skin_map[size_t(n.skin)];
+    }
     tinygltf::Scene scene;
     for (int r = 0; r < s.n_roots; r++)
         if (s.roots[r] >= 0 && s.roots[r] < s.n_nodes && new_index[size_t(s.roots[r])] >= 0)
@@ -2103,11 +2609,11 @@ std::string export_json(Export &ex)
     return j.dump(2) + "\n";
 }
 
-/* Write one output through a temporary file; `body` fills it. */
-template <class F> lie_status write_atomic(const std::string &path, lie_error *err, F body)
+/* Write one output through a temporary file of `group`; `body` fills it. */
+template <class F> lie_status write_atomic(const std::string &path, lie_atomic_group *group, lie_error *err, F body)
 {
     lie_atomic_file af;
-    lie_status st = lie_atomic_open(&af, path.c_str(), err);
+    lie_status st = lie_atomic_open_group(&af, path.c_str(), group, err);
     if (st != LIE_OK)
         return st;
     st = body(af.fp);
@@ -2129,6 +2635,19 @@ lie_status write_bytes(FILE *fp, const std::string &path, const void *data, size
 
 extern "C" lie_status lie_gltf_export(const lie_scene *s, const char *path, lie_error *err)
 {
+    lie_atomic_group *group = lie_atomic_group_create();
+    if (!group)
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    lie_status st = lie_gltf_export_group(s, path, group, err);
+    if (st == LIE_OK)
+        st = lie_atomic_group_commit(group, err);
+    lie_atomic_group_destroy(group);
+    return st;
+}
+
+extern "C" lie_status lie_gltf_export_group(const lie_scene *s, const char *path, lie_atomic_group *group,
+                                            lie_error *err)
+{
     if (!s || !path || !*path)
         return lie_error_set(err, LIE_ERR_ARG, path, "lie_gltf_export: NULL scene or empty path");
     if (strcmp(path, "-") == 0)
@@ -2146,7 +2665,6 @@ extern "C" lie_status lie_gltf_export(const lie_scene *s, const char *path, lie_
                                   base.size() > 4 && base.compare(base.size() - 4, 4, ".png") == 0))
         return lie_error_set(err, LIE_ERR_ARG, path, "the glTF would share its name with its .bin or a texture");
 
-    std::vector<std::string> done; /* files already renamed into place */
     lie_status st = LIE_OK;
     try {
         Export ex{*s, dir, stem, tinygltf::Model(), {}, {}};
@@ -2154,7 +2672,7 @@ extern "C" lie_status lie_gltf_export(const lie_scene *s, const char *path, lie_
         std::string json = export_json(ex);
         /* the side files first, the .gltf last: a .gltf never names a missing file */
         for (const Png &png : ex.pngs) {
-            st = write_atomic(png.path, err, [&](FILE *fp) {
+            st = write_atomic(png.path, group, err, [&](FILE *fp) {
                 const void *codes = png.bits == 16 ? static_cast<const void *>(png.b16.data())
                                                    : static_cast<const void *>(png.b8.data());
                 return lie_scene_png_write(fp, png.path.c_str(), png.width, png.height, png.bits, png.channels,
@@ -2162,17 +2680,14 @@ extern "C" lie_status lie_gltf_export(const lie_scene *s, const char *path, lie_
             });
             if (st != LIE_OK)
                 break;
-            done.push_back(png.path);
         }
         std::string bin_path = dir + stem + ".bin";
         if (st == LIE_OK && !ex.bin.empty()) {
-            st = write_atomic(bin_path, err,
+            st = write_atomic(bin_path, group, err,
                               [&](FILE *fp) { return write_bytes(fp, bin_path, ex.bin.data(), ex.bin.size(), err); });
-            if (st == LIE_OK)
-                done.push_back(bin_path);
         }
         if (st == LIE_OK)
-            st = write_atomic(p, err, [&](FILE *fp) { return write_bytes(fp, p, json.data(), json.size(), err); });
+            st = write_atomic(p, group, err, [&](FILE *fp) { return write_bytes(fp, p, json.data(), json.size(), err); });
     } catch (const ImportError &e) {
         st = lie_error_set(err, e.status, path, "%s", e.msg.c_str());
     } catch (const std::bad_alloc &) {
@@ -2182,8 +2697,5 @@ extern "C" lie_status lie_gltf_export(const lie_scene *s, const char *path, lie_
     } catch (...) {
         st = lie_error_set(err, LIE_ERR_FORMAT, path, "unexpected error while exporting");
     }
-    if (st != LIE_OK)
-        for (const std::string &f : done)
-            unlink(f.c_str());
-    return st;
+    return st; /* on failure the caller's group destroy removes the temporaries */
 }

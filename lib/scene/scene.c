@@ -69,7 +69,25 @@ void lie_scene_destroy(lie_scene *s)
     for (int i = 0; i < s->n_nodes; i++) {
         free(s->nodes[i].name);
         free(s->nodes[i].children);
+        free(s->nodes[i].weights);
     }
+    for (int i = 0; i < s->n_skins; i++) {
+        free(s->skins[i].name);
+        free(s->skins[i].joints);
+        free(s->skins[i].inverse_bind);
+    }
+    free(s->skins);
+    for (int i = 0; i < s->n_animations; i++) {
+        lie_animation *a = &s->animations[i];
+        for (int k = 0; k < a->n_samplers; k++) {
+            free(a->samplers[k].times);
+            free(a->samplers[k].values);
+        }
+        free(a->samplers);
+        free(a->channels);
+        free(a->name);
+    }
+    free(s->animations);
     free(s->nodes);
     free(s->roots);
     for (int i = 0; i < s->n_meshes; i++) {
@@ -209,7 +227,70 @@ static int material_emits(const lie_material *m)
 typedef struct fill_ctx {
     uint32_t tri;
     lie_status status;
+    lie_mat4 *node_world;  /* every node's world transform, for skins; NULL without skins */
 } fill_ctx;
+
+/* Every node's world transform (parents' chains; the importer refused cycles). */
+static lie_mat4 *node_worlds(const lie_scene *s)
+{
+    lie_mat4 *w = malloc(sizeof *w * ((size_t)s->n_nodes + 1));
+    uint8_t *done = calloc((size_t)s->n_nodes + 1, 1);
+    int *chain = malloc(sizeof *chain * ((size_t)s->n_nodes + 1));
+    if (!w || !done || !chain) {
+        free(w);
+        free(done);
+        free(chain);
+        return NULL;
+    }
+    for (int i = 0; i < s->n_nodes; i++) {
+        int n = 0;
+        for (int k = i; k >= 0 && !done[k] && n < s->n_nodes; k = s->nodes[k].parent)
+            chain[n++] = k;
+        while (n > 0) {
+            int k = chain[--n], p = s->nodes[k].parent;
+            w[k] = p >= 0 && done[p] ? lie_mat4_mul(&w[p], &s->nodes[k].local) : s->nodes[k].local;
+            done[k] = 1;
+        }
+    }
+    free(done);
+    free(chain);
+    return w;
+}
+
+/* glTF 2.0 §3.7.3.3: a skinned vertex is sum_k weight_k * (world of joint_k)
+ * * (inverse bind matrix of joint_k) applied to its position; the skinned
+ * node's own transform is not used.  World positions and (unnormalised)
+ * normals of every vertex, and per vertex whether its matrix mirrors. */
+static int skin_vertices(const lie_scene *s, const lie_skin *sk, const lie_primitive *pr, const lie_mat4 *node_world,
+                         lie_vec3 *wp, lie_vec3 *wn, uint8_t *mirror)
+{
+    lie_mat4 *J = malloc(sizeof *J * (size_t)sk->n_joints);
+    if (!J)
+        return 0;
+    for (int j = 0; j < sk->n_joints; j++)
+        J[j] = lie_mat4_mul(&node_world[sk->joints[j]], &sk->inverse_bind[j]);
+    for (uint32_t v = 0; v < pr->n_verts; v++) {
+        lie_mat4 M;
+        memset(&M, 0, sizeof M);
+        for (int k = 0; k < 4; k++) {
+            double wk = pr->weights[4 * (size_t)v + (size_t)k];
+            int j = pr->joints[4 * (size_t)v + (size_t)k];
+            if (wk == 0.0 || j >= sk->n_joints)
+                continue;
+            for (int c = 0; c < 16; c++)
+                M.m[c] += wk * J[j].m[c];
+        }
+        const float *q = &pr->pos[3 * (size_t)v];
+        wp[v] = lie_mat4_point(&M, lie_v3(q[0], q[1], q[2]));
+        mirror[v] = lie_mat4_det3(&M) < 0.0;
+        if (pr->nrm) {
+            const float *nq = &pr->nrm[3 * (size_t)v];
+            wn[v] = lie_mat4_normal(&M, lie_v3(nq[0], nq[1], nq[2]));
+        }
+    }
+    free(J);
+    return 1;
+}
 
 static void fill_node(lie_scene *s, int nd, const lie_mat4 *world, int dead, void *p)
 {
@@ -221,10 +302,25 @@ static void fill_node(lie_scene *s, int nd, const lie_mat4 *world, int dead, voi
          * vertices so every world triangle is counter-clockwise seen from its
          * front. */
         int mirror = lie_mat4_det3(world) < 0.0;
+        const lie_skin *sk = node->skin >= 0 && node->skin < s->n_skins && f->node_world ? &s->skins[node->skin] : NULL;
         for (int pi = 0; pi < m->n_prims; pi++) {
             const lie_primitive *pr = &m->prims[pi];
             if (pr->n_tris == 0)
                 continue;
+            lie_vec3 *sk_p = NULL, *sk_n = NULL;
+            uint8_t *sk_m = NULL;
+            if (sk && pr->joints && !dead) {
+                sk_p = malloc(sizeof *sk_p * ((size_t)pr->n_verts + 1));
+                sk_n = malloc(sizeof *sk_n * ((size_t)pr->n_verts + 1));
+                sk_m = malloc((size_t)pr->n_verts + 1);
+                if (!sk_p || !sk_n || !sk_m || !skin_vertices(s, sk, pr, f->node_world, sk_p, sk_n, sk_m)) {
+                    free(sk_p);
+                    free(sk_n);
+                    free(sk_m);
+                    f->status = LIE_ERR_NOMEM;
+                    return;
+                }
+            }
             lie_instance *in = &s->instances[s->n_instances];
             in->node = nd;
             in->mesh = node->mesh;
@@ -232,12 +328,12 @@ static void fill_node(lie_scene *s, int nd, const lie_mat4 *world, int dead, voi
             in->material = pr->material;
             in->first_tri = f->tri;
             in->n_tris = pr->n_tris;
-            in->world = *world;
+            in->world = sk_p ? lie_mat4_identity() : *world;
             uint32_t inst = (uint32_t)s->n_instances++;
             for (uint32_t t = 0; t < pr->n_tris; t++) {
                 uint32_t g = f->tri++;
                 uint32_t v[3] = {pr->idx[3 * t], pr->idx[3 * t + 1], pr->idx[3 * t + 2]};
-                if (mirror) {
+                if (sk_p ? sk_m[v[0]] : mirror) {
                     uint32_t x = v[1];
                     v[1] = v[2];
                     v[2] = x;
@@ -247,7 +343,9 @@ static void fill_node(lie_scene *s, int nd, const lie_mat4 *world, int dead, voi
                 for (int k = 0; k < 3; k++) {
                     const float *q = &pr->pos[3 * (size_t)v[k]];
                     /* a removed node's slots: empty triangles at the origin */
-                    P[k] = dead ? lie_v3(0.0f, 0.0f, 0.0f) : lie_mat4_point(world, lie_v3(q[0], q[1], q[2]));
+                    P[k] = dead   ? lie_v3(0.0f, 0.0f, 0.0f)
+                           : sk_p ? sk_p[v[k]]
+                                  : lie_mat4_point(world, lie_v3(q[0], q[1], q[2]));
                 }
                 lie_vec3 c = lie_v3_cross(lie_v3_sub(P[1], P[0]), lie_v3_sub(P[2], P[0]));
                 float len = lie_v3_len(c);
@@ -263,7 +361,7 @@ static void fill_node(lie_scene *s, int nd, const lie_mat4 *world, int dead, voi
                     lie_vec3 n = s->tri_ng[g];
                     if (pr->nrm) {
                         const float *q = &pr->nrm[3 * (size_t)v[k]];
-                        lie_vec3 w = lie_v3_norm(lie_mat4_normal(world, lie_v3(q[0], q[1], q[2])));
+                        lie_vec3 w = lie_v3_norm(sk_p ? sk_n[v[k]] : lie_mat4_normal(world, lie_v3(q[0], q[1], q[2])));
                         if (lie_v3_dot(w, w) > 0.5f)
                             n = w;
                     }
@@ -290,6 +388,9 @@ static void fill_node(lie_scene *s, int nd, const lie_mat4 *world, int dead, voi
                 s->tri_instance[g] = inst;
                 s->tri_emitter[g] = -1;
             }
+            free(sk_p);
+            free(sk_n);
+            free(sk_m);
             const lie_material *mat = lie_scene_material(s, pr->material);
             if (!dead && material_emits(mat)) {
                 lie_emitter *e = &s->emitters[s->n_emitters];
@@ -470,8 +571,14 @@ lie_status lie_scene_flatten(lie_scene *s, lie_error *err)
         return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory for %zu triangles", n);
     }
     s->n_tris = (uint32_t)n;
-    fill_ctx f = {0, LIE_OK};
-    if (walk(s, fill_node, &f) != LIE_OK || f.status != LIE_OK) {
+    fill_ctx f = {0, LIE_OK, NULL};
+    if (s->n_skins > 0 && !(f.node_world = node_worlds(s))) {
+        free_world(s);
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    }
+    lie_status wst = walk(s, fill_node, &f);
+    free(f.node_world);
+    if (wst != LIE_OK || f.status != LIE_OK) {
         free_world(s);
         return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
     }

@@ -87,6 +87,16 @@ typedef struct lie_primitive {
     uint32_t n_tris;
     uint32_t *idx;         /* 3 per triangle; strips and fans already converted */
     int material;          /* material index, or -1 for glTF's default material */
+    /* Morph targets (glTF 2.0 §3.7.2.2), kept so edits can change weights:
+     * base_pos / base_nrm hold the unmorphed attributes, tpos / tnrm
+     * n_targets displacement sets of 3 * n_verts floats (zeros where a
+     * target has none); pos and nrm are lie_primitive_morph's result.  All
+     * NULL and 0 without targets. */
+    int n_targets;
+    float *base_pos, *base_nrm, *tpos, *tnrm;
+    /* Skinning (glTF 2.0 §3.7.3): JOINTS_0 and WEIGHTS_0, 4 per vertex, or NULL. */
+    uint16_t *joints;
+    float *weights;
 } lie_primitive;
 
 typedef struct lie_mesh {
@@ -128,7 +138,56 @@ typedef struct lie_node {
     int n_children;
     int removed;           /* set by an edit: the node and its subtree are gone, but keep
                               their triangle slots (empty) so other indices never move */
+    /* The TRS the file gives (t, r as x y z w, s), which animation channels
+     * replace one property at a time; has_trs 0 when the file gives a
+     * matrix (such a node cannot be animated, glTF 2.0 §3.11). */
+    int has_trs;
+    double trs[10];
+    /* Morph weights this node's mesh is drawn with (the node's, else the
+     * mesh's, else zeros), n_weights = the mesh's target count; NULL, 0 without. */
+    double *weights;
+    int n_weights;
+    int skin;              /* skin index, or -1 */
 } lie_node;
+
+/* A skin (glTF 2.0 §3.7.3): joint nodes and their inverse bind matrices. */
+typedef struct lie_skin {
+    char *name;
+    int *joints;
+    int n_joints;
+    lie_mat4 *inverse_bind; /* n_joints; identities when the file gives none */
+} lie_skin;
+
+/* Animations (glTF 2.0 §3.11). */
+typedef enum lie_anim_path {
+    LIE_ANIM_TRANSLATION = 0,
+    LIE_ANIM_ROTATION = 1,
+    LIE_ANIM_SCALE = 2,
+    LIE_ANIM_WEIGHTS = 3
+} lie_anim_path;
+
+typedef enum lie_anim_interp { LIE_INTERP_LINEAR = 0, LIE_INTERP_STEP = 1, LIE_INTERP_CUBICSPLINE = 2 } lie_anim_interp;
+
+typedef struct lie_anim_sampler {
+    lie_anim_interp interp;
+    uint32_t n_keys;
+    float *times;          /* n_keys, strictly increasing */
+    int n_comp;            /* floats per key value: 3, 4, or the target count for weights */
+    float *values;         /* n_keys * n_comp; CUBICSPLINE: n_keys * 3 * n_comp (in-tangent, value, out-tangent) */
+} lie_anim_sampler;
+
+typedef struct lie_anim_channel {
+    int node;
+    lie_anim_path path;
+    int sampler;
+} lie_anim_channel;
+
+typedef struct lie_animation {
+    char *name;            /* may be NULL */
+    lie_anim_sampler *samplers; int n_samplers;
+    lie_anim_channel *channels; int n_channels;
+    float start, end;      /* first and last key time over all samplers */
+} lie_animation;
 
 /* ---- world ------------------------------------------------------------ */
 
@@ -204,6 +263,8 @@ typedef struct lie_scene {
     lie_texture *textures;    int n_textures;
     lie_camera_def *camera_defs; int n_camera_defs;
     lie_light_def *light_defs;   int n_light_defs;
+    lie_skin *skins;          int n_skins;
+    lie_animation *animations; int n_animations;
     /* world (lie_scene_flatten) */
     lie_instance *instances;  int n_instances;
     uint32_t n_tris;
@@ -288,6 +349,37 @@ int lie_scene_add_material(lie_scene *s, const lie_material *m);
 int lie_primitive_copy(const lie_primitive *src, lie_primitive *out);
 /* Frees a primitive's arrays (not the struct). */
 void lie_primitive_free(lie_primitive *p);
+/* pos (and nrm) = base + the weighted target displacements, target by
+ * target in order, skipping zero weights (the importer's arithmetic, so a
+ * file's weights and the same weights set by an edit give the same bits).
+ * Extra weights are ignored, missing ones are zero.  Without targets this
+ * does nothing.  LIE_ERR_FORMAT when a morphed position is not finite. */
+lie_status lie_primitive_morph(lie_primitive *p, const double *w, int n_w);
+
+/* ---- animation (animate.c) ---------------------------------------------- */
+
+/* A pose: per node, its TRS and weights at some time.  Only the nodes an
+ * animation targets are marked (trs_set, weights_set). */
+typedef struct lie_pose {
+    int n_nodes;
+    double *trs;           /* 10 per node: t, r (x y z w), s */
+    unsigned char *trs_set;    /* per node: bit path (1 << LIE_ANIM_*) set by a channel */
+    double **weights;      /* per node: n_weights of the node, or NULL */
+    unsigned char *weights_set;
+} lie_pose;
+
+/* Evaluate animation a at time t (seconds from the animation's start,
+ * clamped to its range): LINEAR (slerp for rotations), STEP and
+ * CUBICSPLINE as glTF 2.0 §3.11 and Appendix C say.  Untargeted properties
+ * keep the node's own.  *out owned by the caller (lie_pose_destroy). */
+lie_status lie_animation_pose(const lie_scene *s, int a, double t, lie_pose **out, lie_error *err);
+void lie_pose_destroy(lie_pose *p);
+/* The local matrix of a node's TRS (10 doubles as in lie_node.trs). */
+lie_mat4 lie_trs_matrix(const double trs[10]);
+/* Animation by name or index; -1 when none matches. */
+int lie_scene_find_animation(const lie_scene *s, const char *spec);
+/* Whether node n is the default scene's (reachable from its roots). */
+int lie_scene_node_in_scene(const lie_scene *s, int n);
 
 int lie_scene_add_mesh(lie_scene *s, const char *name, const float *pos, const float *nrm,
                        const float *uv, uint32_t n_verts, const uint32_t *idx, uint32_t n_tris,
@@ -305,8 +397,8 @@ lie_material lie_material_default(void);
 /* Write the document as glTF 2.0, which lie_scene_load reads back into the
  * same world (the same hash when no node was removed).  Path
  * "DIR/NAME.gltf" also gets DIR/NAME.bin (every vertex and index) and
- * DIR/NAME_texN.png (image N), each written atomically, the .gltf last; on
- * failure the files this call already put in place are removed again.
+ * DIR/NAME_texN.png (image N), all complete on disk before any is renamed
+ * into place (the .gltf last); on failure none is.
  * Left out: removed nodes with their subtrees, nodes outside the default
  * scene, unused meshes, cameras and lights, and textures no material
  * uses.  Every material is
@@ -315,6 +407,9 @@ lie_material lie_material_default(void);
  * else 16-bit), in the colour space of the slot that uses them.  "-"
  * (stdout) is refused: the output is several files. */
 lie_status lie_gltf_export(const lie_scene *s, const char *path, lie_error *err);
+/* The same into `group` (lib/core): nothing is visible until the caller
+ * commits the group, with whatever else the run writes. */
+lie_status lie_gltf_export_group(const lie_scene *s, const char *path, lie_atomic_group *group, lie_error *err);
 
 /* Internal to lib/scene: the importer (gltf.cpp) fills the document. */
 lie_status lie_gltf_import(lie_scene *s, const char *path, const lie_scene_options *opt,

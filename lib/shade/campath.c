@@ -117,10 +117,16 @@ lie_status lie_camera_path_parse(const unsigned char *text, size_t size, const c
                 cp->smooth = 1;
             else
                 st = lie_yaml_error(&p, vn, "interpolation", "expected linear or smooth");
+        } else if (scalar_is(kn, "first-frame")) {
+            double x;
+            st = lie_yaml_number(&p, vn, "first-frame", &x);
+            if (st == LIE_OK && !(x >= 0.0 && x <= MAX_FRAMES && x == floor(x)))
+                st = lie_yaml_error(&p, vn, "first-frame", "expected an integer in [0, 1000000]");
+            cp->first = (int)x;
         } else {
             char k[128];
             snprintf(k, sizeof k, "%s", (const char *)kn->data.scalar.value);
-            st = lie_yaml_error(&p, kn, k, "unknown key (expected keys or interpolation)");
+            st = lie_yaml_error(&p, kn, k, "unknown key (expected keys, interpolation or first-frame)");
         }
     }
     if (st == LIE_OK && !keys)
@@ -164,7 +170,7 @@ lie_status lie_camera_path_read(const char *path, lie_camera_path **out, lie_err
 {
     unsigned char *data;
     size_t size;
-    lie_status st = lie_read_file(path, &data, &size, err);
+    lie_status st = lie_read_file_max(path, LIE_READ_MAX_TEXT, &data, &size, err);
     if (st != LIE_OK)
         return st;
     st = lie_camera_path_parse(data, size, path, out, err);
@@ -228,4 +234,32 @@ lie_camera lie_camera_path_frame(const lie_camera_path *p, int frame)
     c.up = lie_v3_norm(lie_v3_sub(u, lie_v3_scale(c.forward, lie_v3_dot(u, c.forward))));
     c.yfov = fov * (float)M_PI / 180.0f;
     return c;
+}
+
+lie_status lie_camera_path_write(const lie_camera_path *p, const char *path, lie_error *err)
+{
+    lie_atomic_file af;
+    lie_status st = lie_atomic_open(&af, path, err);
+    if (st != LIE_OK)
+        return st;
+    FILE *fp = af.fp;
+    fprintf(fp, "interpolation: %s\n", p->smooth ? "smooth" : "linear");
+    if (p->first)
+        fprintf(fp, "first-frame: %d\n", p->first);
+    fprintf(fp, "keys:\n");
+    for (int i = 0; i < p->n_keys; i++) {
+        const lie_camera_key *k = &p->keys[i];
+        fprintf(fp, "  - eye: [%.9g, %.9g, %.9g]\n", (double)k->eye.x, (double)k->eye.y, (double)k->eye.z);
+        fprintf(fp, "    target: [%.9g, %.9g, %.9g]\n", (double)k->target.x, (double)k->target.y,
+                (double)k->target.z);
+        fprintf(fp, "    up: [%.9g, %.9g, %.9g]\n", (double)k->up.x, (double)k->up.y, (double)k->up.z);
+        fprintf(fp, "    fov: %.9g\n", (double)k->fov_deg);
+        if (i + 1 < p->n_keys)
+            fprintf(fp, "    frames: %d\n", k->frames);
+    }
+    if (ferror(fp)) {
+        lie_atomic_abort(&af);
+        return lie_error_set(err, LIE_ERR_IO, path, "write failed");
+    }
+    return lie_atomic_commit(&af, err);
 }

@@ -292,6 +292,7 @@ typedef struct lie_camera_path {
     int n_keys;
     int smooth;            /* Catmull-Rom (1) or linear (0) */
     int n_frames;
+    int first;             /* the number of frame 0 (first-frame), 0 by default */
 } lie_camera_path;
 
 /* Parse a camera path from YAML text; `name` is used in messages, which
@@ -301,6 +302,9 @@ lie_status lie_camera_path_parse(const unsigned char *text, size_t size, const c
 lie_status lie_camera_path_read(const char *path, lie_camera_path **out, lie_error *err);
 /* The camera of frame `frame` (0 .. n_frames - 1). */
 lie_camera lie_camera_path_frame(const lie_camera_path *p, int frame);
+/* Write p as YAML (formats/camera-path.md) to path ("-": stdout),
+ * atomically; numbers as %.9g, so the floats read back exactly. */
+lie_status lie_camera_path_write(const lie_camera_path *p, const char *path, lie_error *err);
 void lie_camera_path_destroy(lie_camera_path *p);
 
 #ifdef __cplusplus

@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "cache/cache.h"
+#include "fuzz_common.h"
 
 #ifndef LIE_FUZZ_ENTRY
 #define LIE_FUZZ_ENTRY LLVMFuzzerTestOneInput
@@ -68,7 +69,7 @@ static void fc_check(const unsigned char *data, size_t size)
     lie_cache *c = NULL;
     lie_error err;
     if (lie_cache_decode(data, size, "fuzz.lie", &c, &err) != LIE_OK) {
-        if (c || strchr(err.msg, '\n') || !err.msg[0])
+        if (c || fuzz_msg_bad(&err) || !err.msg[0])
             abort();
         return;
     }

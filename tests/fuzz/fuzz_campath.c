@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "shade/shade.h"
+#include "fuzz_common.h"
 
 #ifndef LIE_FUZZ_ENTRY
 #define LIE_FUZZ_ENTRY LLVMFuzzerTestOneInput
@@ -23,7 +24,7 @@ int LIE_FUZZ_ENTRY(const unsigned char *data, size_t size)
     lie_camera_path *p = NULL;
     lie_error err;
     if (lie_camera_path_parse(data, size, "fuzz.yaml", &p, &err) != LIE_OK) {
-        if (p || !err.msg[0] || strchr(err.msg, '\n'))
+        if (p || !err.msg[0] || fuzz_msg_bad(&err))
             abort();
         return 0;
     }

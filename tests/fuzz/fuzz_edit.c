@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "edit/edit.h"
+#include "fuzz_common.h"
 
 #ifndef LIE_FUZZ_ENTRY
 #define LIE_FUZZ_ENTRY LLVMFuzzerTestOneInput
@@ -21,7 +22,7 @@
 
 static void fe_one_line(const lie_error *err)
 {
-    if (!err->msg[0] || strchr(err->msg, '\n'))
+    if (!err->msg[0] || fuzz_msg_bad(err))
         abort();
 }
 

@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "scene/scene.h"
+#include "fuzz_common.h"
 
 #ifndef LIE_FUZZ_ENTRY
 #define LIE_FUZZ_ENTRY LLVMFuzzerTestOneInput
@@ -81,12 +82,12 @@ int LIE_FUZZ_ENTRY(const unsigned char *data, size_t size)
     lie_scene *s = NULL;
     lie_error err;
     if (lie_scene_load(fg_path, &o, &s, &err) != LIE_OK) {
-        if (s || !err.msg[0] || strchr(err.msg, '\n'))
+        if (s || !err.msg[0] || fuzz_msg_bad(&err))
             abort();
         return 0;
     }
     lie_camera cam;
-    if (lie_scene_camera(s, NULL, &cam, &err) != LIE_OK && strchr(err.msg, '\n'))
+    if (lie_scene_camera(s, NULL, &cam, &err) != LIE_OK && fuzz_msg_bad(&err))
         abort();
     lie_scene_destroy(s);
     return 0;

@@ -3,6 +3,8 @@
 # for a bounded time, reporting executions and crashes.
 #
 #   FUZZ_SECONDS   seconds per target (default 60)
+#   FUZZ_RUNS      stop a target after this many executions instead (the
+#                  time limit still applies)
 #   FUZZ_TARGETS   which targets (default: every tests/fuzz/fuzz_*.c)
 #   CLANG, CLANGXX the compilers (default clang, clang++)
 #
@@ -71,14 +73,15 @@ for t in $targets; do
     [ -f "tests/fuzz/$t.dict" ] && dict="-dict=tests/fuzz/$t.dict"
     before=$(ls "$crashes" | wc -l)
     # shellcheck disable=SC2086
-    "$OUT/bin/fuzz_$t" -max_total_time="$SECONDS_EACH" -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
+    "$OUT/bin/fuzz_$t" -max_total_time="$SECONDS_EACH" ${FUZZ_RUNS:+-runs=$FUZZ_RUNS} -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
         -print_final_stats=1 -artifact_prefix="$crashes/" $dict \
         "$corpus" "$OUT/seeds/$t" "tests/fuzz/regressions/$t" >"$OUT/$t.log" 2>&1
     rc=$?
     runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$OUT/$t.log" | tail -1)
     after=$(ls "$crashes" | wc -l)
     found=$((after - before))
-    echo "fuzz: $t: ${runs:-?} executions in ${SECONDS_EACH} s, corpus $(ls "$corpus" | wc -l) inputs, $found new crash$( [ $found -eq 1 ] || echo es)"
+    secs=$(sed -n 's/^Done [0-9]* runs in \([0-9]*\) second.*/\1/p' "$OUT/$t.log" | tail -1)
+    echo "fuzz: $t: ${runs:-?} executions in ${secs:-$SECONDS_EACH} s, corpus $(ls "$corpus" | wc -l) inputs, $found new crash$( [ $found -eq 1 ] || echo es)"
     if [ $rc -ne 0 ] || [ $found -ne 0 ]; then
         status=1
         grep -m1 -E 'ERROR|runtime error|deadly signal' "$OUT/$t.log" | sed "s/^/fuzz: $t: /"

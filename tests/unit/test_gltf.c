@@ -415,7 +415,7 @@ static void test_gltf_second_texcoord_set_per_slot(void **state)
     assert_null(s->tri_uv1);
     lie_scene_destroy(s);
     expect_error("texcoord1_bad.gltf", LIE_ERR_FORMAT,
-                 "metallicRoughnessTexture: KHR_texture_transform texCoord must be an integer >= 0");
+                 "metallicRoughnessTexture.extensions.KHR_texture_transform.texCoord: 1.5 is not an integer");
 }
 
 static void test_gltf_texture_transform_read_and_applied(void **state)

@@ -25,7 +25,9 @@ static void usage(FILE *fp)
             "                        segments (default %u)\n"
             "      --max-blockers B  subdivide a patch whose blocker list is longer (default %u)\n"
             "      --min-patch F     smallest patch area, as a fraction of the largest\n"
-            "                        triangle's area (default %g, the paper's 0.01%%)\n"
+            "                        triangle's area, in [%g, 1] (default %g, the paper's 0.01%%)\n"
+            "      --max-nodes N     refuse to build more patch-tree nodes than N, about\n"
+            "                        20 bytes each (default %llu)\n"
             "      --complex-cap C   a list still longer at the smallest size is 'complex':\n"
             "                        its shadow rays go to the whole scene (default %u)\n"
             "      --blockers MODE   sampled (default, the paper's shaft sampling) |\n"
@@ -42,7 +44,8 @@ static void usage(FILE *fp)
             "  -q, --quiet           no progress bar\n"
             "  -h, --help            this help\n"
             "      --version         print the version\n",
-            prog, d.samples, d.max_samples, d.max_blockers, (double)d.min_patch, d.complex_cap);
+            prog, d.samples, d.max_samples, d.max_blockers, (double)LIE_MIN_PATCH_MIN, (double)d.min_patch,
+            (unsigned long long)LIE_MAX_NODES_DEFAULT, d.complex_cap);
 }
 
 #define usage_error(...) lie_usage_error(prog, __VA_ARGS__)
@@ -51,7 +54,7 @@ static int fail(const lie_error *err) { return lie_report_error(prog, err, 1); }
 
 enum {
     OPT_SAMPLES = 256, OPT_MAX_SAMPLES, OPT_MAX_BLOCKERS, OPT_MIN_PATCH, OPT_COMPLEX_CAP, OPT_BLOCKERS,
-    OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_VIEW, OPT_VIEW_SIZE
+    OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_VIEW, OPT_VIEW_SIZE, OPT_MAX_NODES
 };
 
 static const struct option long_opts[] = {
@@ -60,6 +63,7 @@ static const struct option long_opts[] = {
     {"max-samples", required_argument, NULL, OPT_MAX_SAMPLES},
     {"max-blockers", required_argument, NULL, OPT_MAX_BLOCKERS},
     {"min-patch", required_argument, NULL, OPT_MIN_PATCH},
+    {"max-nodes", required_argument, NULL, OPT_MAX_NODES},
     {"complex-cap", required_argument, NULL, OPT_COMPLEX_CAP},
     {"blockers", required_argument, NULL, OPT_BLOCKERS},
     {"view", required_argument, NULL, OPT_VIEW},
@@ -171,9 +175,15 @@ int main(int argc, char **argv)
             bp.complex_cap = (uint32_t)v;
             break;
         case OPT_MIN_PATCH:
-            if (!lie_parse_float(optarg, 1e-12f, 1.0f, &f))
-                return usage_error("--min-patch: expected a fraction in (0, 1], got '%s'", optarg);
+            if (!lie_parse_float(optarg, LIE_MIN_PATCH_MIN, 1.0f, &f))
+                return usage_error("--min-patch: expected a fraction in [%g, 1], got '%s'", (double)LIE_MIN_PATCH_MIN,
+                                   optarg);
             bp.min_patch = f;
+            break;
+        case OPT_MAX_NODES:
+            if (!lie_parse_long(optarg, 1, 0xFFFFFFF0L, &v))
+                return usage_error("--max-nodes: expected an integer in 1..4294967280, got '%s'", optarg);
+            bp.max_nodes = (uint64_t)v;
             break;
         case OPT_BLOCKERS:
             if (strcmp(optarg, "sampled") == 0) bp.mode = LIE_BLOCKERS_SAMPLED;

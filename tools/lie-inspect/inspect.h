@@ -16,7 +16,11 @@ typedef struct inspect_options {
     int json, quiet, external, all, strict;
     int emitter;         /* image: --emitter, -1 = all */
     int width, height, threads;
+    int min_age, dry_run; /* clean */
 } inspect_options;
+
+/* clean: temporaries younger than this (seconds) may belong to a live run */
+#define INSPECT_CLEAN_MIN_AGE 60
 
 /* Print "lie-inspect: FILE: message" from err; return `code`. */
 int inspect_fail(const lie_error *err, int code);
@@ -61,5 +65,6 @@ int inspect_dump(const char *path, const inspect_options *o);
 int inspect_patch(const char *path, const char *patch, const inspect_options *o);
 int inspect_diff(const char *a, const char *b, const inspect_options *o);
 int inspect_image(const char *path, const inspect_options *o);
+int inspect_clean(const char *dir, const inspect_options *o);
 
 #endif

@@ -5,6 +5,7 @@
  *   lie-inspect patch CACHE TRI[/PATH] [--json]
  *   lie-inspect diff A B [--all] [--strict] [--json]
  *   lie-inspect image CACHE -o OUT.png [--camera C] [--emitter K] [--size WxH]
+ *   lie-inspect clean DIR [--min-age SECONDS] [--dry-run]
  * A thin front end over lib/cache: the library validates, the commands
  * (one file each) print. */
 #include "inspect.h"
@@ -43,6 +44,11 @@ static void usage(FILE *fp)
             "                            Figure 10): green visible, blue occluded, grey by\n"
             "                            blocker count (black 1, white 10 or more), red\n"
             "                            complex or not built, black unlit\n"
+            "  clean DIR                 remove the temporary files (.NAME.tmpXXXXXX) that\n"
+            "                            the tools leave in DIR when killed by SIGKILL\n"
+            "                            (SIGINT, SIGTERM and SIGHUP remove their own):\n"
+            "                            this user's regular files not modified for\n"
+            "                            --min-age seconds; prints each one removed\n"
             "\n"
             "options:\n"
             "      --json                summary, dump, patch, diff: JSON on stdout\n"
@@ -58,18 +64,22 @@ static void usage(FILE *fp)
             "      --size WxH            image: size (default %dx%d)\n"
             "      --threads N           image: worker threads (default: all cores)\n"
             "      --allow-external-uris let the glTF reference files outside its folder\n"
-            "  -q, --quiet               verify, diff: report by exit status only;\n"
+            "      --min-age SECONDS     clean: spare younger files, a run may still be\n"
+            "                            writing them (default %d)\n"
+            "      --dry-run             clean: list what would be removed, remove nothing\n"
+            "  -q, --quiet               verify, diff, clean: report by exit status only;\n"
             "                            image: no progress bar\n"
             "  -h, --help                this help\n"
             "      --version             print the version\n",
-            inspect_prog, INSPECT_DIFF_SHOWN, LIE_RENDER_WIDTH_DEFAULT, LIE_RENDER_HEIGHT_DEFAULT);
+            inspect_prog, INSPECT_DIFF_SHOWN, LIE_RENDER_WIDTH_DEFAULT, LIE_RENDER_HEIGHT_DEFAULT,
+            INSPECT_CLEAN_MIN_AGE);
 }
 
 #define usage_error(...) lie_usage_error(inspect_prog, __VA_ARGS__)
 
 enum {
     OPT_SCENE = 256, OPT_JSON, OPT_VERSION, OPT_EXTERNAL, OPT_ALL, OPT_STRICT, OPT_CAMERA, OPT_EMITTER, OPT_SIZE,
-    OPT_THREADS
+    OPT_THREADS, OPT_MIN_AGE, OPT_DRY_RUN
 };
 
 static const struct option long_opts[] = {
@@ -83,6 +93,8 @@ static const struct option long_opts[] = {
     {"size", required_argument, NULL, OPT_SIZE},
     {"threads", required_argument, NULL, OPT_THREADS},
     {"allow-external-uris", no_argument, NULL, OPT_EXTERNAL},
+    {"min-age", required_argument, NULL, OPT_MIN_AGE},
+    {"dry-run", no_argument, NULL, OPT_DRY_RUN},
     {"quiet", no_argument, NULL, 'q'},
     {"help", no_argument, NULL, 'h'},
     {"version", no_argument, NULL, OPT_VERSION},
@@ -90,7 +102,7 @@ static const struct option long_opts[] = {
 };
 
 /* Which commands take which options (bits of `command`). */
-enum { C_VERIFY = 1, C_SUMMARY = 2, C_DUMP = 4, C_PATCH = 8, C_DIFF = 16, C_IMAGE = 32 };
+enum { C_VERIFY = 1, C_SUMMARY = 2, C_DUMP = 4, C_PATCH = 8, C_DIFF = 16, C_IMAGE = 32, C_CLEAN = 64 };
 typedef struct command {
     const char *name;
     unsigned bit;
@@ -101,6 +113,7 @@ static const command commands[] = {
     {"verify", C_VERIFY, 1, "CACHE"},       {"summary", C_SUMMARY, 1, "CACHE"},
     {"dump", C_DUMP, 1, "CACHE"},           {"patch", C_PATCH, 2, "CACHE and TRI[/PATH]"},
     {"diff", C_DIFF, 2, "two caches A and B"}, {"image", C_IMAGE, 1, "CACHE"},
+    {"clean", C_CLEAN, 1, "DIR"},
 };
 
 typedef struct opt_use {
@@ -119,7 +132,9 @@ static const opt_use uses[] = {
     {OPT_SIZE, "--size", C_IMAGE},
     {OPT_THREADS, "--threads", C_IMAGE},
     {OPT_EXTERNAL, "--allow-external-uris", C_VERIFY | C_IMAGE},
-    {'q', "-q", C_VERIFY | C_DIFF | C_IMAGE},
+    {OPT_MIN_AGE, "--min-age", C_CLEAN},
+    {OPT_DRY_RUN, "--dry-run", C_CLEAN},
+    {'q', "-q", C_VERIFY | C_DIFF | C_IMAGE | C_CLEAN},
 };
 #define N_USES (sizeof uses / sizeof uses[0])
 
@@ -130,6 +145,7 @@ int main(int argc, char **argv)
     o.emitter = -1;
     o.width = LIE_RENDER_WIDTH_DEFAULT;
     o.height = LIE_RENDER_HEIGHT_DEFAULT;
+    o.min_age = INSPECT_CLEAN_MIN_AGE;
     int given[N_USES] = {0};
     long v;
     int c;
@@ -160,6 +176,12 @@ int main(int argc, char **argv)
             o.threads = (int)v;
             break;
         case OPT_EXTERNAL: o.external = 1; break;
+        case OPT_MIN_AGE:
+            if (!lie_parse_long(optarg, 0, 1L << 30, &v))
+                return usage_error("--min-age: expected seconds, an integer >= 0, got '%s'", optarg);
+            o.min_age = (int)v;
+            break;
+        case OPT_DRY_RUN: o.dry_run = 1; break;
         case 'q': o.quiet = 1; break;
         case 'h': usage(stdout); return 0;
         case OPT_VERSION: { char vr[512]; lie_version_report(inspect_prog, vr, sizeof vr); fputs(vr, stdout); return 0; }
@@ -168,7 +190,7 @@ int main(int argc, char **argv)
         }
     }
     if (optind >= argc)
-        return usage_error("%s", "missing command (verify, summary, dump, patch, diff or image)");
+        return usage_error("%s", "missing command (verify, summary, dump, patch, diff, image or clean)");
     const char *name = argv[optind];
     const command *cmd = NULL;
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
@@ -194,6 +216,7 @@ int main(int argc, char **argv)
     case C_SUMMARY: return inspect_summary(a, &o);
     case C_DUMP: return inspect_dump(a, &o);
     case C_PATCH: return inspect_patch(a, b, &o);
+    case C_CLEAN: return inspect_clean(a, &o);
     case C_DIFF:
         if (strcmp(a, "-") == 0 && strcmp(b, "-") == 0)
             return usage_error("%s", "diff: only one of A and B can be stdin");

@@ -8,6 +8,7 @@
 #include <getopt.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 static const char *prog = "lie-render";
 
@@ -30,6 +31,9 @@ static void usage(FILE *fp)
             "                          orthographic view HEIGHT world units tall)\n"
             "      --path PATH.yaml    a camera path (formats/camera-path.md): one frame per\n"
             "                          step, -o must hold a %%d conversion (frame_%%04d.exr)\n"
+            "      --frames A-B        with --path: only frames A to B (numbered from the\n"
+            "                          path's first-frame)\n"
+            "      --skip-existing     leave out frames whose output file exists already\n"
             "      --size WxH          image size (default %dx%d)\n"
             "      --spp N             eye rays per pixel, stratified (default %d: pixel centre)\n"
             "      --light-samples N   shadow rays per area emitter per shading point\n"
@@ -80,13 +84,15 @@ static int fail(const lie_error *err) { return lie_report_error(prog, err, 1); }
 enum {
     OPT_CAMERA = 256, OPT_SIZE, OPT_SPP, OPT_LIGHT_SAMPLES, OPT_PATTERN, OPT_VISIBILITY, OPT_RAYS, OPT_LIE_SKIP,
     OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_SCENE,
-    OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS
+    OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS, OPT_FRAMES, OPT_SKIP_EXISTING
 };
 
 static const struct option long_opts[] = {
     {"output", required_argument, NULL, 'o'},
     {"scene", required_argument, NULL, OPT_SCENE},
     {"path", required_argument, NULL, OPT_PATH},
+    {"frames", required_argument, NULL, OPT_FRAMES},
+    {"skip-existing", no_argument, NULL, OPT_SKIP_EXISTING},
     {"emitter", required_argument, NULL, OPT_EMITTER},
     {"camera", required_argument, NULL, OPT_CAMERA},
     {"size", required_argument, NULL, OPT_SIZE},
@@ -174,32 +180,6 @@ static lie_status load_input(const char *input, const char *override, const lie_
     return st;
 }
 
-/* A printf pattern with exactly one integer conversion: %d, %5d, %05d. */
-static int frame_pattern_ok(const char *s)
-{
-    int convs = 0;
-    for (const char *p = s; *p; p++) {
-        if (*p != '%')
-            continue;
-        if (p[1] == '%') {
-            p++;
-            continue;
-        }
-        p++;
-        if (*p == '0')
-            p++;
-        int digits = 0;
-        while (*p >= '0' && *p <= '9' && digits < 2) {
-            p++;
-            digits++;
-        }
-        if (*p != 'd')
-            return 0;
-        convs++;
-    }
-    return convs == 1;
-}
-
 static const char *vis_name(lie_visibility_mode m)
 {
     return m == LIE_VIS_FULL ? "full" : m == LIE_VIS_LIE ? "lie" : "none";
@@ -214,6 +194,8 @@ int main(int argc, char **argv)
     lie_render_options ro = lie_render_options_default();
     lie_scene_options so = lie_scene_options_default();
     const char *output = NULL, *camera = NULL, *scene_override = NULL, *path_file = NULL;
+    long frame_a = -1, frame_b = -1;
+    int skip_existing = 0;
     int visibility_set = 0;
     float exposure = 0.0f;
     int stats = 0, quiet = 0; /* stats: 1 human, 2 json */
@@ -304,6 +286,11 @@ int main(int argc, char **argv)
         case OPT_EXTERNAL: so.allow_external_uris = 1; break;
         case OPT_SCENE: scene_override = optarg; break;
         case OPT_PATH: path_file = optarg; break;
+        case OPT_FRAMES:
+            if (!lie_parse_range(optarg, 0, 999999, &frame_a, &frame_b))
+                return usage_error("--frames: expected A-B with 0 <= A <= B <= 999999, got '%s'", optarg);
+            break;
+        case OPT_SKIP_EXISTING: skip_existing = 1; break;
         case OPT_EMITTER:
             if (!lie_parse_long(optarg, 0, 1 << 30, &v))
                 return usage_error("--emitter: expected an emitter index, got '%s'", optarg);
@@ -327,10 +314,12 @@ int main(int argc, char **argv)
     if (!output)
         return usage_error("%s", "missing -o OUTPUT");
     const char *input = argv[optind];
-    if (path_file && !frame_pattern_ok(output))
+    if (path_file && !lie_frame_pattern_ok(output))
         return usage_error("--path: -o must hold one %%d conversion (e.g. frame_%%04d.exr), got '%s'", output);
     if (path_file && camera)
         return usage_error("%s", "--path and --camera exclude each other");
+    if (frame_a >= 0 && !path_file)
+        return usage_error("%s", "--frames needs --path");
     if (ro.light_samples == 0) {
         ro.eye_only = 1;
         ro.light_samples = 1;
@@ -394,18 +383,37 @@ int main(int argc, char **argv)
     char hash[32], size[32];
     snprintf(hash, sizeof hash, "%016llx", (unsigned long long)scene->hash);
     snprintf(size, sizeof size, "%dx%d", ro.width, ro.height);
-    int n_frames = cpath ? cpath->n_frames : 1;
+    int n_frames = cpath ? cpath->n_frames : 1, first = cpath ? cpath->first : 0, rendered = 0, skipped = 0;
+    if (cpath && frame_a >= 0 && (frame_a < first || frame_b > (long)first + n_frames - 1)) {
+        lie_error_set(&err, LIE_ERR_ARG, path_file, "--frames %ld-%ld: the path has frames %d-%d", frame_a, frame_b,
+                      first, first + n_frames - 1);
+        lie_rt_destroy(rt);
+        lie_camera_path_destroy(cpath);
+        lie_lie_vis_destroy(lv);
+        lie_cache_destroy(cache);
+        lie_scene_destroy(scene);
+        return fail(&err);
+    }
     lie_render_stats rs;
     memset(&rs, 0, sizeof rs);
     double t_render = 0.0, t_write = 0.0;
     lie_status st = LIE_OK;
     for (int fi = 0; fi < n_frames && st == LIE_OK; fi++) {
+        int number = first + fi;
+        if (frame_a >= 0 && (number < frame_a || number > frame_b))
+            continue;
         lie_camera fc = cpath ? lie_camera_path_frame(cpath, fi) : cam;
         char name[4096];
         if (cpath)
-            snprintf(name, sizeof name, output, fi);
+            snprintf(name, sizeof name, output, number);
         else
             snprintf(name, sizeof name, "%s", output);
+        struct stat sb;
+        if (skip_existing && strcmp(name, "-") != 0 && stat(name, &sb) == 0) {
+            skipped++; /* a resumed run: the frame was written (atomically) before */
+            continue;
+        }
+        rendered++;
         double ta = lie_time_now();
         lie_frame *frame = NULL;
         lie_render_stats fs;
@@ -424,7 +432,7 @@ int main(int argc, char **argv)
             {.name = "lie.lightSamples", .type = LIE_ATTR_INT, .i = ro.eye_only ? 0 : ro.light_samples},
             {.name = "lie.spp", .type = LIE_ATTR_INT, .i = ro.spp},
             {.name = "lie.maxDepth", .type = LIE_ATTR_INT, .i = ro.max_depth},
-            {.name = "lie.frame", .type = LIE_ATTR_INT, .i = fi},
+            {.name = "lie.frame", .type = LIE_ATTR_INT, .i = number},
             {.name = "lie.cameraEye", .type = LIE_ATTR_V3F, .v = {fc.eye.x, fc.eye.y, fc.eye.z}},
             {.name = "lie.cameraForward", .type = LIE_ATTR_V3F, .v = {fc.forward.x, fc.forward.y, fc.forward.z}},
             {.name = "lie.cameraUp", .type = LIE_ATTR_V3F, .v = {fc.up.x, fc.up.y, fc.up.z}},
@@ -446,14 +454,14 @@ int main(int argc, char **argv)
             fprintf(stderr, "{\"tool\":\"lie-render\",\"input\":");
             lie_json_string(stderr, input);
             fprintf(stderr,
-                    ",\"frames\":%d,\"triangles\":%u,\"emitters\":%d,"
+                    ",\"frames\":%d,\"frames_skipped\":%d,\"triangles\":%u,\"emitters\":%d,"
                     "\"width\":%d,\"height\":%d,\"spp\":%d,\"light_samples\":%d,\"visibility\":\"%s\","
                     "\"rays\":\"%s\",\"threads\":%d,\"eye_rays\":%llu,\"reflection_rays\":%llu,"
                     "\"shadow_rays\":%llu,\"shading_points\":%llu,\"seconds_load\":%.6f,"
                     "\"seconds_bvh\":%.6f,\"seconds_render\":%.6f,\"seconds_write\":%.6f,"
                     "\"shadow_mrays_per_second\":%.3f,\"shadow_tests_without_embree\":%llu,"
                     "\"light_samples_total\":%llu,",
-                    n_frames, scene->n_tris, scene->n_emitters, ro.width, ro.height, ro.spp,
+                    rendered, skipped, scene->n_tris, scene->n_emitters, ro.width, ro.height, ro.spp,
                     ro.eye_only ? 0 : ro.light_samples, vis_name(ro.visibility), rays_name(ro.rays), threads,
                     (unsigned long long)rs.eye_rays, (unsigned long long)rs.reflection_rays,
                     (unsigned long long)rs.shadow_rays, (unsigned long long)rs.shading_points, t1 - t0,
@@ -474,13 +482,13 @@ int main(int argc, char **argv)
             fprintf(stderr,
                     "%s: %s: %u triangles, %d emitters, %d points and %d lines skipped\n"
                     "  image %s, %d spp, %d light samples, visibility %s, rays %s, %d threads\n"
-                    "  %d frame%s; rays: %llu eye, %llu reflection, %llu shadow (Embree); %llu light samples\n"
+                    "  %d frame%s (%d skipped: their files exist); rays: %llu eye, %llu reflection, %llu shadow (Embree); %llu light samples\n"
                     "  answered without Embree: %llu (visible pairs, blocker lists, or no shadows)\n"
                     "  time: load %.3f s, bvh %.3f s, render %.3f s, write %.3f s\n"
                     "  %.1f million Embree shadow rays per second of render time\n",
                     prog, input, scene->n_tris, scene->n_emitters, scene->stats.points_skipped,
                     scene->stats.lines_skipped, size, ro.spp, ro.eye_only ? 0 : ro.light_samples,
-                    vis_name(ro.visibility), rays_name(ro.rays), threads, n_frames, n_frames == 1 ? "" : "s",
+                    vis_name(ro.visibility), rays_name(ro.rays), threads, rendered, rendered == 1 ? "" : "s", skipped,
                     (unsigned long long)rs.eye_rays, (unsigned long long)rs.reflection_rays,
                     (unsigned long long)rs.shadow_rays, (unsigned long long)rs.light_samples,
                     (unsigned long long)rs.shadow_rays_skipped, t1 - t0, t2 - t1, render, t4 - t3, mrays);

@@ -185,7 +185,7 @@ int main(int argc, char **argv)
     }
     /* Read and parse every edit first: a bad edit leaves everything untouched. */
     for (int i = 0; i < n_files; i++) {
-        if (lie_read_file(files[i], &texts[i], &sizes[i], &err) != LIE_OK ||
+        if (lie_read_file_max(files[i], LIE_READ_MAX_TEXT, &texts[i], &sizes[i], &err) != LIE_OK ||
             lie_edit_parse(texts[i], sizes[i], files[i], &edits[i], &err) != LIE_OK)
             goto done;
     }
@@ -378,9 +378,7 @@ int main(int argc, char **argv)
     }
     cache->n_tris = scene->n_tris;
     cache->state_hash = scene->hash;
-    if (scene_out && lie_gltf_export(scene, scene_out, &err) != LIE_OK)
-        goto done;
-    if (lie_cache_write(output, cache, &bytes, &err) != LIE_OK)
+    if (lie_cache_write_with_scene(output, cache, scene, scene_out, &bytes, &err) != LIE_OK)
         goto done;
     t_write = lie_time_now() - ta;
     rc = 0;

@@ -669,7 +669,135 @@ def morph():
     write("morph_bad.gltf", bad)
 
 
+def animated():
+    """Animations (glTF 2.0 §3.11) for lie-animate: keys from t = 0.5 s.
+    "Slider" translates LINEAR, "Spinner" rotates LINEAR (slerp, 0 -> 90 ->
+    180 degrees about y), "Pulser" scales CUBICSPLINE, "Stepper" translates
+    STEP, "Sheet" morphs (one target, weights LINEAR), "Bone1" bends the
+    skinned "Arm" (two joints), "Bulb" (a point light) and "Cam" (the
+    camera) move, and "Offstage" (not in the default scene) moves too.  A
+    second animation "Idle" turns the spinner only.  Also the malformed
+    anim_bad_*.gltf, one defect each."""
+    d = Doc()
+    fl = d.positions([(-3, 0, -3), (-3, 0, 3), (3, 0, 3), (3, 0, -3)])
+    quad = d.indices([0, 1, 2, 0, 2, 3])
+    s = 0.25
+    box = [(-s, 0, -s), (s, 0, -s), (s, 0, s), (-s, 0, s), (-s, 2 * s, -s), (s, 2 * s, -s), (s, 2 * s, s),
+           (-s, 2 * s, s)]
+    bp = d.positions(box)
+    bi = d.indices([4, 6, 5, 4, 7, 6, 0, 1, 5, 0, 5, 4, 1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7])
+    lt = d.positions([(-0.5, 2.5, -0.5), (0.5, 2.5, -0.5), (0.5, 2.5, 0.5), (-0.5, 2.5, 0.5)])
+    ltn = d.accessor(f32(*[0, -1, 0] * 4), FLOAT, "VEC3", 4)
+    # the sheet: a horizontal quad at y = 0.6 whose target lifts two corners
+    sh = d.positions([(-0.4, 0.6, -0.4), (-0.4, 0.6, 0.4), (0.4, 0.6, 0.4), (0.4, 0.6, -0.4)])
+    lift = d.accessor(f32(0, 0, 0, 0, 0, 0, 0, 0.5, 0, 0, 0.5, 0), FLOAT, "VEC3", 4)
+    # the arm: a vertical ribbon at x = 1.8, rows at y = 0, 0.5, 1
+    ax, az = 1.8, -1.2
+    arm = [(ax - 0.15, y, az) for y in (0, 0.5, 1)] + [(ax + 0.15, y, az) for y in (0, 0.5, 1)]
+    ap = d.positions(arm)
+    ai = d.indices([0, 3, 1, 1, 3, 4, 1, 4, 2, 2, 4, 5])
+    joints = d.accessor(bytes([0, 1, 0, 0] * 6), UBYTE, "VEC4", 6)
+    w = []
+    for k in range(6):
+        row = k % 3
+        w += [1, 0, 0, 0] if row == 0 else [0.5, 0.5, 0, 0] if row == 1 else [0, 1, 0, 0]
+    weights = d.accessor(f32(*w), FLOAT, "VEC4", 6)
+    ibm = d.accessor(f32(*[1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, -ax, 0, -az, 1],
+                         *[1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, -ax, -0.5, -az, 1]), FLOAT, "MAT4", 2)
+    d.g["meshes"] = [
+        {"name": "Floor", "primitives": [{"attributes": {"POSITION": fl}, "indices": quad, "material": 0}]},
+        {"name": "Box", "primitives": [{"attributes": {"POSITION": bp}, "indices": bi, "material": 0}]},
+        {"name": "Light", "primitives": [{"attributes": {"POSITION": lt, "NORMAL": ltn}, "indices": quad,
+                                          "material": 1}]},
+        {"name": "Sheet", "weights": [0], "primitives": [{"attributes": {"POSITION": sh}, "indices": quad,
+                                                          "material": 0, "targets": [{"POSITION": lift}]}]},
+        {"name": "Arm", "primitives": [{"attributes": {"POSITION": ap, "JOINTS_0": joints, "WEIGHTS_0": weights},
+                                        "indices": ai, "material": 2}]}]
+    d.g["materials"] = [
+        {"pbrMetallicRoughness": {"baseColorFactor": [0.7, 0.7, 0.7, 1], "metallicFactor": 0}},
+        {"emissiveFactor": [1, 0.95, 0.9], "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 10}}},
+        {"doubleSided": True, "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.4, 0.2, 1], "metallicFactor": 0}}]
+    d.g["extensionsUsed"] = ["KHR_materials_emissive_strength", "KHR_lights_punctual"]
+    d.g["extensions"] = {"KHR_lights_punctual": {"lights": [{"type": "point", "name": "bulb", "intensity": 2,
+                                                            "color": [1, 0.8, 0.6]}]}}
+    d.g["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.9, "znear": 0.05}}]
+    d.g["skins"] = [{"name": "ArmSkin", "joints": [7, 8], "inverseBindMatrices": ibm}]
+    d.g["nodes"] = [
+        {"name": "Floor", "mesh": 0},                                       # 0
+        {"name": "Light", "mesh": 2},                                       # 1
+        {"name": "Slider", "mesh": 1, "translation": [-1.5, 0, 0]},         # 2
+        {"name": "Spinner", "mesh": 1, "translation": [0, 0, -1]},          # 3
+        {"name": "Pulser", "mesh": 1, "translation": [1, 0, 1]},            # 4
+        {"name": "Stepper", "mesh": 1, "translation": [-1, 0, 1.5]},        # 5
+        {"name": "Sheet", "mesh": 3, "translation": [0.8, 0, -0.2]},        # 6
+        {"name": "Bone0", "translation": [ax, 0, az], "children": [8]},     # 7
+        {"name": "Bone1", "translation": [0, 0.5, 0]},                      # 8
+        {"name": "Arm", "mesh": 4, "skin": 0},                              # 9
+        {"name": "Bulb", "translation": [-2, 1.5, -2],
+         "extensions": {"KHR_lights_punctual": {"light": 0}}},              # 10
+        {"name": "Cam", "camera": 0, "translation": [0, 3.5, 5], "rotation": [-0.2588, 0, 0, 0.9659]},  # 11
+        {"name": "Offstage", "mesh": 1}]                                    # 12
+    d.g["scenes"] = [{"nodes": [0, 1, 2, 3, 4, 5, 6, 7, 9, 10, 11]}, {"nodes": [12]}]
+    d.g["scene"] = 0
+
+    def acc(vals, type_):
+        n = {"SCALAR": 1, "VEC3": 3, "VEC4": 4}[type_]
+        extra = {}
+        if type_ == "SCALAR":
+            extra = {"min": [min(vals)], "max": [max(vals)]}
+        return d.accessor(f32(*vals), FLOAT, type_, len(vals) // n, **extra)
+
+    t3 = acc([0.5, 1.5, 2.5], "SCALAR")
+    t2 = acc([0.5, 2.5], "SCALAR")
+    t4 = acc([0.5, 1.0, 1.5, 2.0], "SCALAR")
+    r = math.sqrt(0.5)
+    samplers = [
+        {"input": t3, "output": acc([-1.5, 0, 0, -1.5, 0, 1, -0.5, 0, 1], "VEC3")},                     # 0 Slider
+        {"input": t3, "output": acc([0, 0, 0, 1, 0, r, 0, r, 0, 1, 0, 0], "VEC4")},                     # 1 Spinner
+        {"input": t3, "interpolation": "CUBICSPLINE",                                                    # 2 Pulser
+         "output": acc([0, 0, 0, 1, 1, 1, 0, 1, 0,
+                        0, 1, 0, 1, 1.6, 1, 0, -1, 0,
+                        0, -1, 0, 1, 1, 1, 0, 0, 0], "VEC3")},
+        {"input": t4, "interpolation": "STEP",                                                            # 3 Stepper
+         "output": acc([-1, 0, 1.5, -1, 0, 0.8, -1.6, 0, 0.8, -1.6, 0, 1.5], "VEC3")},
+        {"input": t3, "output": acc([0, 1, 0.2], "SCALAR")},                                              # 4 Sheet
+        {"input": t3, "output": acc([0, 0, 0, 1, 0, 0, 0.3827, 0.9239, 0, 0, -0.3827, 0.9239], "VEC4")},  # 5 Bone1
+        {"input": t2, "output": acc([-2, 1.5, -2, 2, 1.5, -2], "VEC3")},                                  # 6 Bulb
+        {"input": t2, "output": acc([0, 3.5, 5, 0.8, 3.0, 4.5], "VEC3")},                                 # 7 Cam
+        {"input": t2, "output": acc([0, 0, 0, 0, 1, 0], "VEC3")},                                         # 8 Offstage
+    ]
+    chans = [(0, 2, "translation"), (1, 3, "rotation"), (2, 4, "scale"), (3, 5, "translation"),
+             (4, 6, "weights"), (5, 8, "rotation"), (6, 10, "translation"), (7, 11, "translation"),
+             (8, 12, "translation")]
+    d.g["animations"] = [
+        {"name": "Show", "samplers": samplers,
+         "channels": [{"sampler": a, "target": {"node": n, "path": p}} for a, n, p in chans]},
+        {"name": "Idle", "samplers": [{"input": t3, "output": samplers[1]["output"]}],
+         "channels": [{"sampler": 0, "target": {"node": 3, "path": "rotation"}}]}]
+    g = d.embedded()
+    write("animated.gltf", g)
+
+    def bad(name, change):
+        b = json.loads(json.dumps(g))
+        change(b)
+        write(name, b)
+
+    bad("anim_bad_count.gltf", lambda b: b["animations"][0]["samplers"][7].update(input=t3))
+    bad("anim_bad_node.gltf", lambda b: b["animations"][0]["channels"][0]["target"].update(node=99))
+    bad("anim_bad_path.gltf", lambda b: b["animations"][0]["channels"][0]["target"].update(path="position"))
+    # input times 0.5, 1.5, 1.0: the Slider's keys out of order
+    def unordered(b):
+        d2 = Doc()
+        d2.bin = base64.b64decode(b["buffers"][0]["uri"].split(",", 1)[1])
+        d2.g = b
+        t = d2.accessor(f32(0.5, 1.5, 1.0), FLOAT, "SCALAR", 3, min=[0.5], max=[1.5])
+        b["animations"][0]["samplers"][0]["input"] = t
+        b["buffers"] = [{"byteLength": len(d2.bin), "uri": data_uri(d2.bin)}]
+    bad("anim_bad_input.gltf", unordered)
+
+
 def main():
+    animated()
     morph()
     texcoord1()
     bent_light()
