@@ -3,6 +3,7 @@
  * From a cache (lie-build), shadow rays are answered by the local
  * illumination environments (--visibility=lie, the default); from a scene,
  * or with --visibility=full, by Embree over the whole scene: the reference. */
+#include "common/cli.h"
 #include "lie.h"
 
 #include <getopt.h>
@@ -197,7 +198,7 @@ int main(int argc, char **argv)
     long frame_a = -1, frame_b = -1;
     int skip_existing = 0;
     int visibility_set = 0;
-    float exposure = 0.0f;
+    lie_frame_options fo = {0}; /* EXR attributes are set per frame */
     int stats = 0, quiet = 0; /* stats: 1 human, 2 json */
     long v;
     int c;
@@ -270,18 +271,18 @@ int main(int argc, char **argv)
                                    optarg);
             break;
         case OPT_COMPRESSION:
-            if (!lie_exr_set_compression(optarg))
+            if (!lie_exr_compression_parse(optarg, &fo.exr.compression))
                 return usage_error("--compression: expected zip, zips, piz, rle or none, got '%s'", optarg);
             break;
         case OPT_EXPOSURE:
-            if (!lie_parse_float(optarg, -64.0f, 64.0f, &exposure))
+            if (!lie_parse_float(optarg, -64.0f, 64.0f, &fo.png.exposure))
                 return usage_error("--exposure: expected a number of stops, got '%s'", optarg);
             break;
         case OPT_THREADS:
             if (!lie_parse_long(optarg, 0, 4096, &v))
                 return usage_error("--threads: expected an integer in 0..4096, got '%s'", optarg);
             ro.threads = (int)v;
-            lie_exr_set_threads(ro.threads);
+            fo.exr.threads = ro.threads;
             break;
         case OPT_EXTERNAL: so.allow_external_uris = 1; break;
         case OPT_SCENE: scene_override = optarg; break;
@@ -440,7 +441,9 @@ int main(int argc, char **argv)
             /* orthographic views: their height in world units (0: perspective) */
             {.name = "lie.cameraOrthoHeight", .type = LIE_ATTR_FLOAT, .f = 2.0f * fc.ymag},
         };
-        st = lie_frame_write(name, frame, attrs, (int)(sizeof attrs / sizeof attrs[0]), exposure, &err);
+        fo.exr.attrs = attrs;
+        fo.exr.n_attrs = (int)(sizeof attrs / sizeof attrs[0]);
+        st = lie_frame_write(name, frame, &fo, &err);
         lie_frame_destroy(frame);
         t_render += tb - ta;
         t_write += lie_time_now() - tb;
