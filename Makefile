@@ -49,7 +49,7 @@ TOOL_BIN := $(TOOLS:%=$(BINDIR)/%)
 UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
 UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/tests/%)
 
-.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench bench-mpi scenes fuzz clean \
+.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench bench-mpi bench-view scenes fuzz clean \
         install uninstall man shared ltc-tables ltc-bench
 all: $(TOOL_BIN)
 
@@ -89,6 +89,12 @@ $(BINDIR)/%: $$(call TOOL_OBJ,$$*) $(LIB_A)
 	@mkdir -p $(dir $@)
 	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
 .SECONDARY:
+
+# lie-view opens a window with SDL2 (its software renderer: no GPU needed).
+SDL_CFLAGS := $(shell sdl2-config --cflags 2>/dev/null)
+SDL_LIBS   := $(shell sdl2-config --libs 2>/dev/null)
+$(BUILD)/tools/lie-view/%.o: CFLAGS += $(SDL_CFLAGS)
+$(BINDIR)/lie-view: LDLIBS += $(SDL_LIBS)
 
 # lib/dist: the MPI layer (Open MPI), linked into lie-render and lie-build
 # only; without mpirun it never calls MPI (lib/dist/dist.h).
@@ -162,6 +168,10 @@ test-asan:
 
 bench: all
 	@sh bench/run.sh
+
+# lie-view's interactive loop under Xvfb (not a timed test: figures depend on the load)
+bench-view: all
+	@sh bench/view.sh
 
 # lie-render and lie-build under mpirun against one process (docs/mpi.md)
 bench-mpi: all
