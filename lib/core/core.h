@@ -67,7 +67,6 @@ typedef struct lie_box3 {
 static inline lie_vec3 lie_v3(float x, float y, float z) { lie_vec3 r = {x, y, z}; return r; }
 static inline lie_vec3 lie_v3_add(lie_vec3 a, lie_vec3 b) { return lie_v3(a.x + b.x, a.y + b.y, a.z + b.z); }
 static inline lie_vec3 lie_v3_sub(lie_vec3 a, lie_vec3 b) { return lie_v3(a.x - b.x, a.y - b.y, a.z - b.z); }
-static inline lie_vec3 lie_v3_mul(lie_vec3 a, lie_vec3 b) { return lie_v3(a.x * b.x, a.y * b.y, a.z * b.z); }
 static inline lie_vec3 lie_v3_scale(lie_vec3 a, float s) { return lie_v3(a.x * s, a.y * s, a.z * s); }
 /* max and min that compile to one instruction (fmaxf/fminf are library
  * calls on x86 for their NaN rules).  A NaN `a` gives b. */
@@ -166,6 +165,19 @@ void lie_hasher_destroy(lie_hasher *h);
  * (b1, b2) of vertices 1 and 2 (Heitz 2019's low-distortion map would do
  * too; the square-root map keeps strata contiguous). */
 void lie_sample_triangle(float u1, float u2, float *b1, float *b2);
+
+/* ---- growable arrays -------------------------------------------------- */
+
+/* Make the heap array *arr (a pointer to any object pointer; capacity *cap
+ * elements of `size` bytes) hold at least `need` elements: the capacity
+ * doubles from at least 8, so appends cost O(1) amortised.  Returns 1, or 0
+ * when out of memory (then *arr and *cap are unchanged). */
+int lie_grow(void *arr, size_t *cap, size_t need, size_t size);
+/* The same for an array `a` with a size_t capacity `cap`; the common case
+ * (room already) costs one compare. */
+#define LIE_GROW(a, cap, need) ((size_t)(need) <= (cap) || lie_grow(&(a), &(cap), (need), sizeof *(a)))
+/* Append v to array a of n elements (LIE_GROW); 1, or 0 when out of memory. */
+#define LIE_PUSH(a, n, cap, v) (LIE_GROW(a, cap, (size_t)(n) + 1) ? ((a)[(n)++] = (v), 1) : 0)
 
 /* ---- threads ---------------------------------------------------------- */
 
@@ -266,30 +278,6 @@ lie_status lie_read_file(const char *path, unsigned char **data, size_t *size, l
  * message, as git quotes paths: \n \t \r \033 ...  Writes at most size bytes
  * with a terminating NUL. */
 void lie_escape_controls(char *out, size_t size, const char *s);
-
-/* ---- command-line values (shared by the tools) ------------------------ */
-
-/* Strict parses: the whole string must be the number, within [min, max]. */
-int lie_parse_long(const char *s, long min, long max, long *out);
-int lie_parse_float(const char *s, float min, float max, float *out);
-/* A printf pattern with exactly one integer conversion: %d, %5d, %05d (frame names). */
-int lie_frame_pattern_ok(const char *s);
-/* "A-B" with min <= A <= B <= max (frame ranges). */
-int lie_parse_range(const char *s, long min, long max, long *a, long *b);
-/* Write s as a JSON string literal (with quotes) to fp. */
-void lie_json_string(FILE *fp, const char *s);
-
-/* "WxH" with both in [1, max]. */
-int lie_parse_size(const char *s, int max, int *w, int *h);
-/* The value of --stats (arg NULL: 1) or --stats=json (2); 0 for another. */
-int lie_parse_stats(const char *arg);
-
-/* ---- tool messages (CLI.md: one line on stderr) ------------------------- */
-
-/* "PROG: message (see --help)"; returns 2, the usage-error exit status. */
-int lie_usage_error(const char *prog, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-/* "PROG: FILE: what is wrong" from err; returns `code`. */
-int lie_report_error(const char *prog, const lie_error *err, int code);
 
 #ifdef __cplusplus
 }

@@ -313,6 +313,7 @@ double lie_polylight_unshadowed(const lie_polylight *L, lie_vec3 o, lie_vec3 n, 
 {
     view vw;
     int m = visible_pieces(L, o, n, ng, &vw, w);
+    w->n = m;
     double sum = 0.0;
     const d3 N = d3_of(n);
     for (int k = 0; k < m; k++)
@@ -556,15 +557,16 @@ static int subtract(lie_poly2 *cur, int *m_io, const shadow *sh, double tiny)
     return 0;
 }
 
-/* The visible pieces into w->a; returns their count, or -1 on overflow. */
-static int shadowed_pieces(const lie_polylight *L, lie_vec3 o, lie_vec3 n, lie_vec3 ng, const lie_vec3 *tri_p,
-                           const int32_t *solid, const uint32_t *blockers, int n_blockers, float eps,
-                           lie_polylight_work *w, view *vwp)
+int lie_polylight_visible(const lie_polylight *L, lie_vec3 o, lie_vec3 n, lie_vec3 ng, const lie_vec3 *tri_p,
+                          const int32_t *solid, const uint32_t *blockers, int n_blockers, float eps,
+                          lie_polylight_work *w, double *omega)
 {
-    int m = visible_pieces(L, o, n, ng, vwp, w);
-    const view vw = *vwp;
-    if (m == 0 || n_blockers == 0)
-        return m;
+    view vw;
+    int m = visible_pieces(L, o, n, ng, &vw, w);
+    *omega = 0.0;
+    w->n = 0;
+    if (m == 0)
+        return 0;
     const d3 pn = {L->pn[0], L->pn[1], L->pn[2]};
     const double d = d3_dot(pn, vw.w);
     const d3 k = d > 0.0 ? pn : (d3){-pn.x, -pn.y, -pn.z}; /* depth away from o */
@@ -626,48 +628,11 @@ static int shadowed_pieces(const lie_polylight *L, lie_vec3 o, lie_vec3 n, lie_v
         if (subtract(cur, &m, &sh, tiny) < 0)
             return -1;
     }
-    return m;
-}
-
-int lie_polylight_visible(const lie_polylight *L, lie_vec3 o, lie_vec3 n, lie_vec3 ng, const lie_vec3 *tri_p,
-                          const int32_t *solid, const uint32_t *blockers, int n_blockers, float eps,
-                          lie_polylight_work *w, double *omega)
-{
-    view vw;
-    int m = shadowed_pieces(L, o, n, ng, tri_p, solid, blockers, n_blockers, eps, w, &vw);
-    *omega = 0.0;
-    if (m < 0)
-        return -1;
     double sum = 0.0;
     const d3 N = d3_of(n);
     for (int i = 0; i < m; i++)
-        sum += edge_sum(&vw, &w->a[i], N);
+        sum += edge_sum(&vw, &cur[i], N);
     *omega = 0.5 * fabs(sum);
+    w->n = m;
     return 0;
-}
-
-int lie_polylight_pieces(const lie_polylight *L, lie_vec3 o, lie_vec3 n, lie_vec3 ng, const lie_vec3 *tri_p,
-                         const int32_t *solid, const uint32_t *blockers, int n_blockers, float eps,
-                         lie_polylight_work *w)
-{
-    view vw;
-    int m = shadowed_pieces(L, o, n, ng, tri_p, solid, blockers, n_blockers, eps, w, &vw);
-    const d3 *f[3] = {&vw.w, &vw.u, &vw.v};
-    for (int k = 0; k < 3; k++) {
-        w->frame[3 * k] = f[k]->x;
-        w->frame[3 * k + 1] = f[k]->y;
-        w->frame[3 * k + 2] = f[k]->z;
-    }
-    return m;
-}
-
-int lie_polylight_piece(const lie_polylight_work *w, int i, lie_vec3 *verts)
-{
-    const lie_poly2 *p = &w->a[i];
-    const double *W = w->frame, *U = w->frame + 3, *V = w->frame + 6;
-    for (int k = 0; k < p->n; k++)
-        verts[k] = lie_v3((float)(W[0] + p->s[k] * U[0] + p->t[k] * V[0]),
-                          (float)(W[1] + p->s[k] * U[1] + p->t[k] * V[1]),
-                          (float)(W[2] + p->s[k] * U[2] + p->t[k] * V[2]));
-    return p->n;
 }

@@ -62,10 +62,10 @@ void lie_polylight_destroy(lie_polylight *L);
 /* Per-worker workspace for blocker lists up to max_blockers long. */
 typedef struct lie_polylight_work {
     lie_poly2 *a;    /* the pieces */
+    int n;           /* how many the last unshadowed() or visible() left in a (0 on -1) */
     uint32_t *idx;   /* 2 cap */
     double *pts;     /* 2 (6 cap + 1) */
     int cap;
-    double frame[9]; /* lie_polylight_pieces: po - o, pu, pv */
 } lie_polylight_work;
 lie_status lie_polylight_work_init(lie_polylight_work *w, int max_blockers);
 void lie_polylight_work_free(lie_polylight_work *w);
@@ -88,15 +88,5 @@ double lie_polylight_unshadowed(const lie_polylight *L, lie_vec3 o, lie_vec3 n, 
 int lie_polylight_visible(const lie_polylight *L, lie_vec3 o, lie_vec3 n, lie_vec3 ng, const lie_vec3 *tri_p,
                           const int32_t *solid, const uint32_t *blockers, int n_blockers, float eps, lie_polylight_work *w,
                           double *omega);
-
-/* The same region as lie_polylight_visible (no blockers: as
- * lie_polylight_unshadowed), left in w as convex pieces for another
- * integrand (the LTC of a glossy BRDF, ltc.h): returns their count, or -1
- * as lie_polylight_visible does.  lie_polylight_piece writes piece i's
- * vertices relative to o (at most LIE_POLY_MAXV) and returns their count. */
-int lie_polylight_pieces(const lie_polylight *L, lie_vec3 o, lie_vec3 n, lie_vec3 ng, const lie_vec3 *tri_p,
-                         const int32_t *solid, const uint32_t *blockers, int n_blockers, float eps,
-                         lie_polylight_work *w);
-int lie_polylight_piece(const lie_polylight_work *w, int i, lie_vec3 *verts);
 
 #endif
