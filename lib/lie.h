@@ -15,6 +15,7 @@
 #include "scene/scene.h"
 #include "shade/shade.h"
 #include "shade/ltc.h"
+#include "update/update.h"
 #include "version/version.h"
 
 #endif

@@ -90,6 +90,11 @@ lie_status lie_cache_sections(const unsigned char *data, size_t size, const char
 lie_status lie_cache_load_scene(const lie_cache *c, const char *cache_path, const char *override,
                                 const lie_scene_options *so, lie_scene **out, lie_error *err);
 
+/* Record scene s's state in c: its triangle count, the emitter summary and
+ * the state hash (lie-build and lib/update make every cache's this way).
+ * c->emitters is reallocated; the rest of c is left alone. */
+lie_status lie_cache_set_state(lie_cache *c, const lie_scene *s, lie_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -60,3 +60,21 @@ lie_status lie_cache_load_scene(const lie_cache *c, const char *cache_path, cons
     *out = s;
     return LIE_OK;
 }
+
+lie_status lie_cache_set_state(lie_cache *c, const lie_scene *s, lie_error *err)
+{
+    lie_cache_emitter *em = realloc(c->emitters, sizeof *em * ((size_t)s->n_emitters + 1));
+    if (!em)
+        return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
+    c->emitters = em;
+    c->n_emitters = s->n_emitters;
+    for (int e = 0; e < s->n_emitters; e++) {
+        em[e].type = (uint32_t)s->emitters[e].type;
+        em[e].node = s->emitters[e].node;
+        em[e].first_tri = s->emitters[e].first_tri;
+        em[e].n_tris = s->emitters[e].n_tris;
+    }
+    c->n_tris = s->n_tris;
+    c->state_hash = s->hash;
+    return LIE_OK;
+}

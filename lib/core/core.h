@@ -167,6 +167,19 @@ void lie_hasher_destroy(lie_hasher *h);
  * too; the square-root map keeps strata contiguous). */
 void lie_sample_triangle(float u1, float u2, float *b1, float *b2);
 
+/* ---- growable arrays -------------------------------------------------- */
+
+/* Make the heap array *arr (a pointer to any object pointer; capacity *cap
+ * elements of `size` bytes) hold at least `need` elements: the capacity
+ * doubles from at least 8, so appends cost O(1) amortised.  Returns 1, or 0
+ * when out of memory (then *arr and *cap are unchanged). */
+int lie_grow(void *arr, size_t *cap, size_t need, size_t size);
+/* The same for an array `a` with a size_t capacity `cap`; the common case
+ * (room already) costs one compare. */
+#define LIE_GROW(a, cap, need) ((size_t)(need) <= (cap) || lie_grow(&(a), &(cap), (need), sizeof *(a)))
+/* Append v to array a of n elements (LIE_GROW); 1, or 0 when out of memory. */
+#define LIE_PUSH(a, n, cap, v) (LIE_GROW(a, cap, (size_t)(n) + 1) ? ((a)[(n)++] = (v), 1) : 0)
+
 /* ---- threads ---------------------------------------------------------- */
 
 /* Number of online CPUs (at least 1). */

@@ -58,17 +58,9 @@ static int64_t stream_write(exr_const_context_t ctxt, void *ud, const void *buf,
         return -1;
     }
     size_t end = (size_t)(off + sz);
-    if (end > s->cap) {
-        size_t cap = s->cap ? s->cap : 4096;
-        while (cap < end)
-            cap *= 2;
-        unsigned char *d = realloc(s->data, cap);
-        if (!d) {
-            error_cb(ctxt, EXR_ERR_OUT_OF_MEMORY, "out of memory");
-            return -1;
-        }
-        s->data = d;
-        s->cap = cap;
+    if (!LIE_GROW(s->data, s->cap, end)) {
+        error_cb(ctxt, EXR_ERR_OUT_OF_MEMORY, "out of memory");
+        return -1;
     }
     if (off > s->size)
         memset(s->data + s->size, 0, (size_t)off - s->size);

@@ -27,22 +27,9 @@ static void on_png_warning(png_structp png, png_const_charp msg) {}
 static void sink_write(png_structp png, png_bytep data, size_t n)
 {
     png_sink *s = png_get_io_ptr(png);
-    if (n > s->cap - s->size) {
-        size_t cap = s->cap ? s->cap : 4096;
-        while (cap - s->size < n) {
-            if (cap > SIZE_MAX / 2) {
-                s->oom = 1;
-                png_error(png, "out of memory");
-            }
-            cap *= 2;
-        }
-        unsigned char *d = realloc(s->data, cap);
-        if (!d) {
-            s->oom = 1;
-            png_error(png, "out of memory");
-        }
-        s->data = d;
-        s->cap = cap;
+    if (n > SIZE_MAX - s->size || !LIE_GROW(s->data, s->cap, s->size + n)) {
+        s->oom = 1;
+        png_error(png, "out of memory");
     }
     memcpy(s->data + s->size, data, n);
     s->size += n;

@@ -11,17 +11,8 @@
 static void collect_candidate(void *ctx, uint32_t tri)
 {
     worker *w = ctx;
-    if (w->n_cand == w->cap_cand) {
-        size_t nc = w->cap_cand ? 2 * w->cap_cand : 64;
-        uint32_t *nb = realloc(w->cand, nc * sizeof *nb);
-        if (!nb) {
-            w->nomem = 1;
-            return;
-        }
-        w->cand = nb;
-        w->cap_cand = nc;
-    }
-    w->cand[w->n_cand++] = tri;
+    if (!LIE_PUSH(w->cand, w->n_cand, w->cap_cand, tri))
+        w->nomem = 1;
 }
 
 static float v3_axis(lie_vec3 v, int a) { return a == 0 ? v.x : a == 1 ? v.y : v.z; }
@@ -99,24 +90,15 @@ static void pair_sat(const build_ctx *c, const worker *w, int nh, uint32_t tri, 
 {
     const lie_emitter *em = &c->s->emitters[e];
     const lie_vec3 *ne = em->type == LIE_EMITTER_AREA ? &c->s->tri_ng[em->first_tri] : NULL;
-    lie_sat_init(sat, w->hull, nh, two_sided ? 9 : 6, c->s->tri_ng[tri], ne, tol);
+    lie_sat_init(sat, w->hull, nh, lie_pair_hull_patch_points(two_sided), c->s->tri_ng[tri], ne, tol);
 }
 
 /* The pair's hull into w->hull (see lie_pair_hull_points). */
-static int pair_hull(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e,
-                     float eps)
+static int pair_hull(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int e)
 {
-    (void)two_sided;
-    (void)eps;
-    int need = lie_pair_hull_cap(c->s, e);
-    if (need > w->cap_hull) {
-        lie_vec3 *nh = realloc(w->hull, sizeof *nh * (size_t)need);
-        if (!nh) {
-            w->nomem = 1;
-            return 0;
-        }
-        w->hull = nh;
-        w->cap_hull = need;
+    if (!LIE_GROW(w->hull, w->cap_hull, lie_pair_hull_cap(c->s, e))) {
+        w->nomem = 1;
+        return 0;
     }
     return lie_pair_hull_points(c->s, tri, V, e, w->hull);
 }
@@ -127,18 +109,17 @@ static int pair_hull(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3
  * shaft's boundary — a wall meeting the floor at the patch's edge, the
  * floor's neighbouring triangle — are left out: the hull's corners are
  * pulled in by a thousandth and contact does not count. */
-size_t lie_cull_shaft(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e,
-                      float eps)
+size_t lie_cull_shaft(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e)
 {
     const lie_scene *s = c->s;
     lie_vec3 ctr = lie_v3_scale(lie_v3_add(V[0], lie_v3_add(V[1], V[2])), 1.0f / 3.0f);
     lie_vec3 W[3];
     for (int k = 0; k < 3; k++)
         W[k] = lie_v3_add(ctr, lie_v3_scale(lie_v3_sub(V[k], ctr), 0.999f));
-    int nh = pair_hull(c, w, tri, W, two_sided, e, eps);
+    int nh = pair_hull(c, w, tri, W, e);
     if (!nh)
         return 0;
-    int n_patch = two_sided ? 9 : 6;
+    int n_patch = lie_pair_hull_patch_points(two_sided);
     lie_vec3 ectr = lie_v3(0, 0, 0);
     for (int i = n_patch; i < nh; i++)
         ectr = lie_v3_add(ectr, w->hull[i]);
@@ -168,14 +149,13 @@ size_t lie_cull_shaft(const build_ctx *c, worker *w, uint32_t tri, const lie_vec
  * triangle of an instance already in the list that meets the shaft. */
 #define EXPAND_SCAN_MAX 256 /* instances up to this many triangles are scanned whole */
 
-void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e,
-                     float eps)
+void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e)
 {
     const lie_scene *s = c->s;
     size_t n0 = w->n_hits;
     if (n0 == 0)
         return;
-    int nh = pair_hull(c, w, tri, V, two_sided, e, eps);
+    int nh = pair_hull(c, w, tri, V, e);
     if (!nh)
         return;
     float tol = 1e-6f * lie_rt_scale(c->rt);
@@ -209,27 +189,20 @@ void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3
             if (lie_sat_rejects(&sat, &s->tri_p[3 * (size_t)t]) ||
                 !lie_hull_meets_triangle(w->hull, nh, &s->tri_p[3 * (size_t)t], tol))
                 continue;
-            if (w->n_hits == w->cap_hits) {
-                size_t ncap = 2 * w->cap_hits + 16;
-                uint32_t *nb = realloc(w->hits, ncap * sizeof *nb);
-                if (!nb) {
-                    w->nomem = 1;
-                    return;
-                }
-                w->hits = nb;
-                w->cap_hits = ncap;
+            if (!LIE_PUSH(w->hits, w->n_hits, w->cap_hits, t)) {
+                w->nomem = 1;
+                return;
             }
-            w->hits[w->n_hits++] = t;
         }
     }
     w->n_hits = lie_sort_unique(w->hits, w->n_hits);
 }
 
 lie_class lie_cull_conservative(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided,
-                                int e, float eps, const uint32_t *parent, size_t n_parent, size_t *n_list)
+                                int e, const uint32_t *parent, size_t n_parent, size_t *n_list)
 {
     const lie_scene *s = c->s;
-    int nh = pair_hull(c, w, tri, V, two_sided, e, eps);
+    int nh = pair_hull(c, w, tri, V, e);
     w->n_hits = 0;
     *n_list = 0;
     if (!nh)
@@ -254,18 +227,10 @@ lie_class lie_cull_conservative(const build_ctx *c, worker *w, uint32_t tri, con
             continue;
         if (lie_sat_rejects(&sat, &s->tri_p[3 * (size_t)t]))
             continue;
-        if (lie_hull_meets_triangle(w->hull, nh, &s->tri_p[3 * (size_t)t], tol)) {
-            if (w->n_hits == w->cap_hits) {
-                size_t ncap = w->cap_hits ? 2 * w->cap_hits : 64;
-                uint32_t *nb = realloc(w->hits, ncap * sizeof *nb);
-                if (!nb) {
-                    w->nomem = 1;
-                    return LIE_CLASS_VISIBLE;
-                }
-                w->hits = nb;
-                w->cap_hits = ncap;
-            }
-            w->hits[w->n_hits++] = t;
+        if (lie_hull_meets_triangle(w->hull, nh, &s->tri_p[3 * (size_t)t], tol) &&
+            !LIE_PUSH(w->hits, w->n_hits, w->cap_hits, t)) {
+            w->nomem = 1;
+            return LIE_CLASS_VISIBLE;
         }
     }
     *n_list = w->n_hits;

@@ -9,15 +9,13 @@
 void lie_cull_candidates(const build_ctx *c, worker *w, const lie_vec3 *hull, int nh, float tol);
 /* The triangles entering the pair's shaft (other than the patch's own and
  * the emitter's) into w->cand, sorted and unique; returns how many. */
-size_t lie_cull_shaft(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e,
-                      float eps);
+size_t lie_cull_shaft(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e);
 /* Add to w->hits every triangle meeting the shaft of an instance already
  * there. */
-void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e,
-                     float eps);
+void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e);
 /* Conservative mode: every triangle meeting the pair's hull into w->hits
  * (among parent[0..n_parent) when parent is not NULL). */
 lie_class lie_cull_conservative(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided,
-                                int e, float eps, const uint32_t *parent, size_t n_parent, size_t *n_list);
+                                int e, const uint32_t *parent, size_t n_parent, size_t *n_list);
 
 #endif

@@ -12,9 +12,11 @@
 typedef struct unit_buf {
     uint32_t *roots;      /* per emitter: the unit's root, local index */
     lie_pnode *nodes;
-    uint32_t n_nodes, cap_nodes;
+    uint32_t n_nodes;
+    size_t cap_nodes;
     uint32_t *pool;
-    uint32_t n_pool, cap_pool;
+    uint32_t n_pool;
+    size_t cap_pool;
     int copied;           /* update: every unit is copied whole from the old env at
                              assembly; nothing is held here but the sizes */
 } unit_buf;
@@ -27,7 +29,7 @@ typedef struct worker {
     uint32_t *cand;      /* conservative candidates */
     size_t n_cand, cap_cand;
     lie_vec3 *hull;      /* conservative hull points */
-    int cap_hull;
+    size_t cap_hull;
     lie_build_stats st;
     int nomem;
     int over;                 /* the node budget ran out (nomem is set too, to stop) */
@@ -46,6 +48,8 @@ typedef struct build_ctx {
                                  build afresh (NULL: build everything) */
     const uint8_t *node_flags; /* update: per old node, 1 = recompute (NULL: none) */
     const uint8_t *tri_mask;   /* build only these triangles (NULL: all) */
+    uint64_t unit_lo, unit_hi; /* build only units [unit_lo, unit_hi) ... */
+    uint32_t tri_lo;           /* ... of triangles tri_lo + item (out[item]) */
     unit_buf *out;        /* per triangle: its units, in emitter order, each contiguous */
     worker *workers;
     /* update: flagged old nodes already recomputed in parallel (see

@@ -53,14 +53,13 @@ static void memo_compute(void *ctx, size_t item, int worker_id)
     const lie_scene *s = c->s;
     lie_vec3 V[3];
     lie_patch_world(m->path, &s->tri_p[3 * (size_t)m->tri], V);
-    int two_sided = lie_scene_material(s, s->tri_material[m->tri])->double_sided != 0;
+    int two_sided = lie_pair_two_sided(s, m->tri);
     size_t n_list = 0;
     m->quality = 0;
     if (lie_pair_unlit(c->s, m->tri, V, two_sided, m->e))
         m->cls = LIE_CLASS_UNLIT;
     else
-        m->cls = lie_sample_pair(c, w, m->tri, m->path, V, two_sided, m->e, lie_pair_eps(s, m->tri),
-                                 &m->quality, &n_list);
+        m->cls = lie_sample_pair(c, w, m->tri, m->path, V, two_sided, m->e, &m->quality, &n_list);
     m->n_list = (uint32_t)n_list;
     m->list = NULL;
     if (n_list && !w->nomem) {
@@ -74,14 +73,8 @@ static void memo_compute(void *ctx, size_t item, int worker_id)
 
 static int memo_push(build_ctx *c, size_t *n, size_t *cap, uint32_t old, uint32_t tri, lie_patch_path path, int e)
 {
-    if (*n == *cap) {
-        size_t nc = *cap ? 2 * *cap : 256;
-        memo_entry *nm = realloc(c->memo, nc * sizeof *nm);
-        if (!nm)
-            return 0;
-        c->memo = nm;
-        *cap = nc;
-    }
+    if (!LIE_GROW(c->memo, *cap, *n + 1))
+        return 0;
     memo_entry *m = &c->memo[(*n)++];
     memset(m, 0, sizeof *m);
     m->old = old;

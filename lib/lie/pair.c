@@ -1,6 +1,7 @@
 /* Pair geometry: what lie-build, the ray segment trees (lib/rst) and the
  * renderer agree a patch-emitter pair is (lib/lie/pair.h). */
 #include "lie/pair.h"
+#include "lie/shaft.h"
 
 #include <string.h>
 
@@ -17,20 +18,19 @@ float lie_pair_eps(const lie_scene *s, uint32_t tri)
     float mag = 0.0f;
     for (int k = 0; k < 3; k++)
         mag = fmaxf(mag, fmaxf(fabsf(P[k].x), fmaxf(fabsf(P[k].y), fabsf(P[k].z))));
-    /* the renderer lifts shadow rays by 1e-4 * max(1, |p|); this bounds it on the triangle */
-    return 1.0001e-4f * fmaxf(1.0f, mag);
+    return lie_ray_eps_bound(mag);
 }
 
 int lie_pair_hull_cap(const lie_scene *s, int e)
 {
     const lie_emitter *em = &s->emitters[e];
-    return 9 + (em->type == LIE_EMITTER_AREA ? (em->n_hull ? em->n_hull : 3 * (int)em->n_tris) : 3);
+    return lie_pair_hull_patch_points(1) + (em->type == LIE_EMITTER_AREA ? (em->n_hull ? em->n_hull : 3 * (int)em->n_tris) : 3);
 }
 
 int lie_pair_hull_points(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], int e, lie_vec3 *out)
 {
     const lie_emitter *em = &s->emitters[e];
-    int two_sided = lie_scene_material(s, s->tri_material[tri])->double_sided != 0;
+    int two_sided = lie_pair_two_sided(s, tri);
     float eps = lie_pair_eps(s, tri);
     lie_vec3 ng = s->tri_ng[tri];
     int n = 0;
@@ -103,4 +103,12 @@ int lie_pair_unlit(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], int tw
     }
     float d = -lie_v3_dot(ng, em->direction);
     return two_sided ? d == 0.0f : d <= 0.0f;
+}
+
+int lie_pair_hull_meets_box(const lie_vec3 *hull, int n, lie_box3 box, float tol)
+{
+    lie_vec3 corners[8];
+    for (int k = 0; k < 8; k++)
+        corners[k] = lie_v3(k & 1 ? box.hi.x : box.lo.x, k & 2 ? box.hi.y : box.lo.y, k & 4 ? box.hi.z : box.lo.z);
+    return lie_hull_meets_hull(hull, n, corners, 8, tol);
 }

@@ -5,6 +5,7 @@
 #define LIE_PAIR_H
 
 #include "core/core.h"
+#include "rt/rt.h"
 #include "scene/scene.h"
 
 #pragma GCC visibility push(default) /* the public API: exported from liblie.so */
@@ -24,6 +25,17 @@ float lie_pair_eps(const lie_scene *s, uint32_t tri);
  * hold lie_pair_hull_cap(s, e) points; returns how many were written. */
 int lie_pair_hull_cap(const lie_scene *s, int e);
 int lie_pair_hull_points(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], int e, lie_vec3 *out);
+/* The hull's layout: first the patch's points (each corner, then it lifted
+ * on the front, then on the back when two-sided), then the emitter's. */
+static inline int lie_pair_hull_patch_points(int two_sided) { return two_sided ? 9 : 6; }
+/* Whether triangle tri is shaded from both sides (a double-sided material). */
+static inline int lie_pair_two_sided(const lie_scene *s, uint32_t tri)
+{
+    return lie_scene_material(s, s->tri_material[tri])->double_sided != 0;
+}
+/* 1 if the convex hull of hull[0..n) meets the box or comes within tol of
+ * it; 0 only when a separating plane is proven. */
+int lie_pair_hull_meets_box(const lie_vec3 *hull, int n, lie_box3 box, float tol);
 
 /* 1 when no point of patch V of triangle tri (shaded from both sides when
  * two_sided) can receive light from any point of emitter e with a non-zero

@@ -134,7 +134,7 @@ static int all_blocked_to_max(const pair_sampler *ps, uint32_t from, worker *w)
  *   triangles in a list), past complex_cap where it cannot split; the
  *   list is not stored then, so it is not expanded to whole instances. */
 lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch_path path, const lie_vec3 V[3],
-                          int two_sided, int e, float eps, uint32_t *quality, size_t *n_list)
+                          int two_sided, int e, uint32_t *quality, size_t *n_list)
 {
     const lie_scene *s = c->s;
     const lie_emitter *em = &s->emitters[e];
@@ -224,20 +224,15 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
             /* Nothing found.  Only triangles in the shaft can block: none
              * means visible, proven; a few become the list, exact; many
              * mean sampling on to max_samples before calling it visible. */
-            size_t n_shaft = lie_cull_shaft(c, w, tri, V, two_sided, e, eps);
+            size_t n_shaft = lie_cull_shaft(c, w, tri, V, two_sided, e);
             if (n_shaft == 0)
                 break;
             if (n_shaft <= c->p->max_blockers) {
                 *quality = total;
                 *n_list = n_shaft;
-                if (n_shaft > w->cap_hits) {
-                    uint32_t *nb = realloc(w->hits, n_shaft * sizeof *nb);
-                    if (!nb) {
-                        w->nomem = 1;
-                        return LIE_CLASS_VISIBLE;
-                    }
-                    w->hits = nb;
-                    w->cap_hits = n_shaft;
+                if (!LIE_GROW(w->hits, w->cap_hits, n_shaft)) {
+                    w->nomem = 1;
+                    return LIE_CLASS_VISIBLE;
                 }
                 memcpy(w->hits, w->cand, n_shaft * sizeof *w->hits);
                 w->n_hits = n_shaft;
@@ -250,7 +245,7 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
             round_n = c->p->max_samples - total;
     }
     if (blocked > 0 && blocked < valid)
-        lie_cull_expand(c, w, tri, V, two_sided, e, eps);
+        lie_cull_expand(c, w, tri, V, two_sided, e);
     *quality = total;
     *n_list = w->n_hits;
     if (valid == 0 || blocked == 0)

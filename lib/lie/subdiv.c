@@ -18,15 +18,9 @@ static int push_node(unit_buf *u, worker *w)
         w->over = w->nomem = 1;
         return -1;
     }
-    if (u->n_nodes == u->cap_nodes) {
-        uint32_t nc = u->cap_nodes ? 2 * u->cap_nodes : 8;
-        lie_pnode *nn = realloc(u->nodes, sizeof *nn * nc);
-        if (!nn) {
-            w->nomem = 1;
-            return -1;
-        }
-        u->nodes = nn;
-        u->cap_nodes = nc;
+    if (!LIE_GROW(u->nodes, u->cap_nodes, (size_t)u->n_nodes + 1)) {
+        w->nomem = 1;
+        return -1;
     }
     memset(&u->nodes[u->n_nodes], 0, sizeof *u->nodes);
     return (int)u->n_nodes++;
@@ -34,17 +28,9 @@ static int push_node(unit_buf *u, worker *w)
 
 static int push_list(unit_buf *u, worker *w, const uint32_t *list, uint32_t n)
 {
-    if (u->n_pool + n > u->cap_pool) {
-        uint32_t nc = u->cap_pool ? u->cap_pool : 16;
-        while (nc < u->n_pool + n)
-            nc *= 2;
-        uint32_t *np = realloc(u->pool, sizeof *np * nc);
-        if (!np) {
-            w->nomem = 1;
-            return 0;
-        }
-        u->pool = np;
-        u->cap_pool = nc;
+    if (!LIE_GROW(u->pool, u->cap_pool, (size_t)u->n_pool + n)) {
+        w->nomem = 1;
+        return 0;
     }
     memcpy(u->pool + u->n_pool, list, sizeof *list * n);
     u->n_pool += n;
@@ -83,7 +69,7 @@ static void copy_node(const lie_env *old, uint32_t from, worker *w, unit_buf *u,
  * is the old env's node for the same patch (or -1): when both old and new
  * split, children whose regions no edit touched are copied. */
 static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx, uint32_t tri,
-                       lie_patch_path path, int e, int two_sided, float eps, const uint32_t *parent,
+                       lie_patch_path path, int e, int two_sided, const uint32_t *parent,
                        size_t n_parent, int64_t old)
 {
     if (old >= 0 && !(c->node_flags && c->node_flags[old])) {
@@ -104,23 +90,18 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
         cls = m->cls;
         quality = m->quality;
         n_list = m->n_list;
-        if (n_list > w->cap_hits) {
-            uint32_t *nb = realloc(w->hits, n_list * sizeof *nb);
-            if (!nb) {
-                w->nomem = 1;
-                return;
-            }
-            w->hits = nb;
-            w->cap_hits = n_list;
+        if (!LIE_GROW(w->hits, w->cap_hits, n_list)) {
+            w->nomem = 1;
+            return;
         }
         if (n_list)
             memcpy(w->hits, m->list, n_list * sizeof *w->hits);
     } else if (lie_pair_unlit(c->s, tri, V, two_sided, e)) {
         cls = LIE_CLASS_UNLIT;
     } else if (c->p->mode == LIE_BLOCKERS_SAMPLED) {
-        cls = lie_sample_pair(c, w, tri, path, V, two_sided, e, eps, &quality, &n_list);
+        cls = lie_sample_pair(c, w, tri, path, V, two_sided, e, &quality, &n_list);
     } else {
-        cls = lie_cull_conservative(c, w, tri, V, two_sided, e, eps, parent, n_parent, &n_list);
+        cls = lie_cull_conservative(c, w, tri, V, two_sided, e, parent, n_parent, &n_list);
     }
     if (w->nomem)
         return;
@@ -149,8 +130,8 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
         u->nodes[idx].count = (uint32_t)n_list;
         uint32_t old_child = old >= 0 ? c->old->nodes[old].child : 0;
         for (int k = 0; k < 4; k++)
-            build_node(c, w, u, (uint32_t)first + (uint32_t)k, tri, lie_patch_child(path, k), e, two_sided, eps,
-                       keep, n_list, old_child ? (int64_t)old_child + k : -1);
+            build_node(c, w, u, (uint32_t)first + (uint32_t)k, tri, lie_patch_child(path, k), e, two_sided, keep,
+                       n_list, old_child ? (int64_t)old_child + k : -1);
         free(keep);
         return;
     }
@@ -238,7 +219,7 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
 {
     build_ctx *c = ctx;
     worker *w = &c->workers[worker_id];
-    uint32_t tri = (uint32_t)item;
+    uint32_t tri = c->tri_lo + (uint32_t)item;
     unit_buf *u = &c->out[item];
     const lie_scene *s = c->s;
     size_t ne = (size_t)s->n_emitters;
@@ -249,10 +230,11 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
         w->nomem = 1;
         return;
     }
-    int two_sided = lie_scene_material(s, s->tri_material[tri])->double_sided != 0;
-    float eps = lie_pair_eps(s, tri);
+    int two_sided = lie_pair_two_sided(s, tri);
     for (size_t e = 0; e < ne; e++) {
         size_t unit = (size_t)tri * ne + e;
+        if (unit < c->unit_lo || unit >= c->unit_hi)
+            continue; /* lie_env_build_range: another part's */
         int root = push_node(u, w);
         if (root < 0)
             return;
@@ -263,6 +245,6 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
             w->st.pairs[LIE_CLASS_NONE]++;
             continue;
         }
-        build_node(c, w, u, (uint32_t)root, tri, lie_patch_root(), (int)e, two_sided, eps, NULL, 0, old);
+        build_node(c, w, u, (uint32_t)root, tri, lie_patch_root(), (int)e, two_sided, NULL, 0, old);
     }
 }

@@ -1,7 +1,6 @@
 /* Exact refinement of ray-segment-tree answers: the hull of a flagged
  * unit root's patch and emitter against the edit's boxes, then down its
  * patch tree while the hulls meet them. */
-#include "lie/shaft.h"
 #include "rst/rst.h"
 
 #include <stdlib.h>
@@ -25,13 +24,8 @@ static void refine_node(refine_ctx *c, uint32_t node, uint32_t tri, lie_patch_pa
     int n = lie_pair_hull_points(c->s, tri, V, e, c->hull);
     int meets = 0;
     float tol = 1e-5f * fmaxf(1.0f, lie_v3_len(lie_v3_sub(c->s->bounds.hi, c->s->bounds.lo)));
-    for (int b = 0; b < c->n_boxes && !meets; b++) {
-        const lie_box3 *x = &c->boxes[b];
-        lie_vec3 corners[8];
-        for (int k = 0; k < 8; k++)
-            corners[k] = lie_v3(k & 1 ? x->hi.x : x->lo.x, k & 2 ? x->hi.y : x->lo.y, k & 4 ? x->hi.z : x->lo.z);
-        meets = lie_hull_meets_hull(c->hull, n, corners, 8, tol);
-    }
+    for (int b = 0; b < c->n_boxes && !meets; b++)
+        meets = lie_pair_hull_meets_box(c->hull, n, c->boxes[b], tol);
     if (!meets) {
         c->flags[node] = 0; /* nor can its children's segments, all among its own */
         c->cleared++;
@@ -51,8 +45,10 @@ uint64_t lie_rst_refine(const lie_scene *s, const lie_env *env, const lie_box3 *
     for (int e = 0; e < s->n_emitters; e++)
         cap = cap > lie_pair_hull_cap(s, e) ? cap : lie_pair_hull_cap(s, e);
     refine_ctx c = {s, env, boxes, n_boxes, flags, malloc(sizeof(lie_vec3) * ((size_t)cap + 1)), 0};
-    if (!c.hull)
-        return 0; /* out of memory: keep every flag (still correct) */
+    if (!c.hull) {
+        lie_rst_spread(env, flags); /* out of memory: flag whole subtrees (still correct) */
+        return 0;
+    }
     for (uint32_t t = 0; t < env->n_tris; t++)
         for (int e = 0; e < env->n_emitters; e++)
             refine_node(&c, env->root[(size_t)t * (size_t)env->n_emitters + (size_t)e], t, lie_patch_root(), e);

@@ -286,7 +286,7 @@ static void compute_region(build_state *bs, const region_item *it, lie_vec3 *hul
     lie_vec3 V[3];
     lie_patch_world(it->path, &s->tri_p[3 * (size_t)it->tri], V);
     int n = lie_pair_hull_points(s, it->tri, V, it->e, hull);
-    int np = lie_scene_material(s, s->tri_material[it->tri])->double_sided ? 9 : 6;
+    int np = lie_pair_hull_patch_points(lie_pair_two_sided(s, it->tri));
     const lie_vec3 *P = hull, *E = hull + np;
     int ne = n - np;
     /* the axis along which patch and emitter are farthest apart */

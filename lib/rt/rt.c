@@ -111,17 +111,8 @@ static void intersect_filter(const struct RTCFilterFunctionNArguments *args)
         args->valid[i] = 0;
         if (skip || q->nomem)
             continue;
-        if (*q->n == *q->cap) {
-            size_t nc = *q->cap ? 2 * *q->cap : 16;
-            uint32_t *nb = realloc(*q->out, nc * sizeof **q->out);
-            if (!nb) {
-                q->nomem = 1;
-                continue;
-            }
-            *q->out = nb;
-            *q->cap = nc;
-        }
-        (*q->out)[(*q->n)++] = prim;
+        if (!LIE_PUSH(*q->out, *q->n, *q->cap, prim))
+            q->nomem = 1;
     }
 }
 
@@ -455,10 +446,8 @@ void lie_rt_box_query(const lie_rt *rt, lie_box3 box, lie_rt_box_fn fn, void *ct
 int lie_shadow_segment(lie_vec3 p, lie_vec3 ng, lie_vec3 q, lie_vec3 *org, lie_vec3 *dir,
                        float *tnear, float *tfar)
 {
-    /* Offset scaled by the coordinates' magnitude (float spacing grows with
-     * it); the segment stops the same relative distance short of q. */
-    float eps = 1e-4f * lie_maxf(lie_v3_maxabs(p), 1.0f);
-    lie_vec3 o = lie_v3_add(p, lie_v3_scale(ng, eps));
+    float eps = lie_ray_eps(p);
+    lie_vec3 o = lie_ray_origin(p, ng, eps);
     lie_vec3 d = lie_v3_sub(q, o);
     float len = lie_v3_len(d);
     if (!(len > 2.0f * eps))
@@ -466,6 +455,6 @@ int lie_shadow_segment(lie_vec3 p, lie_vec3 ng, lie_vec3 q, lie_vec3 *org, lie_v
     *org = o;
     *dir = lie_v3_scale(d, 1.0f / len);
     *tnear = 0.0f;
-    *tfar = len - eps;
+    *tfar = lie_ray_end(len, eps);
     return 1;
 }

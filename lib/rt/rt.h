@@ -83,6 +83,29 @@ int lie_rt_any_hit(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, fl
 typedef void (*lie_rt_box_fn)(void *ctx, uint32_t tri);
 void lie_rt_box_query(const lie_rt *rt, lie_box3 box, lie_rt_box_fn fn, void *ctx);
 
+/* Shadow-ray conventions, shared by the renderer (lib/shade), lie-build
+ * (lib/lie) and the ray segment trees (lib/rst): the LIE image equals the
+ * full-visibility one only if they all use these.  A ray leaving surface
+ * point p starts lifted off the surface by lie_ray_eps(p) = 1e-4 max(1, |p|)
+ * (|p| the largest coordinate magnitude: float spacing grows with it) along
+ * the geometric normal of the side it leaves, and a shadow segment stops
+ * the same distance short of its target. */
+static inline float lie_ray_eps(lie_vec3 p) { return 1e-4f * lie_maxf(lie_v3_maxabs(p), 1.0f); }
+/* A bound of lie_ray_eps over points whose coordinates are at most mag in
+ * magnitude (lie-build's hulls must contain every origin). */
+static inline float lie_ray_eps_bound(float mag) { return 1.0001e-4f * fmaxf(1.0f, mag); }
+/* The origin of a ray leaving p on the side `side` (a unit normal). */
+static inline lie_vec3 lie_ray_origin(lie_vec3 p, lie_vec3 side, float eps)
+{
+    return lie_v3_add(p, lie_v3_scale(side, eps));
+}
+/* Where a segment from the origin to a target len away stops, as a
+ * distance along its unit direction ... */
+static inline float lie_ray_end(float len, float eps) { return len - eps; }
+/* ... and as a fraction of the vector to the target, d2 its squared length
+ * (the form the renderer's vectorised loops use). */
+static inline float lie_ray_end_scale(float d2, float eps) { return d2 > 0.0f ? 1.0f - eps / sqrtf(d2) : 0.0f; }
+
 /* The shadow segment from surface point p (geometric normal ng, facing the
  * side the segment leaves from) to point q: origin offset off the surface,
  * end short of q, so neither the receiver nor the emitter's own surface

@@ -7,6 +7,7 @@
  *
  * (area emitters; point lights: I cos(theta_i) / d^2, directional: E cos). */
 #include "shade/internal.h"
+#include "shade/ltc.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -332,7 +333,7 @@ void lie_shadow_segments(lie_shadow_query *q)
     for (int i = 0; i < n; i++) {
         float dx = lx[i] - ox, dy = ly[i] - oy, dz = lz[i] - oz;
         float d2 = dx * dx + dy * dy + dz * dz;
-        float k = d2 > 0.0f ? 1.0f - eps / sqrtf(d2) : 0.0f;
+        float k = lie_ray_end_scale(d2, eps);
         sdx[i] = dx * k;
         sdy[i] = dy * k;
         sdz[i] = dz * k;
@@ -345,6 +346,30 @@ static void closed_colour(const lie_polylight *pl, const lie_surface *sf, float 
 {
     for (int c = 0; c < 3; c++)
         k[c] = pl->radiance[c] * sf->diffuse[c] * (float)M_1_PI;
+}
+
+/* Other BRDFs: radiance x the LTC integral (ltc.h) over each piece that
+ * lie_polylight_unshadowed or lie_polylight_visible left in w, the pieces
+ * mapped from the emitter plane's (s, t) to directions from o. */
+static void closed_ltc(const lie_polylight *pl, const lie_ltc_shading *sh, lie_vec3 o, const lie_polylight_work *w,
+                       float out[3])
+{
+    const double wx = pl->po[0] - o.x, wy = pl->po[1] - o.y, wz = pl->po[2] - o.z;
+    float acc[3] = {0.0f, 0.0f, 0.0f};
+    for (int k = 0; k < w->n; k++) {
+        const lie_poly2 *p = &w->a[k];
+        lie_vec3 v[LIE_POLY_MAXV];
+        for (int i = 0; i < p->n; i++) {
+            double s = p->s[i], t = p->t[i];
+            v[i] = lie_v3((float)(wx + s * pl->pu[0] + t * pl->pv[0]), (float)(wy + s * pl->pu[1] + t * pl->pv[1]),
+                          (float)(wz + s * pl->pu[2] + t * pl->pv[2]));
+        }
+        float f[3];
+        lie_ltc_polygon(sh, v, p->n, f);
+        acc[0] += f[0], acc[1] += f[1], acc[2] += f[2];
+    }
+    for (int c = 0; c < 3; c++)
+        out[c] = pl->radiance[c] * acc[c];
 }
 
 static void add_scaled(const float k[3], double omega, float rgb[3])
@@ -365,14 +390,13 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
     if (sf->mirror)
         return; /* a delta BRDF sees area lights only through reflection rays */
     /* Shadow rays leave from the surface lifted along the geometric normal
-     * (as lie_shadow_segment does) and stop as far short of the emitter. */
-    float ax = fabsf(sf->p.x), ay = fabsf(sf->p.y), az = fabsf(sf->p.z);
-    float mag = ax > ay ? ax : ay;
-    mag = mag > az ? mag : az;
-    float eps = 1e-4f * (mag > 1.0f ? mag : 1.0f);
-    lie_vec3 o = lie_v3_add(sf->p, lie_v3_scale(sf->ng, eps));
+     * and stop as far short of the emitter (lib/rt/rt.h). */
+    float eps = lie_ray_eps(sf->p);
+    lie_vec3 o = lie_ray_origin(sf->p, sf->ng, eps);
     const int timers = opt->timers;
     lie_render_stats *st = &sc->stats;
+    lie_ltc_shading ltc; /* set up at the first pair that needs it */
+    int ltc_ready = 0;
     for (int e = 0; e < s->n_emitters; e++) {
         const lie_emitter *em = &s->emitters[e];
         if (em->type == LIE_EMITTER_AREA && em->first_tri <= sf->tri && sf->tri < em->first_tri + em->n_tris)
@@ -398,22 +422,37 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
         } else if (opt->visibility == LIE_VIS_NONE) {
             cls = LIE_VISCLASS_VISIBLE;
         }
-        /* A Lambert receiver under a planar emitter of one radiance: the
-         * closed form (polylight.h) for the unshadowed part, and for the
-         * visible part of a partial pair. */
-        const lie_polylight *pl = c->analytic && sf->lambert && c->poly ? c->poly[e] : NULL;
+        /* A receiver under a planar emitter of one radiance: the closed
+         * form (polylight.h) for the unshadowed part, and for the visible
+         * part of a partial pair.  Lambert's edge sum is exact; the glTF
+         * BRDF's LTC (ltc.h) is a fit, a few per cent off (more at grazing
+         * views), so it serves only where closed forms were asked for
+         * (--light-samples exact) and the sampled shading stays the
+         * default. */
+        const lie_polylight *pl =
+            c->analytic && c->poly && (sf->lambert || opt->exact == LIE_EXACT_ONLY) ? c->poly[e] : NULL;
         double omega = 0.0;
-        float kc[3] = {0.0f, 0.0f, 0.0f};
+        float kc[3] = {0.0f, 0.0f, 0.0f}, kl[3] = {0.0f, 0.0f, 0.0f};
         if (pl) {
-            closed_colour(pl, sf, kc);
+            if (sf->lambert) {
+                closed_colour(pl, sf, kc);
+            } else if (!ltc_ready) {
+                lie_ltc_shading_from_surface(lie_ltc_table_default(), sf, &ltc);
+                ltc_ready = 1;
+            }
             if (cls == LIE_VISCLASS_BLOCKERS && c->exact) {
                 double t0 = clock_if(timers);
                 int ok = lie_polylight_visible(pl, o, sf->n, sf->ng, s->tri_p, opt->oracle->solid, sc->blockers, n_blockers, eps,
                                                &sc->poly, &omega) == 0;
+                if (ok && !sf->lambert)
+                    closed_ltc(pl, &ltc, o, &sc->poly, kl);
                 if (timers)
                     st->t_exact += lie_time_now() - t0;
                 if (ok) {
-                    add_scaled(kc, omega, rgb);
+                    if (sf->lambert)
+                        add_scaled(kc, omega, rgb);
+                    else
+                        add_scaled(kl, 1.0, rgb);
                     st->pairs_exact++;
                     st->shadow_rays_skipped += (uint64_t)opt->light_samples;
                     continue;
@@ -422,10 +461,15 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
             }
             double t0 = clock_if(timers);
             omega = lie_polylight_unshadowed(pl, o, sf->n, sf->ng, &sc->poly);
+            if (!sf->lambert)
+                closed_ltc(pl, &ltc, o, &sc->poly, kl);
             if (timers)
                 st->t_analytic += lie_time_now() - t0;
             if (cls == LIE_VISCLASS_VISIBLE) {
-                add_scaled(kc, omega, rgb);
+                if (sf->lambert)
+                    add_scaled(kc, omega, rgb);
+                else
+                    add_scaled(kl, 1.0, rgb);
                 st->pairs_analytic++;
                 st->shadow_rays_skipped += (uint64_t)opt->light_samples;
                 continue;
@@ -463,7 +507,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                                   sc->bwork, sc->bkind, sc->bstride};
             float *sdx = sc->dx, *sdy = sc->dy, *sdz = sc->dz;
             if (!ls) {
-                float len = sc->dist[0] - eps;
+                float len = lie_ray_end(sc->dist[0], eps);
                 sdx[0] *= len;
                 sdy[0] *= len;
                 sdz[0] *= len;
@@ -508,13 +552,23 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                     st->t_embree += lie_time_now() - t0;
             }
         }
-        if (pl) {
+        if (pl && sf->lambert) {
             /* the ratio estimator: the closed form times the share of the
              * samples' weight that is visible (sc->scalar: a Lambert
              * receiver under an emitter of one colour) */
             float all = plain_sum(sc->wr, n);
             float vis = unblocked_sum(sc->wr, sc->occ, n);
             add_scaled(kc, all > 0.0f ? omega * (double)(vis / all) : omega, rgb);
+            continue;
+        }
+        if (pl) {
+            /* the same per channel for the glTF BRDF (weights in wr, wg, wb) */
+            const float *wc[3] = {sc->wr, sc->scalar ? sc->wr : sc->wg, sc->scalar ? sc->wr : sc->wb};
+            for (int k = 0; k < 3; k++) {
+                float all = plain_sum(wc[k], n);
+                float vis = unblocked_sum(wc[k], sc->occ, n);
+                rgb[k] += all > 0.0f ? kl[k] * (vis / all) : kl[k];
+            }
             continue;
         }
         add_pair(sc, sc->occ, n, rgb);

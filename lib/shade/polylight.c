@@ -313,6 +313,7 @@ double lie_polylight_unshadowed(const lie_polylight *L, lie_vec3 o, lie_vec3 n, 
 {
     view vw;
     int m = visible_pieces(L, o, n, ng, &vw, w);
+    w->n = m;
     double sum = 0.0;
     const d3 N = d3_of(n);
     for (int k = 0; k < m; k++)
@@ -563,6 +564,7 @@ int lie_polylight_visible(const lie_polylight *L, lie_vec3 o, lie_vec3 n, lie_ve
     view vw;
     int m = visible_pieces(L, o, n, ng, &vw, w);
     *omega = 0.0;
+    w->n = 0;
     if (m == 0)
         return 0;
     const d3 pn = {L->pn[0], L->pn[1], L->pn[2]};
@@ -631,5 +633,6 @@ int lie_polylight_visible(const lie_polylight *L, lie_vec3 o, lie_vec3 n, lie_ve
     for (int i = 0; i < m; i++)
         sum += edge_sum(&vw, &cur[i], N);
     *omega = 0.5 * fabs(sum);
+    w->n = m;
     return 0;
 }

@@ -62,6 +62,7 @@ void lie_polylight_destroy(lie_polylight *L);
 /* Per-worker workspace for blocker lists up to max_blockers long. */
 typedef struct lie_polylight_work {
     lie_poly2 *a;    /* the pieces */
+    int n;           /* how many the last unshadowed() or visible() left in a (0 on -1) */
     uint32_t *idx;   /* 2 cap */
     double *pts;     /* 2 (6 cap + 1) */
     int cap;

@@ -23,8 +23,7 @@ lie_status lie_visible_triangles(const lie_scene *s, const lie_rt *rt, const lie
                         break;
                     float dn = lie_v3_dot(d, sf.n);
                     d = lie_v3_norm(lie_v3_sub(d, lie_v3_scale(sf.n, 2.0f * dn)));
-                    float mag = fmaxf(fabsf(sf.p.x), fmaxf(fabsf(sf.p.y), fabsf(sf.p.z)));
-                    org = lie_v3_add(sf.p, lie_v3_scale(sf.ng, 1e-4f * fmaxf(1.0f, mag)));
+                    org = lie_ray_origin(sf.p, sf.ng, lie_ray_eps(sf.p));
                 }
             }
     }

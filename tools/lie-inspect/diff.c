@@ -34,7 +34,8 @@ typedef struct diff_ctx {
     size_t n_items, cap, limit;
     int oom;
     diff_field *fields;
-    int n_fields, cap_fields;
+    int n_fields;
+    size_t cap_fields;
 } diff_ctx;
 
 static void record(diff_ctx *d, diff_kind k, uint32_t tri, int e, lie_patch_path path, uint32_t na, uint32_t nb)
@@ -42,18 +43,9 @@ static void record(diff_ctx *d, diff_kind k, uint32_t tri, int e, lie_patch_path
     d->count[k]++;
     if (d->n_items >= d->limit || d->oom)
         return;
-    if (d->n_items == d->cap) {
-        size_t cap = d->cap ? 2 * d->cap : 64;
-        diff_item *v = realloc(d->items, cap * sizeof *v);
-        if (!v) {
-            d->oom = 1;
-            return;
-        }
-        d->items = v;
-        d->cap = cap;
-    }
     diff_item it = {tri, e, path, k, na, nb};
-    d->items[d->n_items++] = it;
+    if (!LIE_PUSH(d->items, d->n_items, d->cap, it))
+        d->oom = 1;
 }
 
 /* A subtree present on one side only; returns the nodes in it. */
@@ -104,15 +96,9 @@ static void field(diff_ctx *d, const char *name, const char *a, const char *b, i
 {
     if (strcmp(a, b) == 0 || d->oom)
         return;
-    if (d->n_fields == d->cap_fields) {
-        int cap = d->cap_fields ? 2 * d->cap_fields : 16;
-        diff_field *v = realloc(d->fields, (size_t)cap * sizeof *v);
-        if (!v) {
-            d->oom = 1;
-            return;
-        }
-        d->fields = v;
-        d->cap_fields = cap;
+    if (!LIE_GROW(d->fields, d->cap_fields, (size_t)d->n_fields + 1)) {
+        d->oom = 1;
+        return;
     }
     diff_field *f = &d->fields[d->n_fields++];
     snprintf(f->name, sizeof f->name, "%s", name);

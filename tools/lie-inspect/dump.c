@@ -26,18 +26,9 @@ static void collect_node(void *ctx, uint32_t tri, int e, lie_patch_path path, ui
 {
     (void)tri;
     collect *c = ctx;
-    if (c->n == c->cap) {
-        size_t cap = c->cap ? 2 * c->cap : 256;
-        pair_ref *v = realloc(c->v, cap * sizeof *v);
-        if (!v) {
-            c->oom = 1;
-            return;
-        }
-        c->v = v;
-        c->cap = cap;
-    }
     pair_ref r = {path, e, node};
-    c->v[c->n++] = r;
+    if (!LIE_PUSH(c->v, c->n, c->cap, r))
+        c->oom = 1;
 }
 
 static int pair_cmp(const void *a, const void *b)

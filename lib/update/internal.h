@@ -1,0 +1,60 @@
+/* lib/update's private state, shared by its files (see update.h). */
+#ifndef LIE_UPDATE_INTERNAL_H
+#define LIE_UPDATE_INTERNAL_H
+
+#include "update/update.h"
+
+struct lie_update {
+    lie_cache *cache;         /* borrowed: cache->env is the committed state */
+    lie_scene *scene;         /* borrowed: edited by lie_update_edit */
+    lie_update_options opt;
+    int failed;
+
+    /* The committed state, which the trees and the flags refer to. */
+    lie_rst *rst;             /* NULL with opt.full */
+    int rst_stale;            /* committed since the trees were built */
+    lie_rst_stats rst_stats;  /* of the trees' build */
+    double rst_seconds;
+    uint32_t base_tris;
+    float base_max_area;
+
+    /* Edits since the last commit. */
+    int dirty;
+    lie_box3 *boxes;          /* every edited node's bounds, before and after */
+    int n_boxes;
+    size_t cap_boxes;
+    int *moved;               /* nodes whose transform, geometry or presence changed */
+    int n_moved;
+    size_t cap_moved;
+    lie_cache_edit *log;      /* the edit files, for the cache's edit log */
+    int n_log;
+    uint8_t *tree_flags;      /* per committed node: flagged by the trees (queries accumulate) */
+
+    /* Phase 1's answer for all of them. */
+    int32_t *old_unit;        /* per unit of the edited scene: the committed unit it continues, or -1 */
+    uint8_t *flags;           /* per committed node: recompute (tree flags tightened by exact hulls) */
+
+    /* Phase 2. */
+    lie_env *work;            /* shaped for the edited scene: committed content, steps' results */
+    uint8_t *work_flags;      /* per work node: still to recompute */
+    uint8_t *pending;         /* per unit: 1 = recompute flagged nodes, 2 = build afresh, 0 = done */
+    size_t n_pending;
+    lie_rt *rt;               /* Embree over the edited scene, made by the first step */
+
+    lie_update_stats st;
+};
+
+/* Phase 1 (mark.c): after the edits since the commit, compute old_unit,
+ * flags, work, work_flags and pending. */
+lie_status lie_update_mark(lie_update *u, lie_error *err);
+/* Free phase 1's answers and the work env (pending work is dropped). */
+void lie_update_drop_answers(lie_update *u);
+
+/* World bounds of every glTF node's own triangles (empty boxes for none);
+ * the caller frees. */
+lie_box3 *lie_update_node_boxes(const lie_scene *s);
+
+/* Are the subtrees at node a of A and node b of B identical? */
+int lie_update_same_subtree(const lie_env *A, uint32_t a, const lie_env *B, uint32_t b);
+
+#endif

@@ -1,0 +1,245 @@
+/* Phase 1 of an update (§5.3): which units continue, which nodes the
+ * edits' boxes reach, and the work env those answers shape. */
+#include "update/internal.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+lie_box3 *lie_update_node_boxes(const lie_scene *s)
+{
+    lie_box3 *b = malloc(sizeof *b * ((size_t)s->n_nodes + 1));
+    if (!b)
+        return NULL;
+    for (int i = 0; i < s->n_nodes; i++)
+        b[i] = lie_box3_empty();
+    for (int i = 0; i < s->n_instances; i++) {
+        const lie_instance *in = &s->instances[i];
+        for (uint32_t t = in->first_tri; t < in->first_tri + in->n_tris; t++)
+            if (!s->tri_removed[t])
+                for (int k = 0; k < 3; k++)
+                    lie_box3_grow(&b[in->node], s->tri_p[3 * (size_t)t + k]);
+    }
+    return b;
+}
+
+int lie_update_same_subtree(const lie_env *A, uint32_t a, const lie_env *B, uint32_t b)
+{
+    const lie_pnode *x = &A->nodes[a], *y = &B->nodes[b];
+    if (x->cls != y->cls || x->count != y->count || x->quality != y->quality || !x->child != !y->child)
+        return 0;
+    if (x->cls == LIE_CLASS_PARTIAL && memcmp(A->pool + x->list, B->pool + y->list, sizeof(uint32_t) * x->count))
+        return 0;
+    if (x->child)
+        for (uint32_t k = 0; k < 4; k++)
+            if (!lie_update_same_subtree(A, x->child + k, B, y->child + k))
+                return 0;
+    return 1;
+}
+
+/* An emitter continues when the same, unmoved instance emits before and
+ * after: its committed index, or -1. */
+static int32_t emitter_before(const lie_cache *c, const lie_emitter *em, const uint8_t *moved)
+{
+    int32_t o = -1;
+    if (moved[em->node])
+        return -1;
+    for (int k = 0; k < c->n_emitters; k++)
+        if (c->emitters[k].type == (uint32_t)em->type && c->emitters[k].node == em->node &&
+            c->emitters[k].first_tri == em->first_tri && c->emitters[k].n_tris == em->n_tris)
+            o = k;
+    return o;
+}
+
+/* old_unit: units whose patch or emitter moved, new units, and all units
+ * when the smallest patch size changed, are built afresh (-1). */
+static lie_status map_units(lie_update *u)
+{
+    const lie_scene *s = u->scene;
+    const lie_cache *c = u->cache;
+    size_t n_units = (size_t)s->n_tris * (size_t)s->n_emitters;
+    uint8_t *moved = calloc((size_t)s->n_nodes + 1, 1);
+    int32_t *emap = malloc(sizeof *emap * ((size_t)s->n_emitters + 1));
+    u->old_unit = malloc(sizeof *u->old_unit * (n_units + 1));
+    if (!moved || !emap || !u->old_unit) {
+        free(moved);
+        free(emap);
+        return LIE_ERR_NOMEM;
+    }
+    for (int k = 0; k < u->n_moved; k++)
+        if (u->moved[k] >= 0 && u->moved[k] < s->n_nodes)
+            moved[u->moved[k]] = 1;
+    for (int e = 0; e < s->n_emitters; e++)
+        emap[e] = emitter_before(c, &s->emitters[e], moved);
+    int everything = u->opt.full || s->max_tri_area != u->base_max_area;
+    for (uint32_t t = 0; t < s->n_tris; t++) {
+        int patch_moved = t >= u->base_tris || moved[s->instances[s->tri_instance[t]].node];
+        for (int e = 0; e < s->n_emitters; e++) {
+            size_t unit = (size_t)t * (size_t)s->n_emitters + (size_t)e;
+            u->old_unit[unit] = everything || patch_moved || emap[e] < 0
+                                    ? -1
+                                    : (int32_t)((size_t)t * (size_t)c->n_emitters + (size_t)emap[e]);
+        }
+    }
+    free(moved);
+    free(emap);
+    return LIE_OK;
+}
+
+/* flags: the trees' answers, tightened by each flagged root's exact hull
+ * and carried down the patch trees while the hulls meet a box.  The hulls
+ * are computed on the edited scene, which is right for every patch and
+ * emitter that did not move (the others are rebuilt anyway) as long as
+ * emitters kept their indices; otherwise a flagged root's whole subtree
+ * goes along. */
+static lie_status flag_nodes(lie_update *u)
+{
+    const lie_env *env = u->cache->env;
+    const lie_scene *s = u->scene;
+    const lie_cache *c = u->cache;
+    u->flags = malloc((size_t)env->n_nodes + 1);
+    if (!u->flags)
+        return LIE_ERR_NOMEM;
+    if (u->tree_flags)
+        memcpy(u->flags, u->tree_flags, env->n_nodes);
+    else
+        memset(u->flags, 0, env->n_nodes);
+    u->st.nodes_flagged_5d = 0;
+    for (uint32_t i = 0; i < env->n_nodes; i++)
+        u->st.nodes_flagged_5d += u->flags[i];
+    int same_emitters = s->n_emitters == c->n_emitters;
+    for (int e = 0; same_emitters && e < s->n_emitters; e++)
+        same_emitters = c->emitters[e].node == s->emitters[e].node && c->emitters[e].first_tri == s->emitters[e].first_tri;
+    if (u->rst && same_emitters)
+        lie_rst_refine(s, env, u->boxes, u->n_boxes, u->flags);
+    else if (u->rst)
+        lie_rst_spread(env, u->flags);
+    u->st.nodes_flagged = 0;
+    for (uint32_t i = 0; i < env->n_nodes; i++)
+        u->st.nodes_flagged += u->flags[i];
+    return LIE_OK;
+}
+
+static void subtree_size(const lie_env *env, uint32_t n, uint32_t *nodes, uint32_t *pool)
+{
+    const lie_pnode *x = &env->nodes[n];
+    ++*nodes;
+    if (x->cls == LIE_CLASS_PARTIAL && !x->child)
+        *pool += x->count;
+    for (uint32_t k = 0; x->child && k < 4; k++)
+        subtree_size(env, x->child + k, nodes, pool);
+}
+
+/* Copy committed node `from` and its subtree to node idx of w, in the
+ * order lib/lie's assembly lays a unit out (children appended as their
+ * parent is visited, depth first), with its flag. */
+static void copy_subtree(const lie_env *env, const uint8_t *flags, uint32_t from, lie_env *w, uint8_t *wf,
+                         uint32_t idx)
+{
+    lie_pnode x = env->nodes[from];
+    wf[idx] = flags[from];
+    if (x.child) {
+        uint32_t first = w->n_nodes, oc = x.child;
+        w->n_nodes += 4;
+        x.child = first;
+        w->nodes[idx] = x;
+        for (uint32_t k = 0; k < 4; k++)
+            copy_subtree(env, flags, oc + k, w, wf, first + k);
+        return;
+    }
+    if (x.cls == LIE_CLASS_PARTIAL) {
+        memcpy(w->pool + w->n_pool, env->pool + x.list, sizeof *w->pool * x.count);
+        x.list = w->n_pool;
+        w->n_pool += x.count;
+    }
+    w->nodes[idx] = x;
+}
+
+/* The work env: per unit of the edited scene, in unit order and each
+ * contiguous, the committed unit it continues or one LIE_CLASS_NONE node
+ * for a unit to build afresh. */
+static lie_status make_work(lie_update *u)
+{
+    const lie_env *env = u->cache->env;
+    const lie_scene *s = u->scene;
+    size_t n_units = (size_t)s->n_tris * (size_t)s->n_emitters;
+    uint64_t nodes = 0, pool = 0;
+    for (size_t k = 0; k < n_units; k++) {
+        uint32_t a = 1, b = 0;
+        if (u->old_unit[k] >= 0) {
+            a = 0;
+            subtree_size(env, env->root[u->old_unit[k]], &a, &b);
+        }
+        nodes += a;
+        pool += b;
+    }
+    if (nodes >= 0xFFFFFFF0u || pool >= 0xFFFFFFF0u)
+        return LIE_ERR_LIMIT;
+    lie_env *w = calloc(1, sizeof *w);
+    u->work = w;
+    u->pending = calloc(n_units + 1, 1);
+    u->work_flags = calloc((size_t)nodes + 1, 1);
+    if (!w || !u->pending || !u->work_flags)
+        return LIE_ERR_NOMEM;
+    *w = *env;
+    w->n_tris = s->n_tris;
+    w->n_emitters = s->n_emitters;
+    w->root = malloc(sizeof *w->root * (n_units + 1));
+    w->nodes = malloc(sizeof *w->nodes * ((size_t)nodes + 1));
+    w->pool = malloc(sizeof *w->pool * ((size_t)pool + 1));
+    w->n_nodes = w->n_pool = 0;
+    if (!w->root || !w->nodes || !w->pool)
+        return LIE_ERR_NOMEM;
+    u->n_pending = 0;
+    for (size_t k = 0; k < n_units; k++) {
+        uint32_t idx = w->n_nodes++;
+        w->root[k] = idx;
+        if (u->old_unit[k] < 0) {
+            memset(&w->nodes[idx], 0, sizeof w->nodes[idx]);
+            w->nodes[idx].cls = LIE_CLASS_NONE;
+            u->pending[k] = 2;
+        } else {
+            uint32_t r = env->root[u->old_unit[k]];
+            copy_subtree(env, u->flags, r, w, u->work_flags, idx);
+            u->pending[k] = u->flags[r];
+        }
+        u->n_pending += u->pending[k] != 0;
+    }
+    return LIE_OK;
+}
+
+void lie_update_drop_answers(lie_update *u)
+{
+    free(u->old_unit);
+    free(u->flags);
+    free(u->work_flags);
+    free(u->pending);
+    lie_env_destroy(u->work);
+    u->old_unit = NULL;
+    u->flags = u->work_flags = u->pending = NULL;
+    u->work = NULL;
+    u->n_pending = 0;
+}
+
+lie_status lie_update_mark(lie_update *u, lie_error *err)
+{
+    double t0 = lie_time_now();
+    lie_update_drop_answers(u);
+    lie_status st = map_units(u);
+    if (st == LIE_OK)
+        st = flag_nodes(u);
+    if (st == LIE_OK)
+        st = make_work(u);
+    if (st != LIE_OK)
+        return lie_error_set(err, st, u->scene->path, "marking the units to update: %s", lie_status_str(st));
+    const lie_scene *s = u->scene;
+    size_t n_units = (size_t)s->n_tris * (size_t)s->n_emitters;
+    u->st.units = n_units;
+    u->st.units_rebuilt = u->st.units_flagged = 0;
+    for (size_t k = 0; k < n_units; k++) {
+        u->st.units_rebuilt += u->pending[k] == 2;
+        u->st.units_flagged += u->pending[k] == 1;
+    }
+    u->st.units_pending = u->n_pending;
+    u->st.seconds_query += lie_time_now() - t0;
+    return LIE_OK;
+}

@@ -1,0 +1,143 @@
+/* lib/update: updating a cache's local illumination environments after
+ * scene edits (§5), in two phases so that an interactive program can show
+ * an edit at once and refine its frames while the environments catch up.
+ *
+ *   phase 1, lie_update_edit: apply an edit file to the scene, query the
+ *     ray segment trees (lib/rst) with the bounds of every node it moved,
+ *     before and after, tighten the answer with the exact hulls down the
+ *     patch trees, and mark the units (triangle x emitter) that need work
+ *     *pending*: those whose patch or emitter changed (rebuilt afresh) and
+ *     those with a flagged node (recomputed where flagged).  Cheap.
+ *   phase 2, lie_update_step: recompute pending units, a chunk at a time.
+ *     When the last one is done the update is *committed*: the cache gets
+ *     the new environments, the scene's triangle count, emitter summary
+ *     and state hash, and the edit log gains the edit files.
+ *
+ * Pending units in a render: lie_update_snapshot gives an env for the
+ * edited scene in which every leaf still to be recomputed, and the root of
+ * every unit still to be rebuilt, has class LIE_CLASS_NONE; the renderer
+ * (lib/shade, lie_lie_vis) already answers those pairs with Embree over
+ * the whole scene, so a frame rendered from a snapshot equals a frame
+ * rendered with full visibility wherever a unit is pending, and with the
+ * finished update everywhere else (unflagged leaves are exactly what the
+ * update keeps).  No other flag or field is involved.
+ *
+ * lie_update_apply is phase 1 for every file and phase 2 to completion: the
+ * cache it leaves is byte for byte what lie-build gives for the edited
+ * scene, and what rst-update wrote before this module existed.
+ *
+ * Threads.  An update borrows a cache and its scene (the one
+ * lie_cache_load_scene loaded) from create to destroy.
+ *   - lie_update_edit writes the scene and the update: nothing may read
+ *     either meanwhile (no render, no step, no snapshot).  After it, the
+ *     caller's Embree scene and lie_lie_vis for the old scene are stale:
+ *     rebuild them (from a snapshot) before rendering again.
+ *   - lie_update_step and lie_update_snapshot only read the scene, so
+ *     rendering may run concurrently with them, from a snapshot or any
+ *     other structure the caller owns.  The two must not run at the same
+ *     time as each other (call both from one constructor thread, or lock).
+ *     A step that commits replaces cache->env: do not render from
+ *     cache->env while steps run.  Snapshots are the caller's, immutable,
+ *     and stay valid after later steps, edits and lie_update_destroy.
+ * Publishing results to a concurrent renderer is therefore: the
+ * constructor thread calls lie_update_step, then lie_update_snapshot, and
+ * hands the new env to the renderer (for example swapping a pointer under
+ * a lock between frames); the renderer frees the env it no longer uses.
+ *
+ * An edit that arrives while units are pending is added to the update:
+ * the pending set is recomputed for all edits since the last commit,
+ * against the environments of that commit, and the chunks already
+ * recomputed are done again (a unit's result depends on the final scene
+ * only). */
+#ifndef LIE_UPDATE_H
+#define LIE_UPDATE_H
+
+#include "cache/cache.h"
+#include "core/core.h"
+#include "edit/edit.h"
+#include "lie/lie.h"
+#include "rst/rst.h"
+#include "scene/scene.h"
+
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct lie_update_options {
+    int threads;            /* workers (0 = all cores); results never depend on it */
+    int full;               /* recompute every unit, trees unused (the reference for update = rebuild) */
+    int keep_trees;         /* rebuild the ray segment trees in the step that commits, so that the
+                               next lie_update_edit stays cheap (interactive use); 0: rebuild them
+                               only when another edit comes */
+    lie_scene_options scene;/* for the scenes that `add` operations load */
+} lie_update_options;
+lie_update_options lie_update_options_default(void);
+
+/* What an update did, summed over the edits since the last commit. */
+typedef struct lie_update_stats {
+    int edits;                 /* edit files applied */
+    uint64_t units;            /* units of the edited scene */
+    uint64_t units_rebuilt;    /* patch or emitter edited: built afresh */
+    uint64_t units_flagged;    /* continuing units with a flagged root */
+    uint64_t units_changed;    /* of those, units whose content really changed (known at commit) */
+    uint64_t units_pending;    /* rebuilt + flagged units not yet recomputed */
+    uint64_t nodes_flagged_5d; /* unit roots the trees flagged */
+    uint64_t nodes_flagged;    /* patch-tree nodes flagged after the exact hull tests */
+    uint64_t nodes_recomputed; /* patch-tree nodes computed by the steps */
+    lie_rst_stats rst;         /* the trees the flags came from */
+    double seconds_rst, seconds_edit, seconds_query, seconds_bvh, seconds_update;
+} lie_update_stats;
+
+typedef struct lie_update lie_update;
+
+/* Start updating `cache`, whose scene `scene` is (same triangles, emitters
+ * and state hash); builds the ray segment trees unless opt->full.  Both are
+ * borrowed until lie_update_destroy. */
+lie_status lie_update_create(lie_cache *cache, lie_scene *scene, const lie_update_options *opt, lie_update **out,
+                             lie_error *err);
+/* Free the update (NULL is fine).  Pending work is dropped: the cache
+ * keeps its last committed state, the scene its edits. */
+void lie_update_destroy(lie_update *u);
+
+/* Phase 1: apply one parsed edit file to the scene and mark the units it
+ * may change pending.  `text` (`size` bytes) is the file's full text and
+ * edit->name its name, both copied for the edit log.  On an error the
+ * scene may be partly edited and the update is unusable (every later call
+ * fails); the cache is untouched. */
+lie_status lie_update_edit(lie_update *u, const lie_edit *edit, const unsigned char *text, size_t size,
+                           lie_error *err);
+
+/* Phase 2: recompute up to max_units pending units (0 = all), in unit
+ * order; commit when none is left.  *remaining (may be NULL) receives the
+ * pending units left.  Any thread count and any chunking give the same
+ * bytes.  On an error the update is unusable and the cache untouched. */
+lie_status lie_update_step(lie_update *u, size_t max_units, size_t *remaining, lie_error *err);
+
+/* Pending units (0: committed, nothing to do). */
+size_t lie_update_pending(const lie_update *u);
+
+/* An env for the scene as it is now: finished units hold their final
+ * content, pending ones LIE_CLASS_NONE where they are not yet known (see
+ * above).  The caller owns *out (lie_env_destroy). */
+lie_status lie_update_snapshot(const lie_update *u, lie_env **out, lie_error *err);
+
+/* Statistics since the last commit (after a commit: of the update it
+ * committed, until the next edit). */
+void lie_update_get_stats(const lie_update *u, lie_update_stats *stats);
+
+/* All of it: create, every edit file in order (texts[i] of sizes[i] bytes
+ * for the log), steps to completion, destroy.  The cache then holds the
+ * edited scene's environments and longer edit log; scene is edited.
+ * stats may be NULL. */
+lie_status lie_update_apply(lie_cache *cache, lie_scene *scene, const lie_edit *const *edits,
+                            const unsigned char *const *texts, const size_t *sizes, int n_edits,
+                            const lie_update_options *opt, lie_update_stats *stats, lie_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#pragma GCC visibility pop
+
+#endif
