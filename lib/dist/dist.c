@@ -1,4 +1,5 @@
 /* The tools' MPI layer (lib/dist/dist.h). */
+#include "common/cli.h" /* lie_report_error: lib/dist is linked into tools only */
 #include "dist/dist.h"
 #include "lie.h"
 
