@@ -96,6 +96,7 @@ typedef struct session {
     double moving_seconds, last_present;
     uint64_t last_images, cam_gen, shown_cam_gen;
     double change_t;        /* the first camera change since the last image */
+    double last_change_t;
     int prev_moving;
     double fps_window_start;
     int fps_window_frames;
@@ -107,8 +108,9 @@ typedef struct session {
     double await_t0, last_edit_end;
     uint64_t await_version;
     int catching_up;
-    double *first_ms, *catchup_ms;
-    int n_first, n_catchup;
+    double *first_ms, *catchup_ms, *refine_ms;
+    int n_first, n_catchup, n_refine;
+    int refining;           /* the camera changed: time until every level is done */
 } session;
 
 static void push_ms(double **arr, int *n, double ms)
@@ -161,6 +163,8 @@ static void camera_update(session *S)
     if (S->cam_gen == S->shown_cam_gen)
         S->change_t = lie_time_now();
     S->cam_gen++;
+    S->refining = 1;
+    S->last_change_t = lie_time_now();
 }
 
 /* A node for an edit file: its name when that names it alone, else '#N'. */
@@ -534,6 +538,9 @@ static void print_stats(session *S, int json)
         fprintf(stderr, "],\"catchup_ms\":[");
         for (int i = 0; i < S->n_catchup; i++)
             fprintf(stderr, "%s%.3f", i ? "," : "", S->catchup_ms[i]);
+        fprintf(stderr, "],\"refine_ms\":[");
+        for (int i = 0; i < S->n_refine; i++)
+            fprintf(stderr, "%s%.3f", i ? "," : "", S->refine_ms[i]);
         fprintf(stderr, "],\"pending_max\":%lld,\"camera\":", (long long)view_world_pending_max(S->w));
         lie_json_string(stderr, S->spec);
         fprintf(stderr, "}\n");
@@ -791,6 +798,11 @@ int main(int argc, char **argv)
             push_ms(&S.first_ms, &S.n_first, 1e3 * (lie_time_now() - S.await_t0));
             S.await_version = 0;
         }
+        if (S.refining && idle) {
+            /* the full --light-samples image of the view since it stopped */
+            push_ms(&S.refine_ms, &S.n_refine, 1e3 * (lie_time_now() - S.last_change_t));
+            S.refining = 0;
+        }
         if (S.catching_up && !view_world_busy(S.w)) {
             push_ms(&S.catchup_ms, &S.n_catchup, 1e3 * (lie_time_now() - S.last_edit_end));
             S.catching_up = 0;
@@ -843,6 +855,7 @@ int main(int argc, char **argv)
     free(shown);
     free(S.first_ms);
     free(S.catchup_ms);
+    free(S.refine_ms);
     if (tex)
         SDL_DestroyTexture(tex);
     if (ren)
