@@ -256,6 +256,7 @@ typedef struct drag_state {
     int x0, y0, lastx, lasty;
     float depth;            /* of the grabbed point along the view */
     lie_vec3 pending;       /* motion not yet applied */
+    double last_flush;
     float pending_yaw, pending_pitch;
 } drag_state;
 
@@ -685,6 +686,8 @@ int main(int argc, char **argv)
     }
     view_orbit_from_camera(&S.orbit, &start, scene);
     camera_update(&S);
+    S.shown_cam_gen = S.cam_gen; /* the first view is not a motion */
+    S.refining = 0;
     int rc = 0;
     char title[256];
     snprintf(title, sizeof title, "lie-view: %s", input);
@@ -780,8 +783,12 @@ int main(int argc, char **argv)
                 view_orbit_dolly(&S.orbit, 0.1f * (float)ev.wheel.y);
             }
         }
-        if (D.dragging)
-            flush_drag(&S, &D); /* at most one edit per frame while dragging */
+        /* while dragging, an edit every 40 ms at most: each is a phase 1 of
+         * the update over every edit since its last commit */
+        if (D.dragging && lie_time_now() - D.last_flush >= 0.04) {
+            flush_drag(&S, &D);
+            D.last_flush = lie_time_now();
+        }
         if (R.sc && !quit) {
             uint64_t images, px, iv;
             int idle;
