@@ -322,7 +322,7 @@ lie_status view_render_screenshot(view_render *r, const char *path, lie_error *e
         pthread_cond_timedwait(&r->cv, &r->m, &ts);
     }
     /* the frame stays ours while m is held */
-    lie_status st = lie_frame_write(path, r->full, NULL, 0, 0.0f, err);
+    lie_status st = lie_frame_write(path, r->full, NULL, err);
     pthread_mutex_unlock(&r->m);
     return st;
 }
