@@ -42,14 +42,16 @@ LIB_SO   := $(BUILD)/liblie.so.$(LIBVERSION)
 $(LIB_OBJ): CFLAGS += -fPIC -fvisibility=hidden -fno-semantic-interposition
 $(LIB_OBJ): CXXFLAGS += -fPIC -fvisibility=hidden -fvisibility-inlines-hidden -fno-semantic-interposition
 
-TOOLS    := $(notdir $(wildcard tools/*))
+# tools/common is linked into every tool and test helper, not built as a tool.
+TOOLS    := $(filter-out common,$(notdir $(wildcard tools/*)))
+COMMON_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(wildcard tools/common/*.c))
 BINDIR   := $(if $(filter release,$(VARIANT)),bin,$(BUILD)/bin)
 TOOL_BIN := $(TOOLS:%=$(BINDIR)/%)
 
 UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
 UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/tests/%)
 
-.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench bench-mpi scenes fuzz clean \
+.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench bench-mpi bench-view scenes fuzz clean \
         install uninstall man shared ltc-tables ltc-bench
 all: $(TOOL_BIN)
 
@@ -85,10 +87,18 @@ FORCE:
 # A tool links every object of its folder (tools/NAME/*.c).
 TOOL_OBJ = $(patsubst %.c,$(BUILD)/%.o,$(wildcard tools/$(1)/*.c))
 .SECONDEXPANSION:
-$(BINDIR)/%: $$(call TOOL_OBJ,$$*) $(LIB_A)
+# tools/common/cli.h: for the tools, the test helpers and lib/dist (linked into tools only)
+$(BUILD)/tools/%.o $(BUILD)/tests/helpers/%.o $(BUILD)/lib/dist/%.o: CFLAGS += -Itools
+$(BINDIR)/%: $$(call TOOL_OBJ,$$*) $(COMMON_OBJ) $(LIB_A)
 	@mkdir -p $(dir $@)
 	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
 .SECONDARY:
+
+# lie-view opens a window with SDL2 (its software renderer: no GPU needed).
+SDL_CFLAGS := $(shell sdl2-config --cflags 2>/dev/null)
+SDL_LIBS   := $(shell sdl2-config --libs 2>/dev/null)
+$(BUILD)/tools/lie-view/%.o: CFLAGS += $(SDL_CFLAGS)
+$(BINDIR)/lie-view: LDLIBS += $(SDL_LIBS)
 
 # lib/dist: the MPI layer (Open MPI), linked into lie-render and lie-build
 # only; without mpirun it never calls MPI (lib/dist/dist.h).
@@ -109,7 +119,7 @@ $(BUILD)/tests/%: $(BUILD)/tests/unit/%.o $(LIB_A)
 
 # ---- test helpers (not installed tools) ------------------------------------
 HELPERS  := $(patsubst tests/helpers/%.c,$(BUILD)/tests/%,$(wildcard tests/helpers/*.c))
-$(BUILD)/tests/%: $(BUILD)/tests/helpers/%.o $(LIB_A)
+$(BUILD)/tests/%: $(BUILD)/tests/helpers/%.o $(COMMON_OBJ) $(LIB_A)
 	@mkdir -p $(dir $@)
 	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
 
@@ -162,6 +172,10 @@ test-asan:
 
 bench: all
 	@sh bench/run.sh
+
+# lie-view's interactive loop under Xvfb (not a timed test: figures depend on the load)
+bench-view: all
+	@sh bench/view.sh
 
 # lie-render and lie-build under mpirun against one process (docs/mpi.md)
 bench-mpi: all

@@ -44,7 +44,7 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     c.rt = rt;
     c.p = &env->params;
     c.min_area = env->params.min_patch * s->max_tri_area;
-    c.ray_far = lie_ray_far(s);
+    c.ray_far = lie_pair_ray_far(s);
     c.old = env;
     c.old_unit = old_unit;
     c.node_flags = node_flags;

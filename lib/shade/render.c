@@ -316,7 +316,7 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
     j.sc.s = s;
     j.sc.rt = rt;
     j.sc.opt = opt;
-    j.sc.ray_far = lie_ray_far(s);
+    j.sc.ray_far = lie_pair_ray_far(s);
     if (!isfinite(j.sc.ray_far))
         j.sc.ray_far = 1e30f;
     j.cam = cam;

@@ -1,6 +1,7 @@
 /* lie-build: build the local illumination environments of a scene and write
  * them to a cache.
  *   lie-build SCENE.gltf|SCENE.glb -o CACHE|- [options] */
+#include "common/cli.h"
 #include "dist.h"
 #include "lie.h"
 
