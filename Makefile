@@ -42,14 +42,16 @@ LIB_SO   := $(BUILD)/liblie.so.$(LIBVERSION)
 $(LIB_OBJ): CFLAGS += -fPIC -fvisibility=hidden -fno-semantic-interposition
 $(LIB_OBJ): CXXFLAGS += -fPIC -fvisibility=hidden -fvisibility-inlines-hidden -fno-semantic-interposition
 
-TOOLS    := $(notdir $(wildcard tools/*))
+# tools/common is linked into every tool and test helper, not built as a tool.
+TOOLS    := $(filter-out common,$(notdir $(wildcard tools/*)))
+COMMON_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(wildcard tools/common/*.c))
 BINDIR   := $(if $(filter release,$(VARIANT)),bin,$(BUILD)/bin)
 TOOL_BIN := $(TOOLS:%=$(BINDIR)/%)
 
 UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
 UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/tests/%)
 
-.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench bench-mpi bench-view scenes fuzz clean \
+.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench bench-build bench-mpi bench-view scenes fuzz clean \
         install uninstall man shared ltc-tables ltc-bench
 all: $(TOOL_BIN)
 
@@ -85,7 +87,9 @@ FORCE:
 # A tool links every object of its folder (tools/NAME/*.c).
 TOOL_OBJ = $(patsubst %.c,$(BUILD)/%.o,$(wildcard tools/$(1)/*.c))
 .SECONDEXPANSION:
-$(BINDIR)/%: $$(call TOOL_OBJ,$$*) $(LIB_A)
+# tools/common/cli.h: for the tools, the test helpers and lib/dist (linked into tools only)
+$(BUILD)/tools/%.o $(BUILD)/tests/helpers/%.o $(BUILD)/lib/dist/%.o: CFLAGS += -Itools
+$(BINDIR)/%: $$(call TOOL_OBJ,$$*) $(COMMON_OBJ) $(LIB_A)
 	@mkdir -p $(dir $@)
 	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
 .SECONDARY:
@@ -115,7 +119,7 @@ $(BUILD)/tests/%: $(BUILD)/tests/unit/%.o $(LIB_A)
 
 # ---- test helpers (not installed tools) ------------------------------------
 HELPERS  := $(patsubst tests/helpers/%.c,$(BUILD)/tests/%,$(wildcard tests/helpers/*.c))
-$(BUILD)/tests/%: $(BUILD)/tests/helpers/%.o $(LIB_A)
+$(BUILD)/tests/%: $(BUILD)/tests/helpers/%.o $(COMMON_OBJ) $(LIB_A)
 	@mkdir -p $(dir $@)
 	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
 
@@ -166,8 +170,13 @@ test-asan:
 	$(MAKE) -j$(NPROC) VARIANT=asan build-tests
 	$(MAKE) VARIANT=asan test-unit test-tools
 
-bench: all
+bench: all build-tests
 	@sh bench/run.sh
+	@sh bench/build.sh
+
+# what a lie-build costs in full frames, per scene: the paper's rule against the cost rule
+bench-build: all
+	@sh bench/build.sh
 
 # lie-view's interactive loop under Xvfb (not a timed test: figures depend on the load)
 bench-view: all

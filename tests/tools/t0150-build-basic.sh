@@ -53,11 +53,21 @@ cp "$TMP/c1.lie" "$TMP/keep.lie"
 run "$B/lie-build" "$D/gltf/bad_json.gltf" -q -o "$TMP/keep.lie"
 expect_same "$TMP/c1.lie" "$TMP/keep.lie" "a failed build leaves the previous cache untouched"
 expect_no_temp "$TMP" "no temporary files left"
-for bad in "--samples 0" "--samples x" "--min-patch 0" "--min-patch 2" "--blockers some" "--max-blockers -1" "--threads many"; do
+for bad in "--samples 0" "--samples x" "--min-patch 0" "--min-patch 2" "--blockers some" "--max-blockers -1" "--threads many" \
+           "--split-gain 1" "--split-gain -0.1" "--split-gain nan"; do
     # shellcheck disable=SC2086
     run "$B/lie-build" "$S/cornell.gltf" -q -o "$TMP/u.lie" $bad
     expect_rc 2 "usage error: $bad"
 done
+# --split-gain: kept in the cache; 0 keeps every split (more nodes than the default)
+"$B/lie-build" "$S/museum1.gltf" -q --min-patch 1e-3 --split-gain 0 -o "$TMP/g0.lie" || not_ok "build --split-gain 0"
+"$B/lie-build" "$S/museum1.gltf" -q --min-patch 1e-3 -o "$TMP/gd.lie" || not_ok "build with the default gain"
+"$B/lie-inspect" dump "$TMP/g0.lie" >"$TMP/g0.dump"
+"$B/lie-inspect" dump "$TMP/gd.lie" >"$TMP/gd.dump"
+n0=$(sed -n 's/^nodes //p' "$TMP/g0.dump"); nd=$(sed -n 's/^nodes //p' "$TMP/gd.dump")
+if grep -qx 'param split-gain 0' "$TMP/g0.dump" && grep -qx 'param split-gain 0.25' "$TMP/gd.dump" && [ "$nd" -lt "$n0" ]; then
+    ok "--split-gain is recorded; the default keeps fewer nodes ($nd) than 0 ($n0)"
+else not_ok "split-gain: $(grep split-gain "$TMP/g0.dump" "$TMP/gd.dump") nodes $nd vs $n0"; fi
 run "$B/lie-build" "$S/cornell.gltf"
 expect_rc 2 "missing -o"
 expect_no_file "$TMP/u.lie" "no cache after usage errors"

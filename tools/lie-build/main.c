@@ -1,6 +1,7 @@
 /* lie-build: build the local illumination environments of a scene and write
  * them to a cache.
  *   lie-build SCENE.gltf|SCENE.glb -o CACHE|- [options] */
+#include "common/cli.h"
 #include "dist.h"
 #include "lie.h"
 
@@ -26,7 +27,10 @@ static void usage(FILE *fp)
             "                        segments (default %u)\n"
             "      --max-blockers B  subdivide a patch whose blocker list is longer (default %u)\n"
             "      --min-patch F     smallest patch area, as a fraction of the largest\n"
-            "                        triangle's area, in [%g, 1] (default %g, the paper's 0.01%%)\n"
+            "                        triangle's area, in [%g, 1] (default %g, the paper's 0.01%%): a floor\n"
+            "      --split-gain G    keep a split only if the children's lists are shorter\n"
+            "                        than the parent's by this share on average (default %g;\n"
+            "                        0 splits wherever a list is too long, as the paper)\n"
             "      --max-nodes N     refuse to build more patch-tree nodes than N, about\n"
             "                        20 bytes each (default %llu)\n"
             "      --complex-cap C   a list still longer at the smallest size is 'complex':\n"
@@ -49,6 +53,7 @@ static void usage(FILE *fp)
             "Under mpirun the ranks share the units out and rank 0 writes the cache one\n"
             "process writes (docs/mpi.md).\n",
             prog, d.samples, d.max_samples, d.max_blockers, (double)LIE_MIN_PATCH_MIN, (double)d.min_patch,
+            (double)d.split_gain,
             (unsigned long long)LIE_MAX_NODES_DEFAULT, d.complex_cap);
 }
 
@@ -57,7 +62,7 @@ static void usage(FILE *fp)
 static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 
 enum {
-    OPT_SAMPLES = 256, OPT_MAX_SAMPLES, OPT_MAX_BLOCKERS, OPT_MIN_PATCH, OPT_COMPLEX_CAP, OPT_BLOCKERS,
+    OPT_SAMPLES = 256, OPT_MAX_SAMPLES, OPT_MAX_BLOCKERS, OPT_MIN_PATCH, OPT_SPLIT_GAIN, OPT_COMPLEX_CAP, OPT_BLOCKERS,
     OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_VIEW, OPT_VIEW_SIZE, OPT_MAX_NODES
 };
 
@@ -67,6 +72,7 @@ static const struct option long_opts[] = {
     {"max-samples", required_argument, NULL, OPT_MAX_SAMPLES},
     {"max-blockers", required_argument, NULL, OPT_MAX_BLOCKERS},
     {"min-patch", required_argument, NULL, OPT_MIN_PATCH},
+    {"split-gain", required_argument, NULL, OPT_SPLIT_GAIN},
     {"max-nodes", required_argument, NULL, OPT_MAX_NODES},
     {"complex-cap", required_argument, NULL, OPT_COMPLEX_CAP},
     {"blockers", required_argument, NULL, OPT_BLOCKERS},
@@ -110,10 +116,11 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
         for (int b = 0; b < 18; b++)
             fprintf(stderr, "%s%llu", b ? "," : "", (unsigned long long)st->list_hist[b]);
         fprintf(stderr,
-                "],\"mean_list_length\":%.3f,\"segments\":%llu,\"nodes\":%u,\"pool\":%u,"
+                "],\"mean_list_length\":%.3f,\"segments\":%llu,\"splits_undone\":%llu,\"nodes\":%u,\"pool\":%u,"
                 "\"seconds_load\":%.6f,\"seconds_bvh\":%.6f,\"seconds_build\":%.6f,\"seconds_write\":%.6f,"
                 "\"bytes\":%zu",
-                mean, (unsigned long long)st->segments, env->n_nodes, env->n_pool, t_load, t_bvh, t_build, t_write,
+                mean, (unsigned long long)st->segments, (unsigned long long)st->splits_undone,
+                env->n_nodes, env->n_pool, t_load, t_bvh, t_build, t_write,
                 bytes);
         lie_dist_stats_print(stderr, "units", 1);
         fprintf(stderr, "}\n");
@@ -139,8 +146,9 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
             else
                 fprintf(stderr, " %u-%u:%llu", lo, hi, (unsigned long long)st->list_hist[b]);
         }
-    fprintf(stderr, "\n  segments cast %llu; %u nodes, %u pooled blockers, %zu bytes written\n",
-            (unsigned long long)st->segments, env->n_nodes, env->n_pool, bytes);
+    fprintf(stderr, "\n  segments cast %llu; splits undone (did not shorten lists) %llu; %u nodes, %u pooled blockers, "
+                    "%zu bytes written\n",
+            (unsigned long long)st->segments, (unsigned long long)st->splits_undone, env->n_nodes, env->n_pool, bytes);
     fprintf(stderr, "  time: load %.3f s, bvh %.3f s, build %.3f s, write %.3f s\n", t_load, t_bvh, t_build,
             t_write);
     lie_dist_stats_print(stderr, "units", 0);
@@ -186,6 +194,11 @@ int main(int argc, char **argv)
                 return usage_error("--min-patch: expected a fraction in [%g, 1], got '%s'", (double)LIE_MIN_PATCH_MIN,
                                    optarg);
             bp.min_patch = f;
+            break;
+        case OPT_SPLIT_GAIN:
+            if (!lie_parse_float(optarg, 0.0f, 0.999f, &f))
+                return usage_error("--split-gain: expected a share in [0, 1), got '%s'", optarg);
+            bp.split_gain = f;
             break;
         case OPT_MAX_NODES:
             if (!lie_parse_long(optarg, 1, 0xFFFFFFF0L, &v))

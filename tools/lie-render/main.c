@@ -3,6 +3,7 @@
  * From a cache (lie-build), shadow rays are answered by the local
  * illumination environments (--visibility=lie, the default); from a scene,
  * or with --visibility=full, by Embree over the whole scene: the reference. */
+#include "common/cli.h"
 #include "dist.h"
 #include "lie.h"
 
@@ -38,12 +39,12 @@ static void usage(FILE *fp)
             "      --size WxH          image size (default %dx%d)\n"
             "      --spp N             eye rays per pixel, stratified (default %d: pixel centre)\n"
             "      --light-samples N   shadow rays per area emitter per shading point\n"
-            "                          (default %d; 0 = eye rays only), or 'exact': Lambert\n"
-            "                          and glossy (LTC) surfaces under planar lights of one\n"
-            "                          colour in closed form with exact shadows, the default\n"
-            "                          count elsewhere\n"
-            "      --exact MODE        auto (default: closed forms and, from a cache, exact\n"
-            "                          shadows once there are 16 light samples or more)\n"
+            "                          (default %d; 0 = eye rays only), or 'exact': surfaces\n"
+            "                          under planar lights of one colour in closed form (LTC\n"
+            "                          for glossy ones) with exact shadows, the default count\n"
+            "                          elsewhere\n"
+            "      --exact MODE        auto (default: closed forms, and from a cache exact\n"
+            "                          shadows where they cost less than the samples)\n"
             "                          | off (shadows from the samples: the oracle's mode)\n"
             "      --timers            --stats also reports per-path times (benchmarks)\n"
             "      --pattern P         fixed (default: the same emitter samples everywhere)\n"
@@ -199,7 +200,7 @@ typedef struct frame_out {
     const char *output, *input, *hash;
     const lie_render_options *ro;
     int path;
-    float exposure;
+    lie_frame_options opt; /* the attributes are set per frame */
     int first; /* the number of the path's frame 0 */
 } frame_out;
 
@@ -231,7 +232,10 @@ static lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie
         /* orthographic views: their height in world units (0: perspective) */
         {.name = "lie.cameraOrthoHeight", .type = LIE_ATTR_FLOAT, .f = 2.0f * fc->ymag},
     };
-    return lie_frame_write(name, frame, attrs, (int)(sizeof attrs / sizeof attrs[0]), o->exposure, err);
+    lie_frame_options opt = o->opt;
+    opt.exr.attrs = attrs;
+    opt.exr.n_attrs = (int)(sizeof attrs / sizeof attrs[0]);
+    return lie_frame_write(name, frame, &opt, err);
 }
 
 int main(int argc, char **argv)
@@ -242,7 +246,7 @@ int main(int argc, char **argv)
     long frame_a = -1, frame_b = -1;
     int skip_existing = 0;
     int visibility_set = 0;
-    float exposure = 0.0f;
+    lie_frame_options fopt = {0};
     int stats = 0, quiet = 0; /* stats: 1 human, 2 json */
     long v;
     int c;
@@ -315,18 +319,18 @@ int main(int argc, char **argv)
                                    optarg);
             break;
         case OPT_COMPRESSION:
-            if (!lie_exr_set_compression(optarg))
+            if (!lie_exr_compression_parse(optarg, &fopt.exr.compression))
                 return usage_error("--compression: expected zip, zips, piz, rle or none, got '%s'", optarg);
             break;
         case OPT_EXPOSURE:
-            if (!lie_parse_float(optarg, -64.0f, 64.0f, &exposure))
+            if (!lie_parse_float(optarg, -64.0f, 64.0f, &fopt.png.exposure))
                 return usage_error("--exposure: expected a number of stops, got '%s'", optarg);
             break;
         case OPT_THREADS:
             if (!lie_parse_long(optarg, 0, 4096, &v))
                 return usage_error("--threads: expected an integer in 0..4096, got '%s'", optarg);
             ro.threads = (int)v;
-            lie_exr_set_threads(ro.threads);
+            fopt.exr.threads = ro.threads;
             break;
         case OPT_EXTERNAL: so.allow_external_uris = 1; break;
         case OPT_SCENE: scene_override = optarg; break;
@@ -478,7 +482,7 @@ int main(int argc, char **argv)
         }
         todo[n_todo++] = fi;
     }
-    frame_out fo = {output, input, hash, &ro, cpath != NULL, exposure, first};
+    frame_out fo = {output, input, hash, &ro, cpath != NULL, fopt, first};
     if (todo && lie_dist_size() > 1) {
         lie_dist_bcast(&n_todo, sizeof n_todo);
         lie_dist_bcast(todo, sizeof *todo * (size_t)n_todo);

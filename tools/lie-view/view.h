@@ -10,6 +10,7 @@
 #ifndef LIE_VIEW_H
 #define LIE_VIEW_H
 
+#include "common/cli.h"
 #include "lie.h"
 
 #include <pthread.h>

@@ -1,6 +1,7 @@
 /* rst-update: apply edit files to a cache's scene and recompute only the
  * local illumination environments the edits can have changed (§5).
  *   rst-update CACHE|- EDIT.yaml [EDIT.yaml ...] -o CACHE|- [options] */
+#include "common/cli.h"
 #include "lie.h"
 
 #include <getopt.h>
