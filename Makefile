@@ -29,7 +29,7 @@ CXXFLAGS += -std=c++17 $(COMMON) -I/usr/include/stb -I/usr/include/nlohmann
 LDFLAGS  += $(filter -fsanitize=%,$(OPT))
 LDLIBS   := -lembree3 -lOpenEXRCore-3_1 -lyaml -ltinygltf -lxxhash -lpng -lz -lpthread -lm -lstdc++
 
-LIB_C    := $(sort $(wildcard lib/*/*.c))
+LIB_C    := $(sort $(filter-out lib/dist/%,$(wildcard lib/*/*.c)))
 LIB_CXX  := $(sort $(wildcard lib/*/*.cpp))
 LIB_OBJ  := $(LIB_C:%.c=$(BUILD)/%.o) $(LIB_CXX:%.cpp=$(BUILD)/%.o)
 LIB_A    := $(BUILD)/liblie.a
@@ -42,14 +42,16 @@ LIB_SO   := $(BUILD)/liblie.so.$(LIBVERSION)
 $(LIB_OBJ): CFLAGS += -fPIC -fvisibility=hidden -fno-semantic-interposition
 $(LIB_OBJ): CXXFLAGS += -fPIC -fvisibility=hidden -fvisibility-inlines-hidden -fno-semantic-interposition
 
-TOOLS    := $(notdir $(wildcard tools/*))
+# tools/common is linked into every tool and test helper, not built as a tool.
+TOOLS    := $(filter-out common,$(notdir $(wildcard tools/*)))
+COMMON_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(wildcard tools/common/*.c))
 BINDIR   := $(if $(filter release,$(VARIANT)),bin,$(BUILD)/bin)
 TOOL_BIN := $(TOOLS:%=$(BINDIR)/%)
 
 UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
 UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/tests/%)
 
-.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench scenes fuzz clean \
+.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench bench-mpi bench-view scenes fuzz clean \
         install uninstall man shared ltc-tables ltc-bench
 all: $(TOOL_BIN)
 
@@ -85,10 +87,31 @@ FORCE:
 # A tool links every object of its folder (tools/NAME/*.c).
 TOOL_OBJ = $(patsubst %.c,$(BUILD)/%.o,$(wildcard tools/$(1)/*.c))
 .SECONDEXPANSION:
-$(BINDIR)/%: $$(call TOOL_OBJ,$$*) $(LIB_A)
+# tools/common/cli.h: for the tools, the test helpers and lib/dist (linked into tools only)
+$(BUILD)/tools/%.o $(BUILD)/tests/helpers/%.o $(BUILD)/lib/dist/%.o: CFLAGS += -Itools
+$(BINDIR)/%: $$(call TOOL_OBJ,$$*) $(COMMON_OBJ) $(LIB_A)
 	@mkdir -p $(dir $@)
 	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
 .SECONDARY:
+
+# lie-view opens a window with SDL2 (its software renderer: no GPU needed).
+SDL_CFLAGS := $(shell sdl2-config --cflags 2>/dev/null)
+SDL_LIBS   := $(shell sdl2-config --libs 2>/dev/null)
+$(BUILD)/tools/lie-view/%.o: CFLAGS += $(SDL_CFLAGS)
+$(BINDIR)/lie-view: LDLIBS += $(SDL_LIBS)
+
+# lib/dist: the MPI layer (Open MPI), linked into lie-render and lie-build
+# only; without mpirun it never calls MPI (lib/dist/dist.h).
+MPI_CFLAGS := $(shell mpicc --showme:compile 2>/dev/null)
+MPI_LIBS   := $(shell mpicc --showme:link 2>/dev/null)
+MPI_TOOLS  := lie-render lie-build
+DIST_A     := $(BUILD)/liblie_dist.a
+$(BUILD)/lib/dist/%.o $(BUILD)/tools/lie-render/dist.o $(BUILD)/tools/lie-build/dist.o: CFLAGS += $(MPI_CFLAGS)
+$(DIST_A): $(patsubst %.c,$(BUILD)/%.o,$(wildcard lib/dist/*.c))
+	@rm -f $@
+	ar rcs $@ $^
+$(MPI_TOOLS:%=$(BINDIR)/%): $(DIST_A)
+$(MPI_TOOLS:%=$(BINDIR)/%): LDLIBS := $(DIST_A) $(LIB_A) $(MPI_LIBS) $(LDLIBS)
 
 $(BUILD)/tests/%: $(BUILD)/tests/unit/%.o $(LIB_A)
 	@mkdir -p $(dir $@)
@@ -96,7 +119,7 @@ $(BUILD)/tests/%: $(BUILD)/tests/unit/%.o $(LIB_A)
 
 # ---- test helpers (not installed tools) ------------------------------------
 HELPERS  := $(patsubst tests/helpers/%.c,$(BUILD)/tests/%,$(wildcard tests/helpers/*.c))
-$(BUILD)/tests/%: $(BUILD)/tests/helpers/%.o $(LIB_A)
+$(BUILD)/tests/%: $(BUILD)/tests/helpers/%.o $(COMMON_OBJ) $(LIB_A)
 	@mkdir -p $(dir $@)
 	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
 
@@ -149,6 +172,14 @@ test-asan:
 
 bench: all
 	@sh bench/run.sh
+
+# lie-view's interactive loop under Xvfb (not a timed test: figures depend on the load)
+bench-view: all
+	@sh bench/view.sh
+
+# lie-render and lie-build under mpirun against one process (docs/mpi.md)
+bench-mpi: all
+	@sh bench/mpi.sh
 
 fuzz:
 	@sh tests/fuzz/run.sh

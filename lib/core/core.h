@@ -67,7 +67,6 @@ typedef struct lie_box3 {
 static inline lie_vec3 lie_v3(float x, float y, float z) { lie_vec3 r = {x, y, z}; return r; }
 static inline lie_vec3 lie_v3_add(lie_vec3 a, lie_vec3 b) { return lie_v3(a.x + b.x, a.y + b.y, a.z + b.z); }
 static inline lie_vec3 lie_v3_sub(lie_vec3 a, lie_vec3 b) { return lie_v3(a.x - b.x, a.y - b.y, a.z - b.z); }
-static inline lie_vec3 lie_v3_mul(lie_vec3 a, lie_vec3 b) { return lie_v3(a.x * b.x, a.y * b.y, a.z * b.z); }
 static inline lie_vec3 lie_v3_scale(lie_vec3 a, float s) { return lie_v3(a.x * s, a.y * s, a.z * s); }
 /* max and min that compile to one instruction (fmaxf/fminf are library
  * calls on x86 for their NaN rules).  A NaN `a` gives b. */
@@ -279,30 +278,6 @@ lie_status lie_read_file(const char *path, unsigned char **data, size_t *size, l
  * message, as git quotes paths: \n \t \r \033 ...  Writes at most size bytes
  * with a terminating NUL. */
 void lie_escape_controls(char *out, size_t size, const char *s);
-
-/* ---- command-line values (shared by the tools) ------------------------ */
-
-/* Strict parses: the whole string must be the number, within [min, max]. */
-int lie_parse_long(const char *s, long min, long max, long *out);
-int lie_parse_float(const char *s, float min, float max, float *out);
-/* A printf pattern with exactly one integer conversion: %d, %5d, %05d (frame names). */
-int lie_frame_pattern_ok(const char *s);
-/* "A-B" with min <= A <= B <= max (frame ranges). */
-int lie_parse_range(const char *s, long min, long max, long *a, long *b);
-/* Write s as a JSON string literal (with quotes) to fp. */
-void lie_json_string(FILE *fp, const char *s);
-
-/* "WxH" with both in [1, max]. */
-int lie_parse_size(const char *s, int max, int *w, int *h);
-/* The value of --stats (arg NULL: 1) or --stats=json (2); 0 for another. */
-int lie_parse_stats(const char *arg);
-
-/* ---- tool messages (CLI.md: one line on stderr) ------------------------- */
-
-/* "PROG: message (see --help)"; returns 2, the usage-error exit status. */
-int lie_usage_error(const char *prog, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-/* "PROG: FILE: what is wrong" from err; returns `code`. */
-int lie_report_error(const char *prog, const lie_error *err, int code);
 
 #ifdef __cplusplus
 }

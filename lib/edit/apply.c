@@ -94,7 +94,6 @@ void lie_edit_effect_free(lie_edit_effect *fx)
     if (!fx)
         return;
     free(fx->nodes);
-    free(fx->material_nodes);
     memset(fx, 0, sizeof *fx);
 }
 
@@ -569,10 +568,6 @@ static lie_status apply_op(lie_scene *s, const lie_edit *e, const lie_edit_op *o
                         mat->emissive[c] = colour[c] * strength;
                     mat->emissive_tex = -1;
                 }
-            }
-            if (fx && !push_int(&fx->material_nodes, &fx->n_material_nodes, nd)) {
-                free(sub);
-                return lie_error_set(err, LIE_ERR_NOMEM, file, "out of memory");
             }
         }
         free(sub);

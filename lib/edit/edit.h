@@ -72,12 +72,11 @@ lie_status lie_edit_parse(const unsigned char *text, size_t size, const char *na
                           lie_error *err);
 void lie_edit_destroy(lie_edit *e);
 
-/* What an application changed, for rst-update. */
+/* What an application changed, for lib/update.  Material and emission
+ * changes are not listed: they move no blocker list (formats/edit.md). */
 typedef struct lie_edit_effect {
     int *nodes;            /* nodes whose world transform, geometry or presence changed */
     int n_nodes;
-    int *material_nodes;   /* nodes whose materials changed (set-material, set-emission) */
-    int n_material_nodes;
 } lie_edit_effect;
 void lie_edit_effect_free(lie_edit_effect *fx);
 

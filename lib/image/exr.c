@@ -213,24 +213,20 @@ static lie_status check_attrs(const lie_attr *attrs, int n_attrs, int *long_name
  * a write step that keeps the result; the chunks are then written in
  * increasing y by this thread.  Each chunk's bytes depend on its pixels
  * only, so the file is the same for any thread count. */
-static _Atomic int exr_threads;
 
-void lie_exr_set_threads(int threads) { exr_threads = threads > 0 ? threads : 0; }
-
-/* The compression of the files written (lie_exr_set_compression). */
-static _Atomic int exr_compression = EXR_COMPRESSION_ZIP;
-
+/* lie_exr_compression's names and OpenEXR codes, in its order. */
 static const struct {
     const char *name;
     exr_compression_t c;
 } COMPRESSIONS[] = {{"zip", EXR_COMPRESSION_ZIP}, {"zips", EXR_COMPRESSION_ZIPS}, {"piz", EXR_COMPRESSION_PIZ},
                     {"rle", EXR_COMPRESSION_RLE}, {"none", EXR_COMPRESSION_NONE}};
+#define N_COMPRESSIONS (sizeof COMPRESSIONS / sizeof *COMPRESSIONS)
 
-int lie_exr_set_compression(const char *name)
+int lie_exr_compression_parse(const char *name, lie_exr_compression *out)
 {
-    for (size_t k = 0; name && k < sizeof COMPRESSIONS / sizeof *COMPRESSIONS; k++)
+    for (size_t k = 0; name && k < N_COMPRESSIONS; k++)
         if (strcmp(name, COMPRESSIONS[k].name) == 0) {
-            exr_compression = (int)COMPRESSIONS[k].c;
+            *out = (lie_exr_compression)k;
             return 1;
         }
     return 0;
@@ -305,9 +301,11 @@ static void encode_chunk(void *ctx, size_t k, int worker)
 
 /* Build the whole file in `s`. */
 static lie_status encode_exr(exr_stream *s, const char *path, const lie_frame *f,
-                             const exr_out_channel *ch, int n_ch, const lie_attr *attrs,
-                             int n_attrs, int long_names, lie_error *err)
+                             const exr_out_channel *ch, int n_ch, const lie_exr_options *opt,
+                             int long_names, lie_error *err)
 {
+    const lie_attr *attrs = opt->attrs;
+    int n_attrs = opt->n_attrs;
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = on_exr_error;
     init.user_data = s;
@@ -325,7 +323,7 @@ static lie_status encode_exr(exr_stream *s, const char *path, const lie_frame *f
     rv = exr_add_part(ctx, NULL, EXR_STORAGE_SCANLINE, &part);
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_initialize_required_attr_simple(ctx, part, f->width, f->height,
-                                                 (exr_compression_t)exr_compression);
+                                                 COMPRESSIONS[opt->compression].c);
     if (rv == EXR_ERR_SUCCESS && long_names)
         rv = exr_set_longname_support(ctx, 1);
     if (rv != EXR_ERR_SUCCESS) {
@@ -376,7 +374,7 @@ static lie_status encode_exr(exr_stream *s, const char *path, const lie_frame *f
         rv = exr_write_scanline_chunk_info(ctx, part, (int)k * lines, &cinfo[k]);
     if (rv == EXR_ERR_SUCCESS) {
         chunk_job job = {ctx, part, f, ch, n_ch, cinfo, out};
-        if (lie_parallel_for(n_chunks, exr_threads, encode_chunk, &job, NULL, NULL) != LIE_OK)
+        if (lie_parallel_for(n_chunks, opt->threads > 0 ? opt->threads : 0, encode_chunk, &job, NULL, NULL) != LIE_OK)
             rv = EXR_ERR_OUT_OF_MEMORY;
     }
     for (size_t k = 0; k < n_chunks && rv == EXR_ERR_SUCCESS; k++) {
@@ -412,9 +410,13 @@ static lie_status write_bytes(const char *path, const void *data, size_t size, l
     return lie_atomic_commit(&af, err);
 }
 
-lie_status lie_exr_write(const char *path, const lie_frame *f, const lie_attr *attrs, int n_attrs,
-                         lie_error *err)
+lie_status lie_exr_write(const char *path, const lie_frame *f, const lie_exr_options *opt, lie_error *err)
 {
+    static const lie_exr_options defaults;
+    if (!opt)
+        opt = &defaults;
+    if ((unsigned)opt->compression >= N_COMPRESSIONS || opt->n_attrs < 0 || (opt->n_attrs > 0 && !opt->attrs))
+        return lie_error_set(err, LIE_ERR_ARG, path, "bad EXR options");
     if (!path || !f || !f->rgb || f->width <= 0 || f->height <= 0 || f->n_aovs < 0 ||
         (f->n_aovs > 0 && !f->aovs))
         return lie_error_set(err, LIE_ERR_ARG, path, "no frame to write");
@@ -422,7 +424,7 @@ lie_status lie_exr_write(const char *path, const lie_frame *f, const lie_attr *a
     if (f->width > INT32_MAX / (LIE_AOV_MAX_CHANNELS * (int)sizeof(float)))
         return lie_error_set(err, LIE_ERR_LIMIT, path, "frame too wide for EXR: %d", f->width);
     int long_names = 0;
-    lie_status st = check_attrs(attrs, n_attrs, &long_names, path, err);
+    lie_status st = check_attrs(opt->attrs, opt->n_attrs, &long_names, path, err);
     if (st != LIE_OK)
         return st;
     exr_out_channel *ch = NULL;
@@ -436,7 +438,7 @@ lie_status lie_exr_write(const char *path, const lie_frame *f, const lie_attr *a
 
     exr_stream s;
     memset(&s, 0, sizeof s);
-    st = encode_exr(&s, path, f, ch, n_ch, attrs, n_attrs, long_names, err);
+    st = encode_exr(&s, path, f, ch, n_ch, opt, long_names, err);
     if (st == LIE_OK)
         st = write_bytes(path, s.data, s.size, err);
     free(s.data);

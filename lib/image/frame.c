@@ -118,13 +118,12 @@ float lie_srgb_to_linear(float x)
     return (float)(v <= SRGB_ENCODED_KNEE ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4));
 }
 
-lie_status lie_frame_write(const char *path, const lie_frame *f, const lie_attr *attrs,
-                           int n_attrs, float exposure, lie_error *err)
+lie_status lie_frame_write(const char *path, const lie_frame *f, const lie_frame_options *opt, lie_error *err)
 {
     if (!path || !f)
         return lie_error_set(err, LIE_ERR_ARG, path, "no output path or frame");
     size_t n = strlen(path);
     if (n >= 4 && strcasecmp(path + n - 4, ".png") == 0)
-        return lie_png_write(path, f, exposure, err);
-    return lie_exr_write(path, f, attrs, n_attrs, err);
+        return lie_png_write(path, f, opt ? &opt->png : NULL, err);
+    return lie_exr_write(path, f, opt ? &opt->exr : NULL, err);
 }

@@ -61,23 +61,36 @@ typedef struct lie_attr {
     float v[16];          /* v3f: v[0..2]; m44f: 16 floats, row-major as EXR */
 } lie_attr;
 
-/* EXR: RGB as 32-bit float channels "R","G","B" plus every AOV, ZIP
- * compression (or lie_exr_set_compression's), scanline, increasing Y.
- * Path "-" writes to stdout.
+/* The lossless compressions of EXR output: zip (the default: 16 scanlines
+ * per zlib block), zips (one scanline), piz (wavelet), rle or none. */
+typedef enum lie_exr_compression {
+    LIE_EXR_ZIP = 0,
+    LIE_EXR_ZIPS = 1,
+    LIE_EXR_PIZ = 2,
+    LIE_EXR_RLE = 3,
+    LIE_EXR_NONE = 4
+} lie_exr_compression;
+/* A compression by its name above; returns 0 for an unknown name (*out
+ * unchanged). */
+int lie_exr_compression_parse(const char *name, lie_exr_compression *out);
+
+/* How one EXR file is written, passed per call as OpenEXRCore passes its
+ * context initializer: no process-wide settings.  A zeroed struct (or a
+ * NULL pointer) is the default: no extra attributes, zip, all cores. */
+typedef struct lie_exr_options {
+    const lie_attr *attrs;           /* extra header attributes */
+    int n_attrs;
+    lie_exr_compression compression;
+    int threads;                     /* workers compressing chunks (0: all cores); the
+                                        bytes written do not depend on it */
+} lie_exr_options;
+
+/* EXR: RGB as 32-bit float channels "R","G","B" plus every AOV, scanline,
+ * increasing Y.  Path "-" writes to stdout.
  * The file is assembled in memory and written atomically.  A channel
  * name used twice, or an attribute clashing with a standard one
  * ("compression", ...), is LIE_ERR_ARG. */
-lie_status lie_exr_write(const char *path, const lie_frame *f, const lie_attr *attrs, int n_attrs,
-                         lie_error *err);
-/* Worker threads that compress EXR chunks (0, the default: all cores); the
- * bytes written do not depend on it.  Process-wide, like OpenEXR's own
- * global thread count; tools set it from --threads. */
-void lie_exr_set_threads(int threads);
-/* The lossless compression of EXR files written from now on, by name:
- * zip (the default: 16 scanlines per zlib block), zips (one scanline),
- * piz (wavelet), rle or none.  Returns 0 for an unknown name (nothing
- * changes).  Process-wide, like lie_exr_set_threads. */
-int lie_exr_set_compression(const char *name);
+lie_status lie_exr_write(const char *path, const lie_frame *f, const lie_exr_options *opt, lie_error *err);
 
 /* Read an EXR file written by anyone: every channel as float.  "R","G","B"
  * go to rgb (missing ones are 0); other channels "layer.chan" become AOVs
@@ -95,18 +108,29 @@ lie_status lie_exr_read(const char *path, lie_frame **out, lie_error *err);
 lie_status lie_exr_read_string_attr(const char *path, const char *name, char *buf, size_t size,
                                     lie_error *err);
 
+/* How a PNG preview is made (zeroed or NULL: exposure 0). */
+typedef struct lie_png_options {
+    float exposure; /* stops: radiance is scaled by 2^exposure */
+} lie_png_options;
+
 /* PNG preview: 8-bit RGB, radiance x 2^exposure, clamped, sRGB transfer
  * curve, with an sRGB chunk.  Written atomically. */
-lie_status lie_png_write(const char *path, const lie_frame *f, float exposure, lie_error *err);
+lie_status lie_png_write(const char *path, const lie_frame *f, const lie_png_options *opt, lie_error *err);
 
 /* 8-bit RGB PNG from raw pixels (for false-colour images and tests). */
 lie_status lie_png_write_rgb8(const char *path, int width, int height, const uint8_t *rgb,
                               lie_error *err);
 
-/* Write by extension: ".png" (case-insensitive) gives a PNG preview,
- * anything else (".exr", "-") an EXR. */
-lie_status lie_frame_write(const char *path, const lie_frame *f, const lie_attr *attrs,
-                           int n_attrs, float exposure, lie_error *err);
+/* Each format's options, for a writer that picks the format by name. */
+typedef struct lie_frame_options {
+    lie_exr_options exr;
+    lie_png_options png;
+} lie_frame_options;
+
+/* Write by extension: ".png" (case-insensitive) gives a PNG preview
+ * (opt->png), anything else (".exr", "-") an EXR (opt->exr).  opt may be
+ * NULL: the defaults. */
+lie_status lie_frame_write(const char *path, const lie_frame *f, const lie_frame_options *opt, lie_error *err);
 
 /* Linear to sRGB-encoded value (IEC 61966-2-1); both clamp to [0, 1] and
  * map NaN to 0. */

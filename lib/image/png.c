@@ -109,7 +109,7 @@ static uint8_t encode_8bit(float x)
     return (uint8_t)(v * 255.0f + 0.5f);
 }
 
-lie_status lie_png_write(const char *path, const lie_frame *f, float exposure, lie_error *err)
+lie_status lie_png_write(const char *path, const lie_frame *f, const lie_png_options *opt, lie_error *err)
 {
     if (!path || !f || !f->rgb || f->width <= 0 || f->height <= 0)
         return lie_error_set(err, LIE_ERR_ARG, path, "no frame to write");
@@ -117,7 +117,7 @@ lie_status lie_png_write(const char *path, const lie_frame *f, float exposure, l
     uint8_t *rgb = malloc(n);
     if (!rgb)
         return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
-    float scale = exp2f(exposure);
+    float scale = exp2f(opt ? opt->exposure : 0.0f);
     for (size_t i = 0; i < n; i++)
         rgb[i] = encode_8bit(f->rgb[i] * scale);
     lie_status st = lie_png_write_rgb8(path, f->width, f->height, rgb, err);

@@ -18,7 +18,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t n_tris, int n_emitters, const int32_t *old_unit);
+static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32_t n_tris, int n_emitters,
+                           const int32_t *old_unit, uint64_t unit_lo, uint64_t unit_hi);
 
 static void workers_free(worker *ws, int n)
 {
@@ -34,8 +35,8 @@ static void workers_free(worker *ws, int n)
 /* Build (or, with a mask, rebuild some units of) every triangle, then
  * concatenate the per-triangle buffers in unit order. */
 static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, const int32_t *old_unit,
-                           const uint8_t *node_flags, const uint8_t *tri_mask, int threads, lie_progress *progress,
-                           lie_build_stats *stats)
+                           const uint8_t *node_flags, const uint8_t *tri_mask, uint64_t unit_lo, uint64_t unit_hi,
+                           int threads, lie_progress *progress, lie_build_stats *stats)
 {
     build_ctx c;
     memset(&c, 0, sizeof c);
@@ -43,15 +44,25 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     c.rt = rt;
     c.p = &env->params;
     c.min_area = env->params.min_patch * s->max_tri_area;
-    c.ray_far = lie_ray_far(s);
+    c.ray_far = lie_pair_ray_far(s);
     c.old = env;
     c.old_unit = old_unit;
     c.node_flags = node_flags;
     c.tri_mask = tri_mask;
+    /* the triangles holding units [unit_lo, unit_hi) */
+    size_t ne = s->n_emitters > 0 ? (size_t)s->n_emitters : 1;
+    c.unit_lo = unit_lo;
+    c.unit_hi = unit_hi;
+    c.tri_lo = (uint32_t)(unit_lo / ne);
+    uint32_t n_items = unit_hi > unit_lo ? (uint32_t)((unit_hi - 1) / ne + 1 - c.tri_lo) : 0;
+    if (s->n_emitters == 0) {
+        c.tri_lo = 0;
+        n_items = s->n_tris;
+    }
     if (threads <= 0)
         threads = lie_cpu_count();
     c.workers = calloc((size_t)threads, sizeof *c.workers);
-    c.out = calloc((size_t)s->n_tris + 1, sizeof *c.out);
+    c.out = calloc((size_t)n_items + 1, sizeof *c.out);
     atomic_uint_least64_t nodes_made = 0;
     for (int i = 0; c.workers && i < threads; i++) {
         c.workers[i].nodes_made = &nodes_made;
@@ -62,7 +73,7 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     if (st == LIE_OK && node_flags && old_unit && c.p->mode == LIE_BLOCKERS_SAMPLED)
         st = lie_memo_precompute(&c, threads, &n_memo);
     if (st == LIE_OK)
-        st = lie_parallel_for(s->n_tris, threads, lie_subdiv_triangle, &c, progress ? lie_progress_cb : NULL, progress);
+        st = lie_parallel_for(n_items, threads, lie_subdiv_triangle, &c, progress ? lie_progress_cb : NULL, progress);
     lie_memo_free(&c, n_memo);
     for (int i = 0; c.workers && i < threads; i++) {
         if (c.workers[i].nomem && st != LIE_ERR_LIMIT)
@@ -71,8 +82,8 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
             lie_stats_merge(stats, &c.workers[i].st);
     }
     if (st == LIE_OK)
-        st = assemble(env, c.out, s->n_tris, s->n_emitters, old_unit);
-    for (uint32_t t = 0; c.out && t < s->n_tris; t++) {
+        st = assemble(env, c.out, c.tri_lo, n_items, s->n_emitters, old_unit, unit_lo, unit_hi);
+    for (uint32_t t = 0; c.out && t < n_items; t++) {
         free(c.out[t].roots);
         free(c.out[t].nodes);
         free(c.out[t].pool);
@@ -117,9 +128,12 @@ static void copy_direct(const lie_env *old, uint32_t from, lie_pnode *nd, uint32
     nd[idx] = x;
 }
 
-/* Concatenate per-triangle unit buffers into env's flat arrays (copied
- * triangles straight from env's old arrays, which are freed last). */
-static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t n_tris, int n_emitters, const int32_t *old_unit)
+/* Concatenate per-triangle unit buffers (of triangles tri_lo + t) into
+ * env's flat arrays (copied triangles straight from env's old arrays, which
+ * are freed last); env->root[unit - unit_lo] for the units in
+ * [unit_lo, unit_hi). */
+static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32_t n_tris, int n_emitters,
+                           const int32_t *old_unit, uint64_t unit_lo, uint64_t unit_hi)
 {
     uint64_t nodes = 0, pool = 0;
     for (uint32_t t = 0; t < n_tris; t++) {
@@ -128,7 +142,7 @@ static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t n_tris, int n_
     }
     if (nodes >= 0xFFFFFFF0u || pool >= 0xFFFFFFF0u)
         return LIE_ERR_LIMIT;
-    uint32_t *root = malloc(sizeof *root * ((size_t)n_tris * (size_t)n_emitters + 1));
+    uint32_t *root = malloc(sizeof *root * ((size_t)(unit_hi - unit_lo) + 1));
     lie_pnode *nd = malloc(sizeof *nd * (size_t)(nodes + 1));
     uint32_t *pl = malloc(sizeof *pl * (size_t)(pool + 1));
     if (!root || !nd || !pl) {
@@ -143,17 +157,20 @@ static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t n_tris, int n_
         if (u->copied) {
             uint32_t next_node = nb, next_pool = pb;
             for (int e = 0; e < n_emitters; e++) {
-                size_t unit = (size_t)t * (size_t)n_emitters + (size_t)e;
+                size_t unit = (size_t)(tri_lo + t) * (size_t)n_emitters + (size_t)e;
                 uint32_t idx = next_node++;
-                root[unit] = idx;
+                root[unit - unit_lo] = idx;
                 copy_direct(env, env->root[old_unit[unit]], nd, pl, idx, &next_node, &next_pool);
             }
             nb += u->n_nodes;
             pb += u->n_pool;
             continue;
         }
-        for (int e = 0; e < n_emitters; e++)
-            root[(size_t)t * (size_t)n_emitters + (size_t)e] = nb + u->roots[e];
+        for (int e = 0; e < n_emitters; e++) {
+            uint64_t unit = (uint64_t)(tri_lo + t) * (uint64_t)n_emitters + (uint64_t)e;
+            if (unit >= unit_lo && unit < unit_hi)
+                root[unit - unit_lo] = nb + u->roots[e];
+        }
         for (uint32_t i = 0; i < u->n_nodes; i++) {
             lie_pnode x = u->nodes[i];
             if (x.child)
@@ -209,7 +226,8 @@ lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_
     env->scene_hash = s->hash;
     if (stats)
         memset(stats, 0, sizeof *stats);
-    lie_status st = run_build(env, s, rt, NULL, NULL, tri_mask, p->threads, progress, stats);
+    uint64_t n_units = (uint64_t)s->n_tris * (uint64_t)s->n_emitters;
+    lie_status st = run_build(env, s, rt, NULL, NULL, tri_mask, 0, n_units, p->threads, progress, stats);
     if (st != LIE_OK) {
         lie_env_destroy(env);
         if (st == LIE_ERR_LIMIT)
@@ -220,6 +238,47 @@ lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_
     if (stats)
         stats->seconds = lie_time_now() - t0;
     *out = env;
+    return LIE_OK;
+}
+
+lie_status lie_env_build_range(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                               const uint8_t *tri_mask, uint64_t first_unit, uint64_t n_units, lie_env_part *out,
+                               lie_build_stats *stats, lie_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (lie_build_params_check(p, err) != LIE_OK)
+        return LIE_ERR_ARG;
+    uint64_t total = (uint64_t)s->n_tris * (uint64_t)s->n_emitters;
+    if (first_unit > total || n_units > total - first_unit)
+        return lie_error_set(err, LIE_ERR_ARG, s->path, "units %llu..%llu out of range (%llu)",
+                             (unsigned long long)first_unit, (unsigned long long)(first_unit + n_units),
+                             (unsigned long long)total);
+    double t0 = lie_time_now();
+    lie_env part;
+    memset(&part, 0, sizeof part);
+    part.params = *p;
+    if (stats)
+        memset(stats, 0, sizeof *stats);
+    lie_status st = LIE_OK;
+    if (n_units)
+        st = run_build(&part, s, rt, NULL, NULL, tri_mask, first_unit, first_unit + n_units, p->threads, NULL, stats);
+    if (st != LIE_OK) {
+        free(part.root);
+        free(part.nodes);
+        free(part.pool);
+        if (st == LIE_ERR_LIMIT)
+            return budget_error(err, s, p);
+        return lie_error_set(err, st, s->path, "building local illumination environments: %s", lie_status_str(st));
+    }
+    if (stats)
+        stats->seconds = lie_time_now() - t0;
+    out->first_unit = first_unit;
+    out->n_units = n_units;
+    out->root = part.root;
+    out->nodes = part.nodes;
+    out->n_nodes = part.n_nodes;
+    out->pool = part.pool;
+    out->n_pool = part.n_pool;
     return LIE_OK;
 }
 
@@ -249,7 +308,8 @@ lie_status lie_env_update(lie_env *env, const lie_scene *s, const lie_rt *rt, co
     double t0 = lie_time_now();
     if (stats)
         memset(stats, 0, sizeof *stats);
-    lie_status st = run_build(env, s, rt, old_unit, node_flags, NULL, threads, NULL, stats);
+    lie_status st = run_build(env, s, rt, old_unit, node_flags, NULL, 0,
+                              (uint64_t)s->n_tris * (uint64_t)s->n_emitters, threads, NULL, stats);
     if (stats)
         stats->seconds = lie_time_now() - t0;
     if (st == LIE_ERR_LIMIT)

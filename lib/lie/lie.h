@@ -112,6 +112,35 @@ lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_
                                 const uint8_t *tri_mask, lie_progress *progress, lie_env **out,
                                 lie_build_stats *stats, lie_error *err);
 
+/* Part of an env, for builds shared out among processes (lie-build under
+ * mpirun): units [first_unit, first_unit + n_units), root[i] the root of
+ * unit first_unit + i in nodes; child and list offsets index this part's
+ * own nodes and pool.  A unit depends on its triangle and emitter alone, so
+ * parts built anywhere join into the bytes of one build. */
+typedef struct lie_env_part {
+    uint64_t first_unit, n_units;
+    uint32_t *root;
+    lie_pnode *nodes;
+    uint32_t n_nodes;
+    uint32_t *pool;
+    uint32_t n_pool;
+} lie_env_part;
+
+/* Build units [first_unit, first_unit + n_units) of lie_env_build_masked's
+ * env into *out (freed by lie_env_part_free).  Statistics count these units
+ * only, so the sums over a partition are lie_env_build_masked's. */
+lie_status lie_env_build_range(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                               const uint8_t *tri_mask, uint64_t first_unit, uint64_t n_units, lie_env_part *out,
+                               lie_build_stats *stats, lie_error *err);
+/* Join parts that cover every unit of s in order (parts[i + 1] starts where
+ * parts[i] ends) into the env lie_env_build_masked builds.  Every child and
+ * list offset is checked against its part. */
+lie_status lie_env_join(const lie_scene *s, const lie_build_params *p, const lie_env_part *parts, size_t n_parts,
+                        lie_env **out, lie_error *err);
+void lie_env_part_free(lie_env_part *part);
+/* The sum of two build statistics (counts; seconds are a's). */
+void lie_build_stats_add(lie_build_stats *a, const lie_build_stats *b);
+
 /* Rebuild the listed units (sorted, unique) in place, with env's own
  * parameters, exactly as lie_env_build would.  Used by rst-update. */
 lie_status lie_env_rebuild_units(lie_env *env, const lie_scene *s, const lie_rt *rt,

@@ -5,7 +5,7 @@
 
 #include <string.h>
 
-float lie_ray_far(const lie_scene *s)
+float lie_pair_ray_far(const lie_scene *s)
 {
     lie_vec3 ext = lie_box3_is_empty(&s->bounds) ? lie_v3(1, 1, 1) : lie_v3_sub(s->bounds.hi, s->bounds.lo);
     float scale = fmaxf(1.0f, fmaxf(ext.x, fmaxf(ext.y, ext.z)));
@@ -24,7 +24,8 @@ float lie_pair_eps(const lie_scene *s, uint32_t tri)
 int lie_pair_hull_cap(const lie_scene *s, int e)
 {
     const lie_emitter *em = &s->emitters[e];
-    return lie_pair_hull_patch_points(1) + (em->type == LIE_EMITTER_AREA ? (em->n_hull ? em->n_hull : 3 * (int)em->n_tris) : 3);
+    int n_emitter = em->type == LIE_EMITTER_AREA ? (em->n_hull ? em->n_hull : 3 * (int)em->n_tris) : 3;
+    return lie_pair_hull_patch_points(1) + n_emitter;
 }
 
 int lie_pair_hull_points(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], int e, lie_vec3 *out)
@@ -49,7 +50,7 @@ int lie_pair_hull_points(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], 
     } else if (em->type == LIE_EMITTER_POINT) {
         out[n++] = em->position;
     } else {
-        float far = lie_ray_far(s);
+        float far = lie_pair_ray_far(s);
         for (int k = 0; k < 3; k++)
             out[n++] = lie_v3_add(V[k], lie_v3_scale(em->direction, -far));
     }

@@ -15,13 +15,13 @@ extern "C" {
 #endif
 
 /* How far shadow segments towards directional emitters reach. */
-float lie_ray_far(const lie_scene *s);
+float lie_pair_ray_far(const lie_scene *s);
 /* The renderer's largest shadow-ray offset on triangle tri. */
 float lie_pair_eps(const lie_scene *s, uint32_t tri);
 /* The hull of a pair, as lie-build and the ray segment trees see it: the
  * patch's corners V, lifted by lie_pair_eps on the side(s) it is shaded
  * from, and the emitter's points (vertices; a point light's position; for a
- * directional light the patch moved lie_ray_far towards it).  `out` must
+ * directional light the patch moved lie_pair_ray_far towards it).  `out` must
  * hold lie_pair_hull_cap(s, e) points; returns how many were written. */
 int lie_pair_hull_cap(const lie_scene *s, int e);
 int lie_pair_hull_points(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], int e, lie_vec3 *out);

@@ -47,6 +47,8 @@ void lie_stats_hist_add(lie_build_stats *st, uint32_t n)
     st->list_hist[b]++;
 }
 
+void lie_build_stats_add(lie_build_stats *a, const lie_build_stats *b) { lie_stats_merge(a, b); }
+
 void lie_stats_merge(lie_build_stats *dst, const lie_build_stats *src)
 {
     for (int k = 0; k < LIE_CLASS_COUNT; k++)

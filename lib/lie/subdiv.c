@@ -219,7 +219,7 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
 {
     build_ctx *c = ctx;
     worker *w = &c->workers[worker_id];
-    uint32_t tri = (uint32_t)item;
+    uint32_t tri = c->tri_lo + (uint32_t)item;
     unit_buf *u = &c->out[item];
     const lie_scene *s = c->s;
     size_t ne = (size_t)s->n_emitters;
@@ -233,6 +233,8 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
     int two_sided = lie_pair_two_sided(s, tri);
     for (size_t e = 0; e < ne; e++) {
         size_t unit = (size_t)tri * ne + e;
+        if (unit < c->unit_lo || unit >= c->unit_hi)
+            continue; /* lie_env_build_range: another part's */
         int root = push_node(u, w);
         if (root < 0)
             return;

@@ -45,8 +45,10 @@ uint64_t lie_rst_refine(const lie_scene *s, const lie_env *env, const lie_box3 *
     for (int e = 0; e < s->n_emitters; e++)
         cap = cap > lie_pair_hull_cap(s, e) ? cap : lie_pair_hull_cap(s, e);
     refine_ctx c = {s, env, boxes, n_boxes, flags, malloc(sizeof(lie_vec3) * ((size_t)cap + 1)), 0};
-    if (!c.hull)
-        return 0; /* out of memory: keep every flag (still correct) */
+    if (!c.hull) {
+        lie_rst_spread(env, flags); /* out of memory: flag whole subtrees (still correct) */
+        return 0;
+    }
     for (uint32_t t = 0; t < env->n_tris; t++)
         for (int e = 0; e < env->n_emitters; e++)
             refine_node(&c, env->root[(size_t)t * (size_t)env->n_emitters + (size_t)e], t, lie_patch_root(), e);

@@ -59,7 +59,8 @@ uint64_t lie_rst_query(const lie_rst *r, lie_box3 b, uint8_t *flags);
  * that stays flagged are flagged and tested in turn.  Afterwards exactly
  * the nodes whose hull meets a box and whose ancestors' hulls all do are
  * flagged.  s and env are the state the trees were built for.  Returns how
- * many flags were cleared. */
+ * many flags were cleared (out of memory, it spreads the flags as
+ * lie_rst_spread does instead, which is looser but still safe). */
 uint64_t lie_rst_refine(const lie_scene *s, const lie_env *env, const lie_box3 *boxes, int n_boxes,
                         uint8_t *flags);
 

@@ -175,16 +175,6 @@ int lie_scene_add_mesh(lie_scene *s, const char *name, const float *pos, const f
     return s->n_meshes - 1;
 }
 
-int lie_scene_add_camera_def(lie_scene *s, const lie_camera_def *c)
-{
-    lie_camera_def *slot = grow((void **)&s->camera_defs, &s->n_camera_defs, sizeof *slot);
-    if (!slot)
-        return -1;
-    *slot = *c;
-    slot->name = dup_or_null(c->name);
-    return s->n_camera_defs - 1;
-}
-
 int lie_scene_add_light_def(lie_scene *s, const lie_light_def *l)
 {
     lie_light_def *slot = grow((void **)&s->light_defs, &s->n_light_defs, sizeof *slot);

@@ -65,7 +65,7 @@ typedef struct lie_material {
 enum { LIE_TEX_BASE_COLOR = 0, LIE_TEX_METALLIC_ROUGHNESS = 1, LIE_TEX_EMISSIVE = 2 };
 
 /* A material slot's texture coordinates after its KHR_texture_transform. */
-static inline void lie_tex_xf_apply(const float xf[6], float u, float v, float *tu, float *tv)
+static inline void lie_material_tex_xf_apply(const float xf[6], float u, float v, float *tu, float *tv)
 {
     *tu = xf[0] * u + xf[1] * v + xf[2];
     *tv = xf[3] * u + xf[4] * v + xf[5];
@@ -384,7 +384,6 @@ int lie_scene_node_in_scene(const lie_scene *s, int n);
 int lie_scene_add_mesh(lie_scene *s, const char *name, const float *pos, const float *nrm,
                        const float *uv, uint32_t n_verts, const uint32_t *idx, uint32_t n_tris,
                        int material);
-int lie_scene_add_camera_def(lie_scene *s, const lie_camera_def *c);
 int lie_scene_add_light_def(lie_scene *s, const lie_light_def *l);
 /* parent -1 makes a root of the default scene. */
 int lie_scene_add_node(lie_scene *s, const char *name, int parent, const lie_mat4 *local, int mesh,

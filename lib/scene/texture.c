@@ -76,7 +76,7 @@ void lie_scene_slot_uv(const lie_scene *s, const lie_material *m, int k, uint32_
 {
     const float *uv = m->tex_set[k] == 1 && s->tri_uv1 ? &s->tri_uv1[6 * (size_t)tri] : &s->tri_uv[6 * (size_t)tri];
     float b0 = 1.0f - b1 - b2;
-    lie_tex_xf_apply(m->tex_xf[k], b0 * uv[0] + b1 * uv[2] + b2 * uv[4], b0 * uv[1] + b1 * uv[3] + b2 * uv[5], u,
+    lie_material_tex_xf_apply(m->tex_xf[k], b0 * uv[0] + b1 * uv[2] + b2 * uv[4], b0 * uv[1] + b1 * uv[3] + b2 * uv[5], u,
                      v);
 }
 

@@ -241,14 +241,66 @@ static void render_tile(void *ctx, size_t item, int worker)
     }
 }
 
-lie_status lie_render(const lie_scene *s, const lie_rt *rt, const lie_camera *cam,
-                      const lie_render_options *opt, lie_frame **out, lie_render_stats *stats,
-                      lie_error *err)
+/* The frame lie_render fills for opt: RGB and the requested AOVs. */
+lie_status lie_render_frame_create(const lie_scene *s, const lie_render_options *opt, lie_frame **out, lie_error *err)
 {
     *out = NULL;
     const char *path = s->path ? s->path : "";
     if (opt->width < 1 || opt->height < 1 || opt->width > 65536 || opt->height > 65536)
         return lie_error_set(err, LIE_ERR_ARG, path, "image size %dx%d out of range", opt->width, opt->height);
+    lie_frame *f = lie_frame_create(opt->width, opt->height);
+    if (!f)
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory for a %dx%d frame", opt->width, opt->height);
+    static const char *const rgb_names[3] = {"R", "G", "B"};
+    static const char *const xyz_names[3] = {"X", "Y", "Z"};
+    static const char *const z_name[1] = {"Z"};
+    static const struct {
+        unsigned bit;
+        const char *name;
+        int n;
+        const char *const *chans;
+    } layers[] = {
+        {LIE_AOV_ALBEDO, "albedo", 3, rgb_names},         {LIE_AOV_NORMAL, "normal", 3, xyz_names},
+        {LIE_AOV_DEPTH, "depth", 1, z_name},              {LIE_AOV_COMPLEXITY, "complexity", 3, rgb_names},
+        {LIE_AOV_PATCH, "patch", 3, rgb_names},
+    };
+    for (size_t k = 0; k < sizeof layers / sizeof layers[0]; k++)
+        if ((opt->aovs & layers[k].bit) && !lie_frame_add_aov(f, layers[k].name, layers[k].n, layers[k].chans)) {
+            lie_frame_destroy(f);
+            return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+        }
+    *out = f;
+    return LIE_OK;
+}
+
+static float *aov_data(const lie_frame *f, const char *name)
+{
+    const lie_aov *a = lie_frame_find_aov(f, name);
+    return a ? a->data : NULL;
+}
+
+typedef struct tile_range {
+    render_job *j;
+    size_t first;
+} tile_range;
+
+static void render_range_tile(void *ctx, size_t item, int worker)
+{
+    const tile_range *r = ctx;
+    render_tile(r->j, r->first + item, worker);
+}
+
+lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_camera *cam,
+                            const lie_render_options *opt, lie_frame *f, size_t first, size_t count,
+                            lie_render_stats *stats, lie_error *err)
+{
+    const char *path = s->path ? s->path : "";
+    if (opt->width != f->width || opt->height != f->height)
+        return lie_error_set(err, LIE_ERR_ARG, path, "frame %dx%d does not match image size %dx%d", f->width,
+                             f->height, opt->width, opt->height);
+    if (first > lie_render_tile_count(opt->width, opt->height) ||
+        count > lie_render_tile_count(opt->width, opt->height) - first)
+        return lie_error_set(err, LIE_ERR_ARG, path, "tiles %zu..%zu out of range", first, first + count);
     if (opt->light_samples < 1 || opt->light_samples > 1000000)
         return lie_error_set(err, LIE_ERR_ARG, path, "light samples %d out of range", opt->light_samples);
     if (opt->visibility == LIE_VIS_LIE && !opt->oracle)
@@ -264,33 +316,17 @@ lie_status lie_render(const lie_scene *s, const lie_rt *rt, const lie_camera *ca
     j.sc.s = s;
     j.sc.rt = rt;
     j.sc.opt = opt;
-    j.sc.ray_far = lie_ray_far(s);
+    j.sc.ray_far = lie_pair_ray_far(s);
     if (!isfinite(j.sc.ray_far))
         j.sc.ray_far = 1e30f;
     j.cam = cam;
     j.view = lie_view_make(cam, opt->width, opt->height);
-    lie_frame *f = lie_frame_create(opt->width, opt->height);
-    if (!f)
-        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory for a %dx%d frame", opt->width, opt->height);
     j.frame = f;
-    static const char *const rgb_names[3] = {"R", "G", "B"};
-    static const char *const xyz_names[3] = {"X", "Y", "Z"};
-    static const char *const z_name[1] = {"Z"};
-    if (opt->aovs & LIE_AOV_ALBEDO)
-        j.albedo = lie_frame_add_aov(f, "albedo", 3, rgb_names);
-    if (opt->aovs & LIE_AOV_NORMAL)
-        j.normal = lie_frame_add_aov(f, "normal", 3, xyz_names);
-    if (opt->aovs & LIE_AOV_DEPTH)
-        j.depth = lie_frame_add_aov(f, "depth", 1, z_name);
-    if (opt->aovs & LIE_AOV_COMPLEXITY)
-        j.complexity = lie_frame_add_aov(f, "complexity", 3, rgb_names);
-    if (opt->aovs & LIE_AOV_PATCH)
-        j.patch = lie_frame_add_aov(f, "patch", 3, rgb_names);
-    if (((opt->aovs & LIE_AOV_ALBEDO) && !j.albedo) || ((opt->aovs & LIE_AOV_NORMAL) && !j.normal) ||
-        ((opt->aovs & LIE_AOV_DEPTH) && !j.depth)) {
-        lie_frame_destroy(f);
-        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
-    }
+    j.albedo = aov_data(f, "albedo");
+    j.normal = aov_data(f, "normal");
+    j.depth = aov_data(f, "depth");
+    j.complexity = aov_data(f, "complexity");
+    j.patch = aov_data(f, "patch");
     int threads = opt->threads > 0 ? opt->threads : lie_cpu_count();
     lie_light_samples *fixed = calloc((size_t)s->n_emitters + 1, sizeof *fixed);
     j.scratch = aligned_alloc(128, sizeof *j.scratch * (size_t)threads);
@@ -323,18 +359,16 @@ lie_status lie_render(const lie_scene *s, const lie_rt *rt, const lie_camera *ca
     }
     if (st == LIE_OK) {
         j.tiles_x = (opt->width + LIE_TILE - 1) / LIE_TILE;
-        int tiles_y = (opt->height + LIE_TILE - 1) / LIE_TILE;
+        tile_range r = {&j, first};
         lie_progress prog;
         lie_progress_begin(&prog, stderr, "render", opt->progress);
-        st = lie_parallel_for((size_t)j.tiles_x * (size_t)tiles_y, threads, render_tile, &j,
-                              lie_progress_cb, &prog);
+        st = lie_parallel_for(count, threads, render_range_tile, &r, lie_progress_cb, &prog);
         lie_progress_end(&prog);
     }
     if (stats) {
         memset(stats, 0, sizeof *stats);
-        for (int t = 0; j.scratch && t < threads; t++) {
+        for (int t = 0; j.scratch && t < threads; t++)
             lie_render_stats_add(stats, &j.scratch[t].stats);
-        }
         stats->seconds = lie_time_now() - t0;
     }
     for (int t = 0; j.scratch && t < threads; t++)
@@ -346,9 +380,23 @@ lie_status lie_render(const lie_scene *s, const lie_rt *rt, const lie_camera *ca
     for (int e = 0; j.sc.poly && e < s->n_emitters; e++)
         lie_polylight_destroy(j.sc.poly[e]);
     free(j.sc.poly);
+    if (st != LIE_OK)
+        return lie_error_set(err, st, path, "%s", lie_status_str(st));
+    return LIE_OK;
+}
+
+lie_status lie_render(const lie_scene *s, const lie_rt *rt, const lie_camera *cam,
+                      const lie_render_options *opt, lie_frame **out, lie_render_stats *stats,
+                      lie_error *err)
+{
+    *out = NULL;
+    lie_frame *f = NULL;
+    lie_status st = lie_render_frame_create(s, opt, &f, err);
+    if (st == LIE_OK)
+        st = lie_render_tiles(s, rt, cam, opt, f, 0, lie_render_tile_count(opt->width, opt->height), stats, err);
     if (st != LIE_OK) {
         lie_frame_destroy(f);
-        return lie_error_set(err, st, path, "%s", lie_status_str(st));
+        return st;
     }
     *out = f;
     return LIE_OK;

@@ -243,6 +243,22 @@ lie_status lie_render(const lie_scene *s, const lie_rt *rt, const lie_camera *ca
                       const lie_render_options *opt, lie_frame **out, lie_render_stats *stats,
                       lie_error *err);
 
+/* The same in pieces, for renderers that share a frame's tiles out (a
+ * cluster, lie-render under mpirun): the frame lie_render returns (RGB and
+ * opt's AOVs, zeroed), and the tiles [first, first + count) of it, LIE_TILE
+ * pixels square in row-major order, lie_render_tile_count of them.  A
+ * pixel's value depends only on its own rays, so any split of the tiles
+ * gives lie_render's bytes.  Other pixels of f are left as they are. */
+static inline size_t lie_render_tile_count(int width, int height)
+{
+    return (size_t)((width + LIE_TILE - 1) / LIE_TILE) * (size_t)((height + LIE_TILE - 1) / LIE_TILE);
+}
+lie_status lie_render_frame_create(const lie_scene *s, const lie_render_options *opt, lie_frame **out,
+                                   lie_error *err);
+lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_camera *cam,
+                            const lie_render_options *opt, lie_frame *f, size_t first, size_t count,
+                            lie_render_stats *stats, lie_error *err);
+
 /* A camera's rays for a width x height image: perspective from the eye,
  * or orthographic (ymag > 0) along forward from the image plane through
  * the eye.  The image's aspect ratio wins over the camera's, so pixels stay

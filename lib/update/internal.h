@@ -21,9 +21,11 @@ struct lie_update {
     /* Edits since the last commit. */
     int dirty;
     lie_box3 *boxes;          /* every edited node's bounds, before and after */
-    int n_boxes, cap_boxes;
+    int n_boxes;
+    size_t cap_boxes;
     int *moved;               /* nodes whose transform, geometry or presence changed */
-    int n_moved, cap_moved;
+    int n_moved;
+    size_t cap_moved;
     lie_cache_edit *log;      /* the edit files, for the cache's edit log */
     int n_log;
     uint8_t *tree_flags;      /* per committed node: flagged by the trees (queries accumulate) */

@@ -75,7 +75,8 @@ static void drop_edits(lie_update *u)
     u->boxes = NULL;
     u->moved = NULL;
     u->tree_flags = NULL;
-    u->n_log = u->n_boxes = u->cap_boxes = u->n_moved = u->cap_moved = 0;
+    u->n_log = u->n_boxes = u->n_moved = 0;
+    u->cap_boxes = u->cap_moved = 0;
     u->dirty = 0;
 }
 
@@ -89,23 +90,9 @@ void lie_update_destroy(lie_update *u)
     free(u);
 }
 
-/* Room for one more element of size `elem` in *arr (holding n of *cap). */
-static int grow(void **arr, int n, int *cap, size_t elem)
-{
-    if (n < *cap)
-        return 1;
-    int nc = *cap ? 2 * *cap : 16;
-    void *na = realloc(*arr, elem * (size_t)nc);
-    if (!na)
-        return 0;
-    *arr = na;
-    *cap = nc;
-    return 1;
-}
-
 static int push_box(lie_update *u, lie_box3 b)
 {
-    if (!grow((void **)&u->boxes, u->n_boxes, &u->cap_boxes, sizeof *u->boxes))
+    if (!LIE_GROW(u->boxes, u->cap_boxes, (size_t)u->n_boxes + 1))
         return 0;
     u->boxes[u->n_boxes++] = b;
     return 1;
@@ -113,7 +100,7 @@ static int push_box(lie_update *u, lie_box3 b)
 
 static int push_moved(lie_update *u, int node)
 {
-    if (!grow((void **)&u->moved, u->n_moved, &u->cap_moved, sizeof *u->moved))
+    if (!LIE_GROW(u->moved, u->cap_moved, (size_t)u->n_moved + 1))
         return 0;
     u->moved[u->n_moved++] = node;
     return 1;

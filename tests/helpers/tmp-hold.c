@@ -5,6 +5,7 @@
  * signal.  SIGINT is reset to its default first: a background job of a
  * non-interactive shell starts with it ignored, a tool in the foreground
  * does not. */
+#include "common/cli.h"
 #include "lie.h"
 
 #include <signal.h>

@@ -1,7 +1,7 @@
 #!/bin/sh
 # The command-line contract (design/CLI.md), for every tool in bin/:
 # --help and -h to stdout with exit 0 and nothing on stderr, --version as
-# "TOOL VERSION", usage errors exit 2 with one line and a hint to --help,
+# "TOOL VERSION (commit C)" then the libraries it was built with, usage errors exit 2 with one line and a hint to --help,
 # and no output file after a usage error.
 . "$ROOT/tests/tools/lib.sh"
 
@@ -25,7 +25,8 @@ for tool in $tools; do
             ok "$tool $h: usage on stdout, exit 0"; else not_ok "$tool $h: exit $rc"; fi
     done
     run "$B/$tool" --version
-    if [ "$rc" -eq 0 ] && grep -Eqx "$tool [0-9]+\.[0-9]+\.[0-9]+" "$TMP/out" && [ ! -s "$TMP/err" ]; then
+    if [ "$rc" -eq 0 ] && head -1 "$TMP/out" | grep -Eqx "$tool [0-9]+\.[0-9]+\.[0-9]+ \(commit [^ ]+\)" &&
+        sed -n 2p "$TMP/out" | grep -q 'Embree [0-9].*OpenEXR [0-9]' && [ ! -s "$TMP/err" ]; then
         ok "$tool --version: $(cat "$TMP/out")"; else not_ok "$tool --version: exit $rc, '$(cat "$TMP/out")'"; fi
     # --help wins over everything after it, like git
     run "$B/$tool" --help --frobnicate

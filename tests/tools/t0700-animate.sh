@@ -46,6 +46,8 @@ for f in 0 1 3 4 6 8; do
     expect_rc 0 "frame $f: chained from the previous frame = rebuild (lie-inspect diff)"
     prev="c$f.lie"
 done
+run "$B/lie-inspect" verify c8.lie
+expect_rc 0 "the chained cache of frame 8 replays its six-file edit log to the same scene (verify)"
 # the posed scene written as glTF and built afresh gives the same environments
 run "$B/rst-update" base.lie edits/frame_0004.yaml -q --write-scene posed.gltf -o p4.lie
 "$B/lie-build" posed.gltf -q -o fresh4.lie || not_ok "build the exported posed scene"

@@ -434,10 +434,10 @@ static void test_gltf_texture_transform_read_and_applied(void **state)
     assert_true(lie_material_tex_xf_is_identity(m, LIE_TEX_EMISSIVE));
     /* T(0.5, 0) R(pi/2) S(2, 1): (u, v) -> (v + 0.5, -2u) */
     float tu, tv;
-    lie_tex_xf_apply(m->tex_xf[LIE_TEX_BASE_COLOR], 0.1f, 0.2f, &tu, &tv);
+    lie_material_tex_xf_apply(m->tex_xf[LIE_TEX_BASE_COLOR], 0.1f, 0.2f, &tu, &tv);
     assert_near(tu, 0.7, 1e-6);
     assert_near(tv, -0.2, 1e-6);
-    lie_tex_xf_apply(m->tex_xf[LIE_TEX_METALLIC_ROUGHNESS], 0.1f, 0.2f, &tu, &tv);
+    lie_material_tex_xf_apply(m->tex_xf[LIE_TEX_METALLIC_ROUGHNESS], 0.1f, 0.2f, &tu, &tv);
     assert_near(tu, 0.1, 1e-7); /* floats against doubles */
     assert_near(tv, 0.2, 1e-7);
     /* a shading point sees the texel the transform picks: at uv (0, 0.25)

@@ -256,7 +256,7 @@ static void test_exr_round_trip_is_bit_exact(void **state)
     lie_frame *f = make_test_frame();
     lie_error err;
     const char *path = tmp_path("round.exr");
-    assert_int_equal(lie_exr_write(path, f, NULL, 0, &err), LIE_OK);
+    assert_int_equal(lie_exr_write(path, f, NULL, &err), LIE_OK);
     lie_frame *g = NULL;
     assert_int_equal(lie_exr_read(path, &g, &err), LIE_OK);
     assert_non_null(g);
@@ -266,6 +266,45 @@ static void test_exr_round_trip_is_bit_exact(void **state)
     assert_string_equal(g->aovs[1].name, "normal");
     lie_frame_destroy(f);
     lie_frame_destroy(g);
+}
+
+/* Options are per call: each compression round-trips exactly, and a call's
+ * choice does not leak into the next (the default stays zip). */
+static void test_exr_options_are_per_call(void **state)
+{
+    (void)state;
+    lie_frame *f = make_test_frame();
+    lie_error err;
+    static const char *const names[] = {"zip", "zips", "piz", "rle", "none"};
+    for (int k = 0; k < 5; k++) {
+        lie_exr_compression c = LIE_EXR_NONE;
+        assert_true(lie_exr_compression_parse(names[k], &c));
+        assert_int_equal((int)c, k);
+        const char *path = tmp_path("comp.exr");
+        lie_exr_options o = {.compression = c, .threads = 1 + k % 2};
+        assert_int_equal(lie_exr_write(path, f, &o, &err), LIE_OK);
+        lie_frame *g = NULL;
+        assert_int_equal(lie_exr_read(path, &g, &err), LIE_OK);
+        assert_frames_identical(f, g);
+        lie_frame_destroy(g);
+    }
+    lie_exr_compression c = LIE_EXR_RLE;
+    assert_false(lie_exr_compression_parse("zip2", &c));
+    assert_false(lie_exr_compression_parse(NULL, &c));
+    assert_int_equal((int)c, LIE_EXR_RLE);
+    const char *p1 = tmp_path("dflt1.exr"), *p2 = tmp_path("dflt2.exr");
+    lie_exr_options zeroed = {0};
+    assert_int_equal(lie_exr_write(p1, f, NULL, &err), LIE_OK);
+    assert_int_equal(lie_exr_write(p2, f, &zeroed, &err), LIE_OK);
+    size_t n1, n2;
+    unsigned char *d1 = slurp(p1, &n1), *d2 = slurp(p2, &n2);
+    assert_int_equal(n1, n2);
+    assert_memory_equal(d1, d2, n1);
+    free(d1);
+    free(d2);
+    lie_exr_options bad = {.compression = (lie_exr_compression)9};
+    assert_int_equal(lie_exr_write(p1, f, &bad, &err), LIE_ERR_ARG);
+    lie_frame_destroy(f);
 }
 
 static void test_exr_round_trip_many_chunks(void **state)
@@ -281,7 +320,7 @@ static void test_exr_round_trip_many_chunks(void **state)
         d[i] = (float)i;
     lie_error err;
     const char *path = tmp_path("chunks.exr");
-    assert_int_equal(lie_exr_write(path, f, NULL, 0, &err), LIE_OK);
+    assert_int_equal(lie_exr_write(path, f, NULL, &err), LIE_OK);
     lie_frame *g = NULL;
     assert_int_equal(lie_exr_read(path, &g, &err), LIE_OK);
     assert_frames_identical(f, g);
@@ -300,7 +339,7 @@ static void test_exr_layer_channels_read_back_in_rgba_order(void **state)
         c[i] = (float)i;
     lie_error err;
     const char *path = tmp_path("rgba.exr");
-    assert_int_equal(lie_exr_write(path, f, NULL, 0, &err), LIE_OK);
+    assert_int_equal(lie_exr_write(path, f, NULL, &err), LIE_OK);
     lie_frame *g = NULL;
     assert_int_equal(lie_exr_read(path, &g, &err), LIE_OK);
     const lie_aov *a = lie_frame_find_aov(g, "albedo");
@@ -325,7 +364,7 @@ static void test_exr_long_channel_names_round_trip(void **state)
     d[1] = 42.0f;
     lie_error err;
     const char *path = tmp_path("long.exr");
-    assert_int_equal(lie_exr_write(path, f, NULL, 0, &err), LIE_OK);
+    assert_int_equal(lie_exr_write(path, f, NULL, &err), LIE_OK);
     lie_frame *g = NULL;
     assert_int_equal(lie_exr_read(path, &g, &err), LIE_OK);
     assert_frames_identical(f, g);
@@ -344,7 +383,7 @@ static void test_exr_default_layer_is_written_without_prefix(void **state)
     d[3] = 2.0f;
     lie_error err;
     const char *path = tmp_path("default.exr");
-    assert_int_equal(lie_exr_write(path, f, NULL, 0, &err), LIE_OK);
+    assert_int_equal(lie_exr_write(path, f, NULL, &err), LIE_OK);
 
     exr_context_t ctx;
     assert_int_equal(exr_start_read(&ctx, path, NULL), EXR_ERR_SUCCESS);
@@ -376,7 +415,7 @@ static void test_exr_write_rejects_duplicate_channels(void **state)
     assert_non_null(lie_frame_add_aov(f, "", 1, r)); /* clashes with RGB's "R" */
     lie_error err;
     const char *path = tmp_path("dup.exr");
-    assert_int_equal(lie_exr_write(path, f, NULL, 0, &err), LIE_ERR_ARG);
+    assert_int_equal(lie_exr_write(path, f, NULL, &err), LIE_ERR_ARG);
     assert_int_equal(access(path, F_OK), -1);
     lie_frame_destroy(f);
 }
@@ -407,7 +446,7 @@ static void test_exr_attributes_round_trip(void **state)
         attrs[4].v[i] = (float)i + 0.25f;
     lie_error err;
     const char *path = tmp_path("attrs.exr");
-    assert_int_equal(lie_exr_write(path, f, attrs, 5, &err), LIE_OK);
+    assert_int_equal(lie_exr_write(path, f, &(lie_exr_options){.attrs = attrs, .n_attrs = 5}, &err), LIE_OK);
 
     char buf[64];
     assert_int_equal(lie_exr_read_string_attr(path, "lie:scene", buf, sizeof buf, &err), LIE_OK);
@@ -451,7 +490,7 @@ static void test_exr_read_string_attr_reports_missing_wrong_type_and_short_buffe
     attrs[1].i = 3;
     lie_error err;
     const char *path = tmp_path("note.exr");
-    assert_int_equal(lie_exr_write(path, f, attrs, 2, &err), LIE_OK);
+    assert_int_equal(lie_exr_write(path, f, &(lie_exr_options){.attrs = attrs, .n_attrs = 2}, &err), LIE_OK);
     char buf[13];
     assert_int_equal(lie_exr_read_string_attr(path, "nope", buf, sizeof buf, &err),
                      LIE_ERR_NOT_FOUND);
@@ -476,7 +515,7 @@ static void test_exr_write_rejects_clashing_attribute(void **state)
     a.s = "none";
     lie_error err;
     const char *path = tmp_path("clash.exr");
-    assert_int_equal(lie_exr_write(path, f, &a, 1, &err), LIE_ERR_ARG);
+    assert_int_equal(lie_exr_write(path, f, &(lie_exr_options){.attrs = &a, .n_attrs = 1}, &err), LIE_ERR_ARG);
     assert_non_null(strstr(err.msg, "compression"));
     assert_int_equal(access(path, F_OK), -1);
     lie_frame_destroy(f);
@@ -493,9 +532,9 @@ static void test_exr_write_is_deterministic(void **state)
     a.s = "x";
     lie_error err;
     const char *p1 = tmp_path("det1.exr"), *p2 = tmp_path("det2.exr");
-    assert_int_equal(lie_exr_write(p1, f, &a, 1, &err), LIE_OK);
+    assert_int_equal(lie_exr_write(p1, f, &(lie_exr_options){.attrs = &a, .n_attrs = 1}, &err), LIE_OK);
     sleep(1); /* a timestamp, if any crept in, would now differ */
-    assert_int_equal(lie_exr_write(p2, f, &a, 1, &err), LIE_OK);
+    assert_int_equal(lie_exr_write(p2, f, &(lie_exr_options){.attrs = &a, .n_attrs = 1}, &err), LIE_OK);
     size_t n1, n2;
     unsigned char *d1 = slurp(p1, &n1), *d2 = slurp(p2, &n2);
     assert_int_equal(n1, n2);
@@ -529,10 +568,9 @@ static void test_exr_chunks_compressed_in_parallel_same_bytes(void **state)
     const char *p[3] = {tmp_path("par1.exr"), tmp_path("par2.exr"), tmp_path("par0.exr")};
     const int threads[3] = {1, 2, 0};
     for (int k = 0; k < 3; k++) {
-        lie_exr_set_threads(threads[k]);
-        assert_int_equal(lie_exr_write(p[k], f, NULL, 0, &err), LIE_OK);
+        lie_exr_options o = {.threads = threads[k]};
+        assert_int_equal(lie_exr_write(p[k], f, &o, &err), LIE_OK);
     }
-    lie_exr_set_threads(0);
     size_t n[3];
     unsigned char *d[3];
     for (int k = 0; k < 3; k++)
@@ -559,7 +597,7 @@ static void test_exr_write_to_missing_directory_fails_with_io_error(void **state
     (void)state;
     lie_frame *f = lie_frame_create(2, 2);
     lie_error err;
-    assert_int_equal(lie_exr_write(tmp_path("no/such/dir/out.exr"), f, NULL, 0, &err),
+    assert_int_equal(lie_exr_write(tmp_path("no/such/dir/out.exr"), f, NULL, &err),
                      LIE_ERR_IO);
     assert_int_equal(err.status, LIE_ERR_IO);
     assert_true(err.msg[0] != 0);
@@ -580,7 +618,7 @@ static void test_exr_write_below_a_regular_file_fails_with_io_error(void **state
     snprintf(target, sizeof target, "%s/out.exr", file);
     lie_frame *f = lie_frame_create(2, 2);
     lie_error err;
-    assert_int_equal(lie_exr_write(target, f, NULL, 0, &err), LIE_ERR_IO);
+    assert_int_equal(lie_exr_write(target, f, NULL, &err), LIE_ERR_IO);
     struct stat st;
     assert_int_equal(stat(file, &st), 0);
     assert_int_equal(st.st_size, 0);
@@ -600,8 +638,8 @@ static void test_exr_write_that_cannot_be_renamed_leaves_no_temp_file(void **sta
     assert_int_equal(mkdir(target, 0755), 0);
     lie_frame *f = make_test_frame();
     lie_error err;
-    assert_int_equal(lie_exr_write(target, f, NULL, 0, &err), LIE_ERR_IO);
-    assert_int_equal(lie_png_write(target, f, 0.0f, &err), LIE_ERR_IO);
+    assert_int_equal(lie_exr_write(target, f, NULL, &err), LIE_ERR_IO);
+    assert_int_equal(lie_png_write(target, f, NULL, &err), LIE_ERR_IO);
     struct stat st;
     assert_int_equal(stat(target, &st), 0);
     assert_true(S_ISDIR(st.st_mode));
@@ -621,7 +659,7 @@ static void test_exr_read_rejects_every_truncation(void **state)
     lie_frame *f = make_test_frame();
     lie_error err;
     const char *path = tmp_path("full.exr"), *cut = tmp_path("cut.exr");
-    assert_int_equal(lie_exr_write(path, f, NULL, 0, &err), LIE_OK);
+    assert_int_equal(lie_exr_write(path, f, NULL, &err), LIE_OK);
     size_t n;
     unsigned char *d = slurp(path, &n);
     for (size_t len = 0; len < n; len++) {
@@ -666,7 +704,7 @@ static void test_exr_read_survives_every_single_byte_corruption(void **state)
     lie_frame *f = make_test_frame();
     lie_error err;
     const char *path = tmp_path("good.exr"), *bad = tmp_path("flip.exr");
-    assert_int_equal(lie_exr_write(path, f, NULL, 0, &err), LIE_OK);
+    assert_int_equal(lie_exr_write(path, f, NULL, &err), LIE_OK);
     size_t n;
     unsigned char *d = slurp(path, &n);
     for (size_t i = 0; i < n; i++) {
@@ -820,7 +858,7 @@ static void test_png_pixels_are_srgb_encoded_and_rounded(void **state)
     f->rgb[3 * 3 + 1] = 0.0f; /* channels stay separate */
     lie_error err;
     const char *path = tmp_path("pixels.png");
-    assert_int_equal(lie_png_write(path, f, 0.0f, &err), LIE_OK);
+    assert_int_equal(lie_png_write(path, f, NULL, &err), LIE_OK);
     decoded_png p = read_png(path);
     assert_int_equal(p.width, 8);
     assert_int_equal(p.height, 1);
@@ -844,12 +882,12 @@ static void test_png_exposure_plus_one_doubles_radiance(void **state)
     f->rgb[9] = 0.5f;
     lie_error err;
     const char *path = tmp_path("exposure.png");
-    assert_int_equal(lie_png_write(path, f, 1.0f, &err), LIE_OK);
+    assert_int_equal(lie_png_write(path, f, &(lie_png_options){1.0f}, &err), LIE_OK);
     decoded_png p = read_png(path);
     assert_int_equal(p.rgb[0], 188); /* 0.25 x 2 = 0.5 */
     assert_int_equal(p.rgb[9], 255); /* 0.5 x 2 = 1 */
     free(p.rgb);
-    assert_int_equal(lie_png_write(path, f, -1.0f, &err), LIE_OK);
+    assert_int_equal(lie_png_write(path, f, &(lie_png_options){-1.0f}, &err), LIE_OK);
     p = read_png(path);
     assert_int_equal(p.rgb[9], 137); /* 0.5 / 2 = 0.25 */
     free(p.rgb);
@@ -894,7 +932,7 @@ static void test_frame_write_chooses_format_by_extension(void **state)
     static const char *const exrs[3] = {"c.exr", "d.png.exr", "e"};
     for (int i = 0; i < 2; i++) {
         const char *p = tmp_path(pngs[i]);
-        assert_int_equal(lie_frame_write(p, f, NULL, 0, 0.0f, &err), LIE_OK);
+        assert_int_equal(lie_frame_write(p, f, NULL, &err), LIE_OK);
         size_t n;
         unsigned char *d = slurp(p, &n);
         assert_true(n > 8);
@@ -903,7 +941,7 @@ static void test_frame_write_chooses_format_by_extension(void **state)
     }
     for (int i = 0; i < 3; i++) {
         const char *p = tmp_path(exrs[i]);
-        assert_int_equal(lie_frame_write(p, f, NULL, 0, 0.0f, &err), LIE_OK);
+        assert_int_equal(lie_frame_write(p, f, NULL, &err), LIE_OK);
         size_t n;
         unsigned char *d = slurp(p, &n);
         assert_true(n > 4);
@@ -919,7 +957,7 @@ static void test_frame_write_dash_writes_exr_to_stdout(void **state)
     lie_frame *f = make_test_frame();
     lie_error err;
     const char *ref = tmp_path("ref.exr"), *cap = tmp_path("stdout.exr");
-    assert_int_equal(lie_exr_write(ref, f, NULL, 0, &err), LIE_OK);
+    assert_int_equal(lie_exr_write(ref, f, NULL, &err), LIE_OK);
 
     fflush(stdout);
     int saved = dup(STDOUT_FILENO);
@@ -927,7 +965,7 @@ static void test_frame_write_dash_writes_exr_to_stdout(void **state)
     assert_true(saved >= 0 && fd >= 0);
     dup2(fd, STDOUT_FILENO);
     close(fd);
-    lie_status st = lie_frame_write("-", f, NULL, 0, 0.0f, &err);
+    lie_status st = lie_frame_write("-", f, NULL, &err);
     fflush(stdout);
     dup2(saved, STDOUT_FILENO);
     close(saved);
@@ -973,6 +1011,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_exr_read_rejects_garbage),
         cmocka_unit_test(test_exr_read_survives_every_single_byte_corruption),
         cmocka_unit_test(test_exr_read_converts_half_and_uint_channels),
+        cmocka_unit_test(test_exr_options_are_per_call),
         cmocka_unit_test(test_png_pixels_are_srgb_encoded_and_rounded),
         cmocka_unit_test(test_png_exposure_plus_one_doubles_radiance),
         cmocka_unit_test(test_png_write_rgb8_stores_pixels_unchanged),

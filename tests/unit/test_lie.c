@@ -420,6 +420,51 @@ static void test_lie_rebuilding_units_equals_building(void **state)
     lie_scene_destroy(s);
 }
 
+/* lie-build under mpirun: ranges of units built apart join into one
+ * build's env, whatever the cut; a missing part is refused. */
+static void test_lie_parts_joined_equal_one_build(void **state)
+{
+    (void)state;
+    lie_scene *s = NULL;
+    lie_error err;
+    assert_int_equal(lie_scene_load(TEST_SCENES "/cornell.gltf", NULL, &s, &err), LIE_OK);
+    lie_rt *rt = NULL;
+    lie_build_params p = lie_build_params_default();
+    p.min_patch = 1e-3f;
+    p.threads = 2;
+    lie_env *whole = build(s, &rt, p);
+    uint64_t n = (uint64_t)s->n_tris * (uint64_t)s->n_emitters;
+    for (uint64_t step = 1; step <= n; step += 5) {
+        lie_env_part parts[64];
+        size_t k = 0;
+        lie_build_stats sum, st;
+        memset(&sum, 0, sizeof sum);
+        for (uint64_t u = 0; u < n && k < 64; u += step, k++) {
+            uint64_t c = n - u < step ? n - u : step;
+            assert_int_equal(lie_env_build_range(s, rt, &p, NULL, u, c, &parts[k], &st, &err), LIE_OK);
+            lie_build_stats_add(&sum, &st);
+        }
+        if (k == 64) {
+            for (size_t i = 0; i < k; i++)
+                lie_env_part_free(&parts[i]);
+            continue;
+        }
+        lie_env *joined = NULL;
+        assert_int_equal(lie_env_join(s, &p, parts, k, &joined, &err), LIE_OK);
+        assert_env_equal(whole, joined);
+        lie_env_destroy(joined);
+        if (k > 1) { /* a part missing */
+            assert_int_equal(lie_env_join(s, &p, parts + 1, k - 1, &joined, &err), LIE_ERR_ARG);
+            assert_null(joined);
+        }
+        for (size_t i = 0; i < k; i++)
+            lie_env_part_free(&parts[i]);
+    }
+    lie_env_destroy(whole);
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+}
+
 static void test_patch_children_tile_the_parent(void **state)
 {
     (void)state;
@@ -493,6 +538,7 @@ int main(void)
         cmocka_unit_test(test_lie_conservative_lists_contain_sampled_lists),
         cmocka_unit_test(test_lie_build_is_identical_for_any_thread_count),
         cmocka_unit_test(test_lie_rebuilding_units_equals_building),
+        cmocka_unit_test(test_lie_parts_joined_equal_one_build),
         cmocka_unit_test(test_patch_children_tile_the_parent),
         cmocka_unit_test(test_patch_names_round_trip),
         cmocka_unit_test(test_lie_many_triangle_emitter_uses_a_flat_oriented_box),

@@ -2,6 +2,7 @@
  * edit file per frame (formats/edit.md) and the animated camera's motion
  * into a camera path (formats/camera-path.md) whose frames match.
  *   lie-animate SCENE.gltf --fps F -o edits/frame_%04d.yaml [options] */
+#include "common/cli.h"
 #include "lie.h"
 
 #include <getopt.h>

@@ -1,6 +1,8 @@
 /* lie-build: build the local illumination environments of a scene and write
  * them to a cache.
  *   lie-build SCENE.gltf|SCENE.glb -o CACHE|- [options] */
+#include "common/cli.h"
+#include "dist.h"
 #include "lie.h"
 
 #include <getopt.h>
@@ -43,14 +45,17 @@ static void usage(FILE *fp)
             "      --stats[=json]    print statistics to stderr\n"
             "  -q, --quiet           no progress bar\n"
             "  -h, --help            this help\n"
-            "      --version         print the version\n",
+            "      --version         print the version\n"
+            "\n"
+            "Under mpirun the ranks share the units out and rank 0 writes the cache one\n"
+            "process writes (docs/mpi.md).\n",
             prog, d.samples, d.max_samples, d.max_blockers, (double)LIE_MIN_PATCH_MIN, (double)d.min_patch,
             (unsigned long long)LIE_MAX_NODES_DEFAULT, d.complex_cap);
 }
 
 #define usage_error(...) lie_usage_error(prog, __VA_ARGS__)
 
-static int fail(const lie_error *err) { return lie_report_error(prog, err, 1); }
+static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 
 enum {
     OPT_SAMPLES = 256, OPT_MAX_SAMPLES, OPT_MAX_BLOCKERS, OPT_MIN_PATCH, OPT_COMPLEX_CAP, OPT_BLOCKERS,
@@ -108,9 +113,11 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
         fprintf(stderr,
                 "],\"mean_list_length\":%.3f,\"segments\":%llu,\"nodes\":%u,\"pool\":%u,"
                 "\"seconds_load\":%.6f,\"seconds_bvh\":%.6f,\"seconds_build\":%.6f,\"seconds_write\":%.6f,"
-                "\"bytes\":%zu}\n",
+                "\"bytes\":%zu",
                 mean, (unsigned long long)st->segments, env->n_nodes, env->n_pool, t_load, t_bvh, t_build, t_write,
                 bytes);
+        lie_dist_stats_print(stderr, "units", 1);
+        fprintf(stderr, "}\n");
         return;
     }
     fprintf(stderr, "%s: %s: %u triangles, %d emitters, %llu units\n", prog, input, s->n_tris, s->n_emitters,
@@ -137,6 +144,7 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
             (unsigned long long)st->segments, env->n_nodes, env->n_pool, bytes);
     fprintf(stderr, "  time: load %.3f s, bvh %.3f s, build %.3f s, write %.3f s\n", t_load, t_bvh, t_build,
             t_write);
+    lie_dist_stats_print(stderr, "units", 0);
 }
 
 int main(int argc, char **argv)
@@ -226,6 +234,11 @@ int main(int argc, char **argv)
         bp.max_samples = bp.samples; /* --samples above the default cap: one round */
     const char *input = argv[optind];
 
+    if (lie_dist_start(&argc, &argv) > 1) {
+        quiet = 1; /* rank 0 prints the statistics */
+        if (lie_dist_rank() != 0)
+            stats = 0;
+    }
     lie_error err;
     lie_error_clear(&err);
     double t0 = lie_time_now();
@@ -261,17 +274,29 @@ int main(int argc, char **argv)
             return fail(&err);
         }
     }
+    if (lie_dist_check(scene->hash, scene->hash, &err) != LIE_OK) {
+        free(mask);
+        lie_rt_destroy(rt);
+        lie_scene_destroy(scene);
+        return fail(&err);
+    }
     lie_progress prog_bar;
     lie_progress_begin(&prog_bar, stderr, "lie-build", !quiet);
     lie_env *env = NULL;
     lie_build_stats st;
-    lie_status rc = lie_env_build_masked(scene, rt, &bp, mask, &prog_bar, &env, &st, &err);
+    lie_status rc = lie_dist_size() > 1 ? build_dist(scene, rt, &bp, mask, &env, &st, &err)
+                                         : lie_env_build_masked(scene, rt, &bp, mask, &prog_bar, &env, &st, &err);
     free(mask);
     lie_progress_end(&prog_bar);
     if (rc != LIE_OK) {
         lie_rt_destroy(rt);
         lie_scene_destroy(scene);
         return fail(&err);
+    }
+    if (!env) { /* another rank than 0 under mpirun: rank 0 writes */
+        lie_rt_destroy(rt);
+        lie_scene_destroy(scene);
+        return 0;
     }
     double t3 = lie_time_now();
     lie_cache cache;

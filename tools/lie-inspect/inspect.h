@@ -2,6 +2,7 @@
 #ifndef LIE_INSPECT_H
 #define LIE_INSPECT_H
 
+#include "common/cli.h"
 #include "lie.h"
 
 extern const char *const inspect_prog;

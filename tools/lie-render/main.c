@@ -3,6 +3,8 @@
  * From a cache (lie-build), shadow rays are answered by the local
  * illumination environments (--visibility=lie, the default); from a scene,
  * or with --visibility=full, by Embree over the whole scene: the reference. */
+#include "common/cli.h"
+#include "dist.h"
 #include "lie.h"
 
 #include <getopt.h>
@@ -69,7 +71,10 @@ static void usage(FILE *fp)
             "      --stats[=json]      print statistics to stderr\n"
             "  -q, --quiet             no progress bar\n"
             "  -h, --help              this help\n"
-            "      --version           print the version\n",
+            "      --version           print the version\n"
+            "\n"
+            "Under mpirun the ranks share the frames out (tiles, or whole frames of a path)\n"
+            "and rank 0 writes the bytes one process writes (docs/mpi.md).\n",
             prog, d.width, d.height, d.spp, d.light_samples, d.max_depth);
 }
 
@@ -80,7 +85,7 @@ static const char *exact_name(const lie_render_options *o)
 
 #define usage_error(...) lie_usage_error(prog, __VA_ARGS__)
 
-static int fail(const lie_error *err) { return lie_report_error(prog, err, 1); }
+static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 
 enum {
     OPT_CAMERA = 256, OPT_SIZE, OPT_SPP, OPT_LIGHT_SAMPLES, OPT_PATTERN, OPT_VISIBILITY, OPT_RAYS, OPT_LIE_SKIP,
@@ -160,7 +165,7 @@ static lie_status load_input(const char *input, const char *override, const lie_
     *cache = NULL;
     unsigned char *data = NULL;
     size_t size = 0;
-    lie_status st = lie_read_file(input, &data, &size, err);
+    lie_status st = lie_dist_read_file(input, &data, &size, err); /* under mpirun: read once, broadcast */
     if (st != LIE_OK)
         return st;
     if (looks_like_gltf(data, size)) {
@@ -190,6 +195,49 @@ static const char *rays_name(lie_ray_mode m)
     return m == LIE_RAYS_SINGLE ? "single" : m == LIE_RAYS_PACKET ? "packet" : "stream";
 }
 
+/* What every frame's file is written with. */
+typedef struct frame_out {
+    const char *output, *input, *hash;
+    const lie_render_options *ro;
+    int path;
+    lie_frame_options opt; /* the attributes are set per frame */
+    int first; /* the number of the path's frame 0 */
+} frame_out;
+
+static lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame, lie_error *err)
+{
+    const frame_out *o = ctx;
+    const lie_render_options *ro = o->ro;
+    char name[4096];
+    int number = o->first + fi;
+    if (o->path)
+        snprintf(name, sizeof name, o->output, number);
+    else
+        snprintf(name, sizeof name, "%s", o->output);
+    float yfov_deg = fc->yfov * 180.0f / (float)M_PI;
+    lie_attr attrs[] = {
+        {.name = "software", .type = LIE_ATTR_STRING, .s = "lie-render " LIE_VERSION},
+        {.name = "lie.input", .type = LIE_ATTR_STRING, .s = o->input},
+        {.name = "lie.sceneHash", .type = LIE_ATTR_STRING, .s = o->hash},
+        {.name = "lie.visibility", .type = LIE_ATTR_STRING, .s = vis_name(ro->visibility)},
+        {.name = "lie.pattern", .type = LIE_ATTR_STRING, .s = ro->pattern == LIE_PATTERN_FIXED ? "fixed" : "rotated"},
+        {.name = "lie.lightSamples", .type = LIE_ATTR_INT, .i = ro->eye_only ? 0 : ro->light_samples},
+        {.name = "lie.spp", .type = LIE_ATTR_INT, .i = ro->spp},
+        {.name = "lie.maxDepth", .type = LIE_ATTR_INT, .i = ro->max_depth},
+        {.name = "lie.frame", .type = LIE_ATTR_INT, .i = number},
+        {.name = "lie.cameraEye", .type = LIE_ATTR_V3F, .v = {fc->eye.x, fc->eye.y, fc->eye.z}},
+        {.name = "lie.cameraForward", .type = LIE_ATTR_V3F, .v = {fc->forward.x, fc->forward.y, fc->forward.z}},
+        {.name = "lie.cameraUp", .type = LIE_ATTR_V3F, .v = {fc->up.x, fc->up.y, fc->up.z}},
+        {.name = "lie.cameraYFovDegrees", .type = LIE_ATTR_FLOAT, .f = yfov_deg},
+        /* orthographic views: their height in world units (0: perspective) */
+        {.name = "lie.cameraOrthoHeight", .type = LIE_ATTR_FLOAT, .f = 2.0f * fc->ymag},
+    };
+    lie_frame_options opt = o->opt;
+    opt.exr.attrs = attrs;
+    opt.exr.n_attrs = (int)(sizeof attrs / sizeof attrs[0]);
+    return lie_frame_write(name, frame, &opt, err);
+}
+
 int main(int argc, char **argv)
 {
     lie_render_options ro = lie_render_options_default();
@@ -198,7 +246,7 @@ int main(int argc, char **argv)
     long frame_a = -1, frame_b = -1;
     int skip_existing = 0;
     int visibility_set = 0;
-    float exposure = 0.0f;
+    lie_frame_options fopt = {0};
     int stats = 0, quiet = 0; /* stats: 1 human, 2 json */
     long v;
     int c;
@@ -271,18 +319,18 @@ int main(int argc, char **argv)
                                    optarg);
             break;
         case OPT_COMPRESSION:
-            if (!lie_exr_set_compression(optarg))
+            if (!lie_exr_compression_parse(optarg, &fopt.exr.compression))
                 return usage_error("--compression: expected zip, zips, piz, rle or none, got '%s'", optarg);
             break;
         case OPT_EXPOSURE:
-            if (!lie_parse_float(optarg, -64.0f, 64.0f, &exposure))
+            if (!lie_parse_float(optarg, -64.0f, 64.0f, &fopt.png.exposure))
                 return usage_error("--exposure: expected a number of stops, got '%s'", optarg);
             break;
         case OPT_THREADS:
             if (!lie_parse_long(optarg, 0, 4096, &v))
                 return usage_error("--threads: expected an integer in 0..4096, got '%s'", optarg);
             ro.threads = (int)v;
-            lie_exr_set_threads(ro.threads);
+            fopt.exr.threads = ro.threads;
             break;
         case OPT_EXTERNAL: so.allow_external_uris = 1; break;
         case OPT_SCENE: scene_override = optarg; break;
@@ -324,6 +372,11 @@ int main(int argc, char **argv)
     if (ro.light_samples == 0) {
         ro.eye_only = 1;
         ro.light_samples = 1;
+    }
+    if (lie_dist_start(&argc, &argv) > 1) {
+        quiet = 1; /* progress and warnings: one process's are enough; rank 0 prints the statistics */
+        if (lie_dist_rank() != 0)
+            stats = 0;
     }
     ro.progress = !quiet;
 
@@ -380,6 +433,14 @@ int main(int argc, char **argv)
         lie_scene_destroy(scene);
         return fail(&err);
     }
+    if (lie_dist_check(scene->hash, cache ? cache->state_hash : 0, &err) != LIE_OK) {
+        lie_rt_destroy(rt);
+        lie_camera_path_destroy(cpath);
+        lie_lie_vis_destroy(lv);
+        lie_cache_destroy(cache);
+        lie_scene_destroy(scene);
+        return fail(&err);
+    }
     double t2 = lie_time_now();
     char hash[32], size[32];
     snprintf(hash, sizeof hash, "%016llx", (unsigned long long)scene->hash);
@@ -399,11 +460,16 @@ int main(int argc, char **argv)
     memset(&rs, 0, sizeof rs);
     double t_render = 0.0, t_write = 0.0;
     lie_status st = LIE_OK;
-    for (int fi = 0; fi < n_frames && st == LIE_OK; fi++) {
+    /* the frames to render: --frames, and --skip-existing's files as rank 0 sees them */
+    int *todo = malloc(sizeof *todo * ((size_t)n_frames + 1)), n_todo = 0;
+    if (!todo) {
+        lie_error_set(&err, LIE_ERR_NOMEM, input, "out of memory");
+        st = LIE_ERR_NOMEM;
+    }
+    for (int fi = 0; todo && fi < n_frames; fi++) {
         int number = first + fi;
         if (frame_a >= 0 && (number < frame_a || number > frame_b))
             continue;
-        lie_camera fc = cpath ? lie_camera_path_frame(cpath, fi) : cam;
         char name[4096];
         if (cpath)
             snprintf(name, sizeof name, output, number);
@@ -414,6 +480,20 @@ int main(int argc, char **argv)
             skipped++; /* a resumed run: the frame was written (atomically) before */
             continue;
         }
+        todo[n_todo++] = fi;
+    }
+    frame_out fo = {output, input, hash, &ro, cpath != NULL, fopt, first};
+    if (todo && lie_dist_size() > 1) {
+        lie_dist_bcast(&n_todo, sizeof n_todo);
+        lie_dist_bcast(todo, sizeof *todo * (size_t)n_todo);
+        double ta = lie_time_now();
+        st = render_dist(scene, rt, &ro, cpath, &cam, todo, n_todo, write_frame, &fo, &rs, &t_write, &err);
+        t_render = lie_time_now() - ta - t_write;
+        rendered = n_todo;
+    }
+    for (int k = 0; todo && lie_dist_size() == 1 && k < n_todo && st == LIE_OK; k++) {
+        int fi = todo[k];
+        lie_camera fc = cpath ? lie_camera_path_frame(cpath, fi) : cam;
         rendered++;
         double ta = lie_time_now();
         lie_frame *frame = NULL;
@@ -423,29 +503,12 @@ int main(int argc, char **argv)
             break;
         double tb = lie_time_now();
         lie_render_stats_add(&rs, &fs);
-        float yfov_deg = fc.yfov * 180.0f / (float)M_PI;
-        lie_attr attrs[] = {
-            {.name = "software", .type = LIE_ATTR_STRING, .s = "lie-render " LIE_VERSION},
-            {.name = "lie.input", .type = LIE_ATTR_STRING, .s = input},
-            {.name = "lie.sceneHash", .type = LIE_ATTR_STRING, .s = hash},
-            {.name = "lie.visibility", .type = LIE_ATTR_STRING, .s = vis_name(ro.visibility)},
-            {.name = "lie.pattern", .type = LIE_ATTR_STRING, .s = ro.pattern == LIE_PATTERN_FIXED ? "fixed" : "rotated"},
-            {.name = "lie.lightSamples", .type = LIE_ATTR_INT, .i = ro.eye_only ? 0 : ro.light_samples},
-            {.name = "lie.spp", .type = LIE_ATTR_INT, .i = ro.spp},
-            {.name = "lie.maxDepth", .type = LIE_ATTR_INT, .i = ro.max_depth},
-            {.name = "lie.frame", .type = LIE_ATTR_INT, .i = number},
-            {.name = "lie.cameraEye", .type = LIE_ATTR_V3F, .v = {fc.eye.x, fc.eye.y, fc.eye.z}},
-            {.name = "lie.cameraForward", .type = LIE_ATTR_V3F, .v = {fc.forward.x, fc.forward.y, fc.forward.z}},
-            {.name = "lie.cameraUp", .type = LIE_ATTR_V3F, .v = {fc.up.x, fc.up.y, fc.up.z}},
-            {.name = "lie.cameraYFovDegrees", .type = LIE_ATTR_FLOAT, .f = yfov_deg},
-            /* orthographic views: their height in world units (0: perspective) */
-            {.name = "lie.cameraOrthoHeight", .type = LIE_ATTR_FLOAT, .f = 2.0f * fc.ymag},
-        };
-        st = lie_frame_write(name, frame, attrs, (int)(sizeof attrs / sizeof attrs[0]), exposure, &err);
+        st = write_frame(&fo, fi, &fc, frame, &err);
         lie_frame_destroy(frame);
         t_render += tb - ta;
         t_write += lie_time_now() - tb;
     }
+    free(todo);
     double t3 = t2 + t_render, t4 = t3 + t_write;
     int threads = ro.threads > 0 ? ro.threads : lie_cpu_count();
     if (st == LIE_OK && stats) {
@@ -473,12 +536,14 @@ int main(int argc, char **argv)
                     "\"pairs_blockers\":%llu,\"pairs_embree\":%llu,\"pairs_unshadowed\":%llu,"
                     "\"exact_overflows\":%llu,\"timers\":%s,\"cpu_seconds_analytic\":%.6f,"
                     "\"cpu_seconds_exact\":%.6f,\"cpu_seconds_blockers\":%.6f,\"cpu_seconds_embree\":%.6f,"
-                    "\"cpu_seconds_sampled_shading\":%.6f}\n",
+                    "\"cpu_seconds_sampled_shading\":%.6f",
                     exact_name(&ro), (unsigned long long)rs.pairs_occluded, (unsigned long long)rs.pairs_analytic,
                     (unsigned long long)rs.pairs_exact, (unsigned long long)rs.pairs_blockers,
                     (unsigned long long)rs.pairs_embree, (unsigned long long)rs.pairs_unshadowed,
                     (unsigned long long)rs.exact_overflows, ro.timers ? "true" : "false", rs.t_analytic,
                     rs.t_exact, rs.t_blockers, rs.t_embree, rs.t_sampled_shading);
+            render_dist_stats(stderr, 1);
+            fprintf(stderr, "}\n");
         } else {
             fprintf(stderr,
                     "%s: %s: %u triangles, %d emitters, %d points and %d lines skipped\n"
@@ -506,6 +571,7 @@ int main(int argc, char **argv)
                         "  worker seconds: closed form %.3f, exact shadows %.3f, blocker samples %.3f,\n"
                         "    Embree %.3f, sampled shading %.3f\n",
                         rs.t_analytic, rs.t_exact, rs.t_blockers, rs.t_embree, rs.t_sampled_shading);
+            render_dist_stats(stderr, 0);
         }
     }
     lie_camera_path_destroy(cpath);

@@ -1,6 +1,7 @@
 /* rst-update: apply edit files to a cache's scene and recompute only the
  * local illumination environments the edits can have changed (§5).
  *   rst-update CACHE|- EDIT.yaml [EDIT.yaml ...] -o CACHE|- [options] */
+#include "common/cli.h"
 #include "lie.h"
 
 #include <getopt.h>
@@ -27,7 +28,10 @@ static void usage(FILE *fp)
             "      --stats[=json]    pairs flagged, pairs really changed, time per phase\n"
             "  -q, --quiet           no progress bar, no warnings\n"
             "  -h, --help            this help\n"
-            "      --version         print the version\n",
+            "      --version         print the version\n"
+            "\n"
+            "rst-update is one process: it is not shared out under mpirun (an update\n"
+            "recomputes few units; run it without mpirun, see docs/mpi.md).\n",
             prog);
 }
 

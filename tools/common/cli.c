@@ -1,5 +1,6 @@
-/* Strict parsing of command-line values: "12x" or "" is an error, never 12 or 0. */
-#include "core/core.h"
+/* Strict parsing of command-line values ("12x" or "" is an error, never 12
+ * or 0) and the tools' messages (tools/common/cli.h). */
+#include "common/cli.h"
 
 #include <errno.h>
 #include <stdarg.h>

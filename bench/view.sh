@@ -1,0 +1,62 @@
+#!/bin/sh
+# make bench-view: lie-view's interactive loop under Xvfb (issue 16's
+# targets, 512x512 museum1, 100 light samples): frames per second while the
+# view orbits (progressive: each orbit step shows at least its coarse
+# level), the first image of an edit's world after each drag, and how long
+# the constructor takes to catch up after the last edit.  Writes
+# out/bench-view.json.  The figures depend on the load of the machine.
+set -e
+cd "$(dirname "$0")/.."
+SCENE=${SCENE:-tests/scenes/museum1.gltf}
+SIZE=${SIZE:-512x512}
+LIGHT_SAMPLES=${LIGHT_SAMPLES:-100}
+STEPS=${STEPS:-120}
+DRAGS=${DRAGS:-10}
+mkdir -p out
+TMP=$(mktemp -d); trap 'rm -rf "$TMP"' EXIT
+command -v xvfb-run >/dev/null || { echo "bench-view: xvfb-run is missing (make deps)" >&2; exit 1; }
+
+bin/lie-build "$SCENE" -q -o "$TMP/scene.lie"
+
+# orbit: STEPS steps of 3 degrees, each waiting for its first image
+{
+    echo "frames 3"
+    i=0
+    while [ $i -lt "$STEPS" ]; do echo "orbit 3 0"; echo "frames 1"; i=$((i + 1)); done
+    echo "quit"
+} >"$TMP/orbit.txt"
+xvfb-run -a -s "-screen 0 1024x768x24" bin/lie-view "$TMP/scene.lie" --size "$SIZE" \
+    --light-samples "$LIGHT_SAMPLES" --script "$TMP/orbit.txt" -q --stats=json 2>"$TMP/orbit.json"
+
+# drags: DRAGS moves of the cube, a few frames apart, then wait for the constructor
+{
+    echo "frames 3"
+    echo "select Cube"
+    i=0
+    while [ $i -lt "$DRAGS" ]; do echo "drag 0.05 0 -0.03"; echo "frames 2"; i=$((i + 1)); done
+    echo "wait"
+    echo "frames 3"
+    echo "quit"
+} >"$TMP/drag.txt"
+xvfb-run -a -s "-screen 0 1024x768x24" bin/lie-view "$TMP/scene.lie" --size "$SIZE" \
+    --light-samples "$LIGHT_SAMPLES" --script "$TMP/drag.txt" -q --stats=json 2>"$TMP/drag.json"
+
+fps=$(sed -n 's/.*"fps_mean":\([0-9.]*\).*/\1/p' "$TMP/orbit.json")
+list() { sed -n "s/.*\"$1\":\[\([^]]*\)\].*/\1/p" "$TMP/drag.json" | tr ',' '\n'; }
+stat() { awk 'NF { n++; s += $1; if ($1 > m) m = $1 } END { if (n) printf "%.1f %.1f %d", s / n, m, n; else print "0 0 0" }'; }
+set -- $(list first_frame_ms | stat); first_mean=$1 first_max=$2 first_n=$3
+set -- $(list update_ms | stat); upd_mean=$1 upd_max=$2
+catchup=$(list catchup_ms | tail -1)
+load=$(cut -d' ' -f1 /proc/loadavg)
+
+printf '%-46s %10s %10s\n' "lie-view, $SIZE, $LIGHT_SAMPLES light samples" measured target
+printf '%-46s %10s %10s\n' "fps while orbiting (progressive)" "$fps" ">= 15"
+printf '%-46s %10s %10s\n' "first frame after a drag, mean (ms)" "$first_mean" "<= 100"
+printf '%-46s %10s %10s\n' "first frame after a drag, worst (ms)" "$first_max" "<= 100"
+printf '%-46s %10s %10s\n' "phase 1 of an edit, mean / worst (ms)" "$upd_mean / $upd_max" ""
+printf '%-46s %10s %10s\n' "constructor catch-up after the last edit (ms)" "${catchup:-?}" "<= 1000"
+printf '%-46s %10s\n' "load average during the run" "$load"
+cat >out/bench-view.json <<EOF
+{"scene":"$SCENE","size":"$SIZE","light_samples":$LIGHT_SAMPLES,"orbit_fps":${fps:-0},"first_frame_ms_mean":$first_mean,"first_frame_ms_max":$first_max,"drags":$first_n,"update_ms_mean":$upd_mean,"update_ms_max":$upd_max,"catchup_ms":${catchup:-0},"loadavg":$load}
+EOF
+echo "bench-view: wrote out/bench-view.json"

@@ -1,0 +1,340 @@
+/* lib/update (§5): an update equals a rebuild of the edited scene for each
+ * of the eight edit operations of formats/edit.md, whatever the chunking of
+ * its steps; edits that arrive while units are pending, and after a
+ * commit, still give the rebuild; snapshots never show an answer the edit
+ * changed. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "lie.h"
+
+#define SCENE TEST_SCENES "/cornell.gltf"
+#define EDIT_NAME TEST_SCENES "/update-test.yaml" /* never read: names the edit, resolves `add` */
+
+static lie_build_params params(void)
+{
+    lie_build_params p = lie_build_params_default();
+    p.min_patch = 1e-3f;
+    p.threads = 2;
+    return p;
+}
+
+static lie_scene *load(void)
+{
+    lie_scene *s = NULL;
+    lie_error err;
+    assert_int_equal(lie_scene_load(SCENE, NULL, &s, &err), LIE_OK);
+    return s;
+}
+
+static lie_env *build(const lie_scene *s)
+{
+    lie_error err;
+    lie_rt *rt = NULL;
+    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
+    lie_build_params p = params();
+    lie_env *env = NULL;
+    assert_int_equal(lie_env_build(s, rt, &p, NULL, &env, NULL, &err), LIE_OK);
+    lie_rt_destroy(rt);
+    return env;
+}
+
+/* A cache of cornell as lie-build makes it, and its scene. */
+static lie_cache *make_cache(lie_scene **scene)
+{
+    lie_error err;
+    *scene = load();
+    lie_cache *c = calloc(1, sizeof *c);
+    c->scene_path = strdup(SCENE);
+    c->scene_hash = (*scene)->hash;
+    assert_int_equal(lie_cache_set_state(c, *scene, &err), LIE_OK);
+    c->env = build(*scene);
+    return c;
+}
+
+static lie_edit *parse(const char *text)
+{
+    lie_edit *e = NULL;
+    lie_error err;
+    if (lie_edit_parse((const unsigned char *)text, strlen(text), EDIT_NAME, &e, &err) != LIE_OK)
+        fail_msg("%s", err.msg);
+    return e;
+}
+
+/* A fresh build of cornell after the edits, as lie-build would make it. */
+static lie_env *rebuild(const char *const *texts, int n, lie_scene **scene)
+{
+    lie_error err;
+    lie_scene *s = load();
+    lie_scene_options so = lie_scene_options_default();
+    for (int i = 0; i < n; i++) {
+        lie_edit *e = parse(texts[i]);
+        assert_int_equal(lie_edit_apply(s, e, &so, NULL, &err), LIE_OK);
+        lie_edit_destroy(e);
+    }
+    lie_env *env = build(s);
+    *scene = s;
+    return env;
+}
+
+static void assert_env_equal(const lie_env *a, const lie_env *b)
+{
+    assert_int_equal(a->n_tris, b->n_tris);
+    assert_int_equal(a->n_emitters, b->n_emitters);
+    assert_int_equal(a->n_nodes, b->n_nodes);
+    assert_int_equal(a->n_pool, b->n_pool);
+    assert_true(a->scene_hash == b->scene_hash);
+    assert_memory_equal(a->root, b->root, sizeof(uint32_t) * a->n_tris * (size_t)a->n_emitters);
+    assert_memory_equal(a->nodes, b->nodes, sizeof(lie_pnode) * a->n_nodes);
+    if (a->n_pool)
+        assert_memory_equal(a->pool, b->pool, sizeof(uint32_t) * a->n_pool);
+}
+
+/* Update cornell by `texts` (in steps of `chunk` units, 0 = at once) and
+ * check the cache against a rebuild: environments, state, edit log. */
+static void check_update(const char *const *texts, int n, size_t chunk, uint64_t *flagged)
+{
+    lie_error err;
+    lie_scene *s = NULL, *ref_scene = NULL;
+    lie_cache *c = make_cache(&s);
+    lie_update_options o = lie_update_options_default();
+    o.threads = 2;
+    lie_update *u = NULL;
+    assert_int_equal(lie_update_create(c, s, &o, &u, &err), LIE_OK);
+    for (int i = 0; i < n; i++) {
+        lie_edit *e = parse(texts[i]);
+        assert_int_equal(lie_update_edit(u, e, (const unsigned char *)texts[i], strlen(texts[i]), &err), LIE_OK);
+        lie_edit_destroy(e);
+    }
+    lie_update_stats st;
+    lie_update_get_stats(u, &st);
+    if (flagged)
+        *flagged = st.units_flagged + st.units_rebuilt;
+    size_t left = lie_update_pending(u), before = left;
+    int steps = 0;
+    do {
+        assert_int_equal(lie_update_step(u, chunk, &left, &err), LIE_OK);
+        steps++;
+    } while (left);
+    if (chunk && before > chunk)
+        assert_true(steps > 1);
+    assert_int_equal(lie_update_pending(u), 0);
+    lie_update_destroy(u);
+
+    lie_env *ref = rebuild(texts, n, &ref_scene);
+    assert_env_equal(c->env, ref);
+    assert_int_equal(c->n_tris, ref_scene->n_tris);
+    assert_true(c->state_hash == ref_scene->hash);
+    assert_int_equal(c->n_emitters, ref_scene->n_emitters);
+    for (int e = 0; e < c->n_emitters; e++) {
+        assert_int_equal(c->emitters[e].node, ref_scene->emitters[e].node);
+        assert_int_equal(c->emitters[e].first_tri, ref_scene->emitters[e].first_tri);
+    }
+    assert_int_equal(c->n_edits, n);
+    for (int i = 0; i < n; i++) {
+        assert_string_equal(c->edits[i].name, EDIT_NAME);
+        assert_int_equal(c->edits[i].size, strlen(texts[i]));
+        assert_memory_equal(c->edits[i].text, texts[i], strlen(texts[i]));
+    }
+    lie_env_destroy(ref);
+    lie_scene_destroy(ref_scene);
+    lie_cache_destroy(c);
+    lie_scene_destroy(s);
+}
+
+static const char *const OPS[8] = {
+    "- move: {node: TallBlock, by: [0.08, 0, -0.05]}\n",
+    "- rotate: {node: ShortBlock, axis: [0, 1, 0], degrees: 25}\n",
+    "- scale: {node: TallBlock, by: [1, 0.8, 1]}\n",
+    "- set-transform: {node: ShortBlock, matrix: [1,0,0,0, 0,1,0,0, 0,0,1,0, 0.05,0,0.1,1]}\n",
+    "- remove: {node: ShortBlock}\n",
+    "- add: {file: cornell.gltf, node: TallBlock, as: Tower, transform: {translation: [0.1, 0, 0.1], scale: [0.3, 0.3, 0.3]}}\n",
+    "- set-material: {node: ShortBlock, base-color: [0.8, 0.1, 0.1], roughness: 0.4}\n",
+    "- set-emission: {node: Light, strength: 0}\n",
+};
+
+static void test_update_equals_rebuild_for_each_operation(void **state)
+{
+    (void)state;
+    for (int i = 0; i < 8; i++) {
+        uint64_t flagged = 0;
+        check_update(&OPS[i], 1, 0, &flagged);
+        /* geometry edits reach some units; a material leaves every unit
+         * alone, and cornell's only light switched off leaves no unit */
+        if (i < 6)
+            assert_true(flagged > 0);
+        else
+            assert_int_equal(flagged, 0);
+    }
+}
+
+static void test_update_in_chunks_equals_update_at_once(void **state)
+{
+    (void)state;
+    check_update(&OPS[0], 1, 3, NULL);
+    check_update(&OPS[5], 1, 17, NULL);
+    check_update(&OPS[3], 1, 40, NULL);
+}
+
+static void test_update_of_several_files_equals_rebuild(void **state)
+{
+    (void)state;
+    const char *texts[3] = {OPS[0], OPS[1], OPS[4]};
+    check_update(texts, 3, 0, NULL);
+    check_update(texts, 3, 11, NULL);
+}
+
+/* Interactive use: an edit while units are pending, then one after the
+ * commit (with keep_trees), each state equal to a rebuild. */
+static void test_update_edits_while_pending_and_after_commit(void **state)
+{
+    (void)state;
+    lie_error err;
+    lie_scene *s = NULL, *ref_scene = NULL;
+    lie_cache *c = make_cache(&s);
+    lie_update_options o = lie_update_options_default();
+    o.keep_trees = 1;
+    lie_update *u = NULL;
+    assert_int_equal(lie_update_create(c, s, &o, &u, &err), LIE_OK);
+    const char *texts[3] = {OPS[0], OPS[1], OPS[2]};
+    for (int i = 0; i < 3; i++) {
+        lie_edit *e = parse(texts[i]);
+        assert_int_equal(lie_update_edit(u, e, (const unsigned char *)texts[i], strlen(texts[i]), &err), LIE_OK);
+        lie_edit_destroy(e);
+        size_t left = 0;
+        if (i == 0) {
+            assert_int_equal(lie_update_step(u, 2, &left, &err), LIE_OK); /* part of the work, then edit 2 */
+            assert_true(left > 0);
+            continue;
+        }
+        do
+            assert_int_equal(lie_update_step(u, 5, &left, &err), LIE_OK);
+        while (left);
+        lie_env *ref = rebuild(texts, i + 1, &ref_scene);
+        assert_env_equal(c->env, ref);
+        assert_int_equal(c->n_edits, i + 1);
+        lie_env_destroy(ref);
+        lie_scene_destroy(ref_scene);
+    }
+    lie_update_destroy(u);
+    lie_cache_destroy(c);
+    lie_scene_destroy(s);
+}
+
+/* The leaf at `path` of the tree below `node`, if the tree has a leaf there. */
+static const lie_pnode *leaf_at(const lie_env *env, uint32_t node, lie_patch_path path)
+{
+    for (int d = 0; d < path.depth; d++) {
+        if (!env->nodes[node].child)
+            return NULL;
+        node = env->nodes[node].child + (uint32_t)lie_patch_digit(path, d);
+    }
+    return env->nodes[node].child ? NULL : &env->nodes[node];
+}
+
+typedef struct snap_check {
+    const lie_env *snap, *final;
+    uint32_t final_root;
+    uint64_t none, same;
+} snap_check;
+
+/* Every snapshot leaf is pending (none) or what the finished update holds
+ * for the same patch, wherever the update has a leaf there. */
+static void check_leaves(snap_check *k, uint32_t node, lie_patch_path path)
+{
+    const lie_pnode *x = &k->snap->nodes[node];
+    if (x->child) {
+        for (uint32_t i = 0; i < 4; i++)
+            check_leaves(k, x->child + i, lie_patch_child(path, (int)i));
+        return;
+    }
+    if (x->cls == LIE_CLASS_NONE) {
+        k->none++;
+        return;
+    }
+    const lie_pnode *y = leaf_at(k->final, k->final_root, path);
+    if (!y)
+        return;
+    assert_int_equal(x->cls, y->cls);
+    assert_int_equal(x->count, y->count);
+    if (x->cls == LIE_CLASS_PARTIAL)
+        assert_memory_equal(k->snap->pool + x->list, k->final->pool + y->list, sizeof(uint32_t) * x->count);
+    k->same++;
+}
+
+static void test_update_snapshots_never_show_a_changed_answer(void **state)
+{
+    (void)state;
+    lie_error err;
+    lie_scene *s = NULL, *ref_scene = NULL;
+    lie_cache *c = make_cache(&s);
+    lie_env *final = rebuild(&OPS[0], 1, &ref_scene);
+    lie_update *u = NULL;
+    assert_int_equal(lie_update_create(c, s, NULL, &u, &err), LIE_OK);
+    lie_edit *e = parse(OPS[0]);
+    assert_int_equal(lie_update_edit(u, e, (const unsigned char *)OPS[0], strlen(OPS[0]), &err), LIE_OK);
+    lie_edit_destroy(e);
+    size_t left = lie_update_pending(u);
+    assert_true(left > 4);
+    int rounds = 0;
+    for (;;) {
+        lie_env *snap = NULL;
+        assert_int_equal(lie_update_snapshot(u, &snap, &err), LIE_OK);
+        assert_int_equal(snap->n_tris, s->n_tris);
+        assert_int_equal(snap->n_emitters, s->n_emitters);
+        snap_check k = {snap, final, 0, 0, 0};
+        for (size_t unit = 0; unit < (size_t)s->n_tris * (size_t)s->n_emitters; unit++) {
+            k.final_root = final->root[unit];
+            check_leaves(&k, snap->root[unit], lie_patch_root());
+        }
+        assert_true(k.same > 0);
+        if (left)
+            assert_true(k.none > 0); /* pending pairs go to Embree */
+        else
+            assert_env_equal(snap, final);
+        lie_env_destroy(snap);
+        if (!left)
+            break;
+        assert_int_equal(lie_update_step(u, 2, &left, &err), LIE_OK);
+        rounds++;
+    }
+    assert_true(rounds > 1);
+    lie_update_destroy(u);
+    lie_env_destroy(final);
+    lie_scene_destroy(ref_scene);
+    lie_cache_destroy(c);
+    lie_scene_destroy(s);
+}
+
+static void test_update_refuses_a_scene_that_is_not_the_caches(void **state)
+{
+    (void)state;
+    lie_error err;
+    lie_scene *s = NULL;
+    lie_cache *c = make_cache(&s);
+    c->state_hash ^= 1;
+    lie_update *u = NULL;
+    assert_int_equal(lie_update_create(c, s, NULL, &u, &err), LIE_ERR_ARG);
+    assert_null(u);
+    lie_cache_destroy(c);
+    lie_scene_destroy(s);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_update_equals_rebuild_for_each_operation),
+        cmocka_unit_test(test_update_in_chunks_equals_update_at_once),
+        cmocka_unit_test(test_update_of_several_files_equals_rebuild),
+        cmocka_unit_test(test_update_edits_while_pending_and_after_commit),
+        cmocka_unit_test(test_update_snapshots_never_show_a_changed_answer),
+        cmocka_unit_test(test_update_refuses_a_scene_that_is_not_the_caches),
+    };
+    return cmocka_run_group_tests_name("update", tests, NULL, NULL);
+}

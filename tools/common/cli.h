@@ -1,0 +1,36 @@
+/* tools/common: what every tool's main shares and the library must not do
+ * (it never prints): strict parsing of command-line values and the one-line
+ * messages of the tool contract (CONTRIBUTING.md).  Linked into every tool
+ * and test helper, not built as a tool (Makefile). */
+#ifndef LIE_TOOLS_CLI_H
+#define LIE_TOOLS_CLI_H
+
+#include "core/core.h"
+
+#include <stdio.h>
+
+/* ---- command-line values (shared by the tools) ------------------------ */
+
+/* Strict parses: the whole string must be the number, within [min, max]. */
+int lie_parse_long(const char *s, long min, long max, long *out);
+int lie_parse_float(const char *s, float min, float max, float *out);
+/* A printf pattern with exactly one integer conversion: %d, %5d, %05d (frame names). */
+int lie_frame_pattern_ok(const char *s);
+/* "A-B" with min <= A <= B <= max (frame ranges). */
+int lie_parse_range(const char *s, long min, long max, long *a, long *b);
+/* Write s as a JSON string literal (with quotes) to fp. */
+void lie_json_string(FILE *fp, const char *s);
+
+/* "WxH" with both in [1, max]. */
+int lie_parse_size(const char *s, int max, int *w, int *h);
+/* The value of --stats (arg NULL: 1) or --stats=json (2); 0 for another. */
+int lie_parse_stats(const char *arg);
+
+/* ---- tool messages: one line on stderr (CONTRIBUTING.md) -------------- */
+
+/* "PROG: message (see --help)"; returns 2, the usage-error exit status. */
+int lie_usage_error(const char *prog, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* "PROG: FILE: what is wrong" from err; returns `code`. */
+int lie_report_error(const char *prog, const lie_error *err, int code);
+
+#endif

@@ -1,0 +1,261 @@
+/* lie-render under mpirun: frames cut into items handed out dynamically
+ * (lib/dist), rank 0 assembling and writing.  A camera path is shared out
+ * by whole frames while at least as many frames remain as ranks; the last
+ * frames, or a lone frame, go out as ranges of tiles, so the tail balances.
+ * A pixel depends on its own rays only (lib/shade/render.c), so any split
+ * gives one process's bytes. */
+#include "dist.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct item {
+    int frame;             /* index into job.list */
+    uint32_t first, count; /* tiles */
+} item;
+
+typedef struct job {
+    const lie_scene *s;
+    const lie_rt *rt;
+    const lie_render_options *ro;
+    const lie_camera_path *path;
+    const lie_camera *cam;
+    const int *list;        /* the frames to render (path frame indices) */
+    item *items;
+    size_t n_items;
+    size_t n_tiles;
+    lie_frame *scratch;     /* this rank's: tiles are rendered here, then packed */
+    lie_frame **frames;     /* rank 0: frames being assembled */
+    size_t *missing;        /* rank 0: tiles still to come per frame */
+    render_write_fn write;
+    void *write_ctx;
+    lie_render_stats rs;
+    double t_write;
+    lie_status setup;       /* this rank could not set up: its items fail with setup_err */
+    lie_error setup_err;
+} job;
+
+static int last_frames; /* of the last render_dist */
+
+static lie_camera frame_camera(const job *j, int f)
+{
+    return j->path ? lie_camera_path_frame(j->path, f) : *j->cam;
+}
+
+/* The float arrays of a frame, with their channels per pixel. */
+static int frame_arrays(const lie_frame *f, float **arr, int *ch, int cap)
+{
+    int n = 0;
+    arr[n] = f->rgb;
+    ch[n++] = 3;
+    for (int a = 0; a < f->n_aovs && n < cap; a++) {
+        arr[n] = f->aovs[a].data;
+        ch[n++] = f->aovs[a].n_channels;
+    }
+    return n;
+}
+
+/* Copy tiles [first, first + count) between a frame and a packed buffer
+ * (array by array, tile by tile, row by row). */
+static void copy_tiles(lie_frame *f, uint32_t first, uint32_t count, float *buf, int to_buf)
+{
+    float *arr[16];
+    int ch[16];
+    int n = frame_arrays(f, arr, ch, 16);
+    int tiles_x = (f->width + LIE_TILE - 1) / LIE_TILE;
+    size_t k = 0;
+    for (int a = 0; a < n; a++)
+        for (uint32_t t = first; t < first + count; t++) {
+            int x0 = (int)(t % (uint32_t)tiles_x) * LIE_TILE, y0 = (int)(t / (uint32_t)tiles_x) * LIE_TILE;
+            int x1 = x0 + LIE_TILE < f->width ? x0 + LIE_TILE : f->width;
+            int y1 = y0 + LIE_TILE < f->height ? y0 + LIE_TILE : f->height;
+            size_t row = (size_t)(x1 - x0) * (size_t)ch[a];
+            for (int y = y0; y < y1; y++) {
+                float *px = arr[a] + ((size_t)y * (size_t)f->width + (size_t)x0) * (size_t)ch[a];
+                if (to_buf)
+                    memcpy(buf + k, px, row * sizeof *px);
+                else
+                    memcpy(px, buf + k, row * sizeof *px);
+                k += row;
+            }
+        }
+}
+
+static size_t packed_floats(const lie_frame *f, uint32_t first, uint32_t count)
+{
+    float *arr[16];
+    int ch[16];
+    int n = frame_arrays(f, arr, ch, 16), per_px = 0;
+    for (int a = 0; a < n; a++)
+        per_px += ch[a];
+    int tiles_x = (f->width + LIE_TILE - 1) / LIE_TILE;
+    size_t px = 0;
+    for (uint32_t t = first; t < first + count; t++) {
+        int x0 = (int)(t % (uint32_t)tiles_x) * LIE_TILE, y0 = (int)(t / (uint32_t)tiles_x) * LIE_TILE;
+        int w = f->width - x0 < LIE_TILE ? f->width - x0 : LIE_TILE;
+        int h = f->height - y0 < LIE_TILE ? f->height - y0 : LIE_TILE;
+        px += (size_t)w * (size_t)h;
+    }
+    return px * (size_t)per_px;
+}
+
+static lie_status run(void *ctx, size_t i, lie_dist_buf *out, lie_error *err)
+{
+    job *j = ctx;
+    if (j->setup != LIE_OK) {
+        *err = j->setup_err;
+        return j->setup;
+    }
+    const item *it = &j->items[i];
+    lie_camera cam = frame_camera(j, j->list[it->frame]);
+    lie_render_stats fs;
+    lie_status st = lie_render_tiles(j->s, j->rt, &cam, j->ro, j->scratch, it->first, it->count, &fs, err);
+    if (st != LIE_OK)
+        return st;
+    size_t n = packed_floats(j->scratch, it->first, it->count);
+    if (!lie_dist_buf_add(out, &fs, sizeof fs))
+        return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
+    float *dst = lie_dist_buf_add(out, NULL, n * sizeof(float));
+    if (!dst)
+        return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
+    copy_tiles(j->scratch, it->first, it->count, dst, 1);
+    return LIE_OK;
+}
+
+static lie_status take(void *ctx, size_t i, int rank, const unsigned char *data, size_t size, lie_error *err)
+{
+    job *j = ctx;
+    if (j->setup != LIE_OK) {
+        *err = j->setup_err;
+        return j->setup;
+    }
+    const item *it = &j->items[i];
+    lie_frame **f = &j->frames[it->frame];
+    if (!*f) {
+        lie_status st = lie_render_frame_create(j->s, j->ro, f, err);
+        if (st != LIE_OK)
+            return st;
+        j->missing[it->frame] = j->n_tiles;
+    }
+    size_t n = packed_floats(*f, it->first, it->count);
+    lie_render_stats fs;
+    if (size != sizeof fs + n * sizeof(float))
+        return lie_error_set(err, LIE_ERR_FORMAT, NULL, "rank %d sent %zu bytes for tiles %u..%u of frame %d, "
+                             "expected %zu", rank, size, it->first, it->first + it->count, it->frame,
+                             sizeof fs + n * sizeof(float));
+    memcpy(&fs, data, sizeof fs);
+    lie_render_stats_add(&j->rs, &fs);
+    /* the floats may be unaligned in the message: copy through */
+    float *tmp = malloc(n * sizeof(float) + 1);
+    if (!tmp)
+        return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
+    memcpy(tmp, data + sizeof fs, n * sizeof(float));
+    copy_tiles(*f, it->first, it->count, tmp, 0);
+    free(tmp);
+    j->missing[it->frame] -= it->count;
+    if (j->missing[it->frame])
+        return LIE_OK;
+    double t0 = lie_time_now();
+    lie_camera cam = frame_camera(j, j->list[it->frame]);
+    lie_status st = j->write(j->write_ctx, j->list[it->frame], &cam, *f, err);
+    j->t_write += lie_time_now() - t0;
+    lie_frame_destroy(*f);
+    *f = NULL;
+    return st;
+}
+
+static uint64_t units(void *ctx, size_t i)
+{
+    const job *j = ctx;
+    return j->items ? j->items[i].count : 0;
+}
+
+/* Whole frames while at least as many remain as ranks, then ranges of about
+ * an eighth of a rank's share of a frame. */
+static size_t plan_chunk(size_t n_tiles, int ranks)
+{
+    size_t chunk = n_tiles / (8 * (size_t)ranks);
+    return chunk < 1 ? 1 : chunk;
+}
+
+static size_t plan_whole(int n_frames, int ranks)
+{
+    return n_frames >= ranks ? (size_t)(n_frames - (ranks - 1)) : 0;
+}
+
+static size_t plan_count(int n_frames, int ranks, size_t n_tiles)
+{
+    size_t whole = plan_whole(n_frames, ranks), chunk = plan_chunk(n_tiles, ranks);
+    return whole + ((size_t)n_frames - whole) * ((n_tiles + chunk - 1) / chunk);
+}
+
+static size_t plan(job *j, int n_frames, int ranks)
+{
+    size_t whole = plan_whole(n_frames, ranks), chunk = plan_chunk(j->n_tiles, ranks);
+    size_t n = plan_count(n_frames, ranks, j->n_tiles);
+    j->items = calloc(n + 1, sizeof *j->items);
+    if (!j->items)
+        return 0;
+    size_t k = 0;
+    for (int f = 0; f < n_frames; f++) {
+        if ((size_t)f < whole) {
+            j->items[k++] = (item){f, 0, (uint32_t)j->n_tiles};
+            continue;
+        }
+        for (size_t t = 0; t < j->n_tiles; t += chunk)
+            j->items[k++] = (item){f, (uint32_t)t, (uint32_t)(j->n_tiles - t < chunk ? j->n_tiles - t : chunk)};
+    }
+    return k;
+}
+
+lie_status render_dist(const lie_scene *s, const lie_rt *rt, const lie_render_options *ro,
+                       const lie_camera_path *path, const lie_camera *cam, const int *frames, int n_frames,
+                       render_write_fn write, void *write_ctx, lie_render_stats *rs, double *t_write, lie_error *err)
+{
+    job j;
+    memset(&j, 0, sizeof j);
+    j.s = s;
+    j.rt = rt;
+    j.ro = ro;
+    j.path = path;
+    j.cam = cam;
+    j.list = frames;
+    j.write = write;
+    j.write_ctx = write_ctx;
+    j.n_tiles = lie_render_tile_count(ro->width, ro->height);
+    int ranks = lie_dist_size();
+    j.n_items = plan(&j, n_frames, ranks);
+    j.frames = calloc((size_t)n_frames, sizeof *j.frames);
+    j.missing = calloc((size_t)n_frames, sizeof *j.missing);
+    /* every rank takes part in lie_dist_run, even one that failed here:
+     * its items then report the failure */
+    lie_error_clear(&j.setup_err);
+    if (!j.items || !j.frames || !j.missing)
+        j.setup = lie_error_set(&j.setup_err, LIE_ERR_NOMEM, NULL, "out of memory");
+    else
+        j.setup = lie_render_frame_create(s, ro, &j.scratch, &j.setup_err);
+    lie_dist_work w = {j.items ? j.n_items : plan_count(n_frames, ranks, j.n_tiles), &j, run, take, units};
+    lie_status st = lie_dist_run(&w, err);
+    for (int f = 0; f < n_frames; f++)
+        lie_frame_destroy(j.frames[f]);
+    lie_frame_destroy(j.scratch);
+    free(j.frames);
+    free(j.missing);
+    free(j.items);
+    *rs = j.rs;
+    *t_write = j.t_write;
+    last_frames = n_frames;
+    return st;
+}
+
+void render_dist_stats(FILE *fp, int json)
+{
+    if (lie_dist_size() < 2 || last_frames < 1)
+        return;
+    lie_dist_stats_print(fp, "tiles", json);
+    double per_frame = (double)lie_dist_bytes_gathered() / (double)last_frames;
+    if (json)
+        fprintf(fp, ",\"bytes_gathered_per_frame\":%.0f", per_frame);
+    else
+        fprintf(fp, "  %.0f bytes gathered per frame\n", per_frame);
+}

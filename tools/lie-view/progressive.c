@@ -1,0 +1,323 @@
+/* Progressive rendering: a thread renders the current request coarse first
+ * (a quarter of the resolution and a tenth of the light samples, then half
+ * and a quarter), then the full image with every light sample, each level
+ * in bands of rows drawn over the one before, so the window shows whatever
+ * is ready and never waits on a whole frame.  A new request (the camera
+ * moved, an edit, a constructor step) abandons the level at the next band.
+ * Each band is whole rows of tiles rendered by lie_render_tiles on all
+ * workers, so the full level is the very image lie-render makes. */
+#include "view.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#define LEVELS 3
+#define BAND_TILE_ROWS 2 /* 32 pixel rows a band */
+
+struct view_render {
+    view_world *w;
+    view_render_options o;
+    pthread_t tid;
+    int started;
+    pthread_mutex_t m;
+    pthread_cond_t cv;        /* a request arrived, or a level finished */
+    /* the request (m) */
+    lie_camera cam;
+    int mode, sel, quit;
+    uint64_t gen;
+    /* what is shown (m) */
+    uint32_t *display;
+    int dirty;
+    uint64_t images, level_pixels;
+    uint64_t full_gen, full_version; /* the request and world version `full` shows, 0: none */
+    uint64_t done_gen, done_version; /* every level of these is finished: idle */
+    uint64_t image_version;          /* the world version of the last image finished */
+    lie_frame *full;
+    /* the render thread's own: a frame per level and view mode (the modes'
+     * AOV layers are what lie_render_tiles fills) */
+    lie_frame *level[LEVELS][3];
+    uint8_t *sel_mask;
+};
+
+static const int level_div[LEVELS] = {4, 2, 1};
+static const int level_ls_div[LEVELS] = {10, 4, 1};
+
+static uint32_t pack(const float c[3], int srgb)
+{
+    uint32_t p = 0xff000000u;
+    for (int k = 0; k < 3; k++) {
+        float v = srgb ? lie_linear_to_srgb(c[k]) : (c[k] < 0.0f ? 0.0f : c[k] > 1.0f ? 1.0f : c[k]);
+        p |= (uint32_t)(v * 255.0f + 0.5f) << (16 - 8 * k);
+    }
+    return p;
+}
+
+/* Draw rows [y0, y1) of a level into the display, each level pixel a
+ * div x div block; selected pixels tinted, their outline orange. */
+static void blit(view_render *r, const lie_frame *f, int div, int mode, int y0, int y1)
+{
+    const float *src = f->rgb;
+    int srgb = 1;
+    if (mode != VIEW_MODE_SHADE) {
+        const lie_aov *a = lie_frame_find_aov(f, mode == VIEW_MODE_COMPLEXITY ? "complexity" : "patch");
+        if (a) {
+            src = a->data;
+            srgb = 0;
+        }
+    }
+    int W = r->o.width, H = r->o.height, lw = f->width;
+    const uint8_t *m = r->sel_mask;
+    for (int y = y0; y < y1; y++)
+        for (int x = 0; x < lw; x++) {
+            size_t i = (size_t)y * (size_t)lw + (size_t)x;
+            uint32_t p = pack(src + 3 * i, srgb);
+            if (m && m[i]) {
+                int edge = x == 0 || !m[i - 1] || x + 1 == lw || !m[i + 1] || y == 0 || !m[i - (size_t)lw];
+                if (edge)
+                    p = 0xffff9020u;
+                else
+                    p = 0xff000000u | (((p >> 1) & 0x7f7f7f) + 0x402808);
+            }
+            for (int dy = 0; dy < div && y * div + dy < H; dy++)
+                for (int dx = 0; dx < div && x * div + dx < W; dx++)
+                    r->display[(size_t)(y * div + dy) * (size_t)W + (size_t)(x * div + dx)] = p;
+        }
+}
+
+/* The selection mask of rows [y0, y1): pixel centres whose first hit
+ * belongs to the selected subtree. */
+static void mask_rows(view_render *r, const lie_scene *s, const lie_rt *rt, const lie_camera *cam, int lw, int lh,
+                      const uint8_t *in, int y0, int y1)
+{
+    lie_view v = lie_view_make(cam, lw, lh);
+    lie_vec3 org[8], dir[8];
+    lie_hit hits[8];
+    for (int y = y0; y < y1; y++)
+        for (int x = 0; x < lw; x += 8) {
+            int n = lw - x < 8 ? lw - x : 8;
+            for (int i = 0; i < n; i++)
+                lie_view_ray(&v, (float)(x + i) + 0.5f, (float)y + 0.5f, lw, lh, &org[i], &dir[i]);
+            lie_rt_intersect8(rt, org, dir, n, 1, hits);
+            for (int i = 0; i < n; i++) {
+                uint32_t t = hits[i].tri;
+                r->sel_mask[(size_t)y * (size_t)lw + (size_t)(x + i)] =
+                    t != LIE_NO_HIT && t < s->n_tris && in[s->instances[s->tri_instance[t]].node];
+            }
+        }
+}
+
+static void *render_main(void *arg)
+{
+    view_render *r = arg;
+    uint64_t done_gen = 0, done_version = 0;
+    for (;;) {
+        pthread_mutex_lock(&r->m);
+        while (!r->quit && r->gen == done_gen && view_world_version(r->w) == done_version) {
+            struct timespec ts;
+            clock_gettime(CLOCK_REALTIME, &ts);
+            ts.tv_nsec += 10 * 1000 * 1000; /* the world's version is polled */
+            if (ts.tv_nsec >= 1000000000L) {
+                ts.tv_sec++;
+                ts.tv_nsec -= 1000000000L;
+            }
+            pthread_cond_timedwait(&r->cv, &r->m, &ts);
+        }
+        if (r->quit) {
+            pthread_mutex_unlock(&r->m);
+            break;
+        }
+        uint64_t gen = r->gen;
+        lie_camera cam = r->cam;
+        int mode = r->mode, sel = r->sel;
+        pthread_mutex_unlock(&r->m);
+        uint64_t version = view_world_version(r->w);
+        int abandoned = 0;
+        for (int lv = 0; lv < LEVELS && !abandoned; lv++) {
+            int div = level_div[lv];
+            int lw = (r->o.width + div - 1) / div, lh = (r->o.height + div - 1) / div;
+            lie_render_options ro = lie_render_options_default();
+            ro.width = lw;
+            ro.height = lh;
+            ro.light_samples = r->o.light_samples / level_ls_div[lv] > 0 ? r->o.light_samples / level_ls_div[lv] : 1;
+            ro.max_depth = r->o.max_depth;
+            ro.threads = r->o.threads;
+            if (r->o.light_samples == 0)
+                ro.eye_only = 1;
+            if (mode == VIEW_MODE_COMPLEXITY)
+                ro.aovs = LIE_AOV_COMPLEXITY;
+            else if (mode == VIEW_MODE_PATCH)
+                ro.aovs = LIE_AOV_PATCH;
+            if (mode != VIEW_MODE_SHADE)
+                ro.eye_only = 1;
+            lie_frame **fp = &r->level[lv][mode];
+            if (!*fp) {
+                lie_error ferr;
+                if (lie_render_frame_create(view_world_scene(r->w), &ro, fp, &ferr) != LIE_OK) {
+                    abandoned = 1;
+                    break;
+                }
+            }
+            lie_frame *f = *fp;
+            size_t tiles_x = (size_t)((lw + LIE_TILE - 1) / LIE_TILE), n_tiles = lie_render_tile_count(lw, lh);
+            for (size_t t0 = 0; t0 < n_tiles && !abandoned; t0 += BAND_TILE_ROWS * tiles_x) {
+                size_t nt = n_tiles - t0 < BAND_TILE_ROWS * tiles_x ? n_tiles - t0 : BAND_TILE_ROWS * tiles_x;
+                int y0 = (int)(t0 / tiles_x) * LIE_TILE;
+                int y1 = y0 + BAND_TILE_ROWS * LIE_TILE < lh ? y0 + BAND_TILE_ROWS * LIE_TILE : lh;
+                view_world_read_lock(r->w);
+                const lie_scene *s = view_world_scene(r->w);
+                ro.oracle = view_world_oracle(r->w);
+                ro.visibility = ro.oracle ? LIE_VIS_LIE : LIE_VIS_FULL;
+                lie_error err;
+                lie_status st = view_world_version(r->w) != version || (mode != VIEW_MODE_SHADE && !ro.oracle)
+                                    ? LIE_ERR_ARG
+                                    : lie_render_tiles(s, view_world_rt(r->w), &cam, &ro, f, t0, nt, NULL, &err);
+                uint8_t *in = sel >= 0 ? calloc((size_t)s->n_nodes + 1, 1) : NULL;
+                if (st == LIE_OK && in) {
+                    view_node_subtree(s, sel, in);
+                    mask_rows(r, s, view_world_rt(r->w), &cam, lw, lh, in, y0, y1);
+                }
+                free(in);
+                view_world_read_unlock(r->w);
+                pthread_mutex_lock(&r->m);
+                if (st != LIE_OK || r->gen != gen || r->quit) {
+                    abandoned = 1;
+                } else {
+                    uint8_t *keep = r->sel_mask;
+                    if (sel < 0)
+                        r->sel_mask = NULL;
+                    blit(r, f, div, mode, y0, y1);
+                    r->sel_mask = keep;
+                    r->dirty = 1;
+                }
+                pthread_mutex_unlock(&r->m);
+            }
+            if (abandoned)
+                break;
+            pthread_mutex_lock(&r->m);
+            r->images++;
+            r->level_pixels = (uint64_t)lw * (uint64_t)lh;
+            r->image_version = version;
+            if (lv == LEVELS - 1 && mode == VIEW_MODE_SHADE) {
+                lie_frame *t = r->full;
+                r->full = f;
+                r->level[lv][mode] = t;
+                r->full_gen = gen;
+                r->full_version = version;
+            }
+            pthread_cond_broadcast(&r->cv);
+            pthread_mutex_unlock(&r->m);
+        }
+        if (!abandoned) {
+            done_gen = gen;
+            done_version = version;
+            pthread_mutex_lock(&r->m);
+            r->done_gen = gen;
+            r->done_version = version;
+            pthread_mutex_unlock(&r->m);
+        }
+    }
+    return NULL;
+}
+
+lie_status view_render_start(view_world *w, const view_render_options *opt, view_render **out, lie_error *err)
+{
+    *out = NULL;
+    view_render *r = calloc(1, sizeof *r);
+    if (!r)
+        return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
+    r->w = w;
+    r->o = *opt;
+    r->sel = -1;
+    pthread_mutex_init(&r->m, NULL);
+    pthread_cond_init(&r->cv, NULL);
+    size_t n = (size_t)opt->width * (size_t)opt->height;
+    r->display = calloc(n, sizeof *r->display);
+    r->sel_mask = calloc(n, 1);
+    r->full = lie_frame_create(opt->width, opt->height);
+    if (!r->display || !r->sel_mask || !r->full) {
+        view_render_stop(r);
+        return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory for %dx%d frames", opt->width, opt->height);
+    }
+    if (pthread_create(&r->tid, NULL, render_main, r) != 0) {
+        view_render_stop(r);
+        return lie_error_set(err, LIE_ERR_NOMEM, NULL, "cannot start the render thread");
+    }
+    r->started = 1;
+    *out = r;
+    return LIE_OK;
+}
+
+void view_render_stop(view_render *r)
+{
+    if (!r)
+        return;
+    if (r->started) {
+        pthread_mutex_lock(&r->m);
+        r->quit = 1;
+        pthread_cond_broadcast(&r->cv);
+        pthread_mutex_unlock(&r->m);
+        pthread_join(r->tid, NULL);
+    }
+    for (int lv = 0; lv < LEVELS; lv++)
+        for (int m = 0; m < 3; m++)
+            lie_frame_destroy(r->level[lv][m]);
+    lie_frame_destroy(r->full);
+    free(r->display);
+    free(r->sel_mask);
+    pthread_mutex_destroy(&r->m);
+    pthread_cond_destroy(&r->cv);
+    free(r);
+}
+
+void view_render_request(view_render *r, const lie_camera *cam, int mode, int sel)
+{
+    pthread_mutex_lock(&r->m);
+    if (r->gen == 0 || memcmp(cam, &r->cam, sizeof *cam) != 0 || mode != r->mode || sel != r->sel) {
+        r->cam = *cam;
+        r->mode = mode;
+        r->sel = sel;
+        r->gen++;
+        pthread_cond_broadcast(&r->cv);
+    }
+    pthread_mutex_unlock(&r->m);
+}
+
+int view_render_fetch(view_render *r, uint32_t *argb, uint64_t *images, uint64_t *level_pixels, int *idle,
+                      uint64_t *image_version)
+{
+    pthread_mutex_lock(&r->m);
+    *image_version = r->image_version;
+    *idle = r->done_gen == r->gen && r->done_version == view_world_version(r->w);
+    int d = argb ? r->dirty : 0; /* NULL: only the counters */
+    if (d)
+        memcpy(argb, r->display, sizeof *argb * (size_t)r->o.width * (size_t)r->o.height);
+    if (argb)
+        r->dirty = 0;
+    *images = r->images;
+    *level_pixels = r->level_pixels;
+    pthread_mutex_unlock(&r->m);
+    return d;
+}
+
+lie_status view_render_screenshot(view_render *r, const char *path, lie_error *err)
+{
+    pthread_mutex_lock(&r->m);
+    while (!(r->full_gen == r->gen && r->full_version == view_world_version(r->w) && r->mode == VIEW_MODE_SHADE)) {
+        if (r->mode != VIEW_MODE_SHADE) {
+            pthread_mutex_unlock(&r->m);
+            return lie_error_set(err, LIE_ERR_ARG, path, "screenshots are of the shaded view");
+        }
+        struct timespec ts;
+        clock_gettime(CLOCK_REALTIME, &ts);
+        ts.tv_nsec += 10 * 1000 * 1000;
+        if (ts.tv_nsec >= 1000000000L) {
+            ts.tv_sec++;
+            ts.tv_nsec -= 1000000000L;
+        }
+        pthread_cond_timedwait(&r->cv, &r->m, &ts);
+    }
+    /* the frame stays ours while m is held */
+    lie_status st = lie_frame_write(path, r->full, NULL, err);
+    pthread_mutex_unlock(&r->m);
+    return st;
+}
