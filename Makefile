@@ -170,7 +170,7 @@ test-asan:
 	$(MAKE) -j$(NPROC) VARIANT=asan build-tests
 	$(MAKE) VARIANT=asan test-unit test-tools
 
-bench: all
+bench: all build-tests
 	@sh bench/run.sh
 
 # lie-view's interactive loop under Xvfb (not a timed test: figures depend on the load)

@@ -72,20 +72,20 @@ printf '\n  100 light samples:\n'
 printf '    LIE vs full (streams):        %sx   (target >= 10x)\n' "$(ratio "$t100_f" "$t100_l")"
 printf '    LIE vs full (one at a time):  %sx   (target >= 20x; the paper: 19x)\n' "$(ratio "$t100_s" "$t100_l")"
 printf '    LIE 100-sample / eye rays:    %s    (target <= 2; the paper: 3.7)\n' "$(ratio "$t100_l" "$t_eye")"
-# Where a LIE frame goes, from ablations measured side by side:
-# --lie-skip answers partial pairs (blockers) or complex pairs (fallback)
-# as unshadowed; the differences are those parts' costs.
-t_skip_b=$(render "$CACHE" --light-samples 100 --lie-skip blockers)
-t_skip_f=$(render "$CACHE" --light-samples 100 --lie-skip fallback)
-t_skip_all=$(render "$CACHE" --light-samples 100 --lie-skip both)
-d_blockers=$(awk -v a="$t100_l" -v b="$t_skip_b" 'BEGIN{print a-b}')
-d_fallback=$(awk -v a="$t100_l" -v b="$t_skip_f" 'BEGIN{print a-b}')
-d_lookup=$(awk -v a="$t_skip_all" -v b="$t_none" 'BEGIN{print a-b}')
-printf '    where a LIE frame goes (%s s): eye rays %s s, shading %s s, leaf lookup and classes %s s\n' "$(num "$t100_l")" "$(num "$t_eye")" "$(num "$(awk -v a="$t_none" -v b="$t_eye" 'BEGIN{print a-b}')")" "$(num "$d_lookup")"
-printf '      (net of shading skipped for occluded pairs), blocker tests %s s, Embree fallback %s s (%s rays)\n' "$(num "$d_blockers")" "$(num "$d_fallback")" "$emb"
+# Where a LIE frame goes, measured directly: per-worker timers around each
+# path (worker seconds summed over threads; the timers cost a clock read
+# per pair, so this frame is not one of the timed ones above).
+bin/lie-render "$CACHE" --size "$SIZE" --threads "$THREADS" -q --stats=json --timers --light-samples 100 \
+    -o "$TMP/frame.exr" 2>"$TMP/timers.json"
+tw() { field "cpu_seconds_$1" <"$TMP/timers.json"; }
+printf '    where a LIE frame goes (%s s; eye rays alone %s s, shading without visibility %s s), worker seconds:\n' \
+    "$(num "$t100_l")" "$(num "$t_eye")" "$(num "$t_none")"
+printf '      closed-form shading %s, exact shadows %s, blocker tests %s, Embree fallback %s (%s rays), sampled shading %s\n' \
+    "$(num "$(tw analytic)")" "$(num "$(tw exact)")" "$(num "$(tw blockers)")" "$(num "$(tw embree)")" "$emb" \
+    "$(num "$(tw sampled_shading)")"
 printf '    full visibility: %s M shadow rays/s (visibility time), %s rays\n' "$mr" "$rays_full"
 json="$json,\"shading_no_visibility_seconds\":$t_none,\"lie_embree_fallback_rays\":$emb,\"full_mrays_per_s\":$mr"
-json="$json,\"lie_breakdown\":{\"lookup_net\":$d_lookup,\"blocker_tests\":$d_blockers,\"embree_fallback\":$d_fallback}"
+json="$json,\"lie_breakdown_worker_seconds\":{\"analytic\":$(tw analytic),\"exact\":$(tw exact),\"blocker_tests\":$(tw blockers),\"embree_fallback\":$(tw embree),\"sampled_shading\":$(tw sampled_shading)}"
 
 printf '\n  Table 2: min patch size, %s (build, then a 100-sample frame)\n' "$(basename "$SCENE")"
 printf '  %-9s %8s %9s %9s %9s %9s %9s %6s %9s %8s %8s %8s\n' "min patch" patches visible occluded partial complex unlit "mean" "cache B" "build s" "LIE s" "build/frame"
@@ -147,3 +147,5 @@ json="$json,\"table3\":{$t3j}"
 echo "$json}" >out/bench.json
 echo
 echo "bench: wrote out/bench.json"
+echo
+sh bench/quality.sh

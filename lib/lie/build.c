@@ -195,7 +195,7 @@ static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32
     return LIE_OK;
 }
 
-static lie_status budget_error(lie_error *err, const lie_scene *s, const lie_build_params *p)
+lie_status lie_budget_error(lie_error *err, const lie_scene *s, const lie_build_params *p)
 {
     return lie_error_set(err, LIE_ERR_LIMIT, s->path,
                          "the patch trees need more than %llu nodes (max-nodes): raise min-patch or max-nodes",
@@ -231,7 +231,7 @@ lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_
     if (st != LIE_OK) {
         lie_env_destroy(env);
         if (st == LIE_ERR_LIMIT)
-            return budget_error(err, s, p);
+            return lie_budget_error(err, s, p);
         return lie_error_set(err, st, s->path, "building local illumination environments: %s",
                              lie_status_str(st));
     }
@@ -267,7 +267,7 @@ lie_status lie_env_build_range(const lie_scene *s, const lie_rt *rt, const lie_b
         free(part.nodes);
         free(part.pool);
         if (st == LIE_ERR_LIMIT)
-            return budget_error(err, s, p);
+            return lie_budget_error(err, s, p);
         return lie_error_set(err, st, s->path, "building local illumination environments: %s", lie_status_str(st));
     }
     if (stats)
@@ -313,7 +313,7 @@ lie_status lie_env_update(lie_env *env, const lie_scene *s, const lie_rt *rt, co
     if (stats)
         stats->seconds = lie_time_now() - t0;
     if (st == LIE_ERR_LIMIT)
-        return budget_error(err, s, &env->params);
+        return lie_budget_error(err, s, &env->params);
     if (st != LIE_OK)
         return lie_error_set(err, st, s->path, "updating local illumination environments: %s",
                              lie_status_str(st));

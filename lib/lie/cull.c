@@ -88,8 +88,7 @@ void lie_cull_candidates(const build_ctx *c, worker *w, const lie_vec3 *hull, in
 static void pair_sat(const build_ctx *c, const worker *w, int nh, uint32_t tri, int two_sided, int e, float tol,
                      lie_sat *sat)
 {
-    const lie_emitter *em = &c->s->emitters[e];
-    const lie_vec3 *ne = em->type == LIE_EMITTER_AREA ? &c->s->tri_ng[em->first_tri] : NULL;
+    const lie_vec3 *ne = lie_emitter_facing(c->s, e);
     lie_sat_init(sat, w->hull, nh, lie_pair_hull_patch_points(two_sided), c->s->tri_ng[tri], ne, tol);
 }
 

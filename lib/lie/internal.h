@@ -69,5 +69,7 @@ size_t lie_sort_unique(uint32_t *v, size_t n);
 void lie_stats_hist_add(lie_build_stats *st, uint32_t n);
 /* Add src's counts to dst's. */
 void lie_stats_merge(lie_build_stats *dst, const lie_build_stats *src);
+/* The error of a build that needs more than max-nodes nodes (build.c). */
+lie_status lie_budget_error(lie_error *err, const lie_scene *s, const lie_build_params *p);
 
 #endif

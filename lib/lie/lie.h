@@ -5,7 +5,7 @@
  * unlit, visible, occluded, partial with a blocker list, or complex.  Trees
  * are per (triangle, emitter), so a pair's subdivision depends on that pair
  * alone and rebuilding one unit gives exactly what a full build gives
- * (rst-update relies on this).
+ * (lib/update relies on this, in chunks of units of any size).
  *
  * Storage is flat: node arrays and a pooled array of blocker triangle
  * indices, units in the order u = t * n_emitters + e. */
@@ -142,7 +142,7 @@ void lie_env_part_free(lie_env_part *part);
 void lie_build_stats_add(lie_build_stats *a, const lie_build_stats *b);
 
 /* Rebuild the listed units (sorted, unique) in place, with env's own
- * parameters, exactly as lie_env_build would.  Used by rst-update. */
+ * parameters, exactly as lie_env_build would. */
 lie_status lie_env_rebuild_units(lie_env *env, const lie_scene *s, const lie_rt *rt,
                                  const uint32_t *units, size_t n_units, int threads,
                                  lie_build_stats *stats, lie_error *err);

@@ -2,7 +2,7 @@
  * units out in unit order, each unit's nodes and blocker lists contiguous,
  * so the env of one build is the parts' arrays concatenated, each part's
  * child and list offsets moved by where its arrays land. */
-#include "lie/lie.h"
+#include "lie/internal.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -58,6 +58,9 @@ lie_status lie_env_join(const lie_scene *s, const lie_build_params *p, const lie
     if (next != n_units)
         return lie_error_set(err, LIE_ERR_ARG, s->path, "parts cover %llu of %llu units", (unsigned long long)next,
                              (unsigned long long)n_units);
+    /* one build stops past max-nodes; parts were held to it one by one */
+    if (nodes > (p->max_nodes ? p->max_nodes : LIE_MAX_NODES_DEFAULT))
+        return lie_budget_error(err, s, p);
     if (nodes >= 0xFFFFFFF0u || pool >= 0xFFFFFFF0u)
         return lie_error_set(err, LIE_ERR_LIMIT, s->path, "too many nodes");
     lie_env *env = calloc(1, sizeof *env);

@@ -65,29 +65,21 @@ static int pair_segment(const pair_sampler *ps, uint32_t i, lie_vec3 *org, lie_v
 {
     const build_ctx *c = ps->c;
     const lie_scene *s = c->s;
-    const lie_emitter *em = &s->emitters[ps->e];
     const lie_vec3 *V = ps->V;
     float b1, b2;
     lie_sample_triangle(frac_shift(halton(c, 0, i), ps->sp1), frac_shift(halton(c, 1, i), ps->sp2), &b1, &b2);
     float b0 = 1.0f - b1 - b2;
     lie_vec3 p = lie_v3_add(lie_v3_add(lie_v3_scale(V[0], b0), lie_v3_scale(V[1], b1)), lie_v3_scale(V[2], b2));
-    lie_vec3 q, ne = lie_v3(0, 0, 0);
-    uint32_t target = LIE_NO_HIT;
-    if (em->type == LIE_EMITTER_AREA) {
-        float eb1, eb2;
-        target = lie_emitter_point(s, ps->e, frac_shift(halton(c, 2, i), ps->se1),
-                                   frac_shift(halton(c, 3, i), ps->se2), &q, &ne, &eb1, &eb2);
-    } else if (em->type == LIE_EMITTER_POINT) {
-        q = em->position;
-    } else {
-        q = lie_v3_add(p, lie_v3_scale(em->direction, -c->ray_far));
-    }
+    lie_vec3 q, ne;
+    int one_sided;
+    uint32_t target = lie_emitter_target(s, ps->e, frac_shift(halton(c, 2, i), ps->se1),
+                                         frac_shift(halton(c, 3, i), ps->se2), p, c->ray_far, &q, &ne, &one_sided);
     lie_vec3 d = lie_v3_sub(q, p);
     lie_vec3 ng = s->tri_ng[ps->tri];
     float cg = lie_v3_dot(ng, d);
     if (!(cg > 0.0f) && !(ps->two_sided && cg < 0.0f))
         return 0;
-    if (em->type == LIE_EMITTER_AREA && !em->double_sided && !(lie_v3_dot(ne, d) < 0.0f))
+    if (one_sided && !(lie_v3_dot(ne, d) < 0.0f))
         return 0;
     lie_vec3 side = cg > 0.0f ? ng : lie_v3_scale(ng, -1.0f);
     if (!lie_shadow_segment(p, side, q, org, dir, tnear, tfar))

@@ -58,8 +58,8 @@ int lie_subdiv_splits(const build_ctx *c, uint32_t tri, lie_patch_path path, int
         return 0;
     const lie_emitter *em = &s->emitters[e];
     size_t own = 0;
-    for (size_t k = 0; em->type == LIE_EMITTER_AREA && k < n_list; k++)
-        own += list[k] - em->first_tri < em->n_tris;
+    for (size_t k = 0; k < n_list; k++)
+        own += lie_emitter_owns(em, list[k]);
     return own <= c->p->complex_cap;
 }
 

@@ -440,7 +440,8 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                 lie_ltc_shading_from_surface(lie_ltc_table_default(), sf, &ltc);
                 ltc_ready = 1;
             }
-            if (cls == LIE_VISCLASS_BLOCKERS && c->exact) {
+            if (cls == LIE_VISCLASS_BLOCKERS && c->exact &&
+                (opt->exact == LIE_EXACT_ONLY || lie_exact_pays(opt->light_samples, n_blockers))) {
                 double t0 = clock_if(timers);
                 int ok = lie_polylight_visible(pl, o, sf->n, sf->ng, s->tri_p, opt->oracle->solid, sc->blockers, n_blockers, eps,
                                                &sc->poly, &omega) == 0;

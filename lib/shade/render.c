@@ -315,6 +315,12 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
     memset(&j, 0, sizeof j);
     j.sc.s = s;
     j.sc.rt = rt;
+    /* a frame of very few light samples is cheaper with full visibility
+     * (LIE_LIE_MIN_SAMPLES); the oracle still serves the AOVs */
+    lie_render_options frame_opt = *opt;
+    if (opt->visibility == LIE_VIS_LIE && opt->light_samples < LIE_LIE_MIN_SAMPLES && opt->exact != LIE_EXACT_ONLY)
+        frame_opt.visibility = LIE_VIS_FULL;
+    opt = &frame_opt;
     j.sc.opt = opt;
     j.sc.ray_far = lie_pair_ray_far(s);
     if (!isfinite(j.sc.ray_far))
@@ -348,9 +354,7 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
     /* closed forms from LIE_ANALYTIC_MIN_SAMPLES on: below, a few samples
      * cost less than an edge sum */
     j.sc.analytic = opt->exact == LIE_EXACT_ONLY || opt->light_samples >= LIE_ANALYTIC_MIN_SAMPLES;
-    j.sc.exact = opt->visibility == LIE_VIS_LIE &&
-                 (opt->exact == LIE_EXACT_ONLY ||
-                  (opt->exact == LIE_EXACT_AUTO && opt->light_samples >= LIE_EXACT_MIN_SAMPLES));
+    j.sc.exact = opt->visibility == LIE_VIS_LIE && opt->exact != LIE_EXACT_OFF;
     if (st == LIE_OK && j.sc.analytic) {
         j.sc.poly = calloc((size_t)s->n_emitters + 1, sizeof *j.sc.poly);
         st = j.sc.poly ? LIE_OK : LIE_ERR_NOMEM;

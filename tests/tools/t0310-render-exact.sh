@@ -28,11 +28,11 @@ for scene in cornell museum1; do
     else not_ok "$scene: p99 error against full at 16k is $p16 (> 2%)"; fi
 done
 
-run "$B/lie-render" "$TMP/museum1.lie" -q --size 48x40 --threads 1 -o "$TMP/t1.exr"
-run "$B/lie-render" "$TMP/museum1.lie" -q --size 48x40 --threads 2 -o "$TMP/t2.exr"
+run "$B/lie-render" "$TMP/museum1.lie" -q --size 48x40 --light-samples exact --threads 1 -o "$TMP/t1.exr"
+run "$B/lie-render" "$TMP/museum1.lie" -q --size 48x40 --light-samples exact --threads 2 -o "$TMP/t2.exr"
 expect_same "$TMP/t1.exr" "$TMP/t2.exr" "exact frames identical for 1 and 2 threads"
 
-run "$B/lie-render" "$TMP/museum1.lie" -q --size 32x32 --stats=json -o "$TMP/s.exr"
+run "$B/lie-render" "$TMP/museum1.lie" -q --size 32x32 --light-samples exact --stats=json -o "$TMP/s.exr"
 exact_pairs=$(field pairs_exact <"$TMP/err"); analytic=$(field pairs_analytic <"$TMP/err")
 if [ "${exact_pairs:-0}" -gt 0 ] && [ "${analytic:-0}" -gt 0 ]; then
     ok "--stats=json counts pairs per path: $exact_pairs exact, $analytic in closed form"

@@ -64,6 +64,13 @@ same_as_rebuild "$TMP/am.lie" "alpha_mask: screen moved" "$TMP/ammove.yaml"
 run "$B/lie-render" "$TMP/u.lie" -q --size 32x32 -o "$TMP/addcol.exr"
 expect_rc 0 "the cache with the coloured object renders"
 same_as_rebuild "$TMP/m1.lie" "museum1: light off" "$TMP/off.yaml"
+# -q: the warning that no emitter is left goes, the cache is the same
+run "$B/rst-update" "$TMP/m1.lie" "$TMP/off.yaml" -o "$TMP/loud.lie"
+if [ "$rc" -eq 0 ] && grep -q "^rst-update: $TMP/m1.lie: warning: the edited scene has no emitters" "$TMP/err"; then
+    ok "light off: a warning without -q"; else not_ok "light off: no warning without -q"; fi
+run "$B/rst-update" "$TMP/m1.lie" "$TMP/off.yaml" -q -o "$TMP/quiet.lie"
+if [ "$rc" -eq 0 ] && [ ! -s "$TMP/err" ]; then ok "light off: -q prints nothing"; else not_ok "light off: -q printed"; fi
+expect_same "$TMP/loud.lie" "$TMP/quiet.lie" "light off: -q changes no byte"
 edit on '- set-emission: {node: Light, strength: 14}'
 same_as_rebuild "$TMP/m1.lie" "museum1: light off then on again" "$TMP/off.yaml" "$TMP/on.yaml"
 same_as_rebuild "$TMP/m1.lie" "museum1: a chain of three files" "$TMP/move_by.yaml" "$TMP/rotate.yaml" "$TMP/remove.yaml"

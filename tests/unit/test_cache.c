@@ -39,16 +39,8 @@ static lie_cache *cache_from_scene(const lie_scene *s, const char *path, lie_blo
     assert_int_equal(lie_env_build(s, rt, &p, NULL, &c->env, &st, &err), LIE_OK);
     lie_rt_destroy(rt);
     c->scene_path = strdup(path);
-    c->scene_hash = c->state_hash = s->hash;
-    c->n_tris = s->n_tris;
-    c->n_emitters = s->n_emitters;
-    c->emitters = calloc((size_t)s->n_emitters + 1, sizeof *c->emitters);
-    for (int e = 0; e < s->n_emitters; e++) {
-        c->emitters[e].type = (uint32_t)s->emitters[e].type;
-        c->emitters[e].node = s->emitters[e].node;
-        c->emitters[e].first_tri = s->emitters[e].first_tri;
-        c->emitters[e].n_tris = s->emitters[e].n_tris;
-    }
+    c->scene_hash = s->hash;
+    assert_int_equal(lie_cache_set_state(c, s, &err), LIE_OK);
     return c;
 }
 

@@ -349,6 +349,58 @@ static void test_polylight_random_blockers_match_quadrature(void **state)
     fixture_free(&f);
 }
 
+/* A glossy floor under the square, one pixel, no shadows: the LTC over the
+ * emitter's clipped polygon (--light-samples exact) against 16k samples. */
+static void test_polylight_glossy_receiver_uses_ltc(void **state)
+{
+    (void)state;
+    lie_scene *s = lie_scene_new("glossy");
+    lie_material light = lie_material_default();
+    light.base_color[0] = light.base_color[1] = light.base_color[2] = 0.0f;
+    light.emissive[0] = light.emissive[1] = light.emissive[2] = 4.0f;
+    int ml = lie_scene_add_material(s, &light);
+    lie_material floor = lie_material_default();
+    floor.metallic = 0.5f;
+    floor.roughness = 0.5f;
+    int mf = lie_scene_add_material(s, &floor);
+    float lp[12] = {-0.5f, 1, -0.5f, 0.5f, 1, -0.5f, 0.5f, 1, 0.5f, -0.5f, 1, 0.5f};
+    float fp[12] = {-50, 0, -50, -50, 0, 50, 50, 0, 50, 50, 0, -50};
+    uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
+    lie_scene_add_node(s, "Light", -1, NULL, lie_scene_add_mesh(s, "Light", lp, NULL, NULL, 4, idx, 2, ml), -1, -1);
+    lie_scene_add_node(s, "Floor", -1, NULL, lie_scene_add_mesh(s, "Floor", fp, NULL, NULL, 4, idx, 2, mf), -1, -1);
+    lie_error err;
+    assert_int_equal(lie_scene_flatten(s, &err), LIE_OK);
+    lie_rt *rt = NULL;
+    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
+    lie_camera cam;
+    memset(&cam, 0, sizeof cam);
+    cam.eye = lie_v3(0.8f, 0.6f, 0.3f);
+    cam.forward = lie_v3_norm(lie_v3_sub(lie_v3(0.3f, 0.0f, 0.1f), cam.eye));
+    cam.up = lie_v3_norm(lie_v3_cross(lie_v3_cross(cam.forward, lie_v3(0, 1, 0)), cam.forward));
+    cam.yfov = 0.01f;
+    float px[2][3];
+    for (int k = 0; k < 2; k++) {
+        lie_render_options o = lie_render_options_default();
+        o.width = o.height = 1;
+        o.threads = 1;
+        o.visibility = LIE_VIS_NONE;
+        o.exact = k ? LIE_EXACT_ONLY : LIE_EXACT_OFF;
+        o.light_samples = k ? 16 : 16384;
+        o.pattern = LIE_PATTERN_ROTATED;
+        lie_frame *f = NULL;
+        lie_render_stats st;
+        assert_int_equal(lie_render(s, rt, &cam, &o, &f, &st, &err), LIE_OK);
+        memcpy(px[k], f->rgb, sizeof px[k]);
+        lie_frame_destroy(f);
+        if (k)
+            assert_true(st.pairs_analytic == 1 && st.light_samples == 0); /* no samples taken */
+    }
+    for (int c = 0; c < 3; c++)
+        assert_true(px[0][c] > 0.0f && fabsf(px[1][c] - px[0][c]) <= 0.05f * px[0][c]);
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -361,6 +413,7 @@ int main(void)
         cmocka_unit_test(test_polylight_own_triangles_are_not_blockers),
         cmocka_unit_test(test_polylight_convex_solid_casts_its_faces_shadow),
         cmocka_unit_test(test_polylight_random_blockers_match_quadrature),
+        cmocka_unit_test(test_polylight_glossy_receiver_uses_ltc),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

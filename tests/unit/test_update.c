@@ -96,17 +96,27 @@ static void assert_env_equal(const lie_env *a, const lie_env *b)
         assert_memory_equal(a->pool, b->pool, sizeof(uint32_t) * a->n_pool);
 }
 
+/* An update of a fresh cornell cache (make_cache). */
+static lie_update *start(lie_cache **c, lie_scene **s, int keep_trees)
+{
+    lie_error err;
+    *c = make_cache(s);
+    lie_update_options o = lie_update_options_default();
+    o.threads = 2;
+    o.keep_trees = keep_trees;
+    lie_update *u = NULL;
+    assert_int_equal(lie_update_create(*c, *s, &o, &u, &err), LIE_OK);
+    return u;
+}
+
 /* Update cornell by `texts` (in steps of `chunk` units, 0 = at once) and
  * check the cache against a rebuild: environments, state, edit log. */
 static void check_update(const char *const *texts, int n, size_t chunk, uint64_t *flagged)
 {
     lie_error err;
     lie_scene *s = NULL, *ref_scene = NULL;
-    lie_cache *c = make_cache(&s);
-    lie_update_options o = lie_update_options_default();
-    o.threads = 2;
-    lie_update *u = NULL;
-    assert_int_equal(lie_update_create(c, s, &o, &u, &err), LIE_OK);
+    lie_cache *c = NULL;
+    lie_update *u = start(&c, &s, 0);
     for (int i = 0; i < n; i++) {
         lie_edit *e = parse(texts[i]);
         assert_int_equal(lie_update_edit(u, e, (const unsigned char *)texts[i], strlen(texts[i]), &err), LIE_OK);
@@ -197,11 +207,8 @@ static void test_update_edits_while_pending_and_after_commit(void **state)
     (void)state;
     lie_error err;
     lie_scene *s = NULL, *ref_scene = NULL;
-    lie_cache *c = make_cache(&s);
-    lie_update_options o = lie_update_options_default();
-    o.keep_trees = 1;
-    lie_update *u = NULL;
-    assert_int_equal(lie_update_create(c, s, &o, &u, &err), LIE_OK);
+    lie_cache *c = NULL;
+    lie_update *u = start(&c, &s, 1);
     const char *texts[3] = {OPS[0], OPS[1], OPS[2]};
     for (int i = 0; i < 3; i++) {
         lie_edit *e = parse(texts[i]);
@@ -273,10 +280,9 @@ static void test_update_snapshots_never_show_a_changed_answer(void **state)
     (void)state;
     lie_error err;
     lie_scene *s = NULL, *ref_scene = NULL;
-    lie_cache *c = make_cache(&s);
+    lie_cache *c = NULL;
+    lie_update *u = start(&c, &s, 0);
     lie_env *final = rebuild(&OPS[0], 1, &ref_scene);
-    lie_update *u = NULL;
-    assert_int_equal(lie_update_create(c, s, NULL, &u, &err), LIE_OK);
     lie_edit *e = parse(OPS[0]);
     assert_int_equal(lie_update_edit(u, e, (const unsigned char *)OPS[0], strlen(OPS[0]), &err), LIE_OK);
     lie_edit_destroy(e);

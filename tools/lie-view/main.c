@@ -30,7 +30,9 @@ static void usage(FILE *fp)
             "      --constructor-threads N  threads rebuilding flagged units (default 1)\n"
             "      --script FILE       run commands from FILE (below), then keep the window\n"
             "                          open unless it says quit\n"
-            "      --record EDITS.yaml write the session's edits there (formats/edit.md)\n"
+            "      --record EDITS.yaml write the session's edits there (formats/edit.md);\n"
+            "                          rst-update CACHE EDITS.yaml (named as here) gives\n"
+            "                          the bytes --save writes\n"
             "      --save OUT.lie      write the cache at exit (and on Ctrl+S)\n"
             "      --allow-external-uris  let the glTF reference files outside its folder\n"
             "      --stats[=json]      at exit: frames, fps while moving, update times, pending\n"
@@ -96,6 +98,7 @@ typedef struct session {
     double moving_seconds, last_present;
     uint64_t last_images, cam_gen, shown_cam_gen;
     double change_t;        /* the first camera change since the last image */
+    double last_change_t;
     int prev_moving;
     double fps_window_start;
     int fps_window_frames;
@@ -107,8 +110,9 @@ typedef struct session {
     double await_t0, last_edit_end;
     uint64_t await_version;
     int catching_up;
-    double *first_ms, *catchup_ms;
-    int n_first, n_catchup;
+    double *first_ms, *catchup_ms, *refine_ms;
+    int n_first, n_catchup, n_refine;
+    int refining;           /* the camera changed: time until every level is done */
 } session;
 
 static void push_ms(double **arr, int *n, double ms)
@@ -161,6 +165,8 @@ static void camera_update(session *S)
     if (S->cam_gen == S->shown_cam_gen)
         S->change_t = lie_time_now();
     S->cam_gen++;
+    S->refining = 1;
+    S->last_change_t = lie_time_now();
 }
 
 /* A node for an edit file: its name when that names it alone, else '#N'. */
@@ -252,6 +258,7 @@ typedef struct drag_state {
     int x0, y0, lastx, lasty;
     float depth;            /* of the grabbed point along the view */
     lie_vec3 pending;       /* motion not yet applied */
+    double last_flush;
     float pending_yaw, pending_pitch;
 } drag_state;
 
@@ -534,6 +541,9 @@ static void print_stats(session *S, int json)
         fprintf(stderr, "],\"catchup_ms\":[");
         for (int i = 0; i < S->n_catchup; i++)
             fprintf(stderr, "%s%.3f", i ? "," : "", S->catchup_ms[i]);
+        fprintf(stderr, "],\"refine_ms\":[");
+        for (int i = 0; i < S->n_refine; i++)
+            fprintf(stderr, "%s%.3f", i ? "," : "", S->refine_ms[i]);
         fprintf(stderr, "],\"pending_max\":%lld,\"camera\":", (long long)view_world_pending_max(S->w));
         lie_json_string(stderr, S->spec);
         fprintf(stderr, "}\n");
@@ -678,6 +688,8 @@ int main(int argc, char **argv)
     }
     view_orbit_from_camera(&S.orbit, &start, scene);
     camera_update(&S);
+    S.shown_cam_gen = S.cam_gen; /* the first view is not a motion */
+    S.refining = 0;
     int rc = 0;
     char title[256];
     snprintf(title, sizeof title, "lie-view: %s", input);
@@ -773,8 +785,12 @@ int main(int argc, char **argv)
                 view_orbit_dolly(&S.orbit, 0.1f * (float)ev.wheel.y);
             }
         }
-        if (D.dragging)
-            flush_drag(&S, &D); /* at most one edit per frame while dragging */
+        /* while dragging, an edit every 40 ms at most: each is a phase 1 of
+         * the update over every edit since its last commit */
+        if (D.dragging && lie_time_now() - D.last_flush >= 0.04) {
+            flush_drag(&S, &D);
+            D.last_flush = lie_time_now();
+        }
         if (R.sc && !quit) {
             uint64_t images, px, iv;
             int idle;
@@ -790,6 +806,11 @@ int main(int argc, char **argv)
         if (S.await_version && image_version >= S.await_version) {
             push_ms(&S.first_ms, &S.n_first, 1e3 * (lie_time_now() - S.await_t0));
             S.await_version = 0;
+        }
+        if (S.refining && idle) {
+            /* the full --light-samples image of the view since it stopped */
+            push_ms(&S.refine_ms, &S.n_refine, 1e3 * (lie_time_now() - S.last_change_t));
+            S.refining = 0;
         }
         if (S.catching_up && !view_world_busy(S.w)) {
             push_ms(&S.catchup_ms, &S.n_catchup, 1e3 * (lie_time_now() - S.last_edit_end));
@@ -843,6 +864,7 @@ int main(int argc, char **argv)
     free(shown);
     free(S.first_ms);
     free(S.catchup_ms);
+    free(S.refine_ms);
     if (tex)
         SDL_DestroyTexture(tex);
     if (ren)

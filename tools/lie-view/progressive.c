@@ -12,7 +12,7 @@
 #include <string.h>
 
 #define LEVELS 3
-#define BAND_TILE_ROWS 2 /* 32 pixel rows a band */
+#define BAND_TILE_ROWS 1 /* 16 pixel rows a band: an edit waits on one band at most */
 
 struct view_render {
     view_world *w;
@@ -24,7 +24,7 @@ struct view_render {
     /* the request (m) */
     lie_camera cam;
     int mode, sel, quit;
-    uint64_t gen;
+    uint64_t gen, version_seen; /* version_seen: the world's, at the last request */
     /* what is shown (m) */
     uint32_t *display;
     int dirty;
@@ -277,6 +277,11 @@ void view_render_request(view_render *r, const lie_camera *cam, int mode, int se
         r->mode = mode;
         r->sel = sel;
         r->gen++;
+        pthread_cond_broadcast(&r->cv);
+    }
+    uint64_t v = view_world_version(r->w);
+    if (v != r->version_seen) {
+        r->version_seen = v; /* an edit: wake the renderer now rather than at its next poll */
         pthread_cond_broadcast(&r->cv);
     }
     pthread_mutex_unlock(&r->m);
