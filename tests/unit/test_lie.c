@@ -617,6 +617,69 @@ static void test_patch_names_round_trip(void **state)
     assert_false(lie_patch_parse("-1", &tri, &q));
 }
 
+/* Spot cones and range (KHR_lights_punctual): a patch outside the outer
+ * cone, or past the range, is unlit; one the renderer may weight above 0
+ * never is.  Checked against the renderer's own falloff on sample points. */
+static float spot_falloff(const lie_emitter *em, lie_vec3 o)
+{
+    lie_vec3 d = lie_v3_sub(em->position, o);
+    float dist = lie_v3_len(d);
+    lie_vec3 wi = lie_v3_scale(d, 1.0f / dist);
+    float a = 1.0f;
+    if (em->cos_outer > -1.5f) {
+        float cd = -lie_v3_dot(em->direction, wi);
+        a = cd > em->cos_outer ? 1.0f : 0.0f;
+    }
+    if (em->range > 0.0f && dist >= em->range)
+        a = 0.0f;
+    return a;
+}
+
+static void test_lie_spot_cone_and_range_cull_exactly_the_dark_patches(void **state)
+{
+    (void)state;
+    lie_emitter em;
+    memset(&em, 0, sizeof em);
+    em.type = LIE_EMITTER_POINT;
+    em.position = lie_v3(0.0f, 4.0f, 0.0f);
+    em.direction = lie_v3(0.0f, -1.0f, 0.0f);
+    em.cos_inner = cosf(0.3f);
+    em.cos_outer = cosf(0.5f); /* lights a disc of radius 4 tan 0.5 = 2.19 on the floor */
+    em.range = 0.0f;
+    lie_scene s;
+    memset(&s, 0, sizeof s);
+    s.emitters = &em;
+    s.n_emitters = 1;
+    const lie_vec3 up = lie_v3(0.0f, 1.0f, 0.0f);
+    int culled = 0, kept = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        if (pass == 1) {
+            em.cos_outer = -2.0f; /* a point light with a range of 5 */
+            em.range = 5.0f;
+        }
+        for (int i = -12; i <= 12; i++)
+            for (int j = -12; j <= 12; j++) {
+                float x = 0.5f * (float)i, z = 0.5f * (float)j;
+                lie_vec3 V[3] = {lie_v3(x, 0, z), lie_v3(x, 0, z + 0.4f), lie_v3(x + 0.4f, 0, z)};
+                int reach = lie_emitter_can_reach(&s, 0, 0, V, up, 0);
+                float lit = 0.0f;
+                for (int a = 0; a <= 8; a++)
+                    for (int b = 0; a + b <= 8; b++) {
+                        float b1 = (float)a / 8.0f, b2 = (float)b / 8.0f, b0 = 1.0f - b1 - b2;
+                        lie_vec3 o = lie_v3_add(lie_v3_add(lie_v3_scale(V[0], b0), lie_v3_scale(V[1], b1)),
+                                                lie_v3_scale(V[2], b2));
+                        lit = fmaxf(lit, spot_falloff(&em, o));
+                    }
+                if (lit > 0.0f)
+                    assert_true(reach); /* never cull a patch the renderer lights */
+                culled += !reach;
+                kept += reach;
+            }
+    }
+    assert_true(culled > 200); /* most of the floor is dark, and culled */
+    assert_true(kept > 50);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -631,6 +694,7 @@ int main(void)
         cmocka_unit_test(test_patch_names_round_trip),
         cmocka_unit_test(test_lie_many_triangle_emitter_uses_a_flat_oriented_box),
         cmocka_unit_test(test_lie_self_occluding_emitter_is_complex_without_splitting),
+        cmocka_unit_test(test_lie_spot_cone_and_range_cull_exactly_the_dark_patches),
     };
     return cmocka_run_group_tests_name("lie", tests, NULL, NULL);
 }
