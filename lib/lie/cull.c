@@ -198,7 +198,8 @@ void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3
 }
 
 lie_class lie_cull_conservative(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided,
-                                int e, const uint32_t *parent, size_t n_parent, size_t *n_list)
+                                int e, const uint32_t *parent, size_t n_parent, size_t limit,
+                                size_t *n_list)
 {
     const lie_scene *s = c->s;
     int nh = pair_hull(c, w, tri, V, e);
@@ -220,7 +221,7 @@ lie_class lie_cull_conservative(const build_ctx *c, worker *w, uint32_t tri, con
     }
     lie_sat sat;
     pair_sat(c, w, nh, tri, two_sided, e, tol, &sat);
-    for (size_t i = 0; i < n_cand; i++) {
+    for (size_t i = 0; i < n_cand && w->n_hits <= limit; i++) {
         uint32_t t = cand[i];
         if (t == tri || !(s->tri_area[t] > 0.0f)) /* empty triangles block nothing */
             continue;

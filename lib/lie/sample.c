@@ -121,10 +121,10 @@ static int all_blocked_to_max(const pair_sampler *ps, uint32_t from, worker *w)
  *   either find them all blocked (occluded, quality = max_samples) or
  *   meet a free one, and the rounds go on as if the probe had not been;
  * - the pair is partial (some segment blocked, some not) and its list is
- *   already past what decides the node: past max_blockers where it will
- *   split (the emitter cannot put more than complex_cap of its own
- *   triangles in a list), past complex_cap where it cannot split; the
- *   list is not stored then, so it is not expanded to whole instances. */
+ *   already past complex_cap: such a list is never stored (the node splits
+ *   or is complex), so it is not expanded to whole instances.  Where the
+ *   emitter has more than complex_cap triangles and the patch may split,
+ *   sampling goes on: the emitter's own triangles decide the split. */
 lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch_path path, const lie_vec3 V[3],
                           int two_sided, int e, uint32_t *quality, size_t *n_list)
 {
@@ -142,9 +142,14 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
                              lie_hash_to_unit(h2),
                              lie_hash_to_unit(h2 << 24)};
     const int can_split = lie_subdiv_may_split(c, tri, path);
-    /* the list length past which this node's class is settled, once partial */
-    const size_t settled = can_split ? (em->n_tris <= c->p->complex_cap ? c->p->max_blockers : SIZE_MAX)
-                                     : c->p->complex_cap;
+    /* The list length past which this node's class is settled, once partial:
+     * past complex_cap the list is never stored (a node that splits keeps only
+     * its count; one that does not, or whose split is undone because it does
+     * not shorten the lists, is complex).  Below it the list is sampled in
+     * full, since lie_subdiv may keep any node as a leaf.  A node that may
+     * split towards an emitter of more than complex_cap triangles is never
+     * settled early: its own triangles decide whether it splits. */
+    const size_t settled = can_split && em->n_tris > c->p->complex_cap ? SIZE_MAX : c->p->complex_cap;
     uint32_t total = 0, round_n = c->p->samples;
     uint64_t valid = 0, blocked = 0;
     size_t known = 0; /* distinct blockers after the previous round */

@@ -242,6 +242,36 @@ uint32_t lie_emitter_target(const lie_scene *s, int e, float u1, float u2, lie_v
     return UINT32_MAX;
 }
 
+/* A point or spot light reaches nothing past its range (KHR_lights_punctual:
+ * the renderer's falloff is 0 from `range` on) nor outside its outer cone.
+ * Tested on a sphere holding the patch, grown by the shading points' offset
+ * from the surface and a rounding margin, so only patches the renderer
+ * surely weights 0 are culled. */
+static int point_may_reach(const lie_emitter *em, const lie_vec3 V[3])
+{
+    lie_vec3 c = lie_v3_scale(lie_v3_add(V[0], lie_v3_add(V[1], V[2])), 1.0f / 3.0f);
+    float r = 0.0f, mag = lie_v3_maxabs(em->position);
+    for (int k = 0; k < 3; k++) {
+        r = fmaxf(r, lie_v3_len(lie_v3_sub(V[k], c)));
+        mag = fmaxf(mag, lie_v3_maxabs(V[k]));
+    }
+    /* ten times the largest shadow-ray offset (lie_ray_eps_bound, lib/rt/rt.h) */
+    r += 1e-3f * fmaxf(mag, 1.0f);
+    lie_vec3 to = lie_v3_sub(c, em->position);
+    float dist = lie_v3_len(to);
+    if (em->range > 0.0f && dist - r >= em->range * (1.0f + 1e-5f))
+        return 0;
+    if (em->cos_outer > -1.5f && dist > r) {
+        /* the sphere's directions from the light lie within asin(r / dist)
+         * of its centre's; all outside the outer cone (with a margin) */
+        double axis = acos(fmax(-1.0, fmin(1.0, (double)lie_v3_dot(em->direction, to) / (double)dist)));
+        double outer = acos(fmax(-1.0, fmin(1.0, (double)em->cos_outer)));
+        if (axis - asin((double)r / (double)dist) > outer + 1e-4)
+            return 0;
+    }
+    return 1;
+}
+
 int lie_emitter_can_reach(const lie_scene *s, int e, uint32_t tri, const lie_vec3 V[3], lie_vec3 ng, int two_sided)
 {
     const lie_emitter *em = &s->emitters[e];
@@ -277,5 +307,9 @@ int lie_emitter_can_reach(const lie_scene *s, int e, uint32_t tri, const lie_vec
     }
     float d = em->type == LIE_EMITTER_POINT ? lie_v3_dot(ng, lie_v3_sub(em->position, V[0]))
                                             : -lie_v3_dot(ng, em->direction);
-    return two_sided ? d != 0.0f : !(d <= 0.0f);
+    if (!(two_sided ? d != 0.0f : !(d <= 0.0f)))
+        return 0;
+    if (em->type == LIE_EMITTER_POINT && (em->range > 0.0f || em->cos_outer > -1.5f))
+        return point_may_reach(em, V);
+    return 1;
 }
