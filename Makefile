@@ -51,7 +51,7 @@ TOOL_BIN := $(TOOLS:%=$(BINDIR)/%)
 UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
 UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/tests/%)
 
-.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench bench-mpi bench-view scenes fuzz clean \
+.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench bench-build bench-mpi bench-view scenes fuzz clean \
         install uninstall man shared ltc-tables ltc-bench
 all: $(TOOL_BIN)
 
@@ -172,6 +172,11 @@ test-asan:
 
 bench: all build-tests
 	@sh bench/run.sh
+	@sh bench/build.sh
+
+# what a lie-build costs in full frames, per scene: the paper's rule against the cost rule
+bench-build: all
+	@sh bench/build.sh
 
 # lie-view's interactive loop under Xvfb (not a timed test: figures depend on the load)
 bench-view: all

@@ -164,6 +164,7 @@ static lie_status encode(const lie_cache *c, const char *name, unsigned char **d
     lie_cache_put_u32(p + 12, env->params.complex_cap);
     lie_cache_put_u32(p + 16, lie_cache_f32_bits(env->params.min_patch));
     lie_cache_put_u32(p + 20, (uint32_t)env->params.mode);
+    lie_cache_put_u32(p + 24, lie_cache_f32_bits(env->params.split_gain));
 
     /* EDITS */
     p = buf + off[S_EDITS];

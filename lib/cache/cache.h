@@ -15,7 +15,7 @@
 extern "C" {
 #endif
 
-#define LIE_CACHE_VERSION 1u
+#define LIE_CACHE_VERSION 2u
 
 /* What the cache knows of each emitter, to check it against a scene. */
 typedef struct lie_cache_emitter {

@@ -141,11 +141,12 @@ static lie_status parse_meta(const unsigned char *p, uint64_t size, const char *
     return LIE_OK;
 }
 
-static lie_status parse_params(const unsigned char *p, uint64_t size, const char *name, lie_build_params *bp,
-                               lie_error *err)
+static lie_status parse_params(const unsigned char *p, uint64_t size, uint32_t version, const char *name,
+                               lie_build_params *bp, lie_error *err)
 {
-    if (size != LIE_CACHE_PARAMS_SIZE)
-        return FAIL("section PARAMS: %llu bytes, expected %u", (ull)size, LIE_CACHE_PARAMS_SIZE);
+    const uint32_t want = version == 1 ? LIE_CACHE_PARAMS_SIZE_V1 : LIE_CACHE_PARAMS_SIZE;
+    if (size != want)
+        return FAIL("section PARAMS: %llu bytes, expected %u", (ull)size, want);
     memset(bp, 0, sizeof *bp);
     bp->samples = lie_cache_get_u32(p);
     bp->max_samples = lie_cache_get_u32(p + 4);
@@ -156,6 +157,8 @@ static lie_status parse_params(const unsigned char *p, uint64_t size, const char
     if (mode > LIE_BLOCKERS_CONSERVATIVE)
         return FAIL("section PARAMS: blocker mode %u is unknown", mode);
     bp->mode = (lie_blocker_mode)mode;
+    /* version 1 caches were built splitting wherever a list was too long */
+    bp->split_gain = version == 1 ? 0.0f : lie_cache_bits_f32(lie_cache_get_u32(p + 24));
     bp->threads = 0;
     lie_error perr;
     if (lie_build_params_check(bp, &perr) != LIE_OK)
@@ -303,7 +306,7 @@ lie_status lie_cache_decode(const unsigned char *data, size_t size, const char *
     meta_counts m = {0, 0, 0, 0, 0};
     st = parse_meta(data + s[0]->offset, s[0]->size, name, c, &m, err);
     if (st == LIE_OK)
-        st = parse_params(data + s[1]->offset, s[1]->size, name, &env->params, err);
+        st = parse_params(data + s[1]->offset, s[1]->size, lie_cache_get_u32(data + 8), name, &env->params, err);
     if (st == LIE_OK)
         st = parse_edits(data + s[2]->offset, s[2]->size, name, c, err);
     if (st == LIE_OK)

@@ -12,7 +12,8 @@
 #define LIE_CACHE_HEADER_SIZE 32u
 #define LIE_CACHE_ENTRY_SIZE 32u
 #define LIE_CACHE_META_FIXED 48u
-#define LIE_CACHE_PARAMS_SIZE 24u
+#define LIE_CACHE_PARAMS_SIZE 28u    /* version 2; version 1: 24 (no split_gain) */
+#define LIE_CACHE_PARAMS_SIZE_V1 24u
 #define LIE_CACHE_EMITTER_SIZE 16u
 #define LIE_CACHE_NODE_SIZE 20u
 

@@ -88,8 +88,7 @@ void lie_cull_candidates(const build_ctx *c, worker *w, const lie_vec3 *hull, in
 static void pair_sat(const build_ctx *c, const worker *w, int nh, uint32_t tri, int two_sided, int e, float tol,
                      lie_sat *sat)
 {
-    const lie_emitter *em = &c->s->emitters[e];
-    const lie_vec3 *ne = em->type == LIE_EMITTER_AREA ? &c->s->tri_ng[em->first_tri] : NULL;
+    const lie_vec3 *ne = lie_emitter_facing(c->s, e);
     lie_sat_init(sat, w->hull, nh, lie_pair_hull_patch_points(two_sided), c->s->tri_ng[tri], ne, tol);
 }
 
@@ -199,7 +198,8 @@ void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3
 }
 
 lie_class lie_cull_conservative(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided,
-                                int e, const uint32_t *parent, size_t n_parent, size_t *n_list)
+                                int e, const uint32_t *parent, size_t n_parent, size_t limit,
+                                size_t *n_list)
 {
     const lie_scene *s = c->s;
     int nh = pair_hull(c, w, tri, V, e);
@@ -221,7 +221,7 @@ lie_class lie_cull_conservative(const build_ctx *c, worker *w, uint32_t tri, con
     }
     lie_sat sat;
     pair_sat(c, w, nh, tri, two_sided, e, tol, &sat);
-    for (size_t i = 0; i < n_cand; i++) {
+    for (size_t i = 0; i < n_cand && w->n_hits <= limit; i++) {
         uint32_t t = cand[i];
         if (t == tri || !(s->tri_area[t] > 0.0f)) /* empty triangles block nothing */
             continue;

@@ -14,8 +14,11 @@ size_t lie_cull_shaft(const build_ctx *c, worker *w, uint32_t tri, const lie_vec
  * there. */
 void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e);
 /* Conservative mode: every triangle meeting the pair's hull into w->hits
- * (among parent[0..n_parent) when parent is not NULL). */
+ * (among parent[0..n_parent) when parent is not NULL).  The search stops
+ * once the list holds more than `limit` triangles (SIZE_MAX: never); the
+ * list is then incomplete and only its length (> limit) means anything. */
 lie_class lie_cull_conservative(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided,
-                                int e, const uint32_t *parent, size_t n_parent, size_t *n_list);
+                                int e, const uint32_t *parent, size_t n_parent, size_t limit,
+                                size_t *n_list);
 
 #endif

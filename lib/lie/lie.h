@@ -46,7 +46,8 @@ typedef struct lie_build_params {
     uint32_t max_samples;  /* adaptive rounds stop here (--max-samples) */
     uint32_t max_blockers; /* subdivide when a list is longer (--max-blockers) */
     uint32_t complex_cap;  /* a leaf list longer than this is complex (--complex-cap) */
-    float min_patch;       /* smallest patch area / largest triangle area (--min-patch) */
+    float min_patch;       /* smallest patch area / largest triangle area (--min-patch): a floor */
+    float split_gain;      /* a split is kept only if it shortens the lists by this share (--split-gain) */
     lie_blocker_mode mode;
     int threads;           /* not stored in caches: results never depend on it */
     uint64_t max_nodes;    /* patch-tree nodes a build may make (--max-nodes); 0: the default.
@@ -58,6 +59,7 @@ typedef struct lie_build_params {
 #define LIE_MAX_BLOCKERS_DEFAULT 8u
 #define LIE_COMPLEX_CAP_DEFAULT 128u
 #define LIE_MIN_PATCH_DEFAULT 1e-4f
+#define LIE_SPLIT_GAIN_DEFAULT 0.25f
 /* --min-patch's lower bound: 1e-8 of the largest triangle is about 13
  * subdivision levels; below that the trees grow by 4x a level for nothing
  * an image can show. */
@@ -97,6 +99,7 @@ typedef struct lie_build_stats {
     uint64_t list_hist[18];            /* leaf partial lists: 1,2,3-4,5-8,...,>2^16 */
     uint64_t segments;                 /* shadow segments cast */
     uint64_t blocker_total;            /* sum of partial list lengths */
+    uint64_t splits_undone;            /* splits classified but not kept: they did not pay */
     double seconds;
 } lie_build_stats;
 

@@ -24,13 +24,11 @@ float lie_pair_eps(const lie_scene *s, uint32_t tri)
 int lie_pair_hull_cap(const lie_scene *s, int e)
 {
     const lie_emitter *em = &s->emitters[e];
-    int n_emitter = em->type == LIE_EMITTER_AREA ? (em->n_hull ? em->n_hull : 3 * (int)em->n_tris) : 3;
-    return lie_pair_hull_patch_points(1) + n_emitter;
+    return lie_pair_hull_patch_points(1) + lie_emitter_hull_cap(em);
 }
 
 int lie_pair_hull_points(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], int e, lie_vec3 *out)
 {
-    const lie_emitter *em = &s->emitters[e];
     int two_sided = lie_pair_two_sided(s, tri);
     float eps = lie_pair_eps(s, tri);
     lie_vec3 ng = s->tri_ng[tri];
@@ -41,20 +39,7 @@ int lie_pair_hull_points(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], 
         if (two_sided)
             out[n++] = lie_v3_sub(V[k], lie_v3_scale(ng, eps));
     }
-    if (em->type == LIE_EMITTER_AREA && em->n_hull) {
-        memcpy(&out[n], em->hull, sizeof(lie_vec3) * (size_t)em->n_hull); /* a box around many triangles */
-        n += em->n_hull;
-    } else if (em->type == LIE_EMITTER_AREA) {
-        memcpy(&out[n], &s->tri_p[3 * (size_t)em->first_tri], sizeof(lie_vec3) * 3 * em->n_tris);
-        n += 3 * (int)em->n_tris;
-    } else if (em->type == LIE_EMITTER_POINT) {
-        out[n++] = em->position;
-    } else {
-        float far = lie_pair_ray_far(s);
-        for (int k = 0; k < 3; k++)
-            out[n++] = lie_v3_add(V[k], lie_v3_scale(em->direction, -far));
-    }
-    return n;
+    return n + lie_emitter_hull_points(s, e, V, lie_pair_ray_far(s), out + n);
 }
 
 /* ---- which pairs cannot interact -------------------------------------- */
@@ -64,46 +49,9 @@ int lie_pair_hull_points(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], 
  * whose every shadow sample the renderer would weight 0. */
 int lie_pair_unlit(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], int two_sided, int e)
 {
-    const lie_emitter *em = &s->emitters[e];
-    lie_vec3 ng = s->tri_ng[tri];
     if (s->tri_area[tri] <= 0.0f)
         return 1;
-    if (em->type == LIE_EMITTER_AREA) {
-        if (tri >= em->first_tri && tri < em->first_tri + em->n_tris)
-            return 1; /* an emitter does not light itself */
-        /* emitter wholly behind (or in) the patch's plane */
-        int front = 0, back = 0;
-        for (uint32_t k = 0; k < em->n_tris && !(front && back); k++) {
-            const lie_vec3 *E = &s->tri_p[3 * (size_t)(em->first_tri + k)];
-            for (int j = 0; j < 3; j++) {
-                float d = lie_v3_dot(ng, lie_v3_sub(E[j], V[0]));
-                front |= d > 0.0f;
-                back |= d < 0.0f;
-            }
-        }
-        if (!front && (!two_sided || !back))
-            return 1;
-        /* patch wholly behind every triangle of a one-sided emitter */
-        if (!em->double_sided) {
-            for (uint32_t k = 0; k < em->n_tris; k++) {
-                uint32_t g = em->first_tri + k;
-                const lie_vec3 *E = &s->tri_p[3 * (size_t)g];
-                lie_vec3 ne = s->tri_ng[g];
-                float margin = 4e-4f * lie_maxf(lie_v3_maxabs(V[0]), 1.0f);
-                for (int j = 0; j < 3; j++)
-                    if (lie_v3_dot(ne, lie_v3_sub(V[j], E[0])) > -margin)
-                        return 0;
-            }
-            return 1;
-        }
-        return 0;
-    }
-    if (em->type == LIE_EMITTER_POINT) {
-        float d = lie_v3_dot(ng, lie_v3_sub(em->position, V[0]));
-        return two_sided ? d == 0.0f : d <= 0.0f;
-    }
-    float d = -lie_v3_dot(ng, em->direction);
-    return two_sided ? d == 0.0f : d <= 0.0f;
+    return !lie_emitter_can_reach(s, e, tri, V, s->tri_ng[tri], two_sided);
 }
 
 int lie_pair_hull_meets_box(const lie_vec3 *hull, int n, lie_box3 box, float tol)

@@ -20,6 +20,7 @@ lie_build_params lie_build_params_default(void)
     p.max_blockers = LIE_MAX_BLOCKERS_DEFAULT;
     p.complex_cap = LIE_COMPLEX_CAP_DEFAULT;
     p.min_patch = LIE_MIN_PATCH_DEFAULT;
+    p.split_gain = LIE_SPLIT_GAIN_DEFAULT;
     p.mode = LIE_BLOCKERS_SAMPLED;
     return p;
 }
@@ -34,6 +35,8 @@ lie_status lie_build_params_check(const lie_build_params *p, lie_error *err)
         return lie_error_set(err, LIE_ERR_ARG, NULL, "max-blockers or complex-cap too large");
     if (!(p->min_patch >= LIE_MIN_PATCH_MIN) || !(p->min_patch <= 1.0f))
         return lie_error_set(err, LIE_ERR_ARG, NULL, "min-patch must be in [%g, 1]", (double)LIE_MIN_PATCH_MIN);
+    if (!(p->split_gain >= 0.0f) || !(p->split_gain < 1.0f))
+        return lie_error_set(err, LIE_ERR_ARG, NULL, "split-gain must be in [0, 1)");
     if (p->mode != LIE_BLOCKERS_SAMPLED && p->mode != LIE_BLOCKERS_CONSERVATIVE)
         return lie_error_set(err, LIE_ERR_ARG, NULL, "unknown blocker mode");
     return LIE_OK;
@@ -59,6 +62,7 @@ void lie_stats_merge(lie_build_stats *dst, const lie_build_stats *src)
         dst->list_hist[k] += src->list_hist[k];
     dst->segments += src->segments;
     dst->blocker_total += src->blocker_total;
+    dst->splits_undone += src->splits_undone;
 }
 
 static void stats_walk(const lie_env *env, uint32_t idx, int depth, lie_build_stats *st)

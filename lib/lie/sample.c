@@ -65,29 +65,21 @@ static int pair_segment(const pair_sampler *ps, uint32_t i, lie_vec3 *org, lie_v
 {
     const build_ctx *c = ps->c;
     const lie_scene *s = c->s;
-    const lie_emitter *em = &s->emitters[ps->e];
     const lie_vec3 *V = ps->V;
     float b1, b2;
     lie_sample_triangle(frac_shift(halton(c, 0, i), ps->sp1), frac_shift(halton(c, 1, i), ps->sp2), &b1, &b2);
     float b0 = 1.0f - b1 - b2;
     lie_vec3 p = lie_v3_add(lie_v3_add(lie_v3_scale(V[0], b0), lie_v3_scale(V[1], b1)), lie_v3_scale(V[2], b2));
-    lie_vec3 q, ne = lie_v3(0, 0, 0);
-    uint32_t target = LIE_NO_HIT;
-    if (em->type == LIE_EMITTER_AREA) {
-        float eb1, eb2;
-        target = lie_emitter_point(s, ps->e, frac_shift(halton(c, 2, i), ps->se1),
-                                   frac_shift(halton(c, 3, i), ps->se2), &q, &ne, &eb1, &eb2);
-    } else if (em->type == LIE_EMITTER_POINT) {
-        q = em->position;
-    } else {
-        q = lie_v3_add(p, lie_v3_scale(em->direction, -c->ray_far));
-    }
+    lie_vec3 q, ne;
+    int one_sided;
+    uint32_t target = lie_emitter_target(s, ps->e, frac_shift(halton(c, 2, i), ps->se1),
+                                         frac_shift(halton(c, 3, i), ps->se2), p, c->ray_far, &q, &ne, &one_sided);
     lie_vec3 d = lie_v3_sub(q, p);
     lie_vec3 ng = s->tri_ng[ps->tri];
     float cg = lie_v3_dot(ng, d);
     if (!(cg > 0.0f) && !(ps->two_sided && cg < 0.0f))
         return 0;
-    if (em->type == LIE_EMITTER_AREA && !em->double_sided && !(lie_v3_dot(ne, d) < 0.0f))
+    if (one_sided && !(lie_v3_dot(ne, d) < 0.0f))
         return 0;
     lie_vec3 side = cg > 0.0f ? ng : lie_v3_scale(ng, -1.0f);
     if (!lie_shadow_segment(p, side, q, org, dir, tnear, tfar))
@@ -129,10 +121,10 @@ static int all_blocked_to_max(const pair_sampler *ps, uint32_t from, worker *w)
  *   either find them all blocked (occluded, quality = max_samples) or
  *   meet a free one, and the rounds go on as if the probe had not been;
  * - the pair is partial (some segment blocked, some not) and its list is
- *   already past what decides the node: past max_blockers where it will
- *   split (the emitter cannot put more than complex_cap of its own
- *   triangles in a list), past complex_cap where it cannot split; the
- *   list is not stored then, so it is not expanded to whole instances. */
+ *   already past complex_cap: such a list is never stored (the node splits
+ *   or is complex), so it is not expanded to whole instances.  Where the
+ *   emitter has more than complex_cap triangles and the patch may split,
+ *   sampling goes on: the emitter's own triangles decide the split. */
 lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch_path path, const lie_vec3 V[3],
                           int two_sided, int e, uint32_t *quality, size_t *n_list)
 {
@@ -150,9 +142,14 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
                              lie_hash_to_unit(h2),
                              lie_hash_to_unit(h2 << 24)};
     const int can_split = lie_subdiv_may_split(c, tri, path);
-    /* the list length past which this node's class is settled, once partial */
-    const size_t settled = can_split ? (em->n_tris <= c->p->complex_cap ? c->p->max_blockers : SIZE_MAX)
-                                     : c->p->complex_cap;
+    /* The list length past which this node's class is settled, once partial:
+     * past complex_cap the list is never stored (a node that splits keeps only
+     * its count; one that does not, or whose split is undone because it does
+     * not shorten the lists, is complex).  Below it the list is sampled in
+     * full, since lie_subdiv may keep any node as a leaf.  A node that may
+     * split towards an emitter of more than complex_cap triangles is never
+     * settled early: its own triangles decide whether it splits. */
+    const size_t settled = can_split && em->n_tris > c->p->complex_cap ? SIZE_MAX : c->p->complex_cap;
     uint32_t total = 0, round_n = c->p->samples;
     uint64_t valid = 0, blocked = 0;
     size_t known = 0; /* distinct blockers after the previous round */

@@ -58,86 +58,252 @@ int lie_subdiv_splits(const build_ctx *c, uint32_t tri, lie_patch_path path, int
         return 0;
     const lie_emitter *em = &s->emitters[e];
     size_t own = 0;
-    for (size_t k = 0; em->type == LIE_EMITTER_AREA && k < n_list; k++)
-        own += list[k] - em->first_tri < em->n_tris;
+    for (size_t k = 0; k < n_list; k++)
+        own += lie_emitter_owns(em, list[k]);
     return own <= c->p->complex_cap;
 }
 
 static void copy_node(const lie_env *old, uint32_t from, worker *w, unit_buf *u, uint32_t idx);
 
+/* A node's classification, before it becomes a leaf or splits. */
+typedef struct node_class {
+    lie_class cls;
+    uint32_t quality;
+    size_t n_list;
+    uint32_t *list; /* lookahead only: an owned copy of the list (NULL when empty) */
+} node_class;
+
+/* Classify the pair of patch `path` of unit (tri, e); the list is left in
+ * w->hits[0..n_list).  `old` is the old env's node in an update (its memo
+ * entry, computed in parallel), or -1. */
+static void classify(const build_ctx *c, worker *w, uint32_t tri, lie_patch_path path, int e, int two_sided,
+                     const uint32_t *parent, size_t n_parent, int64_t old, node_class *nc)
+{
+    const lie_scene *s = c->s;
+    lie_vec3 V[3];
+    lie_patch_world(path, &s->tri_p[3 * (size_t)tri], V);
+    nc->quality = 0;
+    nc->n_list = 0;
+    nc->list = NULL;
+    int32_t mi = old >= 0 && c->memo_of ? c->memo_of[old] : lie_memo_find_new(c, tri, path, e);
+    if (mi >= 0) {
+        /* computed already, in parallel with the other flagged nodes */
+        const memo_entry *m = &c->memo[mi];
+        nc->cls = m->cls;
+        nc->quality = m->quality;
+        nc->n_list = m->n_list;
+        if (!LIE_GROW(w->hits, w->cap_hits, nc->n_list)) {
+            w->nomem = 1;
+            return;
+        }
+        if (nc->n_list)
+            memcpy(w->hits, m->list, nc->n_list * sizeof *w->hits);
+    } else if (lie_pair_unlit(c->s, tri, V, two_sided, e)) {
+        nc->cls = LIE_CLASS_UNLIT;
+    } else if (c->p->mode == LIE_BLOCKERS_SAMPLED) {
+        nc->cls = lie_sample_pair(c, w, tri, path, V, two_sided, e, &nc->quality, &nc->n_list);
+    } else {
+        nc->cls = lie_cull_conservative(c, w, tri, V, two_sided, e, parent, n_parent, SIZE_MAX, &nc->n_list);
+    }
+}
+
+/* What a node costs the renderer per light sample, in blocker tests: none
+ * for unlit, visible and occluded pairs, its list's length otherwise (past
+ * complex_cap the pair is complex: an Embree ray, costlier than any list
+ * once visibility is exact, lib/shade/polylight.h). */
+static double render_weight(lie_class cls, size_t n_list)
+{
+    return cls == LIE_CLASS_PARTIAL || cls == LIE_CLASS_SPLIT || cls == LIE_CLASS_COMPLEX ? (double)n_list : 0.0;
+}
+
+/* The same for an old node an update copies (its class and count are
+ * what a build would give: no edit reached it). */
+static double old_weight(const lie_pnode *x)
+{
+    return render_weight((lie_class)x->cls, x->count);
+}
+
+/* The exact lengths of the node's and its children's lists, the triangles
+ * meeting each hull (§4.1.2), counted up to 8 complex_cap: a sampled list
+ * past the cap stops growing (lie_sample_pair settles it), so only these
+ * can tell a shaft whose lists shrink over several levels (a floor under
+ * many columns) from one whose lists never do (a patch outside a lamp's
+ * shade).  The split is kept if they shrink by split_gain on average. */
+static int exact_split_pays(const build_ctx *c, worker *w, uint32_t tri, lie_patch_path path, int e, int two_sided)
+{
+    const lie_scene *s = c->s;
+    size_t limit = 8 * (size_t)c->p->complex_cap + 8, cnt[5];
+    for (int k = 0; k < 5; k++) {
+        lie_patch_path q = k == 0 ? path : lie_patch_child(path, k - 1);
+        lie_vec3 V[3];
+        lie_patch_world(q, &s->tri_p[3 * (size_t)tri], V);
+        lie_cull_conservative(c, w, tri, V, two_sided, e, NULL, 0, limit, &cnt[k]);
+        if (w->nomem)
+            return 0;
+        cnt[k] = cnt[k] < limit ? cnt[k] : limit;
+    }
+    double mean = 0.25 * (double)(cnt[1] + cnt[2] + cnt[3] + cnt[4]);
+    return mean <= (1.0 - (double)c->p->split_gain) * (double)cnt[0];
+}
+
+/* §4.1.1 with a cost test: a split is kept only if it pays.
+ * - A node short enough for a list splits if its children's lists are on
+ *   average shorter than its own by the share split_gain (0: every split
+ *   is kept, as the paper does).  Where smaller patches keep seeing about
+ *   the same blockers (a shrinking patch tends to a point, whose list is
+ *   not empty), a deeper tree costs build time and cache space and saves
+ *   the renderer nothing.
+ * - A node too long for a list (complex as a leaf) splits if a child gets
+ *   a list: part of its area leaves Embree.  If every child is too long as
+ *   well, the exact counts decide (exact_split_pays).
+ * The decision uses only the node and its four children, all inside the
+ * node's own shaft, so an update that copies an untouched node copies the
+ * same decision. */
+static int split_pays(const build_ctx *c, worker *w, uint32_t tri, lie_patch_path path, int e, int two_sided,
+                      lie_class cls, size_t n_list, const double child_w[4])
+{
+    if (c->p->split_gain <= 0.0f)
+        return 1;
+    double cap = (double)c->p->complex_cap, parent = render_weight(cls, n_list);
+    int all_long = 1;
+    for (int k = 0; k < 4; k++)
+        all_long &= child_w[k] > cap;
+    if (parent > cap && !all_long)
+        return 1;
+    if (parent > cap && c->p->mode == LIE_BLOCKERS_SAMPLED)
+        return exact_split_pays(c, w, tri, path, e, two_sided);
+    double mean = 0.25 * (child_w[0] + child_w[1] + child_w[2] + child_w[3]);
+    return mean <= (1.0 - (double)c->p->split_gain) * parent;
+}
+
 /* Build node `idx` for patch `path` of unit (tri, e).  In an update, `old`
  * is the old env's node for the same patch (or -1): when both old and new
- * split, children whose regions no edit touched are copied. */
+ * split, children whose regions no edit touched are copied.  `pre`, when
+ * not NULL, is the node's classification, already made by its parent's
+ * lookahead. */
 static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx, uint32_t tri,
                        lie_patch_path path, int e, int two_sided, const uint32_t *parent,
-                       size_t n_parent, int64_t old)
+                       size_t n_parent, int64_t old, const node_class *pre)
 {
     if (old >= 0 && !(c->node_flags && c->node_flags[old])) {
         copy_node(c->old, (uint32_t)old, w, u, idx); /* no edit reached this patch's shaft */
         return;
     }
     const lie_scene *s = c->s;
-    lie_vec3 V[3];
-    lie_patch_world(path, &s->tri_p[3 * (size_t)tri], V);
-    w->st.patches_per_depth[path.depth]++;
-    lie_class cls;
-    uint32_t quality = 0;
-    size_t n_list = 0;
-    int32_t mi = old >= 0 && c->memo_of ? c->memo_of[old] : lie_memo_find_new(c, tri, path, e);
-    if (mi >= 0) {
-        /* computed already, in parallel with the other flagged nodes */
-        const memo_entry *m = &c->memo[mi];
-        cls = m->cls;
-        quality = m->quality;
-        n_list = m->n_list;
-        if (!LIE_GROW(w->hits, w->cap_hits, n_list)) {
+    node_class nc;
+    if (pre) {
+        nc = *pre;
+        if (!LIE_GROW(w->hits, w->cap_hits, nc.n_list)) {
             w->nomem = 1;
             return;
         }
-        if (n_list)
-            memcpy(w->hits, m->list, n_list * sizeof *w->hits);
-    } else if (lie_pair_unlit(c->s, tri, V, two_sided, e)) {
-        cls = LIE_CLASS_UNLIT;
-    } else if (c->p->mode == LIE_BLOCKERS_SAMPLED) {
-        cls = lie_sample_pair(c, w, tri, path, V, two_sided, e, &quality, &n_list);
+        if (nc.n_list)
+            memcpy(w->hits, nc.list, nc.n_list * sizeof *w->hits);
+        nc.list = NULL;
     } else {
-        cls = lie_cull_conservative(c, w, tri, V, two_sided, e, parent, n_parent, &n_list);
+        classify(c, w, tri, path, e, two_sided, parent, n_parent, old, &nc);
     }
     if (w->nomem)
         return;
-    if (lie_subdiv_splits(c, tri, path, e, cls, w->hits, n_list)) {
-        /* §4.1.1: split a patch whose list is too long while it is large */
-        uint32_t *keep = NULL;
-        if (c->p->mode == LIE_BLOCKERS_CONSERVATIVE) {
-            keep = malloc(sizeof *keep * n_list);
-            if (!keep) {
-                w->nomem = 1;
-                return;
-            }
-            memcpy(keep, w->hits, sizeof *keep * n_list);
+    w->st.patches_per_depth[path.depth]++;
+    size_t n_list = nc.n_list;
+    if (lie_subdiv_splits(c, tri, path, e, nc.cls, w->hits, n_list)) {
+        /* §4.1.1: a patch whose list is too long splits while it is large,
+         * if the split pays (split_pays): classify the four children first */
+        uint32_t *keep = malloc(sizeof *keep * (n_list ? n_list : 1));
+        node_class kid[4];
+        double kid_w[4];
+        int n_kid = 0;
+        uint32_t old_child = old >= 0 ? c->old->nodes[old].child : 0;
+        if (!keep) {
+            w->nomem = 1;
+            return;
         }
-        int first = push_node(u, w);
-        for (int k = 1; k < 4 && first >= 0; k++)
-            if (push_node(u, w) < 0)
-                first = -1;
-        if (first < 0) {
+        memcpy(keep, w->hits, sizeof *keep * n_list);
+        for (; n_kid < 4; n_kid++) {
+            int64_t ok = old_child ? (int64_t)old_child + n_kid : -1;
+            kid[n_kid].list = NULL;
+            kid[n_kid].n_list = 0;
+            if (ok >= 0 && !(c->node_flags && c->node_flags[ok])) {
+                kid_w[n_kid] = old_weight(&c->old->nodes[ok]);
+                continue;
+            }
+            classify(c, w, tri, lie_patch_child(path, n_kid), e, two_sided, keep, n_list, ok, &kid[n_kid]);
+            if (w->nomem)
+                break;
+            kid_w[n_kid] = render_weight(kid[n_kid].cls, kid[n_kid].n_list);
+            if (kid[n_kid].n_list) {
+                kid[n_kid].list = malloc(sizeof *kid[n_kid].list * kid[n_kid].n_list);
+                if (!kid[n_kid].list) {
+                    w->nomem = 1;
+                    break;
+                }
+                memcpy(kid[n_kid].list, w->hits, sizeof *kid[n_kid].list * kid[n_kid].n_list);
+            }
+        }
+        int pays = !w->nomem && split_pays(c, w, tri, path, e, two_sided, nc.cls, n_list, kid_w);
+        int first = -1;
+        if (pays) {
+            first = push_node(u, w);
+            for (int k = 1; k < 4 && first >= 0; k++)
+                if (push_node(u, w) < 0)
+                    first = -1;
+        }
+        if (pays && first >= 0) {
+            u->nodes[idx].child = (uint32_t)first; /* unit-local; rebased on assembly */
+            u->nodes[idx].cls = LIE_CLASS_SPLIT;
+            u->nodes[idx].quality = nc.quality;
+            u->nodes[idx].count = (uint32_t)n_list;
+            for (int k = 0; k < 4; k++) {
+                int64_t ok = old_child ? (int64_t)old_child + k : -1;
+                int copied = ok >= 0 && !(c->node_flags && c->node_flags[ok]);
+                build_node(c, w, u, (uint32_t)first + (uint32_t)k, tri, lie_patch_child(path, k), e, two_sided,
+                           keep, n_list, ok, copied ? NULL : &kid[k]);
+            }
+        }
+        for (int k = 0; k < n_kid && k < 4; k++)
+            free(kid[k].list);
+        if (w->nomem || pays) {
             free(keep);
             return;
         }
-        u->nodes[idx].child = (uint32_t)first; /* unit-local; rebased on assembly */
-        u->nodes[idx].cls = LIE_CLASS_SPLIT;
-        u->nodes[idx].quality = quality;
-        u->nodes[idx].count = (uint32_t)n_list;
-        uint32_t old_child = old >= 0 ? c->old->nodes[old].child : 0;
-        for (int k = 0; k < 4; k++)
-            build_node(c, w, u, (uint32_t)first + (uint32_t)k, tri, lie_patch_child(path, k), e, two_sided, keep,
-                       n_list, old_child ? (int64_t)old_child + k : -1);
+        /* The split does not pay: this node is a leaf.  A list sampled over
+         * a patch this large may miss small blockers that the deeper tree
+         * would have found, so the leaf gets its exact list instead: every
+         * triangle meeting the pair's hull (§4.1.2), complex past the cap.
+         * In conservative mode the list is exact already. */
+        if (c->p->mode == LIE_BLOCKERS_SAMPLED && n_list <= c->p->complex_cap) {
+            lie_vec3 V[3];
+            lie_patch_world(path, &s->tri_p[3 * (size_t)tri], V);
+            nc.cls = lie_cull_conservative(c, w, tri, V, two_sided, e, NULL, 0, c->p->complex_cap, &n_list);
+            /* a planar emitter's own triangles end every segment: they block none */
+            const lie_emitter *em = &s->emitters[e];
+            if (em->type == LIE_EMITTER_AREA && em->planar && n_list <= c->p->complex_cap) {
+                size_t k = 0;
+                for (size_t j = 0; j < n_list; j++)
+                    if (w->hits[j] - em->first_tri >= em->n_tris)
+                        w->hits[k++] = w->hits[j];
+                n_list = k;
+                if (!n_list)
+                    nc.cls = LIE_CLASS_VISIBLE;
+            }
+        } else {
+            if (!LIE_GROW(w->hits, w->cap_hits, n_list)) {
+                free(keep);
+                w->nomem = 1;
+                return;
+            }
+            memcpy(w->hits, keep, sizeof *keep * n_list);
+        }
         free(keep);
-        return;
+        if (w->nomem)
+            return;
+        w->st.splits_undone++;
     }
     lie_pnode *nd = &u->nodes[idx];
-    nd->quality = quality;
+    nd->quality = nc.quality;
     nd->count = (uint32_t)n_list;
+    lie_class cls = nc.cls;
     /* A list with an alpha-masked triangle goes to Embree as well: the
      * renderer's segment test knows nothing of holes. */
     int masked = 0;
@@ -245,6 +411,6 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
             w->st.pairs[LIE_CLASS_NONE]++;
             continue;
         }
-        build_node(c, w, u, (uint32_t)root, tri, lie_patch_root(), (int)e, two_sided, NULL, 0, old);
+        build_node(c, w, u, (uint32_t)root, tri, lie_patch_root(), (int)e, two_sided, NULL, 0, old, NULL);
     }
 }

@@ -1,6 +1,10 @@
-/* Area emitters' geometry: the shapes lib/lie bounds their shafts with
- * (an oriented box, a plane frame) and points on them by area. */
+/* Emitters' geometry: the shapes lib/lie bounds area emitters' shafts with
+ * (an oriented box, a plane frame), points on them by area, and the emitter
+ * interface every per-type decision about geometry goes through
+ * (lib/scene/scene.h). */
 #include "scene/internal.h"
+
+#include <string.h>
 
 /* A bounding box of an area emitter with many triangles, oriented to its
  * plane: the axis is its area-weighted normal when the triangles mostly
@@ -182,4 +186,130 @@ uint32_t lie_emitter_point(const lie_scene *s, int e, float u1, float u2, lie_ve
     *p = lie_v3_add(lie_v3_add(lie_v3_scale(P[0], b0), lie_v3_scale(P[1], *b1)), lie_v3_scale(P[2], *b2));
     *n = s->tri_ng[g];
     return g;
+}
+
+/* ---- the emitter interface (lib/scene/scene.h) -------------------------- */
+
+const char *lie_emitter_type_name(lie_emitter_type t)
+{
+    return t == LIE_EMITTER_AREA ? "area" : t == LIE_EMITTER_POINT ? "point" : "directional";
+}
+
+int lie_emitter_hull_cap(const lie_emitter *em)
+{
+    return em->type == LIE_EMITTER_AREA ? (em->n_hull ? em->n_hull : 3 * (int)em->n_tris) : 3;
+}
+
+int lie_emitter_hull_points(const lie_scene *s, int e, const lie_vec3 V[3], float far, lie_vec3 *out)
+{
+    const lie_emitter *em = &s->emitters[e];
+    switch (em->type) {
+    case LIE_EMITTER_AREA:
+        if (em->n_hull) { /* a box around many triangles */
+            memcpy(out, em->hull, sizeof(lie_vec3) * (size_t)em->n_hull);
+            return em->n_hull;
+        }
+        memcpy(out, &s->tri_p[3 * (size_t)em->first_tri], sizeof(lie_vec3) * 3 * em->n_tris);
+        return 3 * (int)em->n_tris;
+    case LIE_EMITTER_POINT:
+        out[0] = em->position;
+        return 1;
+    case LIE_EMITTER_DIRECTIONAL:
+        for (int k = 0; k < 3; k++)
+            out[k] = lie_v3_add(V[k], lie_v3_scale(em->direction, -far));
+        return 3;
+    }
+    return 0;
+}
+
+const lie_vec3 *lie_emitter_facing(const lie_scene *s, int e)
+{
+    const lie_emitter *em = &s->emitters[e];
+    return em->type == LIE_EMITTER_AREA ? &s->tri_ng[em->first_tri] : NULL;
+}
+
+uint32_t lie_emitter_target(const lie_scene *s, int e, float u1, float u2, lie_vec3 p, float far, lie_vec3 *q,
+                            lie_vec3 *n, int *one_sided)
+{
+    const lie_emitter *em = &s->emitters[e];
+    *n = lie_v3(0, 0, 0);
+    *one_sided = em->type == LIE_EMITTER_AREA && !em->double_sided;
+    if (em->type == LIE_EMITTER_AREA) {
+        float b1, b2;
+        return lie_emitter_point(s, e, u1, u2, q, n, &b1, &b2);
+    }
+    *q = em->type == LIE_EMITTER_POINT ? em->position : lie_v3_add(p, lie_v3_scale(em->direction, -far));
+    return UINT32_MAX;
+}
+
+/* A point or spot light reaches nothing past its range (KHR_lights_punctual:
+ * the renderer's falloff is 0 from `range` on) nor outside its outer cone.
+ * Tested on a sphere holding the patch, grown by the shading points' offset
+ * from the surface and a rounding margin, so only patches the renderer
+ * surely weights 0 are culled. */
+static int point_may_reach(const lie_emitter *em, const lie_vec3 V[3])
+{
+    lie_vec3 c = lie_v3_scale(lie_v3_add(V[0], lie_v3_add(V[1], V[2])), 1.0f / 3.0f);
+    float r = 0.0f, mag = lie_v3_maxabs(em->position);
+    for (int k = 0; k < 3; k++) {
+        r = fmaxf(r, lie_v3_len(lie_v3_sub(V[k], c)));
+        mag = fmaxf(mag, lie_v3_maxabs(V[k]));
+    }
+    /* ten times the largest shadow-ray offset (lie_ray_eps_bound, lib/rt/rt.h) */
+    r += 1e-3f * fmaxf(mag, 1.0f);
+    lie_vec3 to = lie_v3_sub(c, em->position);
+    float dist = lie_v3_len(to);
+    if (em->range > 0.0f && dist - r >= em->range * (1.0f + 1e-5f))
+        return 0;
+    if (em->cos_outer > -1.5f && dist > r) {
+        /* the sphere's directions from the light lie within asin(r / dist)
+         * of its centre's; all outside the outer cone (with a margin) */
+        double axis = acos(fmax(-1.0, fmin(1.0, (double)lie_v3_dot(em->direction, to) / (double)dist)));
+        double outer = acos(fmax(-1.0, fmin(1.0, (double)em->cos_outer)));
+        if (axis - asin((double)r / (double)dist) > outer + 1e-4)
+            return 0;
+    }
+    return 1;
+}
+
+int lie_emitter_can_reach(const lie_scene *s, int e, uint32_t tri, const lie_vec3 V[3], lie_vec3 ng, int two_sided)
+{
+    const lie_emitter *em = &s->emitters[e];
+    if (em->type == LIE_EMITTER_AREA) {
+        if (lie_emitter_owns(em, tri))
+            return 0; /* an emitter does not light itself */
+        /* emitter wholly behind (or in) the patch's plane */
+        int front = 0, back = 0;
+        for (uint32_t k = 0; k < em->n_tris && !(front && back); k++) {
+            const lie_vec3 *E = &s->tri_p[3 * (size_t)(em->first_tri + k)];
+            for (int j = 0; j < 3; j++) {
+                float d = lie_v3_dot(ng, lie_v3_sub(E[j], V[0]));
+                front |= d > 0.0f;
+                back |= d < 0.0f;
+            }
+        }
+        if (!front && (!two_sided || !back))
+            return 0;
+        /* patch wholly behind every triangle of a one-sided emitter */
+        if (!em->double_sided) {
+            for (uint32_t k = 0; k < em->n_tris; k++) {
+                uint32_t g = em->first_tri + k;
+                const lie_vec3 *E = &s->tri_p[3 * (size_t)g];
+                lie_vec3 ne = s->tri_ng[g];
+                float margin = 4e-4f * lie_maxf(lie_v3_maxabs(V[0]), 1.0f);
+                for (int j = 0; j < 3; j++)
+                    if (lie_v3_dot(ne, lie_v3_sub(V[j], E[0])) > -margin)
+                        return 1;
+            }
+            return 0;
+        }
+        return 1;
+    }
+    float d = em->type == LIE_EMITTER_POINT ? lie_v3_dot(ng, lie_v3_sub(em->position, V[0]))
+                                            : -lie_v3_dot(ng, em->direction);
+    if (!(two_sided ? d != 0.0f : !(d <= 0.0f)))
+        return 0;
+    if (em->type == LIE_EMITTER_POINT && (em->range > 0.0f || em->cos_outer > -1.5f))
+        return point_may_reach(em, V);
+    return 1;
 }

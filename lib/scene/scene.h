@@ -322,6 +322,40 @@ void lie_scene_slot_uv(const lie_scene *s, const lie_material *m, int k, uint32_
 uint32_t lie_emitter_point(const lie_scene *s, int e, float u1, float u2, lie_vec3 *p, lie_vec3 *n,
                            float *b1, float *b2);
 
+/* ---- the emitter interface -----------------------------------------------
+ * What lie-build, the ray segment trees and the cache tools ask of an
+ * emitter, in one place, as pbrt-v4 gives each light one interface: its
+ * name, its triangles, its points for a pair's hull, the point a shadow
+ * segment aims at, and whether it can reach a patch at all.  A new emitter
+ * type is added here (lib/scene/emitter.c), in the import (lib/scene), in
+ * the cache format (formats/lie-cache.md) and in the shading kernels
+ * (lib/shade: its samples and radiance); docs/architecture.md. */
+const char *lie_emitter_type_name(lie_emitter_type t);
+/* Whether triangle tri is one of the emitter's own. */
+static inline int lie_emitter_owns(const lie_emitter *em, uint32_t tri)
+{
+    return em->type == LIE_EMITTER_AREA && tri - em->first_tri < em->n_tris;
+}
+/* How many points lie_emitter_hull_points writes at most. */
+int lie_emitter_hull_cap(const lie_emitter *em);
+/* The emitter's points of the hull of its pair with patch V (world
+ * corners): points whose convex hull holds every point a shadow segment
+ * from the patch aims at (for a directional light, the patch moved `far`
+ * against its direction).  Returns how many were written. */
+int lie_emitter_hull_points(const lie_scene *s, int e, const lie_vec3 V[3], float far, lie_vec3 *out);
+/* A normal every front of the emitter faces, or NULL (for shaft tests). */
+const lie_vec3 *lie_emitter_facing(const lie_scene *s, int e);
+/* The point a shadow segment from p aims at, for sample (u1, u2) in
+ * [0,1)^2: *q, and *n its surface's front normal (area emitters; else 0).
+ * *one_sided is set when only segments reaching the front count.  Returns
+ * the emitter's triangle holding q, or UINT32_MAX for a punctual one. */
+uint32_t lie_emitter_target(const lie_scene *s, int e, float u1, float u2, lie_vec3 p, float far, lie_vec3 *q,
+                            lie_vec3 *n, int *one_sided);
+/* 0 when no point of patch V (on triangle tri, with geometric normal ng
+ * and shaded from both sides when two_sided) can receive light from any
+ * point of emitter e with a non-zero geometric term; 1 when it may. */
+int lie_emitter_can_reach(const lie_scene *s, int e, uint32_t tri, const lie_vec3 V[3], lie_vec3 ng, int two_sided);
+
 /* Bilinear lookup with the texture's wrap modes; rgba out. */
 void lie_texture_sample(const lie_texture *t, float u, float v, float rgba[4]);
 

@@ -51,7 +51,12 @@ int main(int argc, char **argv)
 EOC
 export PKG_CONFIG_PATH="$R/lib/pkgconfig" PKG_CONFIG_SYSROOT_DIR="$DEST"
 flags=$(pkg-config --cflags --libs lie)
-run cc -std=c11 -Wall -Werror "$TMP/prog.c" $flags -o "$TMP/prog"
+# `make VARIANT=asan test-tools` installs the sanitized library: a program
+# using it must carry the sanitizer runtime first.
+SAN=""
+[ "${VARIANT:-release}" = asan ] && SAN="-fsanitize=address,undefined"
+# shellcheck disable=SC2086
+run cc -std=c11 -Wall -Werror $SAN "$TMP/prog.c" $flags -o "$TMP/prog"
 expect_rc 0 "a C11 program compiles and links with pkg-config --cflags --libs lie ($flags)"
 run env LD_LIBRARY_PATH="$R/lib" "$TMP/prog" "$S/cornell.gltf"
 expect_rc 0 "it runs against the installed liblie.so"

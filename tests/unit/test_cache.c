@@ -31,6 +31,7 @@ static lie_cache *cache_from_scene(const lie_scene *s, const char *path, lie_blo
     p.max_samples = 16;
     p.max_blockers = 1;
     p.min_patch = 0.01f;
+    p.split_gain = 0.0f; /* every split kept: the fixtures need interior nodes */
     p.mode = mode;
     p.threads = 2;
     lie_cache *c = calloc(1, sizeof *c);
@@ -145,7 +146,7 @@ static void assemble(const sect *s, int n, unsigned char **out, size_t *size)
     unsigned char *b = calloc(1, total);
     assert_non_null(b);
     memcpy(b, "LIECACHE", 8);
-    put32(b + 8, 1);
+    put32(b + 8, 2);
     put32(b + 20, (uint32_t)n);
     put64(b + 24, total);
     for (int i = 0; i < n; i++) {
@@ -180,7 +181,7 @@ static void spec_sections(const lie_cache *c, sect s[N_SECT])
     put32(s[META].data + 36, env->n_pool);
     put32(s[META].data + 40, (uint32_t)pl);
     memcpy(s[META].data + 48, c->scene_path, pl);
-    s[PARM] = (sect){id4("PARM"), calloc(1, 24), 24};
+    s[PARM] = (sect){id4("PARM"), calloc(1, 28), 28};
     put32(s[PARM].data, env->params.samples);
     put32(s[PARM].data + 4, env->params.max_samples);
     put32(s[PARM].data + 8, env->params.max_blockers);
@@ -189,6 +190,9 @@ static void spec_sections(const lie_cache *c, sect s[N_SECT])
     memcpy(&mp, &env->params.min_patch, 4);
     put32(s[PARM].data + 16, mp);
     put32(s[PARM].data + 20, (uint32_t)env->params.mode);
+    uint32_t sg;
+    memcpy(&sg, &env->params.split_gain, 4);
+    put32(s[PARM].data + 24, sg);
     size_t es = 4;
     for (int i = 0; i < c->n_edits; i++)
         es += 8 + strlen(c->edits[i].name) + c->edits[i].size;
@@ -530,6 +534,36 @@ static void test_not_a_cache_is_rejected(void **state)
     expect_reject(NULL, 0, LIE_ERR_FORMAT, "empty");
 }
 
+/* A version 1 file (PARAMS of 24 bytes, no split_gain) still reads: its
+ * trees were built splitting wherever a list was too long, split_gain 0. */
+static void test_version_1_reads_with_split_gain_0(void **state)
+{
+    (void)state;
+    lie_cache *c = cornell_cache(LIE_BLOCKERS_SAMPLED);
+    sect s[N_SECT];
+    spec_sections(c, s);
+    s[PARM].size = 24;
+    unsigned char *a;
+    size_t na;
+    assemble(s, N_SECT, &a, &na);
+    put32(a + 8, 1);
+    reseal(a, na);
+    lie_cache *d = NULL;
+    lie_error err;
+    assert_int_equal(lie_cache_decode(a, na, "v1.lie", &d, &err), LIE_OK);
+    assert_true(d->env->params.split_gain == 0.0f);
+    assert_int_equal(d->env->params.complex_cap, c->env->params.complex_cap);
+    assert_int_equal(d->env->n_nodes, c->env->n_nodes);
+    lie_cache_destroy(d);
+    /* and a version 2 file with a 24-byte PARAMS is damaged */
+    put32(a + 8, 2);
+    reseal(a, na);
+    expect_reject(a, na, LIE_ERR_FORMAT, "section PARAMS: 24 bytes, expected 28");
+    free_sections(s, N_SECT);
+    free(a);
+    lie_cache_destroy(c);
+}
+
 static void test_newer_version_is_unsupported(void **state)
 {
     (void)state;
@@ -537,12 +571,12 @@ static void test_newer_version_is_unsupported(void **state)
     unsigned char *a;
     size_t na;
     encode(c, &a, &na);
-    put32(a + 8, 2);
+    put32(a + 8, 3);
     /* a newer file may lay out anything after the version: only the
      * invariant trailing checksum must hold */
     memset(a + 12, 0xAB, na - 20);
     reseal(a, na);
-    expect_reject(a, na, LIE_ERR_UNSUPPORTED, "version 2");
+    expect_reject(a, na, LIE_ERR_UNSUPPORTED, "version 3");
     free(a);
     encode(c, &a, &na);
     put32(a + 8, 0);
@@ -1080,6 +1114,7 @@ int main(void)
         cmocka_unit_test(test_every_single_bit_flip_is_rejected),
         cmocka_unit_test(test_every_truncation_is_rejected),
         cmocka_unit_test(test_not_a_cache_is_rejected),
+        cmocka_unit_test(test_version_1_reads_with_split_gain_0),
         cmocka_unit_test(test_newer_version_is_unsupported),
         cmocka_unit_test(test_unknown_required_flag_is_unsupported_optional_ignored),
         cmocka_unit_test(test_unknown_sections_are_skipped_and_order_is_free),

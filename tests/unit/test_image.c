@@ -929,7 +929,7 @@ static void test_frame_write_chooses_format_by_extension(void **state)
     lie_frame *f = make_test_frame();
     lie_error err;
     static const char *const pngs[2] = {"a.png", "b.PnG"};
-    static const char *const exrs[3] = {"c.exr", "d.png.exr", "e"};
+    static const char *const exrs[3] = {"c.exr", "d.png.exr", "e.EXR"};
     for (int i = 0; i < 2; i++) {
         const char *p = tmp_path(pngs[i]);
         assert_int_equal(lie_frame_write(p, f, NULL, &err), LIE_OK);
@@ -948,6 +948,29 @@ static void test_frame_write_chooses_format_by_extension(void **state)
         assert_memory_equal(d, "\x76\x2f\x31\x01", 4);
         free(d);
     }
+    /* no extension it can write: refused, nothing written */
+    static const char *const bad[3] = {"f", "g.jpg", "h.exr.tif"};
+    for (int i = 0; i < 3; i++) {
+        const char *p = tmp_path(bad[i]);
+        assert_int_equal(lie_frame_write(p, f, NULL, &err), LIE_ERR_ARG);
+        assert_int_equal(access(p, F_OK), -1);
+    }
+    /* an explicit format wins over the name */
+    lie_frame_options o;
+    memset(&o, 0, sizeof o);
+    assert_true(lie_frame_format_parse("png", &o.format));
+    const char *p = tmp_path("i.exr");
+    assert_int_equal(lie_frame_write(p, f, &o, &err), LIE_OK);
+    size_t n;
+    unsigned char *d = slurp(p, &n);
+    assert_true(n > 8);
+    assert_memory_equal(d, "\x89PNG\r\n\x1a\n", 8);
+    free(d);
+    lie_frame_format fmt = LIE_FORMAT_AUTO;
+    assert_false(lie_frame_format_parse("jpg", &fmt));
+    assert_int_equal(fmt, LIE_FORMAT_AUTO);
+    assert_true(lie_frame_format_of("-", &fmt));
+    assert_int_equal(fmt, LIE_FORMAT_EXR);
     lie_frame_destroy(f);
 }
 

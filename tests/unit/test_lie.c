@@ -247,6 +247,7 @@ static void test_lie_quad_between_floor_and_light_is_the_only_blocker(void **sta
     lie_build_params p = lie_build_params_default();
     p.min_patch = 1e-3f;
     p.max_blockers = 1; /* split any list of two, to get small patches */
+    p.split_gain = 0.0f; /* the paper's rule: split wherever a list is too long */
     lie_env *env = build(s, &rt, p);
     occ_check c = {s, 0, 0, 0, 0};
     for (uint32_t t = 0; t < 2; t++)
@@ -299,6 +300,7 @@ static void test_lie_subdivision_stops_at_min_patch(void **state)
     lie_rt *rt = NULL;
     lie_build_params p = lie_build_params_default();
     p.max_blockers = 0; /* split every partial patch, as far as allowed */
+    p.split_gain = 0.0f;
     p.samples = 16;
     p.max_samples = 32;
     const float sizes[] = {1e-1f, 1e-2f, 2e-3f};
@@ -313,6 +315,91 @@ static void test_lie_subdivision_stops_at_min_patch(void **state)
         prev_nodes = env->n_nodes;
         lie_env_destroy(env);
     }
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+}
+
+/* The cost rule (split_gain): a split is kept only where it shortens the
+ * lists.  On museum1 it keeps far fewer nodes than the paper's rule and
+ * undoes some splits.  A leaf it keeps though it could split, with a long
+ * list, holds its exact list (the triangles meeting the pair's hull): that
+ * contains every blocker the paper's deeper tree found by sampling below
+ * the same patch. */
+typedef struct gain_check {
+    const lie_scene *s;
+    const lie_env *paper;    /* split_gain 0 */
+    const lie_build_params *p;
+    int checked;
+} gain_check;
+
+static int list_has(const uint32_t *list, uint32_t n, uint32_t t)
+{
+    uint32_t lo = 0, hi = n;
+    while (lo < hi) {
+        uint32_t mid = (lo + hi) / 2;
+        if (list[mid] < t)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < n && list[lo] == t;
+}
+
+static void paper_lists_inside(const lie_env *paper, uint32_t node, const uint32_t *list, uint32_t n, int *leaves)
+{
+    const lie_pnode *x = &paper->nodes[node];
+    if (x->child) {
+        for (uint32_t k = 0; k < 4; k++)
+            paper_lists_inside(paper, x->child + k, list, n, leaves);
+        return;
+    }
+    if (x->cls != LIE_CLASS_PARTIAL)
+        return;
+    ++*leaves;
+    for (uint32_t j = 0; j < x->count; j++)
+        assert_true(list_has(list, n, paper->pool[x->list + j]));
+}
+
+static void check_gain_leaf(const lie_env *env, const lie_pnode *n, uint32_t tri, lie_patch_path path, void *ctx)
+{
+    gain_check *g = ctx;
+    if (n->cls != LIE_CLASS_PARTIAL || n->count <= g->p->max_blockers)
+        return;
+    float area = g->s->tri_area[tri] / (float)(1u << (2 * path.depth));
+    if (!(area > g->p->min_patch * g->s->max_tri_area))
+        return;
+    /* the same patch in the paper's tree */
+    uint32_t node = g->paper->root[tri];
+    for (int d = 0; d < path.depth && g->paper->nodes[node].child; d++)
+        node = g->paper->nodes[node].child + (uint32_t)lie_patch_digit(path, d);
+    int leaves = 0;
+    paper_lists_inside(g->paper, node, &env->pool[n->list], n->count, &leaves);
+    g->checked += leaves > 0;
+}
+
+static void test_lie_split_kept_only_where_it_pays(void **state)
+{
+    (void)state;
+    lie_scene *s = NULL;
+    lie_error err;
+    assert_int_equal(lie_scene_load(TEST_SCENES "/museum1.gltf", NULL, &s, &err), LIE_OK);
+    lie_rt *rt = NULL;
+    lie_build_params p = lie_build_params_default();
+    p.min_patch = 1e-3f;
+    p.split_gain = 0.0f;
+    lie_env *paper = build(s, &rt, p);
+    lie_env *env = NULL;
+    lie_build_stats st;
+    p.split_gain = LIE_SPLIT_GAIN_DEFAULT;
+    assert_int_equal(lie_env_build(s, rt, &p, NULL, &env, &st, &err), LIE_OK);
+    assert_true(st.splits_undone > 0);
+    assert_true(env->n_nodes < paper->n_nodes);
+    gain_check g = {s, paper, &p, 0};
+    for (uint32_t t = 0; t < s->n_tris; t++)
+        walk(env, env->root[t], t, lie_patch_root(), check_gain_leaf, &g);
+    assert_true(g.checked > 0);
+    lie_env_destroy(env);
+    lie_env_destroy(paper);
     lie_rt_destroy(rt);
     lie_scene_destroy(s);
 }
@@ -530,11 +617,75 @@ static void test_patch_names_round_trip(void **state)
     assert_false(lie_patch_parse("-1", &tri, &q));
 }
 
+/* Spot cones and range (KHR_lights_punctual): a patch outside the outer
+ * cone, or past the range, is unlit; one the renderer may weight above 0
+ * never is.  Checked against the renderer's own falloff on sample points. */
+static float spot_falloff(const lie_emitter *em, lie_vec3 o)
+{
+    lie_vec3 d = lie_v3_sub(em->position, o);
+    float dist = lie_v3_len(d);
+    lie_vec3 wi = lie_v3_scale(d, 1.0f / dist);
+    float a = 1.0f;
+    if (em->cos_outer > -1.5f) {
+        float cd = -lie_v3_dot(em->direction, wi);
+        a = cd > em->cos_outer ? 1.0f : 0.0f;
+    }
+    if (em->range > 0.0f && dist >= em->range)
+        a = 0.0f;
+    return a;
+}
+
+static void test_lie_spot_cone_and_range_cull_exactly_the_dark_patches(void **state)
+{
+    (void)state;
+    lie_emitter em;
+    memset(&em, 0, sizeof em);
+    em.type = LIE_EMITTER_POINT;
+    em.position = lie_v3(0.0f, 4.0f, 0.0f);
+    em.direction = lie_v3(0.0f, -1.0f, 0.0f);
+    em.cos_inner = cosf(0.3f);
+    em.cos_outer = cosf(0.5f); /* lights a disc of radius 4 tan 0.5 = 2.19 on the floor */
+    em.range = 0.0f;
+    lie_scene s;
+    memset(&s, 0, sizeof s);
+    s.emitters = &em;
+    s.n_emitters = 1;
+    const lie_vec3 up = lie_v3(0.0f, 1.0f, 0.0f);
+    int culled = 0, kept = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        if (pass == 1) {
+            em.cos_outer = -2.0f; /* a point light with a range of 5 */
+            em.range = 5.0f;
+        }
+        for (int i = -12; i <= 12; i++)
+            for (int j = -12; j <= 12; j++) {
+                float x = 0.5f * (float)i, z = 0.5f * (float)j;
+                lie_vec3 V[3] = {lie_v3(x, 0, z), lie_v3(x, 0, z + 0.4f), lie_v3(x + 0.4f, 0, z)};
+                int reach = lie_emitter_can_reach(&s, 0, 0, V, up, 0);
+                float lit = 0.0f;
+                for (int a = 0; a <= 8; a++)
+                    for (int b = 0; a + b <= 8; b++) {
+                        float b1 = (float)a / 8.0f, b2 = (float)b / 8.0f, b0 = 1.0f - b1 - b2;
+                        lie_vec3 o = lie_v3_add(lie_v3_add(lie_v3_scale(V[0], b0), lie_v3_scale(V[1], b1)),
+                                                lie_v3_scale(V[2], b2));
+                        lit = fmaxf(lit, spot_falloff(&em, o));
+                    }
+                if (lit > 0.0f)
+                    assert_true(reach); /* never cull a patch the renderer lights */
+                culled += !reach;
+                kept += reach;
+            }
+    }
+    assert_true(culled > 200); /* most of the floor is dark, and culled */
+    assert_true(kept > 50);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_lie_quad_between_floor_and_light_is_the_only_blocker),
         cmocka_unit_test(test_lie_subdivision_stops_at_min_patch),
+        cmocka_unit_test(test_lie_split_kept_only_where_it_pays),
         cmocka_unit_test(test_lie_conservative_lists_contain_sampled_lists),
         cmocka_unit_test(test_lie_build_is_identical_for_any_thread_count),
         cmocka_unit_test(test_lie_rebuilding_units_equals_building),
@@ -543,6 +694,7 @@ int main(void)
         cmocka_unit_test(test_patch_names_round_trip),
         cmocka_unit_test(test_lie_many_triangle_emitter_uses_a_flat_oriented_box),
         cmocka_unit_test(test_lie_self_occluding_emitter_is_complex_without_splitting),
+        cmocka_unit_test(test_lie_spot_cone_and_range_cull_exactly_the_dark_patches),
     };
     return cmocka_run_group_tests_name("lie", tests, NULL, NULL);
 }

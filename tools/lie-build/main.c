@@ -27,7 +27,10 @@ static void usage(FILE *fp)
             "                        segments (default %u)\n"
             "      --max-blockers B  subdivide a patch whose blocker list is longer (default %u)\n"
             "      --min-patch F     smallest patch area, as a fraction of the largest\n"
-            "                        triangle's area, in [%g, 1] (default %g, the paper's 0.01%%)\n"
+            "                        triangle's area, in [%g, 1] (default %g, the paper's 0.01%%): a floor\n"
+            "      --split-gain G    keep a split only if the children's lists are shorter\n"
+            "                        than the parent's by this share on average (default %g;\n"
+            "                        0 splits wherever a list is too long, as the paper)\n"
             "      --max-nodes N     refuse to build more patch-tree nodes than N, about\n"
             "                        20 bytes each (default %llu)\n"
             "      --complex-cap C   a list still longer at the smallest size is 'complex':\n"
@@ -38,6 +41,8 @@ static void usage(FILE *fp)
             "                        index or eye=..,target=..; repeatable), directly or in\n"
             "                        mirrors; the rest is marked 'none' and rendered with full\n"
             "                        visibility (§4.3.1)\n"
+            "      --path PATH.yaml  build only the patches seen from the frames of this camera\n"
+            "                        path (formats/camera-path.md), as --view does for one camera\n"
             "      --view-size WxH   the image the views are sampled at (default 512x512)\n"
             "      --threads N       worker threads (default: all cores); the cache is the\n"
             "                        same for any N\n"
@@ -50,6 +55,7 @@ static void usage(FILE *fp)
             "Under mpirun the ranks share the units out and rank 0 writes the cache one\n"
             "process writes (docs/mpi.md).\n",
             prog, d.samples, d.max_samples, d.max_blockers, (double)LIE_MIN_PATCH_MIN, (double)d.min_patch,
+            (double)d.split_gain,
             (unsigned long long)LIE_MAX_NODES_DEFAULT, d.complex_cap);
 }
 
@@ -58,8 +64,8 @@ static void usage(FILE *fp)
 static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 
 enum {
-    OPT_SAMPLES = 256, OPT_MAX_SAMPLES, OPT_MAX_BLOCKERS, OPT_MIN_PATCH, OPT_COMPLEX_CAP, OPT_BLOCKERS,
-    OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_VIEW, OPT_VIEW_SIZE, OPT_MAX_NODES
+    OPT_SAMPLES = 256, OPT_MAX_SAMPLES, OPT_MAX_BLOCKERS, OPT_MIN_PATCH, OPT_SPLIT_GAIN, OPT_COMPLEX_CAP, OPT_BLOCKERS,
+    OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_VIEW, OPT_VIEW_SIZE, OPT_PATH, OPT_MAX_NODES
 };
 
 static const struct option long_opts[] = {
@@ -68,11 +74,13 @@ static const struct option long_opts[] = {
     {"max-samples", required_argument, NULL, OPT_MAX_SAMPLES},
     {"max-blockers", required_argument, NULL, OPT_MAX_BLOCKERS},
     {"min-patch", required_argument, NULL, OPT_MIN_PATCH},
+    {"split-gain", required_argument, NULL, OPT_SPLIT_GAIN},
     {"max-nodes", required_argument, NULL, OPT_MAX_NODES},
     {"complex-cap", required_argument, NULL, OPT_COMPLEX_CAP},
     {"blockers", required_argument, NULL, OPT_BLOCKERS},
     {"view", required_argument, NULL, OPT_VIEW},
     {"view-size", required_argument, NULL, OPT_VIEW_SIZE},
+    {"path", required_argument, NULL, OPT_PATH},
     {"threads", required_argument, NULL, OPT_THREADS},
     {"allow-external-uris", no_argument, NULL, OPT_EXTERNAL},
     {"stats", optional_argument, NULL, OPT_STATS},
@@ -111,10 +119,11 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
         for (int b = 0; b < 18; b++)
             fprintf(stderr, "%s%llu", b ? "," : "", (unsigned long long)st->list_hist[b]);
         fprintf(stderr,
-                "],\"mean_list_length\":%.3f,\"segments\":%llu,\"nodes\":%u,\"pool\":%u,"
+                "],\"mean_list_length\":%.3f,\"segments\":%llu,\"splits_undone\":%llu,\"nodes\":%u,\"pool\":%u,"
                 "\"seconds_load\":%.6f,\"seconds_bvh\":%.6f,\"seconds_build\":%.6f,\"seconds_write\":%.6f,"
                 "\"bytes\":%zu",
-                mean, (unsigned long long)st->segments, env->n_nodes, env->n_pool, t_load, t_bvh, t_build, t_write,
+                mean, (unsigned long long)st->segments, (unsigned long long)st->splits_undone,
+                env->n_nodes, env->n_pool, t_load, t_bvh, t_build, t_write,
                 bytes);
         lie_dist_stats_print(stderr, "units", 1);
         fprintf(stderr, "}\n");
@@ -140,8 +149,9 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
             else
                 fprintf(stderr, " %u-%u:%llu", lo, hi, (unsigned long long)st->list_hist[b]);
         }
-    fprintf(stderr, "\n  segments cast %llu; %u nodes, %u pooled blockers, %zu bytes written\n",
-            (unsigned long long)st->segments, env->n_nodes, env->n_pool, bytes);
+    fprintf(stderr, "\n  segments cast %llu; splits undone (did not shorten lists) %llu; %u nodes, %u pooled blockers, "
+                    "%zu bytes written\n",
+            (unsigned long long)st->segments, (unsigned long long)st->splits_undone, env->n_nodes, env->n_pool, bytes);
     fprintf(stderr, "  time: load %.3f s, bvh %.3f s, build %.3f s, write %.3f s\n", t_load, t_bvh, t_build,
             t_write);
     lie_dist_stats_print(stderr, "units", 0);
@@ -153,7 +163,7 @@ int main(int argc, char **argv)
     lie_scene_options so = lie_scene_options_default();
     const char *output = NULL;
     int stats = 0, quiet = 0;
-    const char *views[64];
+    const char *views[64], *path_file = NULL;
     int n_views = 0, view_w = 512, view_h = 512;
     long v;
     float f;
@@ -188,6 +198,11 @@ int main(int argc, char **argv)
                                    optarg);
             bp.min_patch = f;
             break;
+        case OPT_SPLIT_GAIN:
+            if (!lie_parse_float(optarg, 0.0f, 0.999f, &f))
+                return usage_error("--split-gain: expected a share in [0, 1), got '%s'", optarg);
+            bp.split_gain = f;
+            break;
         case OPT_MAX_NODES:
             if (!lie_parse_long(optarg, 1, 0xFFFFFFF0L, &v))
                 return usage_error("--max-nodes: expected an integer in 1..4294967280, got '%s'", optarg);
@@ -209,6 +224,7 @@ int main(int argc, char **argv)
                 return usage_error("--view: at most 64 views, got another: '%s'", optarg);
             views[n_views++] = optarg;
             break;
+        case OPT_PATH: path_file = optarg; break;
         case OPT_VIEW_SIZE:
             if (!lie_parse_size(optarg, 16384, &view_w, &view_h))
                 return usage_error("--view-size: expected WxH, got '%s'", optarg);
@@ -256,17 +272,26 @@ int main(int argc, char **argv)
     }
     double t2 = lie_time_now();
     uint8_t *mask = NULL;
-    if (n_views) {
-        lie_camera cams[64];
-        mask = calloc((size_t)scene->n_tris + 1, 1);
-        lie_status vs = mask ? LIE_OK : lie_error_set(&err, LIE_ERR_NOMEM, input, "out of memory");
+    if (n_views || path_file) {
+        /* the views: each --view, then every frame of --path */
+        lie_camera_path *cpath = NULL;
+        lie_status vs = path_file ? lie_camera_path_read(path_file, &cpath, &err) : LIE_OK;
+        int n_cams = n_views + (cpath ? cpath->n_frames : 0);
+        lie_camera *cams = vs == LIE_OK ? calloc((size_t)n_cams, sizeof *cams) : NULL;
+        mask = cams ? calloc((size_t)scene->n_tris + 1, 1) : NULL;
+        if (vs == LIE_OK && !mask)
+            vs = lie_error_set(&err, LIE_ERR_NOMEM, input, "out of memory");
         for (int i = 0; vs == LIE_OK && i < n_views; i++) {
             vs = lie_camera_parse(scene, views[i], &cams[i], &err);
             if (vs != LIE_OK && !err.file[0])
                 snprintf(err.file, sizeof err.file, "%s", input);
         }
+        for (int i = n_views; vs == LIE_OK && i < n_cams; i++)
+            cams[i] = lie_camera_path_frame(cpath, i - n_views);
         if (vs == LIE_OK)
-            vs = lie_visible_triangles(scene, rt, cams, n_views, view_w, view_h, LIE_MAX_DEPTH_DEFAULT, mask, &err);
+            vs = lie_visible_triangles(scene, rt, cams, n_cams, view_w, view_h, LIE_MAX_DEPTH_DEFAULT, mask, &err);
+        free(cams);
+        lie_camera_path_destroy(cpath);
         if (vs != LIE_OK) {
             free(mask);
             lie_rt_destroy(rt);

@@ -82,7 +82,7 @@ void inspect_fmt_float(float f, char *buf, size_t size)
 
 const char *inspect_emitter_type_name(uint32_t t)
 {
-    return t == LIE_EMITTER_AREA ? "area" : t == LIE_EMITTER_POINT ? "point" : "directional";
+    return lie_emitter_type_name((lie_emitter_type)t);
 }
 
 const char *inspect_mode_name(lie_blocker_mode m)

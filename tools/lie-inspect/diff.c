@@ -159,6 +159,9 @@ static void compare_headers(diff_ctx *d, const lie_cache *a, const lie_cache *b,
     snprintf(x, sizeof x, "%.9g", (double)p->min_patch);
     snprintf(y, sizeof y, "%.9g", (double)q->min_patch);
     field(d, "param min-patch", x, y, 1);
+    snprintf(x, sizeof x, "%.9g", (double)p->split_gain);
+    snprintf(y, sizeof y, "%.9g", (double)q->split_gain);
+    field(d, "param split-gain", x, y, 1);
     field(d, "param blockers", inspect_mode_name(p->mode), inspect_mode_name(q->mode), 1);
     int ne = a->n_emitters > b->n_emitters ? a->n_emitters : b->n_emitters;
     for (int e = 0; e < ne; e++) {

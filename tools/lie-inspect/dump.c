@@ -54,6 +54,7 @@ static void header_text(const lie_cache *c, uint64_t n_nodes, uint64_t n_leaves)
     printf("param max-blockers %u\n", p->max_blockers);
     printf("param complex-cap %u\n", p->complex_cap);
     printf("param min-patch %.9g\n", (double)p->min_patch);
+    printf("param split-gain %.9g\n", (double)p->split_gain);
     printf("param blockers %s\n", inspect_mode_name(p->mode));
     printf("edits %d\n", c->n_edits);
     for (int i = 0; i < c->n_edits; i++) {
@@ -80,8 +81,8 @@ static void header_json(const lie_cache *c, uint64_t n_nodes, uint64_t n_leaves)
     printf(",\"scene_hash\":\"%016llx\",\"state_hash\":\"%016llx\",\"triangles\":%u,\"emitters\":%d",
            (unsigned long long)c->scene_hash, (unsigned long long)c->state_hash, c->n_tris, c->n_emitters);
     printf(",\"params\":{\"samples\":%u,\"max_samples\":%u,\"max_blockers\":%u,\"complex_cap\":%u,"
-           "\"min_patch\":%.9g,\"blockers\":\"%s\"}",
-           p->samples, p->max_samples, p->max_blockers, p->complex_cap, (double)p->min_patch,
+           "\"min_patch\":%.9g,\"split_gain\":%.9g,\"blockers\":\"%s\"}",
+           p->samples, p->max_samples, p->max_blockers, p->complex_cap, (double)p->min_patch, (double)p->split_gain,
            inspect_mode_name(p->mode));
     printf(",\"edits\":[");
     for (int i = 0; i < c->n_edits; i++) {

@@ -95,8 +95,9 @@ static void summary_text(const char *path, const inspect_cache *l, const lie_bui
     char mp[32];
     inspect_fmt_float(p->min_patch, mp, sizeof mp);
     printf("parameters      samples %u, max-samples %u, max-blockers %u, complex-cap %u, min-patch %s, "
-           "blockers %s\n",
-           p->samples, p->max_samples, p->max_blockers, p->complex_cap, mp, inspect_mode_name(p->mode));
+           "split-gain %.9g, blockers %s\n",
+           p->samples, p->max_samples, p->max_blockers, p->complex_cap, mp, (double)p->split_gain,
+           inspect_mode_name(p->mode));
     printf("triangles       %u\n", c->n_tris);
     printf("emitters        %d (%d area, %d point, %d directional)\n", c->n_emitters, by_type[0], by_type[1],
            by_type[2]);
@@ -155,8 +156,9 @@ static void summary_json(const char *path, const inspect_cache *l, const lie_bui
     char mp[32];
     inspect_fmt_float(p->min_patch, mp, sizeof mp);
     printf("],\"params\":{\"samples\":%u,\"max_samples\":%u,\"max_blockers\":%u,\"complex_cap\":%u,"
-           "\"min_patch\":%s,\"blockers\":\"%s\"}",
-           p->samples, p->max_samples, p->max_blockers, p->complex_cap, mp, inspect_mode_name(p->mode));
+           "\"min_patch\":%s,\"split_gain\":%.9g,\"blockers\":\"%s\"}",
+           p->samples, p->max_samples, p->max_blockers, p->complex_cap, mp, (double)p->split_gain,
+           inspect_mode_name(p->mode));
     printf(",\"triangles\":%u,\"emitters\":%d,\"units\":%llu,\"nodes\":%u,\"leaves\":%llu,\"pool_entries\":%u",
            c->n_tris, c->n_emitters, (unsigned long long)((uint64_t)c->n_tris * (uint64_t)c->n_emitters),
            env->n_nodes, (unsigned long long)leaves, env->n_pool);
