@@ -19,6 +19,8 @@ _lie_tool()
             COMPREPLY=($(compgen -W "sampled conservative" -- "$cur")); return ;;
         --compression)
             COMPREPLY=($(compgen -W "zip zips piz rle none" -- "$cur")); return ;;
+        --format)
+            COMPREPLY=($(compgen -W "exr png" -- "$cur")); return ;;
     esac
     if [[ $cur == -* ]]; then
         local opts

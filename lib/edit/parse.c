@@ -262,6 +262,14 @@ static lie_status parse_op(lie_yaml *p, const yaml_node_t *item, int index, lie_
             return lie_yaml_error(p, vn, "remove.node", "missing");
         op->kind = LIE_EDIT_REMOVE;
         st = get_string(p, f[0].value, "remove.node", &op->node);
+    } else if (strcmp(name, "restore") == 0) {
+        field f[] = {{"node", 0, 0, 0}};
+        if ((st = collect(p, vn, opk, f, 1)) != LIE_OK)
+            return st;
+        if (!f[0].seen)
+            return lie_yaml_error(p, vn, "restore.node", "missing");
+        op->kind = LIE_EDIT_RESTORE;
+        st = get_string(p, f[0].value, "restore.node", &op->node);
     } else if (strcmp(name, "add") == 0) {
         field f[] = {{"file", 0, 0, 0}, {"node", 0, 0, 0}, {"as", 0, 0, 0}, {"transform", 0, 0, 0}};
         if ((st = collect(p, vn, opk, f, 4)) != LIE_OK)

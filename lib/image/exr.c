@@ -5,6 +5,7 @@
 
 #include <OpenEXR/openexr.h>
 #include <limits.h>
+#include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
@@ -108,11 +109,12 @@ typedef struct exr_out_channel {
     char name[EXR_NAME_SIZE];
     const float *base; /* sample of pixel (0, 0) */
     int stride;        /* floats between pixels */
+    int half;          /* stored as 16-bit half (converted by the encoder) */
 } exr_out_channel;
 
 /* Collect RGB and every AOV channel, rejecting duplicate names (the EXR
  * channel list is a set). */
-static lie_status collect_channels(const lie_frame *f, exr_out_channel **out, int *n_out,
+static lie_status collect_channels(const lie_frame *f, int half, exr_out_channel **out, int *n_out,
                                    const char *path, lie_error *err)
 {
     int n = 3;
@@ -131,6 +133,7 @@ static lie_status collect_channels(const lie_frame *f, exr_out_channel **out, in
         snprintf(ch[k].name, sizeof ch[k].name, "%s", rgb_names[c]);
         ch[k].base = f->rgb + c;
         ch[k].stride = 3;
+        ch[k].half = half != 0;
     }
     for (int a = 0; a < f->n_aovs; a++) {
         const lie_aov *aov = &f->aovs[a];
@@ -326,6 +329,12 @@ static lie_status encode_exr(exr_stream *s, const char *path, const lie_frame *f
                                                  COMPRESSIONS[opt->compression].c);
     if (rv == EXR_ERR_SUCCESS && long_names)
         rv = exr_set_longname_support(ctx, 1);
+    if (rv == EXR_ERR_SUCCESS && opt->screen_window_width > 0.0f) {
+        exr_attr_v2f_t c = {.x = opt->screen_window_center[0], .y = opt->screen_window_center[1]};
+        rv = exr_set_screen_window_center(ctx, part, &c);
+        if (rv == EXR_ERR_SUCCESS)
+            rv = exr_set_screen_window_width(ctx, part, opt->screen_window_width);
+    }
     if (rv != EXR_ERR_SUCCESS) {
         st = exr_fail(err, LIE_ERR_IO, path, s, rv, "cannot set up EXR header");
         goto done;
@@ -333,8 +342,8 @@ static lie_status encode_exr(exr_stream *s, const char *path, const lie_frame *f
     /* The library keeps the channel list sorted by name; the encoder's
      * channels are matched back to ours by name below. */
     for (int c = 0; c < n_ch; c++) {
-        rv = exr_add_channel(ctx, part, ch[c].name, EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LOGARITHMIC,
-                             1, 1);
+        rv = exr_add_channel(ctx, part, ch[c].name, ch[c].half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT,
+                             EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
         if (rv != EXR_ERR_SUCCESS) {
             st = exr_fail(err, LIE_ERR_ARG, path, s, rv, "cannot add EXR channel");
             goto done;
@@ -415,7 +424,9 @@ lie_status lie_exr_write(const char *path, const lie_frame *f, const lie_exr_opt
     static const lie_exr_options defaults;
     if (!opt)
         opt = &defaults;
-    if ((unsigned)opt->compression >= N_COMPRESSIONS || opt->n_attrs < 0 || (opt->n_attrs > 0 && !opt->attrs))
+    if ((unsigned)opt->compression >= N_COMPRESSIONS || opt->n_attrs < 0 || (opt->n_attrs > 0 && !opt->attrs) ||
+        !(opt->screen_window_width >= 0.0f) || !isfinite(opt->screen_window_width) ||
+        !isfinite(opt->screen_window_center[0]) || !isfinite(opt->screen_window_center[1]))
         return lie_error_set(err, LIE_ERR_ARG, path, "bad EXR options");
     if (!path || !f || !f->rgb || f->width <= 0 || f->height <= 0 || f->n_aovs < 0 ||
         (f->n_aovs > 0 && !f->aovs))
@@ -429,7 +440,7 @@ lie_status lie_exr_write(const char *path, const lie_frame *f, const lie_exr_opt
         return st;
     exr_out_channel *ch = NULL;
     int n_ch = 0;
-    st = collect_channels(f, &ch, &n_ch, path, err);
+    st = collect_channels(f, opt->half, &ch, &n_ch, path, err);
     if (st != LIE_OK)
         return st;
     for (int c = 0; c < n_ch; c++)

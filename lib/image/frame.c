@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 
 lie_frame *lie_frame_create(int width, int height)
 {
@@ -122,8 +123,40 @@ lie_status lie_frame_write(const char *path, const lie_frame *f, const lie_frame
 {
     if (!path || !f)
         return lie_error_set(err, LIE_ERR_ARG, path, "no output path or frame");
-    size_t n = strlen(path);
-    if (n >= 4 && strcasecmp(path + n - 4, ".png") == 0)
+    lie_frame_format fmt = opt ? opt->format : LIE_FORMAT_AUTO;
+    if (fmt == LIE_FORMAT_AUTO && !lie_frame_format_of(path, &fmt))
+        return lie_error_set(err, LIE_ERR_ARG, path, "cannot write this format: the extension must be .exr or .png");
+    if (fmt == LIE_FORMAT_PNG)
         return lie_png_write(path, f, opt ? &opt->png : NULL, err);
+    if (fmt != LIE_FORMAT_EXR)
+        return lie_error_set(err, LIE_ERR_ARG, path, "unknown image format %d", (int)fmt);
     return lie_exr_write(path, f, opt ? &opt->exr : NULL, err);
+}
+
+int lie_frame_format_parse(const char *name, lie_frame_format *out)
+{
+    if (name && strcmp(name, "exr") == 0)
+        *out = LIE_FORMAT_EXR;
+    else if (name && strcmp(name, "png") == 0)
+        *out = LIE_FORMAT_PNG;
+    else
+        return 0;
+    return 1;
+}
+
+int lie_frame_format_of(const char *path, lie_frame_format *out)
+{
+    if (!path)
+        return 0;
+    size_t n = strlen(path);
+    struct stat sb;
+    if (strcmp(path, "-") == 0 || (n >= 4 && strcasecmp(path + n - 4, ".exr") == 0))
+        *out = LIE_FORMAT_EXR;
+    else if (n >= 4 && strcasecmp(path + n - 4, ".png") == 0)
+        *out = LIE_FORMAT_PNG;
+    else if (stat(path, &sb) == 0 && S_ISCHR(sb.st_mode))
+        *out = LIE_FORMAT_EXR; /* a device (/dev/null to time a run): the bytes of -o - */
+    else
+        return 0;
+    return 1;
 }

@@ -83,6 +83,13 @@ typedef struct lie_exr_options {
     lie_exr_compression compression;
     int threads;                     /* workers compressing chunks (0: all cores); the
                                         bytes written do not depend on it */
+    int half;                        /* store R, G, B as 16-bit half floats (the AOVs
+                                        stay 32-bit) */
+    /* The required screenWindowCenter / screenWindowWidth attributes
+     * (OpenEXR's ImfHeader.h): a width of 0 keeps OpenEXR's default
+     * window, centre (0, 0) and width 1. */
+    float screen_window_center[2];
+    float screen_window_width;
 } lie_exr_options;
 
 /* EXR: RGB as 32-bit float channels "R","G","B" plus every AOV, scanline,
@@ -121,14 +128,32 @@ lie_status lie_png_write(const char *path, const lie_frame *f, const lie_png_opt
 lie_status lie_png_write_rgb8(const char *path, int width, int height, const uint8_t *rgb,
                               lie_error *err);
 
+/* The formats a frame can be written in. */
+typedef enum lie_frame_format {
+    LIE_FORMAT_AUTO = 0, /* by the path's extension (lie_frame_format_of) */
+    LIE_FORMAT_EXR = 1,
+    LIE_FORMAT_PNG = 2
+} lie_frame_format;
+
+/* A format by name ("exr", "png"); returns 0 for an unknown name (*out
+ * unchanged). */
+int lie_frame_format_parse(const char *name, lie_frame_format *out);
+/* The format a path's extension names, case-insensitively: ".exr" EXR,
+ * ".png" PNG, "-" (stdout) or an existing character device (/dev/null)
+ * EXR.  Returns 0 for any other path (*out unchanged): a writer must not
+ * guess. */
+int lie_frame_format_of(const char *path, lie_frame_format *out);
+
 /* Each format's options, for a writer that picks the format by name. */
 typedef struct lie_frame_options {
     lie_exr_options exr;
     lie_png_options png;
+    lie_frame_format format; /* LIE_FORMAT_AUTO: by the path's extension */
 } lie_frame_options;
 
-/* Write by extension: ".png" (case-insensitive) gives a PNG preview
- * (opt->png), anything else (".exr", "-") an EXR (opt->exr).  opt may be
+/* Write in opt->format, or when that is LIE_FORMAT_AUTO (or opt is NULL)
+ * in the format of the path's extension (lie_frame_format_of): a path of
+ * no known extension is LIE_ERR_ARG.  "-" writes to stdout.  opt may be
  * NULL: the defaults. */
 lie_status lie_frame_write(const char *path, const lie_frame *f, const lie_frame_options *opt, lie_error *err);
 

@@ -50,6 +50,52 @@ void lie_view_ray(const lie_view *v, float x, float y, int width, int height, li
     }
 }
 
+lie_view_exr lie_view_exr_make(const lie_view *v)
+{
+    lie_view_exr e;
+    memset(&e, 0, sizeof e);
+    /* world to camera: the camera's axes as columns, -eye projected on them
+     * in the last row */
+    const lie_vec3 ax[3] = {v->right, v->up, v->fwd};
+    float *w = e.world_to_camera;
+    for (int c = 0; c < 3; c++) {
+        w[0 * 4 + c] = ax[c].x;
+        w[1 * 4 + c] = ax[c].y;
+        w[2 * 4 + c] = ax[c].z;
+        w[3 * 4 + c] = -lie_v3_dot(v->eye, ax[c]);
+    }
+    w[15] = 1.0f;
+    /* camera to NDC: x_ndc = (1 + x / half_w) / 2, y_ndc = (1 - y / half_h) / 2,
+     * with x, y divided by z first for a perspective view (w = z) */
+    float p[16] = {0};
+    p[0 * 4 + 0] = 0.5f / v->half_w;
+    p[1 * 4 + 1] = -0.5f / v->half_h;
+    if (v->ortho) {
+        p[3 * 4 + 0] = 0.5f;
+        p[3 * 4 + 1] = 0.5f;
+        p[2 * 4 + 2] = 1.0f;
+        p[3 * 4 + 3] = 1.0f;
+    } else {
+        p[2 * 4 + 0] = 0.5f;
+        p[2 * 4 + 1] = 0.5f;
+        p[3 * 4 + 2] = 1.0f;
+        p[2 * 4 + 3] = 1.0f;
+    }
+    for (int r = 0; r < 4; r++)
+        for (int c = 0; c < 4; c++) {
+            double acc = 0.0;
+            for (int k = 0; k < 4; k++)
+                acc += (double)w[r * 4 + k] * (double)p[k * 4 + c];
+            e.world_to_ndc[r * 4 + c] = (float)acc;
+        }
+    for (int k = 0; k < 16; k++) { /* no -0 in the header */
+        e.world_to_camera[k] += 0.0f;
+        e.world_to_ndc[k] += 0.0f;
+    }
+    e.screen_window_width = 2.0f * v->half_w;
+    return e;
+}
+
 lie_status lie_camera_parse(const lie_scene *s, const char *spec, lie_camera *out, lie_error *err)
 {
     if (!spec || !strchr(spec, '='))

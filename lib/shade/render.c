@@ -40,6 +40,8 @@ void lie_render_stats_add(lie_render_stats *acc, const lie_render_stats *w)
     acc->pairs_embree += w->pairs_embree;
     acc->pairs_unshadowed += w->pairs_unshadowed;
     acc->exact_overflows += w->exact_overflows;
+    acc->pairs_unbuilt += w->pairs_unbuilt;
+    acc->points_unbuilt += w->points_unbuilt;
     acc->t_analytic += w->t_analytic;
     acc->t_exact += w->t_exact;
     acc->t_blockers += w->t_blockers;
@@ -53,6 +55,7 @@ typedef struct render_job {
     const lie_camera *cam;
     lie_frame *frame;
     float *albedo, *normal, *depth, *complexity, *patch;
+    float *coverage; /* the "A" channel */
     lie_view view;
     int tiles_x;
     lie_shade_scratch *scratch; /* one per worker */
@@ -235,6 +238,8 @@ static void render_tile(void *ctx, size_t item, int worker)
                     j->normal[3 * pi + q] = nrm[q] * inv;
             if (j->depth)
                 j->depth[pi] = first_hits ? dep / (float)first_hits : INFINITY;
+            if (j->coverage)
+                j->coverage[pi] = (float)first_hits * inv;
             if (j->complexity || j->patch)
                 describe_pixel(j, x, y, pi);
         }
@@ -254,6 +259,7 @@ lie_status lie_render_frame_create(const lie_scene *s, const lie_render_options 
     static const char *const rgb_names[3] = {"R", "G", "B"};
     static const char *const xyz_names[3] = {"X", "Y", "Z"};
     static const char *const z_name[1] = {"Z"};
+    static const char *const a_name[1] = {"A"};
     static const struct {
         unsigned bit;
         const char *name;
@@ -269,6 +275,12 @@ lie_status lie_render_frame_create(const lie_scene *s, const lie_render_options 
             lie_frame_destroy(f);
             return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
         }
+    /* coverage, OpenEXR's alpha in the default layer: the fraction of the
+     * pixel's eye rays that hit a surface */
+    if (!lie_frame_add_aov(f, "", 1, a_name)) {
+        lie_frame_destroy(f);
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    }
     *out = f;
     return LIE_OK;
 }
@@ -333,6 +345,7 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
     j.depth = aov_data(f, "depth");
     j.complexity = aov_data(f, "complexity");
     j.patch = aov_data(f, "patch");
+    j.coverage = aov_data(f, "");
     int threads = opt->threads > 0 ? opt->threads : lie_cpu_count();
     lie_light_samples *fixed = calloc((size_t)s->n_emitters + 1, sizeof *fixed);
     j.scratch = aligned_alloc(128, sizeof *j.scratch * (size_t)threads);

@@ -1,7 +1,7 @@
 /* lib/shade: BRDFs (Lambert; GGX as glTF's metallic-roughness BRDF; perfect
  * mirror), emitter sample patterns and the direct-lighting renderer.
  *
- * ARCHITECTURE.md decision 1: there is one shading code.  Visibility
+ * There is one shading code (docs/architecture.md, "a visibility method").  Visibility
  * strategies differ only in how a shadow ray is answered: `full` asks Embree
  * over the whole scene (the reference), `lie` (lib/lie) asks the patch's
  * local illumination environment. */
@@ -92,7 +92,8 @@ typedef enum lie_vis_class {
     LIE_VISCLASS_TEST_ALL = 0,   /* cast every shadow ray against the whole scene */
     LIE_VISCLASS_VISIBLE = 1,    /* no ray needed: fully visible */
     LIE_VISCLASS_OCCLUDED = 2,   /* no contribution */
-    LIE_VISCLASS_BLOCKERS = 3    /* test rays against a blocker list only */
+    LIE_VISCLASS_BLOCKERS = 3,   /* test rays against a blocker list only */
+    LIE_VISCLASS_UNBUILT = 4     /* as TEST_ALL: the pair's unit was not built (lie-build --view) */
 } lie_vis_class;
 
 /* One shading point's shadow segments toward one emitter: o -> o + d_i,
@@ -240,6 +241,8 @@ typedef struct lie_render_stats {
     uint64_t pairs_embree;    /* samples against the whole scene */
     uint64_t pairs_unshadowed; /* seen whole, sampled shading */
     uint64_t exact_overflows; /* exact pairs that fell back to samples */
+    uint64_t pairs_unbuilt;   /* of pairs_embree: units lie-build left out (--view, --path) */
+    uint64_t points_unbuilt;  /* shading points with such a pair: pixels, at 1 spp without mirrors */
     /* with lie_render_options.timers: seconds summed over workers */
     double t_analytic, t_exact, t_blockers, t_embree, t_sampled_shading;
     double seconds;
@@ -282,6 +285,25 @@ typedef struct lie_view {
 lie_view lie_view_make(const lie_camera *cam, int width, int height);
 /* The ray through image point (x, y) in pixels (0, 0 the top left corner). */
 void lie_view_ray(const lie_view *v, float x, float y, int width, int height, lie_vec3 *org, lie_vec3 *dir);
+
+/* A view as OpenEXR's standard attributes describe it (ImfStandardAttributes.h,
+ * ImfHeader.h): row-vector 4x4 matrices, row-major (p' = p M, translation in
+ * the last row), the form lie_attr's m44f takes.
+ *  - world_to_camera: RenderMan's left-handed camera space, origin at the
+ *    eye, +x right and +y up in the image, +z the viewing direction;
+ *  - world_to_ndc: to NDC after the divide by w, (0, 0) the display
+ *    window's upper left corner and (1, 1) its lower right, z discarded
+ *    (here 1/depth for a perspective view, depth for an orthographic one);
+ *  - the screen window: centre (0, 0), width 2 half_w, in screen space
+ *    (the image plane at distance 1 for a perspective view, camera x, y
+ *    for an orthographic one). */
+typedef struct lie_view_exr {
+    float world_to_camera[16];
+    float world_to_ndc[16];
+    float screen_window_center[2];
+    float screen_window_width;
+} lie_view_exr;
+lie_view_exr lie_view_exr_make(const lie_view *v);
 
 /* Parse a --camera value: a camera name or index in the scene, or
  * "eye=X,Y,Z,target=X,Y,Z[,up=X,Y,Z][,fov=DEG|ortho=HEIGHT]" (ortho: an

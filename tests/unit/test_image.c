@@ -61,6 +61,17 @@ static unsigned char *slurp(const char *path, size_t *size)
     return data;
 }
 
+/* The two files hold the same bytes. */
+static void assert_files_equal(const char *p1, const char *p2)
+{
+    size_t n1, n2;
+    unsigned char *d1 = slurp(p1, &n1), *d2 = slurp(p2, &n2);
+    assert_int_equal(n1, n2);
+    assert_memory_equal(d1, d2, n1);
+    free(d1);
+    free(d2);
+}
+
 static void spit(const char *path, const void *data, size_t size)
 {
     /* A fresh file: truncating one makes ext4 flush it to disk first. */
@@ -296,12 +307,7 @@ static void test_exr_options_are_per_call(void **state)
     lie_exr_options zeroed = {0};
     assert_int_equal(lie_exr_write(p1, f, NULL, &err), LIE_OK);
     assert_int_equal(lie_exr_write(p2, f, &zeroed, &err), LIE_OK);
-    size_t n1, n2;
-    unsigned char *d1 = slurp(p1, &n1), *d2 = slurp(p2, &n2);
-    assert_int_equal(n1, n2);
-    assert_memory_equal(d1, d2, n1);
-    free(d1);
-    free(d2);
+    assert_files_equal(p1, p2);
     lie_exr_options bad = {.compression = (lie_exr_compression)9};
     assert_int_equal(lie_exr_write(p1, f, &bad, &err), LIE_ERR_ARG);
     lie_frame_destroy(f);
@@ -911,12 +917,7 @@ static void test_png_write_rgb8_stores_pixels_unchanged(void **state)
     /* Deterministic bytes. */
     const char *path2 = tmp_path("raw2.png");
     assert_int_equal(lie_png_write_rgb8(path2, 5, 3, rgb, &err), LIE_OK);
-    size_t n1, n2;
-    unsigned char *d1 = slurp(path, &n1), *d2 = slurp(path2, &n2);
-    assert_int_equal(n1, n2);
-    assert_memory_equal(d1, d2, n1);
-    free(d1);
-    free(d2);
+    assert_files_equal(path, path2);
     assert_int_equal(lie_png_write_rgb8(tmp_path("no/dir/x.png"), 5, 3, rgb, &err), LIE_ERR_IO);
     assert_int_equal(lie_png_write_rgb8(path, 0, 3, rgb, &err), LIE_ERR_ARG);
 }
@@ -929,7 +930,7 @@ static void test_frame_write_chooses_format_by_extension(void **state)
     lie_frame *f = make_test_frame();
     lie_error err;
     static const char *const pngs[2] = {"a.png", "b.PnG"};
-    static const char *const exrs[3] = {"c.exr", "d.png.exr", "e"};
+    static const char *const exrs[3] = {"c.exr", "d.png.exr", "e.EXR"};
     for (int i = 0; i < 2; i++) {
         const char *p = tmp_path(pngs[i]);
         assert_int_equal(lie_frame_write(p, f, NULL, &err), LIE_OK);
@@ -948,6 +949,29 @@ static void test_frame_write_chooses_format_by_extension(void **state)
         assert_memory_equal(d, "\x76\x2f\x31\x01", 4);
         free(d);
     }
+    /* no extension it can write: refused, nothing written */
+    static const char *const bad[3] = {"f", "g.jpg", "h.exr.tif"};
+    for (int i = 0; i < 3; i++) {
+        const char *p = tmp_path(bad[i]);
+        assert_int_equal(lie_frame_write(p, f, NULL, &err), LIE_ERR_ARG);
+        assert_int_equal(access(p, F_OK), -1);
+    }
+    /* an explicit format wins over the name */
+    lie_frame_options o;
+    memset(&o, 0, sizeof o);
+    assert_true(lie_frame_format_parse("png", &o.format));
+    const char *p = tmp_path("i.exr");
+    assert_int_equal(lie_frame_write(p, f, &o, &err), LIE_OK);
+    size_t n;
+    unsigned char *d = slurp(p, &n);
+    assert_true(n > 8);
+    assert_memory_equal(d, "\x89PNG\r\n\x1a\n", 8);
+    free(d);
+    lie_frame_format fmt = LIE_FORMAT_AUTO;
+    assert_false(lie_frame_format_parse("jpg", &fmt));
+    assert_int_equal(fmt, LIE_FORMAT_AUTO);
+    assert_true(lie_frame_format_of("-", &fmt));
+    assert_int_equal(fmt, LIE_FORMAT_EXR);
     lie_frame_destroy(f);
 }
 
@@ -970,13 +994,7 @@ static void test_frame_write_dash_writes_exr_to_stdout(void **state)
     dup2(saved, STDOUT_FILENO);
     close(saved);
     assert_int_equal(st, LIE_OK);
-
-    size_t n1, n2;
-    unsigned char *d1 = slurp(ref, &n1), *d2 = slurp(cap, &n2);
-    assert_int_equal(n1, n2);
-    assert_memory_equal(d1, d2, n1);
-    free(d1);
-    free(d2);
+    assert_files_equal(ref, cap);
     lie_frame_destroy(f);
 }
 

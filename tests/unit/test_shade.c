@@ -683,6 +683,46 @@ static void test_convex_solids_found(void **state)
     lie_scene_destroy(s);
 }
 
+/* OpenEXR's worldToNDC (ImfStandardAttributes.h) maps a point seen through
+ * image position (x, y) to (x / width, y / height); worldToCamera puts it at
+ * camera z = its distance along the view direction. */
+static void test_view_exr_matrices_match_rays(void **state)
+{
+    (void)state;
+    lie_camera cams[2];
+    memset(cams, 0, sizeof cams);
+    cams[0].eye = lie_v3(1.0f, 2.0f, 3.0f);
+    cams[0].forward = lie_v3_norm(lie_v3(0.3f, -0.2f, -1.0f));
+    cams[0].up = lie_v3(0.0f, 1.0f, 0.0f);
+    cams[0].yfov = 0.9f;
+    cams[1] = cams[0];
+    cams[1].yfov = 0.0f;
+    cams[1].ymag = 1.5f; /* orthographic */
+    const int w = 64, h = 40;
+    for (int c = 0; c < 2; c++) {
+        lie_view v = lie_view_make(&cams[c], w, h);
+        lie_view_exr e = lie_view_exr_make(&v);
+        assert_float_equal(e.screen_window_width, 2.0f * v.half_w, 1e-6f);
+        static const float pts[3][2] = {{0.0f, 0.0f}, {64.0f, 40.0f}, {13.25f, 31.5f}};
+        for (int k = 0; k < 3; k++) {
+            lie_vec3 org, dir;
+            lie_view_ray(&v, pts[k][0], pts[k][1], w, h, &org, &dir);
+            float t = 7.5f;
+            lie_vec3 p = lie_v3_add(org, lie_v3_scale(dir, t));
+            float in[4] = {p.x, p.y, p.z, 1.0f}, cam[4] = {0}, ndc[4] = {0};
+            for (int col = 0; col < 4; col++)
+                for (int r = 0; r < 4; r++) {
+                    cam[col] += in[r] * e.world_to_camera[r * 4 + col];
+                    ndc[col] += in[r] * e.world_to_ndc[r * 4 + col];
+                }
+            assert_float_equal(cam[2], lie_v3_dot(lie_v3_sub(p, v.eye), v.fwd), 1e-4f);
+            assert_true(cam[2] > 0.0f); /* in front: +z, left-handed */
+            assert_float_equal(ndc[0] / ndc[3], pts[k][0] / (float)w, 1e-5f);
+            assert_float_equal(ndc[1] / ndc[3], pts[k][1] / (float)h, 1e-5f);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -700,6 +740,7 @@ int main(void)
         cmocka_unit_test(test_planar_blocker_tests_agree_with_embree),
         cmocka_unit_test(test_emitter_plane_frame_and_samples),
         cmocka_unit_test(test_convex_solids_found),
+        cmocka_unit_test(test_view_exr_matrices_match_rays),
     };
     return cmocka_run_group_tests_name("shade", tests, NULL, NULL);
 }

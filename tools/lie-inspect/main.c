@@ -224,6 +224,9 @@ int main(int argc, char **argv)
     default:
         if (!o.output)
             return usage_error("%s", "image: missing -o OUT.png");
+        lie_frame_format fmt;
+        if (strcmp(o.output, "-") != 0 && (!lie_frame_format_of(o.output, &fmt) || fmt != LIE_FORMAT_PNG))
+            return usage_error("%s: image writes PNG only: use .png or - (stdout)", o.output);
         return inspect_image(a, &o);
     }
 }

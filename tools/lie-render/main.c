@@ -21,10 +21,15 @@ static void usage(FILE *fp)
             "usage: %s CACHE|SCENE.gltf|SCENE.glb|- -o OUT.exr|OUT.png|- [options]\n"
             "\n"
             "Render direct lighting with soft shadows, from a LIE cache (lie-build) or a\n"
-            "scene.  The output format follows the extension: .png is an sRGB preview,\n"
-            "anything else (and -) is OpenEXR.  An input of - reads a cache from stdin.\n"
+            "scene.  The output format follows the extension: .exr is OpenEXR (RGB, an A\n"
+            "channel of coverage, the AOVs, and the camera as OpenEXR's worldToCamera and\n"
+            "worldToNDC), .png an sRGB preview; other extensions are refused.  An input\n"
+            "of - reads a cache from stdin.\n"
             "\n"
-            "  -o, --output FILE       output image (required); - writes EXR to stdout\n"
+            "  -o, --output FILE       output image (required); - writes to stdout (EXR,\n"
+            "                          or the --format given)\n"
+            "      --format F          exr or png, whatever the extension\n"
+            "      --half              EXR colour (R, G, B) as 16-bit half floats\n"
             "      --scene S           with a cache: load the scene from S instead of the path\n"
             "                          the cache records (its content hash must match)\n"
             "      --camera SPEC       a camera name or index in the scene, or\n"
@@ -90,7 +95,7 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 enum {
     OPT_CAMERA = 256, OPT_SIZE, OPT_SPP, OPT_LIGHT_SAMPLES, OPT_PATTERN, OPT_VISIBILITY, OPT_RAYS, OPT_LIE_SKIP,
     OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_SCENE,
-    OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS, OPT_FRAMES, OPT_SKIP_EXISTING
+    OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS, OPT_FRAMES, OPT_SKIP_EXISTING, OPT_FORMAT, OPT_HALF
 };
 
 static const struct option long_opts[] = {
@@ -113,6 +118,8 @@ static const struct option long_opts[] = {
     {"max-depth", required_argument, NULL, OPT_MAX_DEPTH},
     {"aov", required_argument, NULL, OPT_AOV},
     {"compression", required_argument, NULL, OPT_COMPRESSION},
+    {"format", required_argument, NULL, OPT_FORMAT},
+    {"half", no_argument, NULL, OPT_HALF},
     {"exposure", required_argument, NULL, OPT_EXPOSURE},
     {"threads", required_argument, NULL, OPT_THREADS},
     {"allow-external-uris", no_argument, NULL, OPT_EXTERNAL},
@@ -231,8 +238,19 @@ static lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie
         {.name = "lie.cameraYFovDegrees", .type = LIE_ATTR_FLOAT, .f = yfov_deg},
         /* orthographic views: their height in world units (0: perspective) */
         {.name = "lie.cameraOrthoHeight", .type = LIE_ATTR_FLOAT, .f = 2.0f * fc->ymag},
+        /* OpenEXR's standard camera attributes (lie_view_exr_make) */
+        {.name = "worldToCamera", .type = LIE_ATTR_M44F},
+        {.name = "worldToNDC", .type = LIE_ATTR_M44F},
     };
+    const int n_base = (int)(sizeof attrs / sizeof attrs[0]) - 2;
     lie_frame_options opt = o->opt;
+    lie_view view = lie_view_make(fc, ro->width, ro->height);
+    lie_view_exr ve = lie_view_exr_make(&view);
+    memcpy(attrs[n_base].v, ve.world_to_camera, sizeof ve.world_to_camera);
+    memcpy(attrs[n_base + 1].v, ve.world_to_ndc, sizeof ve.world_to_ndc);
+    opt.exr.screen_window_center[0] = ve.screen_window_center[0];
+    opt.exr.screen_window_center[1] = ve.screen_window_center[1];
+    opt.exr.screen_window_width = ve.screen_window_width;
     opt.exr.attrs = attrs;
     opt.exr.n_attrs = (int)(sizeof attrs / sizeof attrs[0]);
     return lie_frame_write(name, frame, &opt, err);
@@ -318,6 +336,11 @@ int main(int argc, char **argv)
                 return usage_error("--aov: expected a list of albedo, normal, depth, complexity, patch, got '%s'",
                                    optarg);
             break;
+        case OPT_FORMAT:
+            if (!lie_frame_format_parse(optarg, &fopt.format))
+                return usage_error("--format: expected exr or png, got '%s'", optarg);
+            break;
+        case OPT_HALF: fopt.exr.half = 1; break;
         case OPT_COMPRESSION:
             if (!lie_exr_compression_parse(optarg, &fopt.exr.compression))
                 return usage_error("--compression: expected zip, zips, piz, rle or none, got '%s'", optarg);
@@ -362,6 +385,9 @@ int main(int argc, char **argv)
         return usage_error("unexpected argument '%s'", argv[optind + 1]);
     if (!output)
         return usage_error("%s", "missing -o OUTPUT");
+    lie_frame_format out_format;
+    if (fopt.format == LIE_FORMAT_AUTO && !lie_frame_format_of(output, &out_format))
+        return usage_error("%s: cannot write this format: use .exr or .png (or --format exr|png)", output);
     const char *input = argv[optind];
     if (path_file && !lie_frame_pattern_ok(output))
         return usage_error("--path: -o must hold one %%d conversion (e.g. frame_%%04d.exr), got '%s'", output);
@@ -534,13 +560,15 @@ int main(int argc, char **argv)
             fprintf(stderr,
                     "\"exact\":\"%s\",\"pairs_occluded\":%llu,\"pairs_analytic\":%llu,\"pairs_exact\":%llu,"
                     "\"pairs_blockers\":%llu,\"pairs_embree\":%llu,\"pairs_unshadowed\":%llu,"
-                    "\"exact_overflows\":%llu,\"timers\":%s,\"cpu_seconds_analytic\":%.6f,"
+                    "\"exact_overflows\":%llu,\"pairs_unbuilt\":%llu,\"points_unbuilt\":%llu,"
+                    "\"timers\":%s,\"cpu_seconds_analytic\":%.6f,"
                     "\"cpu_seconds_exact\":%.6f,\"cpu_seconds_blockers\":%.6f,\"cpu_seconds_embree\":%.6f,"
                     "\"cpu_seconds_sampled_shading\":%.6f",
                     exact_name(&ro), (unsigned long long)rs.pairs_occluded, (unsigned long long)rs.pairs_analytic,
                     (unsigned long long)rs.pairs_exact, (unsigned long long)rs.pairs_blockers,
                     (unsigned long long)rs.pairs_embree, (unsigned long long)rs.pairs_unshadowed,
-                    (unsigned long long)rs.exact_overflows, ro.timers ? "true" : "false", rs.t_analytic,
+                    (unsigned long long)rs.exact_overflows, (unsigned long long)rs.pairs_unbuilt,
+                    (unsigned long long)rs.points_unbuilt, ro.timers ? "true" : "false", rs.t_analytic,
                     rs.t_exact, rs.t_blockers, rs.t_embree, rs.t_sampled_shading);
             render_dist_stats(stderr, 1);
             fprintf(stderr, "}\n");
@@ -566,6 +594,10 @@ int main(int argc, char **argv)
                     (unsigned long long)rs.pairs_exact, (unsigned long long)rs.pairs_blockers,
                     (unsigned long long)rs.pairs_embree, (unsigned long long)rs.pairs_unshadowed,
                     (unsigned long long)rs.exact_overflows);
+            if (rs.pairs_unbuilt)
+                fprintf(stderr, "  not built in the cache (lie-build --view/--path): %llu pairs at %llu shading points, "
+                                "answered by Embree\n",
+                        (unsigned long long)rs.pairs_unbuilt, (unsigned long long)rs.points_unbuilt);
             if (ro.timers)
                 fprintf(stderr,
                         "  worker seconds: closed form %.3f, exact shadows %.3f, blocker samples %.3f,\n"
