@@ -10,10 +10,11 @@
  *  - the lobe is lib/shade's BRDF (surface.c: GGX D, height-correlated
  *    Smith V, Schlick F; alpha = roughness^2 clamped to >= 1e-3), evaluated
  *    here in double;
- *  - M = R S, R the rotation about y taking z to the lobe's average
- *    direction, S = [[a, 0, b], [0, c, 0], [0, 0, 1]]; parameters
- *    (log a, log c, b), one parameter (a = c, b = 0) at normal incidence
- *    where the lobe is isotropic;
+ *  - M = R S, R the rotation about y by phi, S = [[a, 0, b], [0, c, 0],
+ *    [0, 0, 1]]: every matrix symmetric about the plane of incidence, up to
+ *    scale; parameters (log a, log c, b, phi - phi_avg), phi_avg the angle
+ *    of the lobe's average direction; one parameter (a = c, b = 0, phi = 0)
+ *    at normal incidence, where the lobe is isotropic;
  *  - the error is the L3 norm of the difference between the lobe and the
  *    distribution as it is evaluated: clipped to the shading hemisphere
  *    and divided by its mass h there (ltc.c folds 1/h into the norm),
@@ -21,6 +22,9 @@
  *    lobe's sampler (GGX normals; cosine for the diffuse lobe) and the
  *    LTC's, on fixed Hammersley points, so the objective is smooth and
  *    deterministic;
+ *  - the Schlick-weighted part of the specular lobe, D V (1 - v.h)^5 cos,
+ *    gets its own LTC per bin (fitted from the bin's D V cos solution): at
+ *    grazing views its shape differs from the lobe's (ltc.h);
  *  - the diffuse part (1 - F) c_diff / pi gets its own roughness-independent
  *    LTC of (1 - (1 - v.h)^5) cos.
  * Output is a function of nothing but this file: double arithmetic, fixed
@@ -70,8 +74,14 @@ static double radical_inverse2(unsigned i)
 
 /* ---- lobes ------------------------------------------------------------ */
 
+enum {
+    LOBE_DIFFUSE,      /* (1 - (1 - v.h)^5) cos */
+    LOBE_GGX,          /* D V cos (F split off) */
+    LOBE_GGX_FRESNEL   /* D V (1 - v.h)^5 cos: the part F's Schlick term weights */
+};
+
 typedef struct lobe {
-    int ggx;     /* 1: D V cos (F split off); 0: (1 - (1 - v.h)^5) cos */
+    int kind;
     double alpha;
     v3 wo;       /* (sin, 0, cos) */
     double nv;
@@ -94,7 +104,7 @@ static double lobe_eval(const lobe *L, v3 wi, double *s5)
     if (nl <= 0.0)
         return 0.0;
     *s5 = schlick5(L->wo, wi);
-    if (!L->ggx)
+    if (L->kind == LOBE_DIFFUSE)
         return (1.0 - *s5) * nl;
     v3 h = norm(add(wi, L->wo));
     double nh = h.z > 0.0 ? h.z : 0.0;
@@ -102,7 +112,7 @@ static double lobe_eval(const lobe *L, v3 wi, double *s5)
     double dd = nh * nh * (a2 - 1.0) + 1.0;
     double D = a2 / (M_PI * dd * dd);
     double V = 0.5 / (nl * sqrt(nv * nv * (1.0 - a2) + a2) + nv * sqrt(nl * nl * (1.0 - a2) + a2));
-    return D * V * nl;
+    return D * V * nl * (L->kind == LOBE_GGX_FRESNEL ? *s5 : 1.0);
 }
 
 /* Density of the lobe's sampler at wi: GGX normals h ~ D(h) (n.h) reflected
@@ -110,7 +120,7 @@ static double lobe_eval(const lobe *L, v3 wi, double *s5)
  * the cosine. */
 static double lobe_pdf(const lobe *L, v3 wi)
 {
-    if (!L->ggx)
+    if (L->kind == LOBE_DIFFUSE)
         return wi.z > 0.0 ? wi.z / M_PI : 0.0;
     v3 h = norm(add(wi, L->wo));
     if (h.z < 0.0)
@@ -130,7 +140,7 @@ static v3 cosine_dir(double u1, double u2)
 
 static v3 lobe_sample(const lobe *L, double u1, double u2)
 {
-    if (!L->ggx)
+    if (L->kind == LOBE_DIFFUSE)
         return cosine_dir(u1, u2);
     double a2 = L->alpha * L->alpha;
     double t2 = a2 * u1 / (1.0 - u1); /* tan^2 of h's polar angle */
@@ -395,7 +405,7 @@ static void fit_bin(bin_fit *B, double *p, int dim, out_bin *o)
     o->m20 = (float)(t.minv[6] * s);
     o->m22 = (float)(t.minv[8] * s);
     o->norm = (float)(B->N / t.horizon);
-    o->fresnel = B->L.ggx ? (float)B->K : 0.0f;
+    o->fresnel = B->L.kind == LOBE_GGX ? (float)B->K : 0.0f;
     bin_samples(B, CHECK_SAMPLES);
     o->l1 = bin_error(B, &t, 1);
 }
@@ -415,7 +425,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "usage: ltc-fit [-o FILE]\n");
         return 2;
     }
-    static out_bin ggx[N_ROUGH][N_COS], dif[N_COS];
+    static out_bin ggx[N_ROUGH][N_COS], fre[N_ROUGH][N_COS], dif[N_COS];
     bin_fit B;
     size_t ns = CHECK_SAMPLES > FIT_SAMPLES ? CHECK_SAMPLES : FIT_SAMPLES;
     B.bw = malloc(ns * sizeof *B.bw);
@@ -437,18 +447,23 @@ int main(int argc, char **argv)
         double p[4];
         for (int j = 0; j < N_COS; j++) {
             double c = bin_cos(j);
-            B.L.ggx = 1;
+            B.L.kind = LOBE_GGX;
             B.L.alpha = alpha;
             B.L.nv = c;
             B.L.wo = mk(sqrt(1.0 - c * c), 0.0, c);
-            if (j == 0) {
+            int dim = j == 0 ? 1 : 4;
+            if (j == 0)
                 p[0] = row_start[0];
-                fit_bin(&B, p, 1, &ggx[i][j]);
+            fit_bin(&B, p, dim, &ggx[i][j]);
+            /* the Fresnel-weighted lobe, from this bin's solution */
+            double q[4];
+            memcpy(q, p, sizeof q);
+            B.L.kind = LOBE_GGX_FRESNEL;
+            fit_bin(&B, q, dim, &fre[i][j]);
+            if (j == 0) {
                 row_start[0] = p[0];
                 p[1] = p[0];
                 p[2] = p[3] = 0.0;
-            } else {
-                fit_bin(&B, p, 4, &ggx[i][j]);
             }
         }
         fprintf(stderr, "ltc-fit: roughness %.3f done\n", r);
@@ -457,7 +472,7 @@ int main(int argc, char **argv)
     double p[4] = {0.0, 0.0, 0.0, 0.0};
     for (int j = 0; j < N_COS; j++) {
         double c = bin_cos(j);
-        B.L.ggx = 0;
+        B.L.kind = LOBE_DIFFUSE;
         B.L.alpha = 1.0;
         B.L.nv = c;
         B.L.wo = mk(sqrt(1.0 - c * c), 0.0, c);
@@ -482,10 +497,14 @@ int main(int argc, char **argv)
                " * distribution as evaluated (clipped, renormalised), in %% of the\n"
                " * lobe's mass (0 identical, 200 disjoint), over the %d view angles:\n"
                " *\n"
-               " *   roughness   mean L1   worst L1   at n.wo\n",
+               " * The Schlick-weighted part D V (1 - v.h)^5 cos: its L1 times its share K\n"
+               " * of the lobe (its error in units of the whole specular lobe).\n"
+               " *\n"
+               " *               D V cos                       D V (1 - v.h)^5 cos\n"
+               " *   roughness   mean L1   worst L1   at n.wo   mean L1   worst L1\n",
             N_COS);
     for (int i = 0; i < N_ROUGH; i += 3) {
-        double sum = 0.0, worst = 0.0;
+        double sum = 0.0, worst = 0.0, fsum = 0.0, fworst = 0.0;
         int wj = 0;
         for (int j = 0; j < N_COS; j++) {
             sum += ggx[i][j].l1;
@@ -493,9 +512,13 @@ int main(int argc, char **argv)
                 worst = ggx[i][j].l1;
                 wj = j;
             }
+            /* in units of the whole specular lobe: the part's own L1 times its share K */
+            double fl = fre[i][j].l1 * ggx[i][j].fresnel;
+            fsum += fl;
+            fworst = fl > fworst ? fl : fworst;
         }
-        fprintf(f, " *   %9.3f   %6.2f%%   %7.2f%%   %7.4f\n", (double)i / (N_ROUGH - 1), 100.0 * sum / N_COS,
-                100.0 * worst, bin_cos(wj));
+        fprintf(f, " *   %9.3f   %6.2f%%   %7.2f%%   %7.4f   %6.2f%%   %7.2f%%\n", (double)i / (N_ROUGH - 1),
+                100.0 * sum / N_COS, 100.0 * worst, bin_cos(wj), 100.0 * fsum / N_COS, 100.0 * fworst);
     }
     {
         double sum = 0.0, worst = 0.0;
@@ -512,10 +535,15 @@ int main(int argc, char **argv)
     for (int i = 0; i < N_ROUGH; i++)
         for (int j = 0; j < N_COS; j++)
             print_bin(f, &ggx[i][j]);
+    fprintf(f, "};\n\n/* the same bins for D V (1 - v.h)^5 cos (fresnel unused) */\n");
+    fprintf(f, "static const lie_ltc_bin ggx_fresnel[%d] = {\n", N_ROUGH * N_COS);
+    for (int i = 0; i < N_ROUGH; i++)
+        for (int j = 0; j < N_COS; j++)
+            print_bin(f, &fre[i][j]);
     fprintf(f, "};\n\nstatic const lie_ltc_bin diffuse[%d] = {\n", N_COS);
     for (int j = 0; j < N_COS; j++)
         print_bin(f, &dif[j]);
-    fprintf(f, "};\n\nstatic const lie_ltc_table table = {%d, %d, ggx, diffuse};\n\n"
+    fprintf(f, "};\n\nstatic const lie_ltc_table table = {%d, %d, ggx, diffuse, ggx_fresnel};\n\n"
                "const lie_ltc_table *lie_ltc_table_default(void) { return &table; }\n",
             N_ROUGH, N_COS);
     int bad = ferror(f);

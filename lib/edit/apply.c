@@ -475,7 +475,10 @@ static lie_status apply_op(lie_scene *s, const lie_edit *e, const lie_edit_op *o
             return st;
         break;
     case LIE_EDIT_SET_LIGHT:
-        geometry = 0; /* blocker lists do not depend on a light's colour, intensity, range or cone */
+        /* Blocker lists do not depend on a light's colour or intensity.  Its
+         * range and outer cone decide which pairs it reaches (unlit pairs,
+         * lie_emitter_can_reach), so an edit of them rebuilds its pairs. */
+        geometry = (op->has & (LIE_EDIT_HAS_RANGE | LIE_EDIT_HAS_OUTER)) != 0;
         st = set_light(s, file, op, node, err);
         if (st != LIE_OK)
             return st;

@@ -396,7 +396,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
     const int timers = opt->timers;
     lie_render_stats *st = &sc->stats;
     lie_ltc_shading ltc; /* set up at the first pair that needs it */
-    int ltc_ready = 0;
+    int ltc_ready = 0, unbuilt_seen = 0;
     for (int e = 0; e < s->n_emitters; e++) {
         const lie_emitter *em = &s->emitters[e];
         if (em->type == LIE_EMITTER_AREA && em->first_tri <= sf->tri && sf->tri < em->first_tri + em->n_tris)
@@ -406,6 +406,12 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
         int n_blockers = 0;
         if (opt->visibility == LIE_VIS_LIE && opt->oracle) {
             cls = opt->oracle->classify(opt->oracle->ctx, sf, e, &pair);
+            if (cls == LIE_VISCLASS_UNBUILT) {
+                st->pairs_unbuilt++;
+                st->points_unbuilt += !unbuilt_seen;
+                unbuilt_seen = 1;
+                cls = LIE_VISCLASS_TEST_ALL;
+            }
             if (cls == LIE_VISCLASS_OCCLUDED) {
                 sc->stats.shadow_rays_skipped += (uint64_t)(em->type == LIE_EMITTER_AREA ? opt->light_samples : 1);
                 st->pairs_occluded++;

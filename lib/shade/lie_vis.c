@@ -43,8 +43,10 @@ static lie_vis_class classify(void *ctx, const lie_surface *sf, int e, const voi
     case LIE_CLASS_PARTIAL:
         *pair = n;
         return LIE_VISCLASS_BLOCKERS;
+    case LIE_CLASS_NONE:
+        return LIE_VISCLASS_UNBUILT; /* not built: the whole scene answers */
     default:
-        return LIE_VISCLASS_TEST_ALL; /* complex, or not built */
+        return LIE_VISCLASS_TEST_ALL; /* complex */
     }
 }
 

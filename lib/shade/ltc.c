@@ -133,10 +133,22 @@ void lie_ltc_shading_init(const lie_ltc_table *t, lie_vec3 n, lie_vec3 wo, float
     lie_ltc_bin d = lookup(t->diffuse, 1, t->n_cos, 0.0f, u);
     set_minv(&s, sh->spec_m);
     set_minv(&d, sh->diff_m);
-    for (int k = 0; k < 3; k++) {
-        sh->spec_w[k] = s.norm * (f0[k] * (1.0f - s.fresnel) + s.fresnel);
-        sh->diff_w[k] = c_diff[k] * (1.0f - f0[k]) * (float)M_1_PI * d.norm;
+    if (t->ggx_fresnel) {
+        lie_ltc_bin fz = lookup(t->ggx_fresnel, t->n_rough, t->n_cos, roughness, u);
+        set_minv(&fz, sh->fres_m);
+        for (int k = 0; k < 3; k++) {
+            sh->spec_w[k] = s.norm * f0[k];
+            sh->fres_w[k] = fz.norm * (1.0f - f0[k]);
+        }
+    } else {
+        set_minv(&s, sh->fres_m);
+        for (int k = 0; k < 3; k++) {
+            sh->spec_w[k] = s.norm * (f0[k] * (1.0f - s.fresnel) + s.fresnel);
+            sh->fres_w[k] = 0.0f;
+        }
     }
+    for (int k = 0; k < 3; k++)
+        sh->diff_w[k] = c_diff[k] * (1.0f - f0[k]) * (float)M_1_PI * d.norm;
     sh->has_spec = 1;
 }
 
@@ -146,9 +158,9 @@ void lie_ltc_shading_lambert(lie_vec3 n, const float c_diff[3], lie_ltc_shading 
     lobe_frame(n, n, sh->frame, &nv);
     static const float identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
     for (int k = 0; k < 9; k++)
-        sh->spec_m[k] = sh->diff_m[k] = identity[k];
+        sh->spec_m[k] = sh->fres_m[k] = sh->diff_m[k] = identity[k];
     for (int k = 0; k < 3; k++) {
-        sh->spec_w[k] = 0.0f;
+        sh->spec_w[k] = sh->fres_w[k] = 0.0f;
         sh->diff_w[k] = c_diff[k]; /* c_diff / pi * (pi * LTC with M = I) */
     }
     sh->has_spec = 0;
@@ -186,8 +198,9 @@ void lie_ltc_polygon(const lie_ltc_shading *sh, const lie_vec3 *verts, int n, fl
         return;
     }
     float es = integrate(sh->spec_m, c, k), ed = integrate(sh->diff_m, c, k);
+    float ef = sh->fres_w[0] > 0.0f || sh->fres_w[1] > 0.0f || sh->fres_w[2] > 0.0f ? integrate(sh->fres_m, c, k) : 0.0f;
     for (int j = 0; j < 3; j++)
-        out[j] = sh->spec_w[j] * es + sh->diff_w[j] * ed;
+        out[j] = sh->spec_w[j] * es + sh->fres_w[j] * ef + sh->diff_w[j] * ed;
 }
 
 void lie_ltc_polygon_once(const lie_ltc_table *t, lie_vec3 n, lie_vec3 wo, float roughness,

@@ -16,6 +16,15 @@
  *     N_s = int_H D V cos (directional albedo of the specular lobe without
  *     F, the table's "norm") and K_s = int_H D V (1 - v.h)^5 cos / N_s (its
  *     "fresnel"); LTC_s(P) in [0, 1] is the fitted distribution's mass in P.
+ *     That takes the Schlick-weighted part D V (1 - v.h)^5 cos to have the
+ *     shape of D V cos, which it has not where v.h varies across the lobe
+ *     (grazing views: the part toward the mirror direction is weighted
+ *     most), so with a ggx_fresnel table (the default one has it) that
+ *     part gets its own LTC:
+ *       int_P F D V cos ~ f0 N_s LTC_s(P) + (1 - f0) N_s K_s LTC_f(P).
+ *     Measured on dielectrics at 75 degrees (`make ltc-bench`): the paper's
+ *     split is off by up to 25% on polygons holding much of the lobe, the
+ *     second LTC by up to ~10%, as the specular lobe alone.
  *   diffuse:  int_P c_diff/pi (1 - F) cos
  *               = c_diff (1 - f0)/pi int_P (1 - (1 - v.h)^5) cos
  *             ~ c_diff (1 - f0)/pi N_d(v) LTC_d(P),
@@ -27,12 +36,16 @@
  * to lib/shade/ltc_table.c; its header comment holds the fit's error table.
  *
  * Limits of the approximation (measured in tests/unit/test_ltc.c, reported
- * by `make ltc-bench`): an LTC is a 3-parameter fit of the lobe, so a
- * polygon's integral is off by a few per cent for roughness >= 0.1 (more for
- * small polygons on the sharpest lobes and at grazing views); a polygon
- * holding the whole upper hemisphere gives the directional albedo exactly
- * up to the tabulated norms (the fitted distribution's mass below the
- * shading horizon is folded into N_s and N_d).  Not handled: the perfect
+ * by `make ltc-bench`): an LTC is a 4-parameter fit of the lobe, so a
+ * polygon holding much of the lobe is off by up to ~5% for views up to 60
+ * degrees, ~10% at 75 degrees, more toward 85; in a lobe's dim tails the
+ * relative error is large (an LTC is exactly 0 beyond its own tilted
+ * horizon, GGX is not: light near the horizon on the viewer's side of a
+ * rough metal can come out several times too dark), though small against
+ * the lobe's whole.  A polygon holding the whole upper hemisphere gives
+ * the directional albedo up to the tabulated norms (the fitted
+ * distributions' mass below the shading horizon is folded into the
+ * norms: within 1%).  Not handled: the perfect
  * mirror (a delta: lie_surface.mirror), emitted textures (radiance must be
  * constant over the polygon), the geometric-normal test of direct.c (only
  * the shading normal's hemisphere is integrated). */
@@ -65,6 +78,9 @@ typedef struct lie_ltc_table {
     int n_rough, n_cos;
     const lie_ltc_bin *ggx;     /* [n_rough][n_cos] specular lobe */
     const lie_ltc_bin *diffuse; /* [n_cos] Fresnel-weighted diffuse lobe */
+    /* [n_rough][n_cos] the specular lobe's Schlick-weighted part, its norm
+     * N_s K_s; NULL: the paper's scalar split alone */
+    const lie_ltc_bin *ggx_fresnel;
 } lie_ltc_table;
 
 /* The fitted tables compiled into the library (static data: nothing to
@@ -78,8 +94,10 @@ const lie_ltc_table *lie_ltc_table_default(void);
 typedef struct lie_ltc_shading {
     float frame[9];    /* world -> lobe frame, rows x, y, n */
     float spec_m[9];   /* lobe frame -> specular cosine space (M^-1) */
+    float fres_m[9];   /* lobe frame -> the Schlick-weighted part's cosine space */
     float diff_m[9];   /* lobe frame -> diffuse cosine space */
-    float spec_w[3];   /* RGB weight of LTC_s(P): N_s (f0 (1 - K_s) + K_s) */
+    float spec_w[3];   /* RGB weight of LTC_s(P): f0 N_s, or N_s (f0 (1 - K_s) + K_s) */
+    float fres_w[3];   /* RGB weight of LTC_f(P): (1 - f0) N_s K_s, or 0 */
     float diff_w[3];   /* RGB weight of LTC_d(P) */
     int has_spec;      /* 0: Lambert only (diff_m is the identity) */
 } lie_ltc_shading;

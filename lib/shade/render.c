@@ -40,6 +40,8 @@ void lie_render_stats_add(lie_render_stats *acc, const lie_render_stats *w)
     acc->pairs_embree += w->pairs_embree;
     acc->pairs_unshadowed += w->pairs_unshadowed;
     acc->exact_overflows += w->exact_overflows;
+    acc->pairs_unbuilt += w->pairs_unbuilt;
+    acc->points_unbuilt += w->points_unbuilt;
     acc->t_analytic += w->t_analytic;
     acc->t_exact += w->t_exact;
     acc->t_blockers += w->t_blockers;

@@ -92,7 +92,8 @@ typedef enum lie_vis_class {
     LIE_VISCLASS_TEST_ALL = 0,   /* cast every shadow ray against the whole scene */
     LIE_VISCLASS_VISIBLE = 1,    /* no ray needed: fully visible */
     LIE_VISCLASS_OCCLUDED = 2,   /* no contribution */
-    LIE_VISCLASS_BLOCKERS = 3    /* test rays against a blocker list only */
+    LIE_VISCLASS_BLOCKERS = 3,   /* test rays against a blocker list only */
+    LIE_VISCLASS_UNBUILT = 4     /* as TEST_ALL: the pair's unit was not built (lie-build --view) */
 } lie_vis_class;
 
 /* One shading point's shadow segments toward one emitter: o -> o + d_i,
@@ -241,6 +242,8 @@ typedef struct lie_render_stats {
     uint64_t pairs_embree;    /* samples against the whole scene */
     uint64_t pairs_unshadowed; /* seen whole, sampled shading */
     uint64_t exact_overflows; /* exact pairs that fell back to samples */
+    uint64_t pairs_unbuilt;   /* of pairs_embree: units lie-build left out (--view, --path) */
+    uint64_t points_unbuilt;  /* shading points with such a pair: pixels, at 1 spp without mirrors */
     /* with lie_render_options.timers: seconds summed over workers */
     double t_analytic, t_exact, t_blockers, t_embree, t_sampled_shading;
     double seconds;

@@ -20,11 +20,10 @@ static double now(void)
  * holding at least 10% of the lobe (its integral over the hemisphere), and
  * the worst error over all polygons in units of that hemisphere integral
  * (the tails of a lobe, where an LTC is least faithful, hold little). */
-static void accuracy(const char *title, float metallic, const float base[3])
+static void accuracy(const lie_ltc_table *T, const char *title, float metallic, const float base[3])
 {
     static const float rough[] = {0.05f, 0.1f, 0.2f, 0.3f, 0.5f, 0.75f, 1.0f};
     static const float angle[] = {0.0f, 30.0f, 60.0f, 75.0f, 85.0f};
-    const lie_ltc_table *T = lie_ltc_table_default();
     printf("\n%s.\nEach cell: worst relative error over the polygons holding >= 10%% of the\n"
            "hemisphere integral / worst error over all 5 polygons in units of the\n"
            "hemisphere integral (MC: %d x 3 samples)\n\n| roughness |",
@@ -89,17 +88,23 @@ static void cost(void)
            "| call | ns |\n|---|---|\n",
            NP, REPS);
     volatile float sink = 0.0f;
+    lie_ltc_table paper = *T;
+    paper.ggx_fresnel = NULL;
+    lie_surface metal = ltc_mc_surface(n, wo, 0.4f, 1.0f, (const float[3]){1.0f, 1.0f, 1.0f});
     struct {
         const char *name;
+        const lie_ltc_table *t;
         const lie_surface *sf;
         int verts;
-    } cases[] = {{"lie_ltc_polygon, GGX, triangle", &ggx, 3},
-                 {"lie_ltc_polygon, GGX, quad", &ggx, 4},
-                 {"lie_ltc_polygon, Lambert, triangle", &lam, 3},
-                 {"lie_ltc_polygon, Lambert, quad", &lam, 4}};
+    } cases[] = {{"lie_ltc_polygon, dielectric GGX (3 LTCs), triangle", T, &ggx, 3},
+                 {"lie_ltc_polygon, dielectric GGX (3 LTCs), quad", T, &ggx, 4},
+                 {"the same with the paper's Fresnel split (2 LTCs), quad", &paper, &ggx, 4},
+                 {"lie_ltc_polygon, white metal (f0 = 1: 2 LTCs), quad", T, &metal, 4},
+                 {"lie_ltc_polygon, Lambert (edge sum), triangle", T, &lam, 3},
+                 {"lie_ltc_polygon, Lambert (edge sum), quad", T, &lam, 4}};
     for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) {
         lie_ltc_shading sh;
-        lie_ltc_shading_from_surface(T, cases[c].sf, &sh);
+        lie_ltc_shading_from_surface(cases[c].t, cases[c].sf, &sh);
         float acc = 0.0f;
         double t0 = now();
         for (int r = 0; r < REPS; r++)
@@ -130,8 +135,14 @@ static void cost(void)
 int main(void)
 {
     float white[3] = {1.0f, 1.0f, 1.0f}, grey[3] = {0.5f, 0.5f, 0.5f};
-    accuracy("Specular only (metallic 1, base colour 1: F = 1, no diffuse)", 1.0f, white);
-    accuracy("Dielectric (metallic 0, base colour 0.5: Fresnel-weighted diffuse + specular)", 0.0f, grey);
+    const lie_ltc_table *T = lie_ltc_table_default();
+    lie_ltc_table paper = *T; /* the LTC paper's scalar Fresnel split alone */
+    paper.ggx_fresnel = NULL;
+    accuracy(T, "Specular only (metallic 1, base colour 1: F = 1, no diffuse)", 1.0f, white);
+    accuracy(T, "Dielectric (metallic 0, base colour 0.5: Fresnel-weighted diffuse + specular)", 0.0f, grey);
+    accuracy(&paper, "The same dielectric with the paper's scalar Fresnel split (no ggx_fresnel table)", 0.0f, grey);
+    float gold[3] = {1.0f, 0.78f, 0.34f};
+    accuracy(T, "Gold-like metal (metallic 1, base colour 1, 0.78, 0.34)", 1.0f, gold);
     cost();
     return 0;
 }

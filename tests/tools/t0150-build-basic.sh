@@ -59,6 +59,39 @@ for bad in "--samples 0" "--samples x" "--min-patch 0" "--min-patch 2" "--blocke
     run "$B/lie-build" "$S/cornell.gltf" -q -o "$TMP/u.lie" $bad
     expect_rc 2 "usage error: $bad"
 done
+# --path: the frames of a camera path are the views; what none of them sees is left unbuilt,
+# and the cache renders those frames as the scene does.
+cat >"$TMP/tour.yaml" <<'YAML'
+interpolation: linear
+keys:
+  - eye: [3.5, 1.6, 2.9]
+    target: [-0.6, 0.45, -0.5]
+    fov: 40
+    frames: 2
+  - eye: [2.5, 1.2, 3.5]
+    target: [0.0, 0.5, -1.0]
+    fov: 40
+YAML
+run "$B/lie-build" "$S/museum1.gltf" -q --path "$TMP/tour.yaml" --view-size 64x64 --stats=json -o "$TMP/tour.lie"
+expect_rc 0 "--path: a build for the frames of a camera path"
+none=$(sed -n 's/.*"none":\([0-9]*\).*/\1/p' "$TMP/err")
+run "$B/lie-build" "$S/museum1.gltf" -q --view "eye=3.5,1.6,2.9,target=-0.6,0.45,-0.5,fov=40" --view-size 64x64 \
+    --stats=json -o "$TMP/one.lie"
+none1=$(sed -n 's/.*"none":\([0-9]*\).*/\1/p' "$TMP/err")
+if [ "${none:-0}" -gt 0 ] && [ "${none1:-0}" -ge "$none" ]; then
+    ok "--path leaves $none units unbuilt, no more than its first view alone ($none1)"
+else not_ok "--path: none $none, first view alone $none1"; fi
+run "$B/lie-render" "$TMP/tour.lie" -q --size 32x32 --camera "eye=-3,1.5,-3,target=0,0.5,0" --stats=json -o "$TMP/away.exr"
+pu=$(sed -n 's/.*"points_unbuilt":\([0-9]*\).*/\1/p' "$TMP/err")
+run "$B/lie-render" "$TMP/tour.lie" -q --size 32x32 --path "$TMP/tour.yaml" --stats=json -o "$TMP/tour_%d.exr"
+pt=$(sed -n 's/.*"points_unbuilt":\([0-9]*\).*/\1/p' "$TMP/err")
+if [ "${pu:-0}" -gt 0 ] && [ -n "$pt" ] && [ "$pt" -lt "$pu" ]; then
+    ok "--stats=json counts the shading points whose units were not built: $pu from elsewhere, $pt on the path"
+else not_ok "points_unbuilt: elsewhere '$pu', on the path '$pt'"; fi
+run "$B/lie-build" "$S/museum1.gltf" -q --path "$TMP/missing.yaml" -o "$TMP/u.lie"
+expect_rc 1 "--path naming a missing file"
+expect_no_file "$TMP/u.lie" "no cache after a bad --path"
+
 # --split-gain: kept in the cache; 0 keeps every split (more nodes than the default)
 "$B/lie-build" "$S/museum1.gltf" -q --min-patch 1e-3 --split-gain 0 -o "$TMP/g0.lie" || not_ok "build --split-gain 0"
 "$B/lie-build" "$S/museum1.gltf" -q --min-patch 1e-3 -o "$TMP/gd.lie" || not_ok "build with the default gain"

@@ -4,8 +4,8 @@
 # (rst-update set-material) rendered from its cache with exact shadows and
 # LTC shading, against full visibility with sampled shading at 1k and 16k
 # rotated samples.  An LTC is a fit of the BRDF, so the difference stops
-# shrinking at the fit's bias (measured on 32x32: rmse 1.8%, p99 10% at
-# 16k samples, the same at 1k: the reference's noise is already below the
+# shrinking at the fit's bias (measured on 32x32: rmse 1.1%, p99 6.1% at
+# 16k samples, 1.3% at 1k: the reference's noise is already near the
 # bias); the bounds leave room for noise only.  Also: every pair took a
 # closed form, full visibility with LTC shading (the ratio estimator) against
 # exact shadows, and thread-count determinism.
@@ -35,9 +35,9 @@ for ns in 1024 16384; do
     "$H/exr-compare" --error "$TMP/f$ns.exr" "$TMP/x.exr" >"$TMP/e$ns.json"
 done
 r16=$(field rmse <"$TMP/e16384.json"); p16=$(field p99 <"$TMP/e16384.json"); r1=$(field rmse <"$TMP/e1024.json")
-if awk -v r="$r16" -v p="$p16" 'BEGIN { exit !(r <= 0.03 && p <= 0.15) }'; then
+if awk -v r="$r16" -v p="$p16" 'BEGIN { exit !(r <= 0.02 && p <= 0.09) }'; then
     ok "LTC + exact shadows vs full at 16k samples: rmse $r16, p99 $p16 (1k: rmse $r1)"
-else not_ok "LTC + exact shadows vs full at 16k samples: rmse $r16 (> 0.03) or p99 $p16 (> 0.15)"; fi
+else not_ok "LTC + exact shadows vs full at 16k samples: rmse $r16 (> 0.02) or p99 $p16 (> 0.09)"; fi
 
 # full visibility with LTC shading: the ratio estimator over its 100 samples
 "$B/lie-render" "$TMP/g.gltf" -q --size 32x32 --visibility=full --pattern rotated --light-samples exact \

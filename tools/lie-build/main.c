@@ -41,6 +41,8 @@ static void usage(FILE *fp)
             "                        index or eye=..,target=..; repeatable), directly or in\n"
             "                        mirrors; the rest is marked 'none' and rendered with full\n"
             "                        visibility (§4.3.1)\n"
+            "      --path PATH.yaml  build only the patches seen from the frames of this camera\n"
+            "                        path (formats/camera-path.md), as --view does for one camera\n"
             "      --view-size WxH   the image the views are sampled at (default 512x512)\n"
             "      --threads N       worker threads (default: all cores); the cache is the\n"
             "                        same for any N\n"
@@ -64,7 +66,7 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 
 enum {
     OPT_SAMPLES = 256, OPT_MAX_SAMPLES, OPT_MAX_BLOCKERS, OPT_MIN_PATCH, OPT_SPLIT_GAIN, OPT_COMPLEX_CAP, OPT_BLOCKERS,
-    OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_VIEW, OPT_VIEW_SIZE, OPT_MAX_NODES
+    OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_VIEW, OPT_VIEW_SIZE, OPT_PATH, OPT_MAX_NODES
 };
 
 static const struct option long_opts[] = {
@@ -79,6 +81,7 @@ static const struct option long_opts[] = {
     {"blockers", required_argument, NULL, OPT_BLOCKERS},
     {"view", required_argument, NULL, OPT_VIEW},
     {"view-size", required_argument, NULL, OPT_VIEW_SIZE},
+    {"path", required_argument, NULL, OPT_PATH},
     {"threads", required_argument, NULL, OPT_THREADS},
     {"allow-external-uris", no_argument, NULL, OPT_EXTERNAL},
     {"stats", optional_argument, NULL, OPT_STATS},
@@ -162,7 +165,7 @@ int main(int argc, char **argv)
     lie_scene_options so = lie_scene_options_default();
     const char *output = NULL;
     int stats = 0, quiet = 0, verbose = 0;
-    const char *views[64];
+    const char *views[64], *path_file = NULL;
     int n_views = 0, view_w = 512, view_h = 512;
     long v;
     float f;
@@ -223,6 +226,7 @@ int main(int argc, char **argv)
                 return usage_error("--view: at most 64 views, got another: '%s'", optarg);
             views[n_views++] = optarg;
             break;
+        case OPT_PATH: path_file = optarg; break;
         case OPT_VIEW_SIZE:
             if (!lie_parse_size(optarg, 16384, &view_w, &view_h))
                 return usage_error("--view-size: expected WxH, got '%s'", optarg);
@@ -271,17 +275,26 @@ int main(int argc, char **argv)
     }
     double t2 = lie_phase(prog, verbose, "bvh", t1);
     uint8_t *mask = NULL;
-    if (n_views) {
-        lie_camera cams[64];
-        mask = calloc((size_t)scene->n_tris + 1, 1);
-        lie_status vs = mask ? LIE_OK : lie_error_set(&err, LIE_ERR_NOMEM, input, "out of memory");
+    if (n_views || path_file) {
+        /* the views: each --view, then every frame of --path */
+        lie_camera_path *cpath = NULL;
+        lie_status vs = path_file ? lie_camera_path_read(path_file, &cpath, &err) : LIE_OK;
+        int n_cams = n_views + (cpath ? cpath->n_frames : 0);
+        lie_camera *cams = vs == LIE_OK ? calloc((size_t)n_cams, sizeof *cams) : NULL;
+        mask = cams ? calloc((size_t)scene->n_tris + 1, 1) : NULL;
+        if (vs == LIE_OK && !mask)
+            vs = lie_error_set(&err, LIE_ERR_NOMEM, input, "out of memory");
         for (int i = 0; vs == LIE_OK && i < n_views; i++) {
             vs = lie_camera_parse(scene, views[i], &cams[i], &err);
             if (vs != LIE_OK && !err.file[0])
                 snprintf(err.file, sizeof err.file, "%s", input);
         }
+        for (int i = n_views; vs == LIE_OK && i < n_cams; i++)
+            cams[i] = lie_camera_path_frame(cpath, i - n_views);
         if (vs == LIE_OK)
-            vs = lie_visible_triangles(scene, rt, cams, n_views, view_w, view_h, LIE_MAX_DEPTH_DEFAULT, mask, &err);
+            vs = lie_visible_triangles(scene, rt, cams, n_cams, view_w, view_h, LIE_MAX_DEPTH_DEFAULT, mask, &err);
+        free(cams);
+        lie_camera_path_destroy(cpath);
         if (vs != LIE_OK) {
             free(mask);
             lie_rt_destroy(rt);
@@ -295,7 +308,7 @@ int main(int argc, char **argv)
         lie_scene_destroy(scene);
         return fail(&err);
     }
-    if (n_views)
+    if (n_views || path_file)
         t2 = lie_phase(prog, verbose, "views", t2);
     lie_progress prog_bar;
     lie_progress_begin(&prog_bar, stderr, "lie-build", !quiet);

@@ -576,13 +576,15 @@ int main(int argc, char **argv)
             fprintf(stderr,
                     "\"exact\":\"%s\",\"pairs_occluded\":%llu,\"pairs_analytic\":%llu,\"pairs_exact\":%llu,"
                     "\"pairs_blockers\":%llu,\"pairs_embree\":%llu,\"pairs_unshadowed\":%llu,"
-                    "\"exact_overflows\":%llu,\"timers\":%s,\"cpu_seconds_analytic\":%.6f,"
+                    "\"exact_overflows\":%llu,\"pairs_unbuilt\":%llu,\"points_unbuilt\":%llu,"
+                    "\"timers\":%s,\"cpu_seconds_analytic\":%.6f,"
                     "\"cpu_seconds_exact\":%.6f,\"cpu_seconds_blockers\":%.6f,\"cpu_seconds_embree\":%.6f,"
                     "\"cpu_seconds_sampled_shading\":%.6f",
                     exact_name(&ro), (unsigned long long)rs.pairs_occluded, (unsigned long long)rs.pairs_analytic,
                     (unsigned long long)rs.pairs_exact, (unsigned long long)rs.pairs_blockers,
                     (unsigned long long)rs.pairs_embree, (unsigned long long)rs.pairs_unshadowed,
-                    (unsigned long long)rs.exact_overflows, ro.timers ? "true" : "false", rs.t_analytic,
+                    (unsigned long long)rs.exact_overflows, (unsigned long long)rs.pairs_unbuilt,
+                    (unsigned long long)rs.points_unbuilt, ro.timers ? "true" : "false", rs.t_analytic,
                     rs.t_exact, rs.t_blockers, rs.t_embree, rs.t_sampled_shading);
             render_dist_stats(stderr, 1);
             fprintf(stderr, "}\n");
@@ -608,6 +610,10 @@ int main(int argc, char **argv)
                     (unsigned long long)rs.pairs_exact, (unsigned long long)rs.pairs_blockers,
                     (unsigned long long)rs.pairs_embree, (unsigned long long)rs.pairs_unshadowed,
                     (unsigned long long)rs.exact_overflows);
+            if (rs.pairs_unbuilt)
+                fprintf(stderr, "  not built in the cache (lie-build --view/--path): %llu pairs at %llu shading points, "
+                                "answered by Embree\n",
+                        (unsigned long long)rs.pairs_unbuilt, (unsigned long long)rs.points_unbuilt);
             if (ro.timers)
                 fprintf(stderr,
                         "  worker seconds: closed form %.3f, exact shadows %.3f, blocker samples %.3f,\n"
