@@ -15,7 +15,7 @@
 extern "C" {
 #endif
 
-/* ---- status and errors (STYLE.md 3) ---------------------------------- */
+/* ---- status and errors (CONTRIBUTING.md, Errors) ---------------------- */
 
 typedef enum lie_status {
     LIE_OK = 0,
@@ -134,7 +134,7 @@ lie_mat4 lie_mat4_translation(double x, double y, double z);
 /* Determinant of the upper 3x3 (negative: the transform mirrors). */
 double lie_mat4_det3(const lie_mat4 *m);
 
-/* ---- deterministic hashing and sampling (ARCHITECTURE.md decision 2) --- */
+/* ---- deterministic hashing and sampling (CONTRIBUTING.md, Determinism) - */
 
 /* XXH3-64 of a byte range with a seed. */
 uint64_t lie_hash_bytes(const void *data, size_t size, uint64_t seed);
@@ -223,7 +223,7 @@ void lie_progress_end(lie_progress *p);
 /* Adapter for lie_parallel_for: pctx is a lie_progress. */
 void lie_progress_cb(void *pctx, size_t done, size_t total);
 
-/* ---- atomic output (STYLE.md 15) -------------------------------------- */
+/* ---- atomic output (CONTRIBUTING.md, Files) --------------------------- */
 
 /* Writes go to a temporary file in the target's directory; commit fsyncs
  * and renames it over the target, abort removes it.  Path "-" writes

@@ -5,7 +5,7 @@
  * a stated size limit.
  *
  * Outputs: a temporary file in the target's directory, fsync, rename
- * (STYLE.md 15).  A symlink is followed to its target and the target is
+ * (CONTRIBUTING.md, Files).  A symlink is followed to its target and the target is
  * replaced atomically in its own folder; an existing non-regular file (a
  * character device such as /dev/null, a FIFO) is written in place.  A group
  * holds finished temporaries until every output of a run is complete, then

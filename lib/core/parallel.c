@@ -1,6 +1,6 @@
 /* A parallel-for over POSIX threads.  Items are handed out in order from an
  * atomic counter; callers write only to per-item slots, so results never
- * depend on the schedule (STYLE.md 7). */
+ * depend on the schedule (CONTRIBUTING.md, Determinism). */
 #include "core/core.h"
 
 #include <pthread.h>

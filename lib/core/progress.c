@@ -1,4 +1,4 @@
-/* Progress bars on a terminal only (STYLE.md 14). */
+/* Progress bars on a terminal only (CONTRIBUTING.md, Tools). */
 #include "core/core.h"
 
 #include <unistd.h>

@@ -1,4 +1,4 @@
-/* Status codes and one-line error messages (STYLE.md 3, 12). */
+/* Status codes and one-line error messages (CONTRIBUTING.md, Errors and Tools). */
 #include "core/core.h"
 
 #include <stdarg.h>

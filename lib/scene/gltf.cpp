@@ -2,7 +2,7 @@
  *
  * Fills the *document* half of a lie_scene (scene.h); lie_scene_flatten
  * builds the world from it.  This is the trust boundary for scene files
- * (STYLE.md 6): every index, offset, size and count from the file is checked
+ * (CONTRIBUTING.md, Files): every index, offset, size and count from the file is checked
  * here before it is used, so flatten and the renderer can trust the
  * document.  tinygltf parses the JSON and reads buffers and images through
  * our file-system callbacks, which refuse URIs leaving the scene's folder

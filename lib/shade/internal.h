@@ -6,7 +6,7 @@
 #include "shade/shade.h"
 
 /* Per-worker buffers, sized once for the largest sample count, so the
- * per-pixel path allocates nothing (STYLE.md 6). */
+ * per-pixel path allocates nothing (CONTRIBUTING.md, Hot paths). */
 typedef struct lie_shade_scratch {
     _Alignas(128) int cap; /* one per worker, on its own cache lines: no false sharing */
     float *wr, *wg, *wb;       /* unshadowed contribution per sample */

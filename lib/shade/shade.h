@@ -1,7 +1,7 @@
 /* lib/shade: BRDFs (Lambert; GGX as glTF's metallic-roughness BRDF; perfect
  * mirror), emitter sample patterns and the direct-lighting renderer.
  *
- * ARCHITECTURE.md decision 1: there is one shading code.  Visibility
+ * There is one shading code (docs/architecture.md, "a visibility method").  Visibility
  * strategies differ only in how a shadow ray is answered: `full` asks Embree
  * over the whole scene (the reference), `lie` (lib/lie) asks the patch's
  * local illumination environment. */

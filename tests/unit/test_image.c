@@ -61,6 +61,17 @@ static unsigned char *slurp(const char *path, size_t *size)
     return data;
 }
 
+/* The two files hold the same bytes. */
+static void assert_files_equal(const char *p1, const char *p2)
+{
+    size_t n1, n2;
+    unsigned char *d1 = slurp(p1, &n1), *d2 = slurp(p2, &n2);
+    assert_int_equal(n1, n2);
+    assert_memory_equal(d1, d2, n1);
+    free(d1);
+    free(d2);
+}
+
 static void spit(const char *path, const void *data, size_t size)
 {
     /* A fresh file: truncating one makes ext4 flush it to disk first. */
@@ -296,12 +307,7 @@ static void test_exr_options_are_per_call(void **state)
     lie_exr_options zeroed = {0};
     assert_int_equal(lie_exr_write(p1, f, NULL, &err), LIE_OK);
     assert_int_equal(lie_exr_write(p2, f, &zeroed, &err), LIE_OK);
-    size_t n1, n2;
-    unsigned char *d1 = slurp(p1, &n1), *d2 = slurp(p2, &n2);
-    assert_int_equal(n1, n2);
-    assert_memory_equal(d1, d2, n1);
-    free(d1);
-    free(d2);
+    assert_files_equal(p1, p2);
     lie_exr_options bad = {.compression = (lie_exr_compression)9};
     assert_int_equal(lie_exr_write(p1, f, &bad, &err), LIE_ERR_ARG);
     lie_frame_destroy(f);
@@ -911,12 +917,7 @@ static void test_png_write_rgb8_stores_pixels_unchanged(void **state)
     /* Deterministic bytes. */
     const char *path2 = tmp_path("raw2.png");
     assert_int_equal(lie_png_write_rgb8(path2, 5, 3, rgb, &err), LIE_OK);
-    size_t n1, n2;
-    unsigned char *d1 = slurp(path, &n1), *d2 = slurp(path2, &n2);
-    assert_int_equal(n1, n2);
-    assert_memory_equal(d1, d2, n1);
-    free(d1);
-    free(d2);
+    assert_files_equal(path, path2);
     assert_int_equal(lie_png_write_rgb8(tmp_path("no/dir/x.png"), 5, 3, rgb, &err), LIE_ERR_IO);
     assert_int_equal(lie_png_write_rgb8(path, 0, 3, rgb, &err), LIE_ERR_ARG);
 }

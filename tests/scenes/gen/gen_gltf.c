@@ -459,7 +459,7 @@ static void set_err(char *err, size_t size, const char *fmt, ...)
     va_end(ap);
 }
 
-/* Atomic output (STYLE.md 15): a temporary file beside the target. */
+/* Atomic output (CONTRIBUTING.md, Files): a temporary file beside the target. */
 typedef struct atomic_file {
     FILE *f;
     char tmp[4096];
