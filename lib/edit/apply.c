@@ -418,9 +418,12 @@ static lie_status apply_op(lie_scene *s, const lie_edit *e, const lie_edit_op *o
         st = lie_edit_find_node(s, op->node, &node, file, op->line, op->col, err);
         if (st != LIE_OK)
             return st;
-        if (s->nodes[node].removed)
+        if (s->nodes[node].removed && op->kind != LIE_EDIT_RESTORE)
             return lie_error_set_at(err, LIE_ERR_NOT_FOUND, file, op->line, op->col,
                                     "node '%s' was removed by an earlier edit", op->node);
+        if (!s->nodes[node].removed && op->kind == LIE_EDIT_RESTORE)
+            return lie_error_set_at(err, LIE_ERR_FORMAT, file, op->line, op->col,
+                                    "restore: node '%s' was not removed", op->node);
     }
     int geometry = 1;
     if ((op->kind == LIE_EDIT_MOVE_BY || op->kind == LIE_EDIT_MOVE_TO || op->kind == LIE_EDIT_ROTATE ||
@@ -485,6 +488,9 @@ static lie_status apply_op(lie_scene *s, const lie_edit *e, const lie_edit_op *o
         break;
     case LIE_EDIT_REMOVE:
         s->nodes[node].removed = 1;
+        break;
+    case LIE_EDIT_RESTORE:
+        s->nodes[node].removed = 0; /* its triangles kept their slots (see remove) */
         break;
     case LIE_EDIT_ADD: {
         int dup = 0;

@@ -27,7 +27,8 @@ typedef enum lie_edit_kind {
     LIE_EDIT_SET_MATERIAL = 7,
     LIE_EDIT_SET_EMISSION = 8,
     LIE_EDIT_SET_WEIGHTS = 9,
-    LIE_EDIT_SET_LIGHT = 10
+    LIE_EDIT_SET_LIGHT = 10,
+    LIE_EDIT_RESTORE = 11   /* undo a remove: the node and its subtree come back as they were */
 } lie_edit_kind;
 
 /* Which optional fields of set-material / set-emission were given. */

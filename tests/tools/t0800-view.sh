@@ -28,7 +28,8 @@ fi
 "$B/lie-build" "$S/museum1.gltf" -q --min-patch 1e-2 -o "$TMP/m1.lie" || not_ok "build museum1"
 
 # A scripted session: look around, move the cube, rotate a chair, change a
-# material, undo and redo, wait for the constructor, screenshot.
+# material, undo and redo, remove a chair and undo that (restore), wait for
+# the constructor, screenshot.
 cat >"$TMP/s.txt" <<EOF
 frames 2
 orbit 15 -5
@@ -42,6 +43,9 @@ rotate 0 1 0 30
 set-material base-color: [0.8, 0.2, 0.1], roughness: 0.5
 undo
 redo
+select Chair1
+remove
+undo
 wait
 screenshot $TMP/shot.png
 quit
@@ -52,13 +56,14 @@ expect_rc 0 "scripted session"
 expect_file "$TMP/shot.png" "the screenshot is written"
 expect_file "$TMP/edits.yaml" "the edits are recorded"
 if grep -q '^- move: {node: Cube, by: \[0.4' "$TMP/edits.yaml" && grep -q '^- set-material: {node: Chair2' "$TMP/edits.yaml" &&
-    grep -q '^- rotate: {node: Chair2' "$TMP/edits.yaml"; then
-    ok "the record holds the move, the rotation and the material"
+    grep -q '^- rotate: {node: Chair2' "$TMP/edits.yaml" && grep -q '^- remove: {node: ' "$TMP/edits.yaml" &&
+    grep -q '^- restore: {node: ' "$TMP/edits.yaml"; then
+    ok "the record holds the move, the rotation, the material, the removal and its undo (restore)"
 else
     not_ok "the record: $(cat "$TMP/edits.yaml")"
 fi
 cam=$(sed -n 's/.*"camera":"\([^"]*\)".*/\1/p' "$TMP/err")
-if [ -n "$cam" ] && grep -q '"frames":[1-9]' "$TMP/err" && grep -q '"update_ms":\[[0-9.]*,[0-9.]*,[0-9.]*,[0-9.]*,[0-9.]*\]' "$TMP/err" &&
+if [ -n "$cam" ] && grep -q '"frames":[1-9]' "$TMP/err" && grep -Eq '"update_ms":\[[0-9.]+(,[0-9.]+){6}\]' "$TMP/err" &&
     grep -q '"pending_max":[1-9]' "$TMP/err" && grep -q '"fps_mean":' "$TMP/err"; then
     ok "--stats=json: frames, fps_mean, update_ms per edit, pending_max, camera"
 else

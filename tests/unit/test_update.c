@@ -184,6 +184,18 @@ static void test_update_equals_rebuild_for_each_operation(void **state)
     }
 }
 
+/* restore (an undo of remove): the removed block comes back, update equal
+ * to rebuild, and the environments equal those of a cache never edited */
+static void test_update_restore_after_remove_equals_rebuild(void **state)
+{
+    (void)state;
+    const char *texts[2] = {OPS[4], "- restore: {node: ShortBlock}\n"};
+    uint64_t flagged = 0;
+    check_update(texts, 2, 0, &flagged);
+    assert_true(flagged > 0);
+    check_update(texts, 2, 13, NULL);
+}
+
 static void test_update_in_chunks_equals_update_at_once(void **state)
 {
     (void)state;
@@ -336,6 +348,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_update_equals_rebuild_for_each_operation),
+        cmocka_unit_test(test_update_restore_after_remove_equals_rebuild),
         cmocka_unit_test(test_update_in_chunks_equals_update_at_once),
         cmocka_unit_test(test_update_of_several_files_equals_rebuild),
         cmocka_unit_test(test_update_edits_while_pending_and_after_commit),

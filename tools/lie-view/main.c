@@ -53,7 +53,8 @@ static void usage(FILE *fp)
             "Script commands: frames N, orbit YAW PITCH, dolly F, select NODE, pick X Y,\n"
             "drag DX DY DZ, rotate AX AY AZ DEG, set-material FIELDS, set-emission FIELDS\n"
             "(FIELDS as in edit files: base-color: [r, g, b], roughness: r, strength: s),\n"
-            "undo, redo, wait (until no unit is pending), screenshot FILE.png, quit.\n",
+            "remove (the selection), undo, redo, wait (until no unit is pending),\n"
+            "screenshot FILE.png, quit.\n",
             prog, 512, 512, LIE_LIGHT_SAMPLES_DEFAULT, LIE_MAX_DEPTH_DEFAULT);
 }
 
@@ -474,6 +475,7 @@ static int script_step(session *S, script_run *R, uint64_t images, int idle)
         case VIEW_CMD_ROTATE:
         case VIEW_CMD_SET_MATERIAL:
         case VIEW_CMD_SET_EMISSION:
+        case VIEW_CMD_REMOVE:
             if (S->sel < 0) {
                 st = lie_error_set_at(&err, LIE_ERR_ARG, R->path, c->line, 1, "nothing is selected");
                 break;
@@ -481,7 +483,11 @@ static int script_step(session *S, script_run *R, uint64_t images, int idle)
             node_ref(S, S->sel, ref, sizeof ref);
             if (c->kind == VIEW_CMD_DRAG)
                 st = edit_move(S, lie_v3((float)c->v[0], (float)c->v[1], (float)c->v[2]), 0, &err);
-            else if (c->kind == VIEW_CMD_ROTATE)
+            else if (c->kind == VIEW_CMD_REMOVE) {
+                st = edit(S, 0, &err, "- remove: {node: %s}\n", ref);
+                if (st == LIE_OK)
+                    S->sel = -1;
+            } else if (c->kind == VIEW_CMD_ROTATE)
                 st = edit(S, 0, &err, "- rotate: {node: %s, axis: [%.17g, %.17g, %.17g], degrees: %.17g}\n", ref,
                           c->v[0], c->v[1], c->v[2], c->v[3]);
             else

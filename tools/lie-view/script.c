@@ -19,6 +19,7 @@ static const struct {
     {"set-emission", VIEW_CMD_SET_EMISSION, -1}, {"undo", VIEW_CMD_UNDO, 0},
     {"redo", VIEW_CMD_REDO, 0},          {"wait", VIEW_CMD_WAIT, 0},
     {"screenshot", VIEW_CMD_SCREENSHOT, -1}, {"quit", VIEW_CMD_QUIT, 0},
+    {"remove", VIEW_CMD_REMOVE, 0},
 };
 
 void view_script_destroy(view_script *s)

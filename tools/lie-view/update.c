@@ -12,7 +12,8 @@
  * Undo applies an edit that restores what a group changed (a node's local
  * transform as it was, its materials as they were), so the record of the
  * session stays a plain edit file that rst-update replays exactly.  A
- * removal has no such inverse in formats/edit.md and is not undone. */
+ * removal is undone by `restore`; an added object has no such inverse in
+ * formats/edit.md and is not undone. */
 #include "world_internal.h"
 
 #include <stdarg.h>
@@ -56,7 +57,8 @@ static void put(buf *b, const char *fmt, ...)
 static void ref(char *out, size_t size, int node) { snprintf(out, size, "'#%d'", node); }
 
 /* The edit restoring what `e` is about to change, or NULL (*removes set)
- * when it removes a node.  Absolute values, so the order of the restoring
+ * when it adds a node (edit files have no operation taking an added node
+ * out again; a removal is undone by `restore`).  Absolute values, so the order of the restoring
  * operations does not matter: a node's local transform, and per mesh node
  * of a subtree the first material's colour, metallic, roughness and
  * emission (a base colour texture that set-material dropped stays dropped). */
@@ -70,13 +72,18 @@ static char *inverse_of(const lie_scene *s, const lie_edit *e, int *removes)
         const lie_edit_op *op = &e->ops[i];
         int node;
         lie_error err;
-        if (op->kind == LIE_EDIT_REMOVE || op->kind == LIE_EDIT_ADD) {
+        if (op->kind == LIE_EDIT_ADD) {
             *removes = 1;
             break;
         }
         if (lie_edit_find_node(s, op->node, &node, e->name, op->line, op->col, &err) != LIE_OK)
             continue;
         char r[32];
+        if (op->kind == LIE_EDIT_REMOVE || op->kind == LIE_EDIT_RESTORE) {
+            ref(r, sizeof r, node);
+            put(&b, "- %s: {node: %s}\n", op->kind == LIE_EDIT_REMOVE ? "restore" : "remove", r);
+            continue;
+        }
         if (op->kind == LIE_EDIT_SET_MATERIAL || op->kind == LIE_EDIT_SET_EMISSION) {
             view_node_subtree(s, node, in);
             for (int n = 0; n < s->n_nodes; n++) {
@@ -141,7 +148,7 @@ static lie_status prepare(view_world *w, const char *yaml, lie_edit **out, char 
         if (op->kind == LIE_EDIT_ADD)
             continue;
         st = lie_edit_find_node(w->scene, op->node, &node, (*out)->name, op->line, op->col, err);
-        if (st == LIE_OK && w->scene->nodes[node].removed)
+        if (st == LIE_OK && w->scene->nodes[node].removed && op->kind != LIE_EDIT_RESTORE)
             st = lie_error_set_at(err, LIE_ERR_ARG, (*out)->name, op->line, op->col, "node '%s' was removed",
                                   op->node);
     }
@@ -280,7 +287,7 @@ lie_status view_world_undo(view_world *w, int *done, lie_error *err)
     view_group *g = &w->live[w->n_live - 1];
     if (!g->inverse)
         return lie_error_set(err, LIE_ERR_UNSUPPORTED, w->input,
-                             "a removal cannot be undone (formats/edit.md has no edit that brings a node back)");
+                             "adding an object cannot be undone (formats/edit.md has no edit that takes it out again)");
     lie_edit *e = NULL;
     lie_status st = *g->inverse ? prepare(w, g->inverse, &e, NULL, err) : LIE_OK;
     if (st == LIE_OK && e)

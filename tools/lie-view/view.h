@@ -126,7 +126,7 @@ void view_text(uint32_t *argb, int width, int height, int x, int y, int scale, u
 typedef enum view_cmd_kind {
     VIEW_CMD_FRAMES, VIEW_CMD_ORBIT, VIEW_CMD_DOLLY, VIEW_CMD_SELECT, VIEW_CMD_PICK, VIEW_CMD_DRAG,
     VIEW_CMD_ROTATE, VIEW_CMD_SET_MATERIAL, VIEW_CMD_SET_EMISSION, VIEW_CMD_UNDO, VIEW_CMD_REDO, VIEW_CMD_WAIT,
-    VIEW_CMD_SCREENSHOT, VIEW_CMD_QUIT
+    VIEW_CMD_SCREENSHOT, VIEW_CMD_QUIT, VIEW_CMD_REMOVE
 } view_cmd_kind;
 
 typedef struct view_cmd {
