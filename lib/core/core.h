@@ -187,24 +187,35 @@ int lie_cpu_count(void);
 /* Calls fn(ctx, item, worker) for every item in [0, n) on `threads` workers
  * (0 = all cores), items handed out in order from a shared counter.  fn must
  * write only to slots owned by `item`, so the result does not depend on the
- * schedule.  `progress` (may be NULL) is called from worker 0 only, with the
- * number of items finished so far. */
+ * schedule.  `progress` (may be NULL) is called by whichever worker finishes
+ * an item (one call at a time; a worker that finds another reporting skips
+ * its call), with the number of items all workers finished so far, and
+ * once with 0 before any item starts and once with the total after the last. */
 typedef void (*lie_parallel_fn)(void *ctx, size_t item, int worker);
 typedef void (*lie_progress_fn)(void *pctx, size_t done, size_t total);
 lie_status lie_parallel_for(size_t n, int threads, lie_parallel_fn fn, void *ctx,
                             lie_progress_fn progress, void *pctx);
+/* The same with a weight per item (its expected work; NULL: 1 each):
+ * progress gets the summed weight of the items finished and the total. */
+lie_status lie_parallel_for_weighted(size_t n, int threads, lie_parallel_fn fn, void *ctx,
+                                     const uint32_t *weight, lie_progress_fn progress, void *pctx);
 
 /* ---- time and progress ------------------------------------------------ */
 
 double lie_time_now(void); /* seconds, monotonic */
 
 /* A progress bar on `stream` if it is a terminal and `enabled`, redrawn at
- * most a few times a second. */
+ * most a few times a second, with the elapsed time, the rate (in `unit`s
+ * per second when a unit is set, else percent) and the time left at that
+ * rate, counted from the last update with done = 0 (lie_parallel_for makes
+ * one as it starts).  label may hold "frame N/M" for paths. */
 typedef struct lie_progress {
     FILE *stream;
     int active;
     double last;
     const char *label;
+    const char *unit;  /* what done and total count ("tiles"), or NULL */
+    double start;      /* lie_time_now() at begin */
 } lie_progress;
 void lie_progress_begin(lie_progress *p, FILE *stream, const char *label, int enabled);
 void lie_progress_update(lie_progress *p, size_t done, size_t total);

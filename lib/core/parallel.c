@@ -23,8 +23,10 @@ double lie_time_now(void)
 }
 
 typedef struct job {
-    size_t n;
+    size_t n, total; /* items; their summed weight */
     atomic_size_t next, done;
+    const uint32_t *weight;
+    atomic_flag reporting; /* one progress call at a time */
     lie_parallel_fn fn;
     void *ctx;
     lie_progress_fn progress;
@@ -45,9 +47,14 @@ static void *worker_main(void *p)
         if (i >= j->n)
             break;
         j->fn(j->ctx, i, w->id);
-        size_t d = atomic_fetch_add(&j->done, 1) + 1;
-        if (w->id == 0 && j->progress)
-            j->progress(j->pctx, d, j->n);
+        size_t wi = j->weight ? j->weight[i] : 1;
+        size_t d = atomic_fetch_add(&j->done, wi) + wi;
+        /* any worker reports, so a long item on one worker does not stall
+         * the bar; done is summed over all of them */
+        if (j->progress && !atomic_flag_test_and_set(&j->reporting)) {
+            j->progress(j->pctx, d, j->total);
+            atomic_flag_clear(&j->reporting);
+        }
     }
     return NULL;
 }
@@ -55,12 +62,28 @@ static void *worker_main(void *p)
 lie_status lie_parallel_for(size_t n, int threads, lie_parallel_fn fn, void *ctx,
                             lie_progress_fn progress, void *pctx)
 {
+    return lie_parallel_for_weighted(n, threads, fn, ctx, NULL, progress, pctx);
+}
+
+lie_status lie_parallel_for_weighted(size_t n, int threads, lie_parallel_fn fn, void *ctx,
+                                     const uint32_t *weight, lie_progress_fn progress, void *pctx)
+{
     if (threads <= 0)
         threads = lie_cpu_count();
     if ((size_t)threads > n)
         threads = n > 0 ? (int)n : 1;
     job j;
     j.n = n;
+    j.weight = weight;
+    j.total = n;
+    if (weight) {
+        j.total = 0;
+        for (size_t i = 0; i < n; i++)
+            j.total += weight[i];
+    }
+    atomic_flag_clear(&j.reporting);
+    if (progress)
+        progress(pctx, 0, j.total); /* the start: the bar's clock */
     atomic_init(&j.next, 0);
     atomic_init(&j.done, 0);
     j.fn = fn;
@@ -87,6 +110,8 @@ lie_status lie_parallel_for(size_t n, int threads, lie_parallel_fn fn, void *ctx
     worker_main(&args[0]);
     for (int t = 1; t < started; t++)
         pthread_join(tids[t], NULL);
+    if (progress && n > 0)
+        progress(pctx, j.total, j.total); /* the end, which a skipped call may have missed */
     free(args);
     free(tids);
     return LIE_OK;

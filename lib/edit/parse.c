@@ -254,22 +254,17 @@ static lie_status parse_op(lie_yaml *p, const yaml_node_t *item, int index, lie_
         st = get_string(p, f[0].value, "set-transform.node", &op->node);
         if (st == LIE_OK)
             st = lie_yaml_numbers(p, f[1].value, "set-transform.matrix", op->matrix, 16);
-    } else if (strcmp(name, "remove") == 0) {
+    } else if (strcmp(name, "remove") == 0 || strcmp(name, "restore") == 0) {
+        /* {node}: remove, or restore (an undo of remove) */
         field f[] = {{"node", 0, 0, 0}};
+        char nkey[16];
+        snprintf(nkey, sizeof nkey, "%s.node", name);
         if ((st = collect(p, vn, opk, f, 1)) != LIE_OK)
             return st;
         if (!f[0].seen)
-            return lie_yaml_error(p, vn, "remove.node", "missing");
-        op->kind = LIE_EDIT_REMOVE;
-        st = get_string(p, f[0].value, "remove.node", &op->node);
-    } else if (strcmp(name, "restore") == 0) {
-        field f[] = {{"node", 0, 0, 0}};
-        if ((st = collect(p, vn, opk, f, 1)) != LIE_OK)
-            return st;
-        if (!f[0].seen)
-            return lie_yaml_error(p, vn, "restore.node", "missing");
-        op->kind = LIE_EDIT_RESTORE;
-        st = get_string(p, f[0].value, "restore.node", &op->node);
+            return lie_yaml_error(p, vn, nkey, "missing");
+        op->kind = strcmp(name, "remove") == 0 ? LIE_EDIT_REMOVE : LIE_EDIT_RESTORE;
+        st = get_string(p, f[0].value, nkey, &op->node);
     } else if (strcmp(name, "add") == 0) {
         field f[] = {{"file", 0, 0, 0}, {"node", 0, 0, 0}, {"as", 0, 0, 0}, {"transform", 0, 0, 0}};
         if ((st = collect(p, vn, opk, f, 4)) != LIE_OK)

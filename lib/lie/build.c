@@ -15,6 +15,7 @@
 #include "lie/sample.h"
 #include "lie/subdiv.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -30,6 +31,34 @@ static void workers_free(worker *ws, int n)
         free(ws[i].hull);
     }
     free(ws);
+}
+
+/* Each triangle's expected share of the build, for the progress bar only:
+ * its pairs to build times the leaves along a shadow boundary its
+ * subdivision can reach (§3.2: a patch splits in four until min_patch, so a
+ * boundary crosses about sqrt(area / min_area) of the smallest patches).
+ * Pairs outside the views' mask cost next to nothing. */
+static uint32_t *build_weights(const build_ctx *c, uint32_t n_items, size_t ne)
+{
+    uint32_t *w = malloc(sizeof *w * ((size_t)n_items + 1));
+    if (!w)
+        return NULL; /* the bar then counts triangles */
+    for (uint32_t i = 0; i < n_items; i++) {
+        uint32_t tri = c->tri_lo + i;
+        size_t u0 = (size_t)tri * ne, u1 = u0 + ne;
+        if (u0 < c->unit_lo)
+            u0 = (size_t)c->unit_lo;
+        if (u1 > c->unit_hi)
+            u1 = (size_t)c->unit_hi;
+        size_t pairs = c->s->n_emitters == 0 ? 1 : u1 > u0 ? u1 - u0 : 0;
+        double ratio = c->min_area > 0.0f ? (double)c->s->tri_area[tri] / (double)c->min_area : 1.0;
+        double depth = 1.0 + (ratio > 1.0 ? pow(ratio, 0.75) : 0.0);
+        if (c->tri_mask && !c->tri_mask[tri])
+            depth = 0.05;
+        double v = (double)pairs * depth * 4.0;
+        w[i] = v < 1.0 ? 1u : v > 1e9 ? 1000000000u : (uint32_t)v;
+    }
+    return w;
 }
 
 /* Build (or, with a mask, rebuild some units of) every triangle, then
@@ -72,8 +101,11 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     size_t n_memo = 0;
     if (st == LIE_OK && node_flags && old_unit && c.p->mode == LIE_BLOCKERS_SAMPLED)
         st = lie_memo_precompute(&c, threads, &n_memo);
+    uint32_t *weight = st == LIE_OK && progress && progress->active ? build_weights(&c, n_items, ne) : NULL;
     if (st == LIE_OK)
-        st = lie_parallel_for(n_items, threads, lie_subdiv_triangle, &c, progress ? lie_progress_cb : NULL, progress);
+        st = lie_parallel_for_weighted(n_items, threads, lie_subdiv_triangle, &c, weight,
+                                       progress ? lie_progress_cb : NULL, progress);
+    free(weight);
     lie_memo_free(&c, n_memo);
     for (int i = 0; c.workers && i < threads; i++) {
         if (c.workers[i].nomem && st != LIE_ERR_LIMIT)

@@ -378,7 +378,8 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
         j.tiles_x = (opt->width + LIE_TILE - 1) / LIE_TILE;
         tile_range r = {&j, first};
         lie_progress prog;
-        lie_progress_begin(&prog, stderr, "render", opt->progress);
+        lie_progress_begin(&prog, stderr, opt->progress_label ? opt->progress_label : "render", opt->progress);
+        prog.unit = "tiles";
         st = lie_parallel_for(count, threads, render_range_tile, &r, lie_progress_cb, &prog);
         lie_progress_end(&prog);
     }

@@ -214,6 +214,7 @@ typedef struct lie_render_options {
     int eye_only;          /* trace eye rays only (benchmark baseline) */
     unsigned lie_skip;     /* LIE_SKIP_*: benchmark ablations (wrong images) */
     int progress;          /* progress bar on stderr if a terminal */
+    const char *progress_label; /* its label (NULL: "render"), e.g. "frame 3/20" */
     lie_exact_mode exact;  /* closed-form shading and exact visibility (polylight.h) */
     int timers;            /* per-worker timers of each path into the stats (costs a clock read per pair) */
 } lie_render_options;

@@ -4,6 +4,7 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 #include <stdlib.h>
 
 #include <cmocka.h>
@@ -82,10 +83,65 @@ static void test_shadow_segment_uses_the_shared_offset_and_end(void **state)
     assert_false(lie_shadow_segment(p, ng, lie_v3(-300.0f, 2.0f + eps, 5.0f), &org, &dir, &tnear, &tfar));
 }
 
+typedef struct progress_log {
+    size_t calls, first, last, total, max;
+    int decreasing;
+} progress_log;
+
+static void log_progress(void *pctx, size_t done, size_t total)
+{
+    progress_log *l = pctx; /* calls never overlap (lie_parallel_for) */
+    if (l->calls++ == 0)
+        l->first = done;
+    if (done < l->max)
+        l->decreasing = 1;
+    l->max = done > l->max ? done : l->max;
+    l->last = done;
+    l->total = total;
+}
+
+static void count_item(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    ((int *)ctx)[item]++;
+}
+
+/* Progress is the summed weight of the finished items over all workers,
+ * from 0 to the total, never going back. */
+static void test_parallel_progress_weighted(void **state)
+{
+    (void)state;
+    enum { N = 200 };
+    uint32_t w[N];
+    size_t sum = 0;
+    for (int i = 0; i < N; i++)
+        sum += w[i] = (uint32_t)(1 + (i * 7) % 13);
+    for (int threads = 1; threads <= 4; threads++) {
+        int seen[N] = {0};
+        progress_log l;
+        memset(&l, 0, sizeof l);
+        assert_int_equal(lie_parallel_for_weighted(N, threads, count_item, seen, w, log_progress, &l), LIE_OK);
+        for (int i = 0; i < N; i++)
+            assert_int_equal(seen[i], 1);
+        assert_int_equal(l.first, 0);
+        assert_int_equal(l.last, sum);
+        assert_int_equal(l.total, sum);
+        assert_false(l.decreasing);
+        assert_true(l.calls >= 2);
+    }
+    progress_log l;
+    memset(&l, 0, sizeof l);
+    int seen[N] = {0};
+    assert_int_equal(lie_parallel_for(N, 3, count_item, seen, log_progress, &l), LIE_OK);
+    assert_int_equal(l.last, N);
+    assert_int_equal(l.total, N);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_push_keeps_every_element_in_order),
+        cmocka_unit_test(test_parallel_progress_weighted),
         cmocka_unit_test(test_grow_reserves_at_least_what_is_asked),
         cmocka_unit_test(test_grow_refuses_sizes_past_memory_and_keeps_the_array),
         cmocka_unit_test(test_shadow_segment_uses_the_shared_offset_and_end),

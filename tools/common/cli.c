@@ -126,3 +126,11 @@ int lie_report_error(const char *prog, const lie_error *err, int code)
     fprintf(stderr, "%s: %s\n", prog, line);
     return code;
 }
+
+double lie_phase(const char *prog, int verbose, const char *phase, double since)
+{
+    double now = lie_time_now();
+    if (verbose)
+        fprintf(stderr, "%s: %s: %.3f s\n", prog, phase, now - since);
+    return now;
+}

@@ -30,6 +30,10 @@ int lie_parse_stats(const char *arg);
 
 /* "PROG: message (see --help)"; returns 2, the usage-error exit status. */
 int lie_usage_error(const char *prog, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+/* -v: one line per phase on stderr, "prog: phase: 1.234 s", when verbose;
+ * returns lie_time_now() so phases chain: t = lie_phase(prog, v, "load", t). */
+double lie_phase(const char *prog, int verbose, const char *phase, double since);
 /* "PROG: FILE: what is wrong" from err; returns `code`. */
 int lie_report_error(const char *prog, const lie_error *err, int code);
 

@@ -49,6 +49,7 @@ static void usage(FILE *fp)
             "      --allow-external-uris  let the glTF reference files outside its folder\n"
             "      --stats[=json]    print statistics to stderr\n"
             "  -q, --quiet           no progress bar\n"
+            "  -v, --verbose         each phase's time on stderr (load, bvh, build, write)\n"
             "  -h, --help            this help\n"
             "      --version         print the version\n"
             "\n"
@@ -85,6 +86,7 @@ static const struct option long_opts[] = {
     {"allow-external-uris", no_argument, NULL, OPT_EXTERNAL},
     {"stats", optional_argument, NULL, OPT_STATS},
     {"quiet", no_argument, NULL, 'q'},
+    {"verbose", no_argument, NULL, 'v'},
     {"help", no_argument, NULL, 'h'},
     {"version", no_argument, NULL, OPT_VERSION},
     {NULL, 0, NULL, 0},
@@ -162,14 +164,14 @@ int main(int argc, char **argv)
     lie_build_params bp = lie_build_params_default();
     lie_scene_options so = lie_scene_options_default();
     const char *output = NULL;
-    int stats = 0, quiet = 0;
+    int stats = 0, quiet = 0, verbose = 0;
     const char *views[64], *path_file = NULL;
     int n_views = 0, view_w = 512, view_h = 512;
     long v;
     float f;
     int c;
     opterr = 0;
-    while ((c = getopt_long(argc, argv, ":o:qh", long_opts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":o:qvh", long_opts, NULL)) != -1) {
         switch (c) {
         case 'o': output = optarg; break;
         case OPT_SAMPLES:
@@ -234,6 +236,7 @@ int main(int argc, char **argv)
                 return usage_error("--stats: expected --stats or --stats=json, got '%s'", optarg);
             break;
         case 'q': quiet = 1; break;
+        case 'v': verbose = 1; break;
         case 'h': usage(stdout); return 0;
         case OPT_VERSION: { char vr[512]; lie_version_report(prog, vr, sizeof vr); fputs(vr, stdout); return 0; }
         case ':': return usage_error("%s: missing value", argv[optind - 1]);
@@ -264,13 +267,13 @@ int main(int argc, char **argv)
     if (scene->n_emitters == 0 && !quiet)
         fprintf(stderr, "%s: %s: warning: no emitters (no emissive material, no KHR_lights_punctual light): "
                         "the cache holds no environments\n", prog, input);
-    double t1 = lie_time_now();
+    double t1 = lie_phase(prog, verbose, "load", t0);
     lie_rt *rt = NULL;
     if (lie_rt_create(scene, &rt, &err) != LIE_OK) {
         lie_scene_destroy(scene);
         return fail(&err);
     }
-    double t2 = lie_time_now();
+    double t2 = lie_phase(prog, verbose, "bvh", t1);
     uint8_t *mask = NULL;
     if (n_views || path_file) {
         /* the views: each --view, then every frame of --path */
@@ -305,6 +308,8 @@ int main(int argc, char **argv)
         lie_scene_destroy(scene);
         return fail(&err);
     }
+    if (n_views || path_file)
+        t2 = lie_phase(prog, verbose, "views", t2);
     lie_progress prog_bar;
     lie_progress_begin(&prog_bar, stderr, "lie-build", !quiet);
     lie_env *env = NULL;
@@ -323,7 +328,7 @@ int main(int argc, char **argv)
         lie_scene_destroy(scene);
         return 0;
     }
-    double t3 = lie_time_now();
+    double t3 = lie_phase(prog, verbose, "build", t2);
     lie_cache cache;
     memset(&cache, 0, sizeof cache);
     cache.scene_path = (char *)input;
@@ -333,7 +338,7 @@ int main(int argc, char **argv)
     size_t bytes = 0;
     if (rc == LIE_OK)
         rc = lie_cache_write(output, &cache, &bytes, &err);
-    double t4 = lie_time_now();
+    double t4 = lie_phase(prog, verbose && rc == LIE_OK, "write", t3);
     if (rc == LIE_OK && stats)
         print_stats(input, scene, env, &st, t1 - t0, t2 - t1, t3 - t2, t4 - t3, bytes, stats == 2);
     free(cache.emitters);

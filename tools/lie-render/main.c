@@ -75,6 +75,8 @@ static void usage(FILE *fp)
             "      --allow-external-uris  let the glTF reference files outside its folder\n"
             "      --stats[=json]      print statistics to stderr\n"
             "  -q, --quiet             no progress bar\n"
+            "  -v, --verbose           each phase's time on stderr (load, bvh, then render\n"
+            "                          and write per frame)\n"
             "  -h, --help              this help\n"
             "      --version           print the version\n"
             "\n"
@@ -125,6 +127,7 @@ static const struct option long_opts[] = {
     {"allow-external-uris", no_argument, NULL, OPT_EXTERNAL},
     {"stats", optional_argument, NULL, OPT_STATS},
     {"quiet", no_argument, NULL, 'q'},
+    {"verbose", no_argument, NULL, 'v'},
     {"help", no_argument, NULL, 'h'},
     {"version", no_argument, NULL, OPT_VERSION},
     {NULL, 0, NULL, 0},
@@ -265,11 +268,11 @@ int main(int argc, char **argv)
     int skip_existing = 0;
     int visibility_set = 0;
     lie_frame_options fopt = {0};
-    int stats = 0, quiet = 0; /* stats: 1 human, 2 json */
+    int stats = 0, quiet = 0, verbose = 0; /* stats: 1 human, 2 json */
     long v;
     int c;
     opterr = 0;
-    while ((c = getopt_long(argc, argv, ":o:qh", long_opts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":o:qvh", long_opts, NULL)) != -1) {
         switch (c) {
         case 'o': output = optarg; break;
         case OPT_CAMERA: camera = optarg; break;
@@ -373,6 +376,7 @@ int main(int argc, char **argv)
                 return usage_error("--stats: expected --stats or --stats=json, got '%s'", optarg);
             break;
         case 'q': quiet = 1; break;
+        case 'v': verbose = 1; break;
         case 'h': usage(stdout); return 0;
         case OPT_VERSION: { char vr[512]; lie_version_report(prog, vr, sizeof vr); fputs(vr, stdout); return 0; }
         case ':': return usage_error("%s: missing value", argv[optind - 1]);
@@ -414,7 +418,7 @@ int main(int argc, char **argv)
     lie_lie_vis *lv = NULL;
     if (load_input(input, scene_override, &so, &scene, &cache, &err) != LIE_OK)
         return fail(&err);
-    double t1 = lie_time_now();
+    double t1 = lie_phase(prog, verbose, "load", t0);
     if (!visibility_set)
         ro.visibility = cache ? LIE_VIS_LIE : LIE_VIS_FULL;
     if (!cache && (ro.visibility == LIE_VIS_LIE || (ro.aovs & (LIE_AOV_COMPLEXITY | LIE_AOV_PATCH)))) {
@@ -467,7 +471,7 @@ int main(int argc, char **argv)
         lie_scene_destroy(scene);
         return fail(&err);
     }
-    double t2 = lie_time_now();
+    double t2 = lie_phase(prog, verbose, "bvh", t1);
     char hash[32], size[32];
     snprintf(hash, sizeof hash, "%016llx", (unsigned long long)scene->hash);
     snprintf(size, sizeof size, "%dx%d", ro.width, ro.height);
@@ -524,13 +528,25 @@ int main(int argc, char **argv)
         double ta = lie_time_now();
         lie_frame *frame = NULL;
         lie_render_stats fs;
+        char label[64];
+        if (cpath) {
+            snprintf(label, sizeof label, "frame %d/%d", k + 1, n_todo);
+            ro.progress_label = label;
+        }
         st = lie_render(scene, rt, &fc, &ro, &frame, &fs, &err);
+        ro.progress_label = NULL;
         if (st != LIE_OK)
             break;
         double tb = lie_time_now();
         lie_render_stats_add(&rs, &fs);
+        if (cpath)
+            snprintf(label, sizeof label, "frame %d: render", first + fi);
+        lie_phase(prog, verbose, cpath ? label : "render", ta);
         st = write_frame(&fo, fi, &fc, frame, &err);
         lie_frame_destroy(frame);
+        if (cpath)
+            snprintf(label, sizeof label, "frame %d: write", first + fi);
+        lie_phase(prog, verbose && st == LIE_OK, cpath ? label : "write", tb);
         t_render += tb - ta;
         t_write += lie_time_now() - tb;
     }
