@@ -155,10 +155,13 @@ static int exact_split_pays(const build_ctx *c, worker *w, uint32_t tri, lie_pat
  *   the renderer nothing.
  * - A node too long for a list (complex as a leaf) splits if a child gets
  *   a list: part of its area leaves Embree.  If every child is too long as
- *   well, the exact counts decide (exact_split_pays).
+ *   well, a patch larger than 1% of the largest triangle splits anyway
+ *   (lists may take several levels to fall under the cap), and a smaller
+ *   one splits if the exact counts shrink (exact_split_pays).
  * The decision uses only the node and its four children, all inside the
  * node's own shaft, so an update that copies an untouched node copies the
  * same decision. */
+#define LIE_COMPLEX_KEEP_SPLITTING 1e-2f
 static int split_pays(const build_ctx *c, worker *w, uint32_t tri, lie_patch_path path, int e, int two_sided,
                       lie_class cls, size_t n_list, const double child_w[4])
 {
@@ -169,6 +172,13 @@ static int split_pays(const build_ctx *c, worker *w, uint32_t tri, lie_patch_pat
     for (int k = 0; k < 4; k++)
         all_long &= child_w[k] > cap;
     if (parent > cap && !all_long)
+        return 1;
+    /* A complex patch costs an Embree ray per light sample on every pixel
+     * it covers: a large one keeps splitting, as the paper's rule does,
+     * whatever one level shows (LIE_COMPLEX_KEEP_SPLITTING of the largest
+     * triangle; a relative size, so updates keep it, lib/update). */
+    float area = c->s->tri_area[tri] / (float)(1u << (2 * (path.depth < 15 ? path.depth : 15)));
+    if (parent > cap && area > LIE_COMPLEX_KEEP_SPLITTING * c->s->max_tri_area)
         return 1;
     if (parent > cap && c->p->mode == LIE_BLOCKERS_SAMPLED)
         return exact_split_pays(c, w, tri, path, e, two_sided);
@@ -242,8 +252,31 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
             }
         }
         int pays = !w->nomem && split_pays(c, w, tri, path, e, two_sided, nc.cls, n_list, kid_w);
+        /* A leaf instead, if the split does not pay.  A list sampled over a
+         * patch this large may miss small blockers that the deeper tree
+         * would have found, so such a leaf gets its exact list: every
+         * triangle meeting the pair's hull (§4.1.2), less a planar
+         * emitter's own triangles, which end every segment.  If that list
+         * is past the cap the leaf would be complex, dearer than any split:
+         * the node splits after all.  In conservative mode the list is
+         * exact already. */
+        size_t n_leaf = n_list;
+        if (!pays && !w->nomem && c->p->mode == LIE_BLOCKERS_SAMPLED && n_list <= c->p->complex_cap) {
+            lie_vec3 V[3];
+            lie_patch_world(path, &s->tri_p[3 * (size_t)tri], V);
+            lie_cull_conservative(c, w, tri, V, two_sided, e, NULL, 0, c->p->complex_cap, &n_leaf);
+            const lie_emitter *em = &s->emitters[e];
+            if (em->type == LIE_EMITTER_AREA && em->planar && n_leaf <= c->p->complex_cap) {
+                size_t k = 0;
+                for (size_t j = 0; j < n_leaf; j++)
+                    if (w->hits[j] - em->first_tri >= em->n_tris)
+                        w->hits[k++] = w->hits[j];
+                n_leaf = k;
+            }
+            pays = n_leaf > c->p->complex_cap;
+        }
         int first = -1;
-        if (pays) {
+        if (pays && !w->nomem) {
             first = push_node(u, w);
             for (int k = 1; k < 4 && first >= 0; k++)
                 if (push_node(u, w) < 0)
@@ -267,26 +300,10 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
             free(keep);
             return;
         }
-        /* The split does not pay: this node is a leaf.  A list sampled over
-         * a patch this large may miss small blockers that the deeper tree
-         * would have found, so the leaf gets its exact list instead: every
-         * triangle meeting the pair's hull (§4.1.2), complex past the cap.
-         * In conservative mode the list is exact already. */
         if (c->p->mode == LIE_BLOCKERS_SAMPLED && n_list <= c->p->complex_cap) {
-            lie_vec3 V[3];
-            lie_patch_world(path, &s->tri_p[3 * (size_t)tri], V);
-            nc.cls = lie_cull_conservative(c, w, tri, V, two_sided, e, NULL, 0, c->p->complex_cap, &n_list);
-            /* a planar emitter's own triangles end every segment: they block none */
-            const lie_emitter *em = &s->emitters[e];
-            if (em->type == LIE_EMITTER_AREA && em->planar && n_list <= c->p->complex_cap) {
-                size_t k = 0;
-                for (size_t j = 0; j < n_list; j++)
-                    if (w->hits[j] - em->first_tri >= em->n_tris)
-                        w->hits[k++] = w->hits[j];
-                n_list = k;
-                if (!n_list)
-                    nc.cls = LIE_CLASS_VISIBLE;
-            }
+            n_list = n_leaf; /* the exact list, in w->hits */
+            if (!n_list)
+                nc.cls = LIE_CLASS_VISIBLE;
         } else {
             if (!LIE_GROW(w->hits, w->cap_hits, n_list)) {
                 free(keep);
