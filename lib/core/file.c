@@ -138,31 +138,41 @@ lie_status lie_atomic_group_commit(lie_atomic_group *g, lie_error *err)
 
 /* Follow symlinks from `path` to the file they name, which may not exist yet
  * (a dangling link names the file to create).  At most 40 links, as the
- * kernel allows; the result is the last name reached. */
-static void resolve_links(const char *path, char *out, size_t size)
+ * kernel allows; the result is the last name reached.  As the kernel's
+ * protected_symlinks does for open(), a link in a sticky world-writable
+ * folder (/tmp) is followed only if it belongs to us or to the folder's
+ * owner: otherwise another user could aim our output at any file.  Returns
+ * 0, or -1 for such a link. */
+static int resolve_links(const char *path, char *out, size_t size)
 {
     snprintf(out, size, "%s", path);
     for (int hops = 0; hops < 40; hops++) {
-        struct stat st;
+        struct stat st, dir;
         if (lstat(out, &st) != 0 || !S_ISLNK(st.st_mode))
-            return;
+            return 0;
+        char *slash = strrchr(out, '/');
+        int dirlen = slash ? (int)(slash - out + 1) : 0;
+        char dname[4096];
+        snprintf(dname, sizeof dname, "%.*s", dirlen ? dirlen : 1, dirlen ? out : ".");
+        if (stat(dname, &dir) == 0 && (dir.st_mode & S_ISVTX) && (dir.st_mode & S_IWOTH) &&
+            st.st_uid != geteuid() && st.st_uid != dir.st_uid)
+            return -1;
         char link[4096];
         ssize_t n = readlink(out, link, sizeof link - 1);
         if (n <= 0)
-            return;
+            return 0;
         link[n] = 0;
         if (link[0] == '/') {
             snprintf(out, size, "%s", link);
         } else {
-            char *slash = strrchr(out, '/');
-            int dirlen = slash ? (int)(slash - out + 1) : 0;
             char joined[8192];
             snprintf(joined, sizeof joined, "%.*s%s", dirlen, out, link);
             if (strlen(joined) >= size)
-                return;
+                return 0;
             snprintf(out, size, "%s", joined);
         }
     }
+    return 0;
 }
 
 lie_status lie_atomic_open_group(lie_atomic_file *af, const char *path, lie_atomic_group *group, lie_error *err)
@@ -179,7 +189,9 @@ lie_status lie_atomic_open_group(lie_atomic_file *af, const char *path, lie_atom
     if (strlen(path) + 16 >= sizeof af->tmp)
         return lie_error_set(err, LIE_ERR_ARG, path, "path too long");
     snprintf(af->path, sizeof af->path, "%s", path);
-    resolve_links(path, af->target, sizeof af->target);
+    if (resolve_links(path, af->target, sizeof af->target) != 0)
+        return lie_error_set(err, LIE_ERR_IO, path,
+                             "cannot write: a symlink of another user in a sticky world-writable folder");
     if (strlen(af->target) + 16 >= sizeof af->tmp)
         return lie_error_set(err, LIE_ERR_ARG, path, "the path a symlink names is too long");
 
@@ -205,9 +217,12 @@ lie_status lie_atomic_open_group(lie_atomic_file *af, const char *path, lie_atom
 
     /* The temporary lives next to the target so rename() is atomic. */
     const char *slash = strrchr(af->target, '/');
-    size_t dirlen = slash ? (size_t)(slash - af->target + 1) : 0;
-    snprintf(af->tmp, sizeof af->tmp, "%.*s.%s.tmpXXXXXX", (int)dirlen, af->target,
-             slash ? slash + 1 : af->target);
+    size_t dirlen = slash ? (size_t)(slash - af->target + 1) : 0, len = strlen(af->target);
+    /* "DIR/.NAME.tmpXXXXXX": the length was checked above */
+    memcpy(af->tmp, af->target, dirlen);
+    af->tmp[dirlen] = '.';
+    memcpy(af->tmp + dirlen + 1, af->target + dirlen, len - dirlen);
+    memcpy(af->tmp + len + 1, ".tmpXXXXXX", sizeof ".tmpXXXXXX");
     /* signals between mkstemp and the registration would leave the file */
     sigset_t block, old;
     sigemptyset(&block);

@@ -150,8 +150,10 @@ rm sc/cornell.gltf && mkfifo sc/cornell.gltf
 (cd sc && quick "$B/lie-render" ../sc.lie -q --size 8x8 -o "$T/o.exr")
 expect_fail_line lie-render "cornell.gltf: cannot read a FIFO" "a FIFO as a cache's scene path"
 rm sc/cornell.gltf && ln -s "$T/zero" sc/cornell.gltf
+(cd sc && quick "$B/lie-render" ../sc.lie -q --size 8x8 -o "$T/o.exr")
+expect_fail_line lie-render "cornell.gltf: cannot read a character device" "a device (/dev/zero) as a cache's scene path"
 (cd sc && quick "$B/lie-inspect" verify ../sc.lie --scene cornell.gltf)
-expect_fail_line lie-inspect "cornell.gltf: cannot read a character device" "a device as a cache's scene"
+expect_fail_line lie-inspect "cornell.gltf: cannot read a character device" "and as verify --scene"
 quick "$B/lie-build" "$T" -q -o "$T/o.lie"
 expect_fail_line lie-build "cannot read a directory" "a directory as scene"
 
@@ -213,6 +215,9 @@ expect_fail_line lie-render '^lie-render: we\\nird\\033\]0;pwned\\007/cornell\.g
     "a scene path from a cache is escaped"
 if tr -d '\n' <"$T/err" | LC_ALL=C grep -q "$(printf '[\001-\037\177]')"; then
     not_ok "control bytes reached stderr"; else ok "no control byte reaches stderr"; fi
+run "$B/lie-inspect" summary "$T/ctl.lie"
+grep '^scene ' "$T/out" | grep -qF 'we\x0aird\x1b]0;pwned\x07/cornell.gltf' &&
+    ok "lie-inspect summary escapes the scene path too" || { not_ok "summary"; grep '^scene' "$T/out" | od -c | head -3; }
 edit_fails ctl.yaml '- move: {node: "Tall\\nBlock\\e[31m\\u009b", by: [0, 0, 0]}\n' \
     'Tall\\nBlock\\033\[31m\\302\\233' "a node name with a newline, ESC and a C1 CSI"
 edit_fails utf8.yaml '- move: {node: "Zoë", by: [0, 0, 0]}\n' 'Zoë' "UTF-8 passes unescaped"

@@ -86,7 +86,9 @@ static void summary_text(const char *path, const inspect_cache *l, const lie_bui
         if (c->emitters[e].type < 3)
             by_type[c->emitters[e].type]++;
     printf("cache           %s (%zu bytes, format version %u)\n", path, l->size, LIE_CACHE_VERSION);
-    printf("scene           %s\n", c->scene_path);
+    fputs("scene           ", stdout);
+    inspect_text_string(stdout, c->scene_path); /* from the file: may hold control bytes */
+    putchar('\n');
     printf("scene hash      %016llx\n", (unsigned long long)c->scene_hash);
     printf("state hash      %016llx\n", (unsigned long long)c->state_hash);
     printf("edits           %d\n", c->n_edits);

@@ -1,0 +1,169 @@
+/* lib/core's inputs, outputs and messages (issue 19): control bytes are
+ * escaped, inputs are regular files within a limit, a group of outputs
+ * appears together or not at all, stale temporaries are found by name. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+#include "core/core.h"
+
+static char dir[64];
+
+static int setup(void **state)
+{
+    snprintf(dir, sizeof dir, "/tmp/lie-test-file.XXXXXX");
+    return mkdtemp(dir) ? 0 : -1;
+}
+
+static int teardown(void **state)
+{
+    char cmd[128];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    return system(cmd) == 0 ? 0 : -1;
+}
+
+static void path_in(char *out, size_t size, const char *name) { snprintf(out, size, "%s/%s", dir, name); }
+
+static void test_escape_controls_like_git(void **state)
+{
+    char out[256];
+    lie_escape_controls(out, sizeof out, "a\nb\tc\rd\033[31m\x07" "e");
+    assert_string_equal(out, "a\\nb\\tc\\rd\\033[31m\\007e");
+    lie_escape_controls(out, sizeof out, "Zo\xc3\xab \xe2\x82\xac \xf0\x9f\x98\x80"); /* UTF-8 passes */
+    assert_string_equal(out, "Zo\xc3\xab \xe2\x82\xac \xf0\x9f\x98\x80");
+    lie_escape_controls(out, sizeof out, "x\xc2\x9by\xffz\xc3"); /* C1 CSI, not UTF-8, a cut sequence */
+    assert_string_equal(out, "x\\302\\233y\\377z\\303");
+    lie_escape_controls(out, 5, "ab\ncd"); /* truncated to fit, */
+    assert_string_equal(out, "ab\\n");
+    lie_escape_controls(out, 4, "ab\ncd"); /* never inside an escape */
+    assert_string_equal(out, "ab");
+}
+
+static void test_error_messages_are_escaped(void **state)
+{
+    lie_error err;
+    lie_error_set(&err, LIE_ERR_FORMAT, "dir\n/x.gltf", "node '%s' not found", "A\033]0;t\007");
+    char line[512];
+    lie_error_format(&err, line, sizeof line);
+    assert_string_equal(line, "dir\\n/x.gltf: node 'A\\033]0;t\\007' not found");
+}
+
+static void test_read_refuses_fifo_and_respects_limit(void **state)
+{
+    char fifo[128], big[128];
+    path_in(fifo, sizeof fifo, "fifo");
+    path_in(big, sizeof big, "big");
+    assert_int_equal(mkfifo(fifo, 0600), 0);
+    unsigned char *data;
+    size_t size;
+    lie_error err;
+    assert_int_equal(lie_read_file(fifo, &data, &size, &err), LIE_ERR_IO); /* at once, no writer needed */
+    assert_non_null(strstr(err.msg, "cannot read a FIFO"));
+    assert_int_equal(lie_read_file(dir, &data, &size, &err), LIE_ERR_IO);
+    assert_non_null(strstr(err.msg, "a directory"));
+    FILE *fp = fopen(big, "wb");
+    assert_non_null(fp);
+    for (int i = 0; i < 100; i++)
+        fputc('x', fp);
+    fclose(fp);
+    assert_int_equal(lie_read_file_max(big, 99, &data, &size, &err), LIE_ERR_LIMIT);
+    assert_int_equal(lie_read_file_max(big, 100, &data, &size, &err), LIE_OK);
+    assert_int_equal(size, 100);
+    free(data);
+}
+
+static void write_text(lie_atomic_file *af, const char *text) { fputs(text, af->fp); }
+
+static int file_is(const char *path, const char *text)
+{
+    char buf[64] = {0};
+    FILE *fp = fopen(path, "rb");
+    if (!fp)
+        return 0;
+    size_t n = fread(buf, 1, sizeof buf - 1, fp);
+    fclose(fp);
+    return n == strlen(text) && memcmp(buf, text, n) == 0;
+}
+
+static void count_cb(void *ctx, const char *name, uint64_t bytes)
+{
+    (void)name;
+    (void)bytes;
+    ++*(int *)ctx;
+}
+
+static void test_group_commits_all_or_none(void **state)
+{
+    char a[128], b[128];
+    path_in(a, sizeof a, "a.out");
+    path_in(b, sizeof b, "b.out");
+    lie_error err;
+    /* abandoned: nothing appears, no temporary stays */
+    lie_atomic_group *g = lie_atomic_group_create();
+    lie_atomic_file fa, fb;
+    assert_int_equal(lie_atomic_open_group(&fa, a, g, &err), LIE_OK);
+    write_text(&fa, "A");
+    assert_int_equal(lie_atomic_commit(&fa, &err), LIE_OK);
+    assert_int_equal(access(a, F_OK), -1); /* complete, but not yet visible */
+    lie_atomic_group_destroy(g);
+    assert_int_equal(access(a, F_OK), -1);
+    int n = 0;
+    assert_int_equal(lie_tmp_clean(dir, 0, 1, count_cb, &n, &err), LIE_OK);
+    assert_int_equal(n, 0); /* the temporary went with the group */
+    /* committed: both appear */
+    g = lie_atomic_group_create();
+    assert_int_equal(lie_atomic_open_group(&fa, a, g, &err), LIE_OK);
+    assert_int_equal(lie_atomic_open_group(&fb, b, g, &err), LIE_OK);
+    write_text(&fa, "A");
+    write_text(&fb, "B");
+    assert_int_equal(lie_atomic_commit(&fa, &err), LIE_OK);
+    assert_int_equal(lie_atomic_commit(&fb, &err), LIE_OK);
+    assert_int_equal(lie_atomic_group_commit(g, &err), LIE_OK);
+    lie_atomic_group_destroy(g);
+    assert_true(file_is(a, "A"));
+    assert_true(file_is(b, "B"));
+}
+
+static void test_tmp_clean_finds_our_names_only(void **state)
+{
+    const char *names[] = {".x.lie.tmpAb12Cd", ".y.exr.tmp000000", ".z.tmp", "w.lie.tmpAb12Cd", ".v.lie.tmpAb_2Cd"};
+    for (size_t i = 0; i < sizeof names / sizeof *names; i++) {
+        char p[128];
+        path_in(p, sizeof p, names[i]);
+        FILE *fp = fopen(p, "wb");
+        assert_non_null(fp);
+        fclose(fp);
+    }
+    lie_error err;
+    int n = 0;
+    assert_int_equal(lie_tmp_clean(dir, 0, 1, count_cb, &n, &err), LIE_OK);
+    assert_int_equal(n, 2);
+    n = 0;
+    assert_int_equal(lie_tmp_clean(dir, 3600, 0, count_cb, &n, &err), LIE_OK);
+    assert_int_equal(n, 0); /* all younger than an hour */
+    assert_int_equal(lie_tmp_clean(dir, 0, 0, count_cb, &n, &err), LIE_OK);
+    assert_int_equal(n, 2);
+    char p[128];
+    path_in(p, sizeof p, ".x.lie.tmpAb12Cd");
+    assert_int_equal(access(p, F_OK), -1);
+    path_in(p, sizeof p, ".z.tmp");
+    assert_int_equal(access(p, F_OK), 0);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_escape_controls_like_git),
+        cmocka_unit_test(test_error_messages_are_escaped),
+        cmocka_unit_test_setup_teardown(test_read_refuses_fifo_and_respects_limit, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_group_commits_all_or_none, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_tmp_clean_finds_our_names_only, setup, teardown),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
