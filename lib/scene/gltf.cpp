@@ -29,6 +29,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <map>
+#include <set>
 #include <new>
 #include <sstream>
 #include <string>
@@ -332,6 +333,7 @@ bool fs_write(std::string *err, const std::string &, const std::vector<unsigned 
 struct ImageState {
     const tinygltf::Model *model;
     std::string limit_msg;
+    std::map<int, std::string> undecodable; /* image -> why the decoder refused it */
 };
 
 uint32_t be16(const unsigned char *p) { return uint32_t(p[0]) << 8 | p[1]; }
@@ -401,7 +403,20 @@ bool image_load(tinygltf::Image *image, const int index, std::string *err, std::
         return false;
     }
     /* stb decoding, expanded to 8- or 16-bit RGBA (tinygltf's default options) */
-    return tinygltf::LoadImageData(image, index, err, warn, req_w, req_h, bytes, size, nullptr);
+    std::string derr;
+    if (tinygltf::LoadImageData(image, index, &derr, warn, req_w, req_h, bytes, size, nullptr))
+        return true;
+    /* An image the decoder cannot read (a corrupt PNG, a KTX2 or WebP named
+     * as a plain source) is not the whole scene's failure: the slots using
+     * it fall back to their factors, as Blender and three.js do, with a
+     * warning (texture_for).  Required extensions are refused earlier. */
+    /* tinygltf's message repeats the index and name; keep what it says */
+    st.undecodable[index] = derr.find("Unknown image format") != std::string::npos
+                                ? std::string("not a PNG or JPEG the decoder can read")
+                                : std::string("the decoder refused it");
+    image->image.clear();
+    image->width = image->height = 0;
+    return true;
 }
 
 /* ---- loading the file -------------------------------------------------- */
@@ -687,7 +702,7 @@ void check_json(const std::vector<unsigned char> &d, bool glb)
 /* Parse the file into `model`; `image_errors` gets why external images that
  * tinygltf skipped (with a warning) could not be opened. */
 void load_model(tinygltf::Model &model, const char *path, const lie_scene_options &opt,
-                std::map<int, std::string> &image_errors)
+                std::map<int, std::string> &image_errors, std::map<int, std::string> &undecodable)
 {
     std::vector<unsigned char> data = read_input(path);
 
@@ -705,7 +720,7 @@ void load_model(tinygltf::Model &model, const char *path, const lie_scene_option
             fs.root += '/';
     }
 
-    ImageState images{&model, std::string()};
+    ImageState images{&model, std::string(), {}};
     tinygltf::TinyGLTF loader;
     tinygltf::FsCallbacks cb;
     cb.FileExists = fs_exists;
@@ -746,6 +761,13 @@ void load_model(tinygltf::Model &model, const char *path, const lie_scene_option
             image_errors[int(i)] = "'" + clean(im.uri) + "': cannot open: " +
                                    (it != fs.missing.end() ? it->second : std::string("not loaded"));
         }
+    }
+    for (const auto &u : images.undecodable) {
+        const tinygltf::Image &im = model.images[size_t(u.first)];
+        std::string name = !im.uri.empty() && im.uri.compare(0, 5, "data:") != 0 ? " '" + clean(im.uri) + "'"
+                           : !im.name.empty()                                  ? " '" + clean(im.name) + "'"
+                                                                               : std::string();
+        undecodable[u.first] = "image " + std::to_string(u.first) + name + ": cannot decode (" + clean(u.second) + ")";
     }
 }
 
@@ -1279,8 +1301,19 @@ struct Import {
     const tinygltf::Model &m;
     lie_scene *s;
     const std::map<int, std::string> &image_errors; /* from load_model */
+    const std::map<int, std::string> &undecodable;  /* from load_model: images to warn about */
     std::map<int, int> texture_of; /* glTF texture * 2 + srgb -> s->textures index */
+    std::set<int> warned;          /* images warned about */
 };
+
+/* A warning for the tools to print (lie_scene.warnings). */
+void scene_warn(lie_scene *s, const std::string &msg)
+{
+    if (s->n_warnings < LIE_SCENE_WARNINGS_MAX)
+        snprintf(s->warnings[s->n_warnings], sizeof s->warnings[0], "%s", msg.c_str());
+    if (s->n_warnings < INT_MAX)
+        s->n_warnings++;
+}
 
 lie_wrap wrap_mode(int mode, const std::string &what)
 {
@@ -1321,6 +1354,12 @@ int texture_for(Import &im, int ti, bool srgb, const std::string &what)
     const tinygltf::Image &img = m.images[size_t(tex.source)];
     std::string iw = "image " + std::to_string(tex.source);
     if (img.image.empty() || img.width <= 0 || img.height <= 0) {
+        auto u = im.undecodable.find(tex.source);
+        if (u != im.undecodable.end()) { /* no texture: the slot keeps its factor */
+            if (im.warned.insert(tex.source).second)
+                scene_warn(im.s, u->second + "; its textures fall back to their factors");
+            return -1;
+        }
         auto e = im.image_errors.find(tex.source);
         if (e != im.image_errors.end())
             fail(LIE_ERR_IO, "%s %s", iw.c_str(), e->second.c_str());
@@ -2053,11 +2092,12 @@ extern "C" lie_status lie_gltf_import(lie_scene *s, const char *path, const lie_
     lie_scene_options o = opt ? *opt : lie_scene_options_default();
     try {
         tinygltf::Model model;
-        std::map<int, std::string> image_errors;
-        load_model(model, path, o, image_errors);
+        std::map<int, std::string> image_errors, undecodable;
+        load_model(model, path, o, image_errors, undecodable);
         s->stats.points_skipped = s->stats.lines_skipped = s->stats.prims_without_material = 0;
         import_document(model, s, o);
-        Import im{model, s, image_errors, {}};
+        s->n_warnings = 0;
+        Import im{model, s, image_errors, undecodable, {}, {}};
         import_materials(im);
         import_cameras(model, s);
         import_lights(model, s);

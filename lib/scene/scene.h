@@ -253,6 +253,7 @@ typedef struct lie_scene_stats {
     uint32_t normals_generated; /* primitives with flat normals */
 } lie_scene_stats;
 
+#define LIE_SCENE_WARNINGS_MAX 8
 typedef struct lie_scene {
     char *path;            /* as given to lie_scene_load */
     /* document */
@@ -287,6 +288,12 @@ typedef struct lie_scene {
     float max_tri_area;
     uint64_t hash;            /* content hash of the world (geometry, materials, emitters) */
     lie_scene_stats stats;
+    /* What the import tolerated and a tool should tell (the library prints
+     * nothing): one line each, without the file name, e.g. an image the
+     * decoder cannot read, whose texture slots fall back to their factors.
+     * n_warnings counts them all; the first LIE_SCENE_WARNINGS_MAX are kept. */
+    int n_warnings;
+    char warnings[LIE_SCENE_WARNINGS_MAX][256];
 } lie_scene;
 
 typedef struct lie_scene_options {

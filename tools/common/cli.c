@@ -1,6 +1,7 @@
 /* Strict parsing of command-line values ("12x" or "" is an error, never 12
  * or 0) and the tools' messages (tools/common/cli.h). */
 #include "common/cli.h"
+#include "scene/scene.h"
 
 #include <errno.h>
 #include <stdarg.h>
@@ -133,4 +134,14 @@ double lie_phase(const char *prog, int verbose, const char *phase, double since)
     if (verbose)
         fprintf(stderr, "%s: %s: %.3f s\n", prog, phase, now - since);
     return now;
+}
+
+void lie_print_scene_warnings(const char *prog, const lie_scene *s, const char *fallback)
+{
+    int kept = s->n_warnings < LIE_SCENE_WARNINGS_MAX ? s->n_warnings : LIE_SCENE_WARNINGS_MAX;
+    const char *file = s->path && s->path[0] ? s->path : fallback;
+    for (int i = 0; i < kept; i++)
+        fprintf(stderr, "%s: %s: warning: %s\n", prog, file, s->warnings[i]);
+    if (s->n_warnings > kept)
+        fprintf(stderr, "%s: %s: warning: %d more warnings\n", prog, file, s->n_warnings - kept);
 }

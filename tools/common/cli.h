@@ -34,6 +34,10 @@ int lie_usage_error(const char *prog, const char *fmt, ...) __attribute__((forma
 /* -v: one line per phase on stderr, "prog: phase: 1.234 s", when verbose;
  * returns lie_time_now() so phases chain: t = lie_phase(prog, v, "load", t). */
 double lie_phase(const char *prog, int verbose, const char *phase, double since);
+/* The scene's warnings (lie_scene.warnings), one "PROG: FILE: warning: ..."
+ * line each, FILE the glTF (or `fallback` when the scene has no path). */
+struct lie_scene;
+void lie_print_scene_warnings(const char *prog, const struct lie_scene *s, const char *fallback);
 /* "PROG: FILE: what is wrong" from err; returns `code`. */
 int lie_report_error(const char *prog, const lie_error *err, int code);
 

@@ -264,6 +264,8 @@ int main(int argc, char **argv)
     lie_scene *scene = NULL;
     if (lie_scene_load(input, &so, &scene, &err) != LIE_OK)
         return fail(&err);
+    if (!quiet)
+        lie_print_scene_warnings(prog, scene, input);
     if (scene->n_emitters == 0 && !quiet)
         fprintf(stderr, "%s: %s: warning: no emitters (no emissive material, no KHR_lights_punctual light): "
                         "the cache holds no environments\n", prog, input);

@@ -433,6 +433,8 @@ int main(int argc, char **argv)
         }
         ro.oracle = lie_lie_vis_oracle(lv);
     }
+    if (!quiet)
+        lie_print_scene_warnings(prog, scene, input);
     if (scene->n_emitters == 0 && !quiet)
         fprintf(stderr, "%s: %s: warning: no emitters (no emissive material, no KHR_lights_punctual light): "
                         "the image shows emission only\n", prog, input);

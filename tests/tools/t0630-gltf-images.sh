@@ -1,0 +1,46 @@
+#!/bin/sh
+# glTF images the decoder cannot read (issue 18): a warning naming the image,
+# one line per tool run, and the texture slot falls back to its factor (as
+# Blender and three.js do); required extensions stay refused by name.
+. "$(dirname "$0")/lib.sh"
+G="$D/gltf"
+cd "$TMP" || exit 1
+tri=$(tr -d '\n ' <"$G/accessor_oob.gltf")
+mk() { # NAME SED-EXPR: a variant of a one-triangle glTF
+    printf '%s\n' "$tri" | sed -e 's/"count":4/"count":3/' -e "$2" >"$TMP/$1.gltf"
+}
+MAT='"materials":[{"emissiveFactor":[0.5,0.5,0.5],"pbrMetallicRoughness":{"baseColorFactor":[0.2,0.4,0.6,1]TEX}}],"meshes":[{"primitives":[{"material":0,"attributes":{"POSITION":0}'
+with_material() { # NAME TEXTURE-JSON IMAGES-JSON
+    m=$(printf '%s' "$MAT" | sed "s|TEX|$2|")
+    mk "$1" "s|\"meshes\":\[{\"primitives\":\[{\"attributes\":{\"POSITION\":0}|$3$m|"
+}
+# a PNG signature and header of 4 x 4 pixels, then garbage
+bad=$(printf '\211PNG\r\n\032\n\000\000\000\015IHDR\000\000\000\004\000\000\000\004\010\002\000\000\000garbage-garbage' | base64 | tr -d '\n')
+with_material plain "" ""
+with_material corrupt ',"baseColorTexture":{"index":0}' "\"images\":[{\"name\":\"wood\",\"uri\":\"data:image/png;base64,$bad\"}],\"textures\":[{\"source\":0}],"
+printf '\253KTX 20\273\r\n\032\n0000000000000000' >tex.ktx2
+with_material ktx ',"baseColorTexture":{"index":0}' '"images":[{"uri":"tex.ktx2"}],"textures":[{"source":0}],'
+
+CAM="--camera eye=0.3,0.3,2,target=0.3,0.3,0 --size 16x16 --light-samples 1 --aov albedo"
+run "$B/lie-render" corrupt.gltf $CAM -o corrupt.exr
+expect_rc 0 "lie-render: a corrupt PNG is not fatal"
+expect_one_error_line "lie-render: corrupt.gltf: warning: image 0 'wood': cannot decode" "one warning naming the image"
+run "$B/lie-render" plain.gltf $CAM -o plain.exr -q
+if oiiotool corrupt.exr plain.exr --fail 0 --warn 0 --diff >/dev/null 2>&1; then
+    ok "the slot falls back to baseColorFactor: the same pixels as without the texture"; else
+    not_ok "pixels differ: $(oiiotool corrupt.exr plain.exr --diff 2>&1 | tail -2)"; fi
+run "$B/lie-render" corrupt.gltf $CAM -o q.exr -q
+if [ "$rc" -eq 0 ] && [ ! -s "$TMP/err" ]; then ok "-q: no warning"; else not_ok "-q printed: $(cat "$TMP/err")"; fi
+run "$B/lie-build" corrupt.gltf -o c.lie
+expect_rc 0 "lie-build: a corrupt PNG is not fatal"
+expect_one_error_line "lie-build: corrupt.gltf: warning: image 0 'wood': cannot decode" "lie-build: one warning"
+run "$B/lie-render" ktx.gltf $CAM -o ktx.exr
+expect_rc 0 "lie-render: a .ktx2 source without KHR_texture_basisu is not fatal"
+expect_one_error_line "lie-render: ktx.gltf: warning: image 0 'tex.ktx2': cannot decode" "one warning naming the .ktx2"
+# a required extension is still refused by name
+sed 's|"asset":|"extensionsUsed":["KHR_texture_basisu"],"extensionsRequired":["KHR_texture_basisu"],"asset":|' ktx.gltf >req.gltf
+run "$B/lie-render" req.gltf $CAM -o req.exr
+expect_rc 1 "a required KHR_texture_basisu is refused"
+expect_one_error_line "KHR_texture_basisu" "the refusal names the extension"
+expect_no_file req.exr "nothing written"
+finish
