@@ -33,7 +33,7 @@ static void usage(FILE *fp)
             "                        0 splits wherever a list is too long, as the paper)\n"
             "      --max-nodes N     refuse to build more patch-tree nodes than N, about\n"
             "                        20 bytes each (default %llu)\n"
-            "      --complex-cap C   a list still longer at the smallest size is 'complex':\n"
+            "      --complex-cap C   a leaf whose list is still longer is 'complex':\n"
             "                        its shadow rays go to the whole scene (default %u)\n"
             "      --blockers MODE   sampled (default, the paper's shaft sampling) |\n"
             "                        conservative (every triangle that meets the shaft: exact)\n"
