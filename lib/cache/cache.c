@@ -73,10 +73,13 @@ static lie_status check_cache(const lie_cache *c, const char *name, lie_error *e
     if (c->n_emitters < 0 || c->n_edits < 0 || (c->n_emitters > 0 && !c->emitters) ||
         (c->n_edits > 0 && !c->edits))
         return lie_error_set(err, LIE_ERR_ARG, name, "refusing to write a cache with bad emitter or edit arrays");
-    if (c->n_tris != env->n_tris || c->n_emitters != env->n_emitters)
+    uint64_t n_clusters = 0;
+    for (int e = 0; e < c->n_emitters; e++)
+        n_clusters += c->emitters[e].n_clusters;
+    if (c->n_tris != env->n_tris || n_clusters != (uint64_t)env->n_clusters)
         return lie_error_set(err, LIE_ERR_ARG, name,
-                             "refusing to write a cache whose env has %u triangles and %d emitters, not %u and %d",
-                             env->n_tris, env->n_emitters, c->n_tris, c->n_emitters);
+                             "refusing to write a cache whose env has %u triangles and %d clusters, not %u and %llu",
+                             env->n_tris, env->n_clusters, c->n_tris, (unsigned long long)n_clusters);
     if (env->scene_hash != c->state_hash)
         return lie_error_set(err, LIE_ERR_ARG, name,
                              "refusing to write a cache whose env was built for scene state %016llx, not %016llx",
@@ -109,7 +112,7 @@ static lie_status encode(const lie_cache *c, const char *name, unsigned char **d
         return st;
     const lie_env *env = c->env;
     const uint64_t path_len = strlen(c->scene_path);
-    const uint64_t n_units = (uint64_t)env->n_tris * (uint64_t)env->n_emitters;
+    const uint64_t n_units = (uint64_t)env->n_tris * (uint64_t)env->n_clusters;
 
     uint64_t sz[S_COUNT], off[S_COUNT];
     sz[S_META] = LIE_CACHE_META_FIXED + path_len;
@@ -148,7 +151,7 @@ static lie_status encode(const lie_cache *c, const char *name, unsigned char **d
     lie_cache_put_u64(p + 0, c->scene_hash);
     lie_cache_put_u64(p + 8, c->state_hash);
     lie_cache_put_u32(p + 16, env->n_tris);
-    lie_cache_put_u32(p + 20, (uint32_t)env->n_emitters);
+    lie_cache_put_u32(p + 20, (uint32_t)c->n_emitters);
     lie_cache_put_u64(p + 24, n_units);
     lie_cache_put_u32(p + 32, env->n_nodes);
     lie_cache_put_u32(p + 36, env->n_pool);
@@ -189,6 +192,8 @@ static lie_status encode(const lie_cache *c, const char *name, unsigned char **d
         lie_cache_put_u32(p + 4, (uint32_t)em->node);
         lie_cache_put_u32(p + 8, em->first_tri);
         lie_cache_put_u32(p + 12, em->n_tris);
+        lie_cache_put_u32(p + 16, em->n_clusters);
+        lie_cache_put_u32(p + 20, em->partition);
     }
 
     /* ROOTS, NODES, POOL */

@@ -15,13 +15,15 @@
 extern "C" {
 #endif
 
-#define LIE_CACHE_VERSION 2u
+#define LIE_CACHE_VERSION 3u
 
 /* What the cache knows of each emitter, to check it against a scene. */
 typedef struct lie_cache_emitter {
     uint32_t type;       /* lie_emitter_type */
     int32_t node;        /* glTF node index */
     uint32_t first_tri, n_tris;
+    uint32_t n_clusters; /* its clusters (lie_cluster); 1 in versions 1 and 2 */
+    uint32_t partition;  /* lie_scene_cluster_digest; 0 for one cluster */
 } lie_cache_emitter;
 
 /* One applied edit: the edit file's name as given and its full text

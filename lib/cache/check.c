@@ -17,8 +17,14 @@ const char *lie_cache_check_emitter(const lie_cache_emitter *e, uint32_t n_tris)
             return "area emitter without triangles";
         if ((uint64_t)e->first_tri + e->n_tris > n_tris)
             return "area emitter triangles beyond the scene's";
+        if (e->n_clusters < 1 || e->n_clusters > LIE_CLUSTER_MAX || e->n_clusters > e->n_tris)
+            return "cluster count out of range";
+        if ((e->n_clusters == 1) != (e->partition == 0))
+            return "partition digest does not fit the cluster count";
     } else if (e->first_tri != 0 || e->n_tris != 0) {
         return "point or directional emitter with triangles";
+    } else if (e->n_clusters != 1 || e->partition != 0) {
+        return "point or directional emitter with clusters";
     }
     return NULL;
 }
@@ -29,10 +35,10 @@ typedef uint8_t node_state;
 lie_status lie_cache_check_env(const lie_env *env, lie_status status, const char *name, const char *prefix,
                                lie_error *err)
 {
-    if (env->n_emitters < 0)
-        return lie_error_set(err, status, name, "%snegative emitter count", prefix);
+    if (env->n_clusters < 0)
+        return lie_error_set(err, status, name, "%snegative cluster count", prefix);
     const uint32_t n_nodes = env->n_nodes, n_pool = env->n_pool, n_tris = env->n_tris;
-    const size_t n_units = (size_t)n_tris * (size_t)env->n_emitters;
+    const size_t n_units = (size_t)n_tris * (size_t)env->n_clusters;
     node_state *state = calloc((size_t)n_nodes + 1, sizeof *state);
     if (!state)
         return lie_error_set(err, LIE_ERR_NOMEM, name, "%sout of memory checking %u nodes", prefix, n_nodes);

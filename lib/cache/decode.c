@@ -103,7 +103,7 @@ static const lie_cache_section *find(const lie_cache_section *s, int n, uint32_t
 /* Counts from META that the other sections are checked against. */
 typedef struct meta_counts {
     uint32_t n_tris, n_emitters, n_nodes, n_pool;
-    uint64_t n_units;
+    uint64_t n_units, n_clusters;
 } meta_counts;
 
 static lie_status parse_meta(const unsigned char *p, uint64_t size, const char *name, lie_cache *c, meta_counts *m,
@@ -126,9 +126,6 @@ static lie_status parse_meta(const unsigned char *p, uint64_t size, const char *
     m->n_pool = lie_cache_get_u32(p + 36);
     if (m->n_emitters > INT_MAX)
         return FAIL("section META: %u emitters is beyond %d", m->n_emitters, INT_MAX);
-    if (m->n_units != (uint64_t)m->n_tris * m->n_emitters)
-        return FAIL("section META: %llu units is not %u triangles x %u emitters", (ull)m->n_units, m->n_tris,
-                    m->n_emitters);
     c->scene_hash = lie_cache_get_u64(p);
     c->state_hash = lie_cache_get_u64(p + 8);
     c->n_tris = m->n_tris;
@@ -204,25 +201,35 @@ static lie_status parse_edits(const unsigned char *p, uint64_t size, const char 
     return LIE_OK;
 }
 
-static lie_status parse_emitters(const unsigned char *p, uint64_t size, const char *name, const meta_counts *m,
-                                 lie_cache *c, lie_error *err)
+static lie_status parse_emitters(const unsigned char *p, uint64_t size, uint32_t version, const char *name,
+                                 meta_counts *m, lie_cache *c, lie_error *err)
 {
-    if (size != (uint64_t)LIE_CACHE_EMITTER_SIZE * m->n_emitters)
+    const uint32_t rec = version < 3 ? LIE_CACHE_EMITTER_SIZE_V2 : LIE_CACHE_EMITTER_SIZE;
+    if (size != (uint64_t)rec * m->n_emitters)
         return FAIL("section EMITTERS: %llu bytes for %u emitters, expected %llu", (ull)size, m->n_emitters,
-                    (ull)LIE_CACHE_EMITTER_SIZE * m->n_emitters);
+                    (ull)rec * m->n_emitters);
     c->emitters = calloc((size_t)m->n_emitters + 1, sizeof *c->emitters);
     if (!c->emitters)
         return lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory");
-    for (uint32_t e = 0; e < m->n_emitters; e++, p += LIE_CACHE_EMITTER_SIZE) {
+    m->n_clusters = 0;
+    for (uint32_t e = 0; e < m->n_emitters; e++, p += rec) {
         lie_cache_emitter *em = &c->emitters[e];
         em->type = lie_cache_get_u32(p);
         em->node = (int32_t)lie_cache_get_u32(p + 4);
         em->first_tri = lie_cache_get_u32(p + 8);
         em->n_tris = lie_cache_get_u32(p + 12);
+        em->n_clusters = version < 3 ? 1 : lie_cache_get_u32(p + 16);
+        em->partition = version < 3 ? 0 : lie_cache_get_u32(p + 20);
         const char *why = lie_cache_check_emitter(em, m->n_tris);
         if (why)
             return FAIL("section EMITTERS: emitter %u: %s", e, why);
+        m->n_clusters += em->n_clusters;
     }
+    if (m->n_clusters > INT_MAX)
+        return FAIL("section EMITTERS: %llu clusters is beyond %d", (ull)m->n_clusters, INT_MAX);
+    if (m->n_units != (uint64_t)m->n_tris * m->n_clusters)
+        return FAIL("section META: %llu units is not %u triangles x %llu clusters", (ull)m->n_units, m->n_tris,
+                    (ull)m->n_clusters);
     return LIE_OK;
 }
 
@@ -262,7 +269,7 @@ static lie_status parse_env(const unsigned char *data, const lie_cache_section *
     for (uint32_t i = 0; i < m->n_pool; i++, p += 4)
         env->pool[i] = lie_cache_get_u32(p);
     env->n_tris = m->n_tris;
-    env->n_emitters = (int)m->n_emitters;
+    env->n_clusters = (int)m->n_clusters;
     env->n_nodes = m->n_nodes;
     env->n_pool = m->n_pool;
     return lie_cache_check_env(env, LIE_ERR_FORMAT, name, "", err);
@@ -303,14 +310,14 @@ lie_status lie_cache_decode(const unsigned char *data, size_t size, const char *
         return lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory");
     }
     c->env = env;
-    meta_counts m = {0, 0, 0, 0, 0};
+    meta_counts m = {0, 0, 0, 0, 0, 0};
     st = parse_meta(data + s[0]->offset, s[0]->size, name, c, &m, err);
     if (st == LIE_OK)
         st = parse_params(data + s[1]->offset, s[1]->size, lie_cache_get_u32(data + 8), name, &env->params, err);
     if (st == LIE_OK)
         st = parse_edits(data + s[2]->offset, s[2]->size, name, c, err);
     if (st == LIE_OK)
-        st = parse_emitters(data + s[3]->offset, s[3]->size, name, &m, c, err);
+        st = parse_emitters(data + s[3]->offset, s[3]->size, lie_cache_get_u32(data + 8), name, &m, c, err);
     if (st == LIE_OK)
         st = parse_env(data, s[4], s[5], s[6], name, &m, env, err);
     if (st != LIE_OK) {

@@ -14,7 +14,8 @@
 #define LIE_CACHE_META_FIXED 48u
 #define LIE_CACHE_PARAMS_SIZE 28u    /* version 2; version 1: 24 (no split_gain) */
 #define LIE_CACHE_PARAMS_SIZE_V1 24u
-#define LIE_CACHE_EMITTER_SIZE 16u
+#define LIE_CACHE_EMITTER_SIZE 24u    /* version 3; versions 1, 2: 16 (one cluster each) */
+#define LIE_CACHE_EMITTER_SIZE_V2 16u
 #define LIE_CACHE_NODE_SIZE 20u
 
 /* A section id: its four ASCII bytes read as a little-endian u32. */

@@ -57,6 +57,17 @@ lie_status lie_cache_load_scene(const lie_cache *c, const char *cache_path, cons
         lie_scene_destroy(s);
         return LIE_ERR_FORMAT;
     }
+    for (int e = 0; e < s->n_emitters; e++) {
+        uint32_t dig = lie_scene_cluster_digest(s, e);
+        if ((uint32_t)s->emitters[e].n_clusters != c->emitters[e].n_clusters || dig != c->emitters[e].partition) {
+            lie_error_set(err, LIE_ERR_FORMAT, cache_path,
+                          "emitter %d: the cache splits it into %u clusters (digest %08x), this lie-build into %d "
+                          "(%08x): rebuild the cache",
+                          e, c->emitters[e].n_clusters, c->emitters[e].partition, s->emitters[e].n_clusters, dig);
+            lie_scene_destroy(s);
+            return LIE_ERR_FORMAT;
+        }
+    }
     *out = s;
     return LIE_OK;
 }
@@ -73,6 +84,8 @@ lie_status lie_cache_set_state(lie_cache *c, const lie_scene *s, lie_error *err)
         em[e].node = s->emitters[e].node;
         em[e].first_tri = s->emitters[e].first_tri;
         em[e].n_tris = s->emitters[e].n_tris;
+        em[e].n_clusters = (uint32_t)s->emitters[e].n_clusters;
+        em[e].partition = lie_scene_cluster_digest(s, e);
     }
     c->n_tris = s->n_tris;
     c->state_hash = s->hash;

@@ -19,7 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32_t n_tris, int n_emitters,
+static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32_t n_tris, int n_clusters,
                            const int32_t *old_unit, uint64_t unit_lo, uint64_t unit_hi);
 
 static void workers_free(worker *ws, int n)
@@ -50,7 +50,7 @@ static uint32_t *build_weights(const build_ctx *c, uint32_t n_items, size_t ne)
             u0 = (size_t)c->unit_lo;
         if (u1 > c->unit_hi)
             u1 = (size_t)c->unit_hi;
-        size_t pairs = c->s->n_emitters == 0 ? 1 : u1 > u0 ? u1 - u0 : 0;
+        size_t pairs = c->s->n_clusters == 0 ? 1 : u1 > u0 ? u1 - u0 : 0;
         double ratio = c->min_area > 0.0f ? (double)c->s->tri_area[tri] / (double)c->min_area : 1.0;
         double depth = 1.0 + (ratio > 1.0 ? pow(ratio, 0.75) : 0.0);
         if (c->tri_mask && !c->tri_mask[tri])
@@ -79,12 +79,12 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     c.node_flags = node_flags;
     c.tri_mask = tri_mask;
     /* the triangles holding units [unit_lo, unit_hi) */
-    size_t ne = s->n_emitters > 0 ? (size_t)s->n_emitters : 1;
+    size_t ne = s->n_clusters > 0 ? (size_t)s->n_clusters : 1;
     c.unit_lo = unit_lo;
     c.unit_hi = unit_hi;
     c.tri_lo = (uint32_t)(unit_lo / ne);
     uint32_t n_items = unit_hi > unit_lo ? (uint32_t)((unit_hi - 1) / ne + 1 - c.tri_lo) : 0;
-    if (s->n_emitters == 0) {
+    if (s->n_clusters == 0) {
         c.tri_lo = 0;
         n_items = s->n_tris;
     }
@@ -114,7 +114,7 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
             lie_stats_merge(stats, &c.workers[i].st);
     }
     if (st == LIE_OK)
-        st = assemble(env, c.out, c.tri_lo, n_items, s->n_emitters, old_unit, unit_lo, unit_hi);
+        st = assemble(env, c.out, c.tri_lo, n_items, s->n_clusters, old_unit, unit_lo, unit_hi);
     for (uint32_t t = 0; c.out && t < n_items; t++) {
         free(c.out[t].roots);
         free(c.out[t].nodes);
@@ -164,7 +164,7 @@ static void copy_direct(const lie_env *old, uint32_t from, lie_pnode *nd, uint32
  * env's flat arrays (copied triangles straight from env's old arrays, which
  * are freed last); env->root[unit - unit_lo] for the units in
  * [unit_lo, unit_hi). */
-static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32_t n_tris, int n_emitters,
+static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32_t n_tris, int n_clusters,
                            const int32_t *old_unit, uint64_t unit_lo, uint64_t unit_hi)
 {
     uint64_t nodes = 0, pool = 0;
@@ -188,8 +188,8 @@ static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32
         const unit_buf *u = &bufs[t];
         if (u->copied) {
             uint32_t next_node = nb, next_pool = pb;
-            for (int e = 0; e < n_emitters; e++) {
-                size_t unit = (size_t)(tri_lo + t) * (size_t)n_emitters + (size_t)e;
+            for (int e = 0; e < n_clusters; e++) {
+                size_t unit = (size_t)(tri_lo + t) * (size_t)n_clusters + (size_t)e;
                 uint32_t idx = next_node++;
                 root[unit - unit_lo] = idx;
                 copy_direct(env, env->root[old_unit[unit]], nd, pl, idx, &next_node, &next_pool);
@@ -198,8 +198,8 @@ static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32
             pb += u->n_pool;
             continue;
         }
-        for (int e = 0; e < n_emitters; e++) {
-            uint64_t unit = (uint64_t)(tri_lo + t) * (uint64_t)n_emitters + (uint64_t)e;
+        for (int e = 0; e < n_clusters; e++) {
+            uint64_t unit = (uint64_t)(tri_lo + t) * (uint64_t)n_clusters + (uint64_t)e;
             if (unit >= unit_lo && unit < unit_hi)
                 root[unit - unit_lo] = nb + u->roots[e];
         }
@@ -252,13 +252,13 @@ lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_
     if (!env)
         return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
     env->n_tris = s->n_tris;
-    env->n_emitters = s->n_emitters;
+    env->n_clusters = s->n_clusters;
     env->params = *p;
     env->params.threads = 0;
     env->scene_hash = s->hash;
     if (stats)
         memset(stats, 0, sizeof *stats);
-    uint64_t n_units = (uint64_t)s->n_tris * (uint64_t)s->n_emitters;
+    uint64_t n_units = (uint64_t)s->n_tris * (uint64_t)s->n_clusters;
     lie_status st = run_build(env, s, rt, NULL, NULL, tri_mask, 0, n_units, p->threads, progress, stats);
     if (st != LIE_OK) {
         lie_env_destroy(env);
@@ -280,7 +280,7 @@ lie_status lie_env_build_range(const lie_scene *s, const lie_rt *rt, const lie_b
     memset(out, 0, sizeof *out);
     if (lie_build_params_check(p, err) != LIE_OK)
         return LIE_ERR_ARG;
-    uint64_t total = (uint64_t)s->n_tris * (uint64_t)s->n_emitters;
+    uint64_t total = (uint64_t)s->n_tris * (uint64_t)s->n_clusters;
     if (first_unit > total || n_units > total - first_unit)
         return lie_error_set(err, LIE_ERR_ARG, s->path, "units %llu..%llu out of range (%llu)",
                              (unsigned long long)first_unit, (unsigned long long)(first_unit + n_units),
@@ -318,9 +318,9 @@ lie_status lie_env_rebuild_units(lie_env *env, const lie_scene *s, const lie_rt 
                                  const uint32_t *units, size_t n_units, int threads,
                                  lie_build_stats *stats, lie_error *err)
 {
-    if (env->n_tris != s->n_tris || env->n_emitters != s->n_emitters)
+    if (env->n_tris != s->n_tris || env->n_clusters != s->n_clusters)
         return lie_error_set(err, LIE_ERR_ARG, s->path, "the scene's triangles or emitters changed in number");
-    size_t n = (size_t)s->n_tris * (size_t)s->n_emitters;
+    size_t n = (size_t)s->n_tris * (size_t)s->n_clusters;
     int32_t *old_unit = malloc(sizeof *old_unit * (n + 1));
     if (!old_unit)
         return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
@@ -341,7 +341,7 @@ lie_status lie_env_update(lie_env *env, const lie_scene *s, const lie_rt *rt, co
     if (stats)
         memset(stats, 0, sizeof *stats);
     lie_status st = run_build(env, s, rt, old_unit, node_flags, NULL, 0,
-                              (uint64_t)s->n_tris * (uint64_t)s->n_emitters, threads, NULL, stats);
+                              (uint64_t)s->n_tris * (uint64_t)s->n_clusters, threads, NULL, stats);
     if (stats)
         stats->seconds = lie_time_now() - t0;
     if (st == LIE_ERR_LIMIT)
@@ -350,7 +350,7 @@ lie_status lie_env_update(lie_env *env, const lie_scene *s, const lie_rt *rt, co
         return lie_error_set(err, st, s->path, "updating local illumination environments: %s",
                              lie_status_str(st));
     env->n_tris = s->n_tris;
-    env->n_emitters = s->n_emitters;
+    env->n_clusters = s->n_clusters;
     env->scene_hash = s->hash;
     return LIE_OK;
 }

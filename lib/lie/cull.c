@@ -88,7 +88,7 @@ void lie_cull_candidates(const build_ctx *c, worker *w, const lie_vec3 *hull, in
 static void pair_sat(const build_ctx *c, const worker *w, int nh, uint32_t tri, int two_sided, int e, float tol,
                      lie_sat *sat)
 {
-    const lie_vec3 *ne = lie_emitter_facing(c->s, e);
+    const lie_vec3 *ne = lie_cluster_facing(c->s, e);
     lie_sat_init(sat, w->hull, nh, lie_pair_hull_patch_points(two_sided), c->s->tri_ng[tri], ne, tol);
 }
 
@@ -132,7 +132,7 @@ size_t lie_cull_shaft(const build_ctx *c, worker *w, uint32_t tri, const lie_vec
     size_t m = 0;
     for (size_t i = 0; i < w->n_cand; i++) {
         uint32_t t = w->cand[i];
-        if (t == tri || s->tri_emitter[t] == e || !(s->tri_area[t] > 0.0f))
+        if (t == tri || s->tri_emitter[t] == s->clusters[e].emitter || !(s->tri_area[t] > 0.0f))
             continue;
         if (lie_sat_rejects(&sat, &s->tri_p[3 * (size_t)t]))
             continue;
@@ -183,7 +183,7 @@ void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3
             uint32_t t = scan ? in->first_tri + (uint32_t)k : w->cand[k];
             if (!scan && s->tri_instance[t] != inst)
                 continue;
-            if (t == tri || s->tri_emitter[t] == e || !(s->tri_area[t] > 0.0f))
+            if (t == tri || s->tri_emitter[t] == s->clusters[e].emitter || !(s->tri_area[t] > 0.0f))
                 continue;
             if (lie_sat_rejects(&sat, &s->tri_p[3 * (size_t)t]) ||
                 !lie_hull_meets_triangle(w->hull, nh, &s->tri_p[3 * (size_t)t], tol))

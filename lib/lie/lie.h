@@ -1,14 +1,15 @@
 /* lib/lie: local illumination environments (§4).
  *
- * For every triangle t and emitter e there is one *unit*: a patch tree over
- * t (lib/patch) whose leaves each hold one patch–emitter pair's class —
+ * For every triangle t and emitter cluster c (lie_cluster: an emitter, or a
+ * part of a large one) there is one *unit*: a patch tree over
+ * t (lib/patch) whose leaves each hold one patch–cluster pair's class —
  * unlit, visible, occluded, partial with a blocker list, or complex.  Trees
- * are per (triangle, emitter), so a pair's subdivision depends on that pair
+ * are per (triangle, cluster), so a pair's subdivision depends on that pair
  * alone and rebuilding one unit gives exactly what a full build gives
  * (lib/update relies on this, in chunks of units of any size).
  *
  * Storage is flat: node arrays and a pooled array of blocker triangle
- * indices, units in the order u = t * n_emitters + e. */
+ * indices, units in the order u = t * n_clusters + c. */
 #ifndef LIE_LIE_H
 #define LIE_LIE_H
 
@@ -83,7 +84,7 @@ typedef struct lie_pnode {
 
 typedef struct lie_env {
     uint32_t n_tris;
-    int n_emitters;
+    int n_clusters;       /* units per triangle: the scene's clusters (lie_scene.n_clusters) */
     uint32_t *root;       /* per unit: its root node */
     lie_pnode *nodes;
     uint32_t n_nodes;
@@ -164,22 +165,22 @@ void lie_env_stats(const lie_env *env, lie_build_stats *stats);
 
 void lie_env_destroy(lie_env *env);
 
-/* The leaf of unit (tri, e) holding local point (b1, b2): the renderer's
+/* The leaf of unit (tri, cluster c) holding local point (b1, b2): the renderer's
  * hot path, a few steps down a quad-tree. */
-static inline const lie_pnode *lie_env_find_leaf(const lie_env *env, uint32_t tri, int e, float b1,
+static inline const lie_pnode *lie_env_find_leaf(const lie_env *env, uint32_t tri, int c, float b1,
                                                  float b2)
 {
-    const lie_pnode *n = &env->nodes[env->root[(size_t)tri * (size_t)env->n_emitters + (size_t)e]];
+    const lie_pnode *n = &env->nodes[env->root[(size_t)tri * (size_t)env->n_clusters + (size_t)c]];
     while (n->child)
         n = &env->nodes[n->child + (uint32_t)lie_patch_descend(&b1, &b2)];
     return n;
 }
 
 /* The same, also giving the leaf's patch path. */
-static inline const lie_pnode *lie_env_find_leaf_path(const lie_env *env, uint32_t tri, int e, float b1,
+static inline const lie_pnode *lie_env_find_leaf_path(const lie_env *env, uint32_t tri, int c, float b1,
                                                       float b2, lie_patch_path *path)
 {
-    const lie_pnode *n = &env->nodes[env->root[(size_t)tri * (size_t)env->n_emitters + (size_t)e]];
+    const lie_pnode *n = &env->nodes[env->root[(size_t)tri * (size_t)env->n_clusters + (size_t)c]];
     lie_patch_path p = lie_patch_root();
     while (n->child) {
         int d = lie_patch_descend(&b1, &b2);

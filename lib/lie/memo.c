@@ -133,7 +133,7 @@ lie_status lie_memo_precompute(build_ctx *c, int threads, size_t *n_memo)
     for (uint32_t i = 0; i < old->n_nodes; i++)
         c->memo_of[i] = -1;
     size_t n = 0, cap = 0;
-    size_t ne = (size_t)s->n_emitters;
+    size_t ne = (size_t)s->n_clusters;
     for (uint32_t t = 0; t < s->n_tris; t++)
         for (size_t e = 0; e < ne; e++) {
             int32_t ou = c->old_unit[(size_t)t * ne + e];

@@ -23,8 +23,7 @@ float lie_pair_eps(const lie_scene *s, uint32_t tri)
 
 int lie_pair_hull_cap(const lie_scene *s, int e)
 {
-    const lie_emitter *em = &s->emitters[e];
-    return lie_pair_hull_patch_points(1) + lie_emitter_hull_cap(em);
+    return lie_pair_hull_patch_points(1) + lie_cluster_hull_cap(s, e);
 }
 
 int lie_pair_hull_points(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], int e, lie_vec3 *out)
@@ -39,7 +38,7 @@ int lie_pair_hull_points(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], 
         if (two_sided)
             out[n++] = lie_v3_sub(V[k], lie_v3_scale(ng, eps));
     }
-    return n + lie_emitter_hull_points(s, e, V, lie_pair_ray_far(s), out + n);
+    return n + lie_cluster_hull_points(s, e, V, lie_pair_ray_far(s), out + n);
 }
 
 /* ---- which pairs cannot interact -------------------------------------- */
@@ -51,7 +50,7 @@ int lie_pair_unlit(const lie_scene *s, uint32_t tri, const lie_vec3 V[3], int tw
 {
     if (s->tri_area[tri] <= 0.0f)
         return 1;
-    return !lie_emitter_can_reach(s, e, tri, V, s->tri_ng[tri], two_sided);
+    return !lie_cluster_can_reach(s, e, tri, V, s->tri_ng[tri], two_sided);
 }
 
 int lie_pair_hull_meets_box(const lie_vec3 *hull, int n, lie_box3 box, float tol)

@@ -1,6 +1,7 @@
 /* Pair geometry (lib/lie/pair.c): what a patch-emitter pair is, as
  * lie-build, the ray segment trees (lib/rst) and the renderer must all see
- * it for the LIE image to equal the reference. */
+ * it for the LIE image to equal the reference.  The emitter side of a pair
+ * is a cluster (lie_cluster): `e` below is a cluster index. */
 #ifndef LIE_PAIR_H
 #define LIE_PAIR_H
 

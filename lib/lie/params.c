@@ -85,7 +85,7 @@ static void stats_walk(const lie_env *env, uint32_t idx, int depth, lie_build_st
 void lie_env_stats(const lie_env *env, lie_build_stats *stats)
 {
     memset(stats, 0, sizeof *stats);
-    size_t n = (size_t)env->n_tris * (size_t)env->n_emitters;
+    size_t n = (size_t)env->n_tris * (size_t)env->n_clusters;
     for (size_t u = 0; u < n; u++)
         stats_walk(env, env->root[u], 0, stats);
 }

@@ -43,7 +43,7 @@ lie_status lie_env_join(const lie_scene *s, const lie_build_params *p, const lie
                         lie_env **out, lie_error *err)
 {
     *out = NULL;
-    uint64_t n_units = (uint64_t)s->n_tris * (uint64_t)s->n_emitters, next = 0, nodes = 0, pool = 0;
+    uint64_t n_units = (uint64_t)s->n_tris * (uint64_t)s->n_clusters, next = 0, nodes = 0, pool = 0;
     for (size_t i = 0; i < n_parts; i++) {
         if (parts[i].first_unit != next)
             return lie_error_set(err, LIE_ERR_ARG, s->path, "part %zu starts at unit %llu, expected %llu", i,
@@ -74,7 +74,7 @@ lie_status lie_env_join(const lie_scene *s, const lie_build_params *p, const lie
         return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
     }
     env->n_tris = s->n_tris;
-    env->n_emitters = s->n_emitters;
+    env->n_clusters = s->n_clusters;
     env->params = *p;
     env->params.threads = 0;
     env->scene_hash = s->hash;

@@ -72,7 +72,7 @@ static int pair_segment(const pair_sampler *ps, uint32_t i, lie_vec3 *org, lie_v
     lie_vec3 p = lie_v3_add(lie_v3_add(lie_v3_scale(V[0], b0), lie_v3_scale(V[1], b1)), lie_v3_scale(V[2], b2));
     lie_vec3 q, ne;
     int one_sided;
-    uint32_t target = lie_emitter_target(s, ps->e, frac_shift(halton(c, 2, i), ps->se1),
+    uint32_t target = lie_cluster_target(s, ps->e, frac_shift(halton(c, 2, i), ps->se1),
                                          frac_shift(halton(c, 3, i), ps->se2), p, c->ray_far, &q, &ne, &one_sided);
     lie_vec3 d = lie_v3_sub(q, p);
     lie_vec3 ng = s->tri_ng[ps->tri];
@@ -129,7 +129,7 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
                           int two_sided, int e, uint32_t *quality, size_t *n_list)
 {
     const lie_scene *s = c->s;
-    const lie_emitter *em = &s->emitters[e];
+    const lie_emitter *em = &s->emitters[s->clusters[e].emitter];
     uint64_t h = lie_hash_u64x4(tri, path.digits, (uint64_t)path.depth, (uint64_t)e);
     uint64_t h2 = lie_hash_u64x4(h, 0x656d6974ull, 0, 0);
     const pair_sampler ps = {c,

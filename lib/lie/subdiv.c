@@ -56,7 +56,7 @@ int lie_subdiv_splits(const build_ctx *c, uint32_t tri, lie_patch_path path, int
     const lie_scene *s = c->s;
     if (!(cls == LIE_CLASS_PARTIAL && n_list > c->p->max_blockers && lie_subdiv_may_split(c, tri, path)))
         return 0;
-    const lie_emitter *em = &s->emitters[e];
+    const lie_emitter *em = &s->emitters[s->clusters[e].emitter];
     size_t own = 0;
     for (size_t k = 0; k < n_list; k++)
         own += lie_emitter_owns(em, list[k]);
@@ -265,7 +265,7 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
             lie_vec3 V[3];
             lie_patch_world(path, &s->tri_p[3 * (size_t)tri], V);
             lie_cull_conservative(c, w, tri, V, two_sided, e, NULL, 0, c->p->complex_cap, &n_leaf);
-            const lie_emitter *em = &s->emitters[e];
+            const lie_emitter *em = &s->emitters[s->clusters[e].emitter];
             if (em->type == LIE_EMITTER_AREA && em->planar && n_leaf <= c->p->complex_cap) {
                 size_t k = 0;
                 for (size_t j = 0; j < n_leaf; j++)
@@ -384,7 +384,7 @@ static void subtree_size(const lie_env *old, uint32_t from, uint32_t *n_nodes, u
  * reached: it is copied at assembly, straight into the new arrays. */
 static int copied_whole(const build_ctx *c, uint32_t tri, unit_buf *u)
 {
-    size_t ne = (size_t)c->s->n_emitters;
+    size_t ne = (size_t)c->s->n_clusters;
     if (!c->old_unit || c->tri_mask)
         return 0;
     for (size_t e = 0; e < ne; e++) {
@@ -405,7 +405,7 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
     uint32_t tri = c->tri_lo + (uint32_t)item;
     unit_buf *u = &c->out[item];
     const lie_scene *s = c->s;
-    size_t ne = (size_t)s->n_emitters;
+    size_t ne = (size_t)s->n_clusters;
     if (copied_whole(c, tri, u))
         return;
     u->roots = malloc(sizeof *u->roots * (ne + 1));

@@ -42,7 +42,7 @@ static void refine_node(refine_ctx *c, uint32_t node, uint32_t tri, lie_patch_pa
 uint64_t lie_rst_refine(const lie_scene *s, const lie_env *env, const lie_box3 *boxes, int n_boxes, uint8_t *flags)
 {
     int cap = 0;
-    for (int e = 0; e < s->n_emitters; e++)
+    for (int e = 0; e < s->n_clusters; e++)
         cap = cap > lie_pair_hull_cap(s, e) ? cap : lie_pair_hull_cap(s, e);
     refine_ctx c = {s, env, boxes, n_boxes, flags, malloc(sizeof(lie_vec3) * ((size_t)cap + 1)), 0};
     if (!c.hull) {
@@ -50,8 +50,8 @@ uint64_t lie_rst_refine(const lie_scene *s, const lie_env *env, const lie_box3 *
         return 0;
     }
     for (uint32_t t = 0; t < env->n_tris; t++)
-        for (int e = 0; e < env->n_emitters; e++)
-            refine_node(&c, env->root[(size_t)t * (size_t)env->n_emitters + (size_t)e], t, lie_patch_root(), e);
+        for (int e = 0; e < env->n_clusters; e++)
+            refine_node(&c, env->root[(size_t)t * (size_t)env->n_clusters + (size_t)e], t, lie_patch_root(), e);
     free(c.hull);
     return c.cleared;
 }
@@ -69,6 +69,6 @@ static void spread_node(const lie_env *env, uint32_t node, uint8_t *flags)
 
 void lie_rst_spread(const lie_env *env, uint8_t *flags)
 {
-    for (size_t u = 0; u < (size_t)env->n_tris * (size_t)env->n_emitters; u++)
+    for (size_t u = 0; u < (size_t)env->n_tris * (size_t)env->n_clusters; u++)
         spread_node(env, env->root[u], flags);
 }

@@ -415,7 +415,7 @@ lie_status lie_rst_build(const lie_scene *s, const lie_env *env, int threads, li
     /* Regions are computed in parallel (each from its own item), then
      * inserted in item order, so the trees do not depend on the schedule. */
     int cap = 0;
-    for (int e = 0; e < s->n_emitters; e++)
+    for (int e = 0; e < s->n_clusters; e++)
         cap = cap > lie_pair_hull_cap(s, e) ? cap : lie_pair_hull_cap(s, e);
     int workers = threads > 0 ? threads : lie_cpu_count();
     build_state bs;
@@ -426,8 +426,8 @@ lie_status lie_rst_build(const lie_scene *s, const lie_env *env, int threads, li
     bs.hull_cap = cap + 1;
     bs.hull = malloc(sizeof(lie_vec3) * (size_t)bs.hull_cap * (size_t)workers);
     for (uint32_t t = 0; t < env->n_tris && bs.hull && !bs.nomem; t++)
-        for (int e = 0; e < env->n_emitters; e++)
-            collect(&bs, env->root[(size_t)t * (size_t)env->n_emitters + (size_t)e], t, lie_patch_root(), e);
+        for (int e = 0; e < env->n_clusters; e++)
+            collect(&bs, env->root[(size_t)t * (size_t)env->n_clusters + (size_t)e], t, lie_patch_root(), e);
     bs.outs = malloc(sizeof *bs.outs * (bs.n_items + 1));
     lie_status st = LIE_ERR_NOMEM;
     if (bs.hull && bs.outs && !bs.nomem)

@@ -6,31 +6,34 @@
 
 #include <string.h>
 
-/* A bounding box of an area emitter with many triangles, oriented to its
+/* A bounding box of an area emitter (or cluster) with many triangles, oriented to its
  * plane: the axis is its area-weighted normal when the triangles mostly
  * agree on it (a tessellated panel, whose box is then flat), the in-plane
  * axes its vertices' principal directions; else the world axes (a closed
  * bulb).  Widened a little, so rounding never leaves a vertex outside. */
-static void emitter_hull(const lie_scene *s, lie_emitter *e)
+void lie_scene_hull_of(const lie_scene *s, const uint32_t *tris, uint32_t first, uint32_t n_tris, lie_vec3 hull[8],
+                       int *n_hull)
 {
-    e->n_hull = 0;
-    if (e->n_tris <= LIE_EMITTER_HULL_TRIS)
+    *n_hull = 0;
+    if (n_tris <= LIE_EMITTER_HULL_TRIS)
         return;
-    const lie_vec3 *P = &s->tri_p[3 * (size_t)e->first_tri];
-    size_t nv = 3 * (size_t)e->n_tris;
+#define TRI_OF(k) (tris ? tris[k] : first + (uint32_t)(k))
+#define VERT(i) s->tri_p[3 * (size_t)TRI_OF((i) / 3) + (i) % 3]
+    size_t nv = 3 * (size_t)n_tris;
     double nx = 0, ny = 0, nz = 0, total = 0, cx = 0, cy = 0, cz = 0;
-    for (uint32_t t = 0; t < e->n_tris; t++) {
-        lie_vec3 g = s->tri_ng[e->first_tri + t];
-        double a = s->tri_area[e->first_tri + t];
+    for (uint32_t t = 0; t < n_tris; t++) {
+        lie_vec3 g = s->tri_ng[TRI_OF(t)];
+        double a = s->tri_area[TRI_OF(t)];
         nx += a * g.x;
         ny += a * g.y;
         nz += a * g.z;
         total += a;
     }
     for (size_t i = 0; i < nv; i++) {
-        cx += P[i].x;
-        cy += P[i].y;
-        cz += P[i].z;
+        lie_vec3 P = VERT(i);
+        cx += P.x;
+        cy += P.y;
+        cz += P.z;
     }
     cx /= (double)nv;
     cy /= (double)nv;
@@ -52,7 +55,8 @@ static void emitter_hull(const lie_scene *s, lie_emitter *e)
          * the 2x2 covariance of the projected vertices */
         double suu = 0, svv = 0, suv = 0;
         for (size_t i = 0; i < nv; i++) {
-            double q[3] = {P[i].x - cx, P[i].y - cy, P[i].z - cz};
+            lie_vec3 P = VERT(i);
+            double q[3] = {P.x - cx, P.y - cy, P.z - cz};
             double pu = q[0] * u[0] + q[1] * u[1] + q[2] * u[2], pv = q[0] * v[0] + q[1] * v[1] + q[2] * v[2];
             suu += pu * pu;
             svv += pv * pv;
@@ -68,7 +72,8 @@ static void emitter_hull(const lie_scene *s, lie_emitter *e)
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     double mag = 0.0;
     for (size_t i = 0; i < nv; i++) {
-        double q[3] = {P[i].x, P[i].y, P[i].z};
+        lie_vec3 P = VERT(i);
+        double q[3] = {P.x, P.y, P.z};
         for (int a = 0; a < 3; a++) {
             double pr = q[0] * ax[a][0] + q[1] * ax[a][1] + q[2] * ax[a][2];
             lo[a] = pr < lo[a] ? pr : lo[a];
@@ -86,9 +91,11 @@ static void emitter_hull(const lie_scene *s, lie_emitter *e)
             for (int q = 0; q < 3; q++)
                 p[q] += t * ax[a][q];
         }
-        e->hull[k] = lie_v3((float)p[0], (float)p[1], (float)p[2]);
+        hull[k] = lie_v3((float)p[0], (float)p[1], (float)p[2]);
     }
-    e->n_hull = 8;
+    *n_hull = 8;
+#undef VERT
+#undef TRI_OF
 }
 
 /* Is the emitter planar (see lie_emitter)?  Its largest triangle gives the
@@ -151,7 +158,7 @@ static void emitter_plane(const lie_scene *s, lie_emitter *e)
 
 void lie_scene_emitter_shape(const lie_scene *s, lie_emitter *e)
 {
-    emitter_hull(s, e);
+    lie_scene_hull_of(s, NULL, e->first_tri, e->n_tris, e->hull, &e->n_hull);
     emitter_plane(s, e);
 }
 
@@ -169,23 +176,31 @@ static uint32_t cdf_find(const float *cdf, uint32_t n, float a)
     return lo;
 }
 
+/* A point by area on triangles tris[0..n) (tris NULL: first, first + 1,
+ * ...) whose cumulative areas are cdf[], of total area `area`. */
+static uint32_t point_on(const lie_scene *s, const uint32_t *tris, uint32_t first, uint32_t n, const float *cdf,
+                         float area, float u1, float u2, lie_vec3 *p, lie_vec3 *nrm, float *b1, float *b2)
+{
+    float a = u1 * area;
+    uint32_t t = cdf_find(cdf, n, a);
+    float lo = t > 0 ? cdf[t - 1] : 0.0f;
+    float ta = cdf[t] - lo;
+    float ru = ta > 0.0f ? (a - lo) / ta : 0.5f;
+    ru = fminf(fmaxf(ru, 0.0f), 0.99999994f);
+    lie_sample_triangle(ru, u2, b1, b2);
+    uint32_t g = tris ? tris[t] : first + t;
+    const lie_vec3 *P = &s->tri_p[3 * (size_t)g];
+    float b0 = 1.0f - *b1 - *b2;
+    *p = lie_v3_add(lie_v3_add(lie_v3_scale(P[0], b0), lie_v3_scale(P[1], *b1)), lie_v3_scale(P[2], *b2));
+    *nrm = s->tri_ng[g];
+    return g;
+}
+
 uint32_t lie_emitter_point(const lie_scene *s, int e, float u1, float u2, lie_vec3 *p, lie_vec3 *n,
                            float *b1, float *b2)
 {
     const lie_emitter *em = &s->emitters[e];
-    float a = u1 * em->area;
-    uint32_t t = cdf_find(em->tri_cdf, em->n_tris, a);
-    float lo = t > 0 ? em->tri_cdf[t - 1] : 0.0f;
-    float ta = em->tri_cdf[t] - lo;
-    float ru = ta > 0.0f ? (a - lo) / ta : 0.5f;
-    ru = fminf(fmaxf(ru, 0.0f), 0.99999994f);
-    lie_sample_triangle(ru, u2, b1, b2);
-    uint32_t g = em->first_tri + t;
-    const lie_vec3 *P = &s->tri_p[3 * (size_t)g];
-    float b0 = 1.0f - *b1 - *b2;
-    *p = lie_v3_add(lie_v3_add(lie_v3_scale(P[0], b0), lie_v3_scale(P[1], *b1)), lie_v3_scale(P[2], *b2));
-    *n = s->tri_ng[g];
-    return g;
+    return point_on(s, NULL, em->first_tri, em->n_tris, em->tri_cdf, em->area, u1, u2, p, n, b1, b2);
 }
 
 /* ---- the emitter interface (lib/scene/scene.h) -------------------------- */
@@ -272,39 +287,45 @@ static int point_may_reach(const lie_emitter *em, const lie_vec3 V[3])
     return 1;
 }
 
+/* Whether area emitter em's triangles tris[0..n) (tris NULL: first,
+ * first + 1, ...) may light patch V (see lie_emitter_can_reach). */
+static int area_may_reach(const lie_scene *s, const lie_emitter *em, const uint32_t *tris, uint32_t first, uint32_t n,
+                          const lie_vec3 V[3], lie_vec3 ng, int two_sided)
+{
+    /* emitter wholly behind (or in) the patch's plane */
+    int front = 0, back = 0;
+    for (uint32_t k = 0; k < n && !(front && back); k++) {
+        const lie_vec3 *E = &s->tri_p[3 * (size_t)(tris ? tris[k] : first + k)];
+        for (int j = 0; j < 3; j++) {
+            float d = lie_v3_dot(ng, lie_v3_sub(E[j], V[0]));
+            front |= d > 0.0f;
+            back |= d < 0.0f;
+        }
+    }
+    if (!front && (!two_sided || !back))
+        return 0;
+    /* patch wholly behind every triangle of a one-sided emitter */
+    if (!em->double_sided) {
+        for (uint32_t k = 0; k < n; k++) {
+            uint32_t g = tris ? tris[k] : first + k;
+            const lie_vec3 *E = &s->tri_p[3 * (size_t)g];
+            lie_vec3 ne = s->tri_ng[g];
+            float margin = 4e-4f * lie_maxf(lie_v3_maxabs(V[0]), 1.0f);
+            for (int j = 0; j < 3; j++)
+                if (lie_v3_dot(ne, lie_v3_sub(V[j], E[0])) > -margin)
+                    return 1;
+        }
+        return 0;
+    }
+    return 1;
+}
+
 int lie_emitter_can_reach(const lie_scene *s, int e, uint32_t tri, const lie_vec3 V[3], lie_vec3 ng, int two_sided)
 {
     const lie_emitter *em = &s->emitters[e];
-    if (em->type == LIE_EMITTER_AREA) {
-        if (lie_emitter_owns(em, tri))
-            return 0; /* an emitter does not light itself */
-        /* emitter wholly behind (or in) the patch's plane */
-        int front = 0, back = 0;
-        for (uint32_t k = 0; k < em->n_tris && !(front && back); k++) {
-            const lie_vec3 *E = &s->tri_p[3 * (size_t)(em->first_tri + k)];
-            for (int j = 0; j < 3; j++) {
-                float d = lie_v3_dot(ng, lie_v3_sub(E[j], V[0]));
-                front |= d > 0.0f;
-                back |= d < 0.0f;
-            }
-        }
-        if (!front && (!two_sided || !back))
-            return 0;
-        /* patch wholly behind every triangle of a one-sided emitter */
-        if (!em->double_sided) {
-            for (uint32_t k = 0; k < em->n_tris; k++) {
-                uint32_t g = em->first_tri + k;
-                const lie_vec3 *E = &s->tri_p[3 * (size_t)g];
-                lie_vec3 ne = s->tri_ng[g];
-                float margin = 4e-4f * lie_maxf(lie_v3_maxabs(V[0]), 1.0f);
-                for (int j = 0; j < 3; j++)
-                    if (lie_v3_dot(ne, lie_v3_sub(V[j], E[0])) > -margin)
-                        return 1;
-            }
-            return 0;
-        }
-        return 1;
-    }
+    if (em->type == LIE_EMITTER_AREA)
+        return !lie_emitter_owns(em, tri) /* an emitter does not light itself */
+               && area_may_reach(s, em, NULL, em->first_tri, em->n_tris, V, ng, two_sided);
     float d = em->type == LIE_EMITTER_POINT ? lie_v3_dot(ng, lie_v3_sub(em->position, V[0]))
                                             : -lie_v3_dot(ng, em->direction);
     if (!(two_sided ? d != 0.0f : !(d <= 0.0f)))
@@ -312,4 +333,60 @@ int lie_emitter_can_reach(const lie_scene *s, int e, uint32_t tri, const lie_vec
     if (em->type == LIE_EMITTER_POINT && (em->range > 0.0f || em->cos_outer > -1.5f))
         return point_may_reach(em, V);
     return 1;
+}
+
+/* ---- clusters: the same questions of one cluster ------------------------ */
+
+static int whole(const lie_scene *s, int c) { return s->emitters[s->clusters[c].emitter].n_clusters == 1; }
+
+int lie_cluster_hull_cap(const lie_scene *s, int c)
+{
+    const lie_cluster *cl = &s->clusters[c];
+    if (whole(s, c))
+        return lie_emitter_hull_cap(&s->emitters[cl->emitter]);
+    return cl->n_hull ? cl->n_hull : 3 * (int)cl->n_tris;
+}
+
+int lie_cluster_hull_points(const lie_scene *s, int c, const lie_vec3 V[3], float far, lie_vec3 *out)
+{
+    const lie_cluster *cl = &s->clusters[c];
+    if (whole(s, c))
+        return lie_emitter_hull_points(s, cl->emitter, V, far, out);
+    if (cl->n_hull) {
+        memcpy(out, cl->hull, sizeof(lie_vec3) * (size_t)cl->n_hull);
+        return cl->n_hull;
+    }
+    for (uint32_t k = 0; k < cl->n_tris; k++)
+        memcpy(out + 3 * k, &s->tri_p[3 * (size_t)s->cluster_tris[cl->first + k]], sizeof(lie_vec3) * 3);
+    return 3 * (int)cl->n_tris;
+}
+
+const lie_vec3 *lie_cluster_facing(const lie_scene *s, int c)
+{
+    const lie_cluster *cl = &s->clusters[c];
+    if (whole(s, c))
+        return lie_emitter_facing(s, cl->emitter);
+    return &s->tri_ng[s->cluster_tris[cl->first]]; /* any axis serves the separating-axis test */
+}
+
+uint32_t lie_cluster_target(const lie_scene *s, int c, float u1, float u2, lie_vec3 p, float far, lie_vec3 *q,
+                            lie_vec3 *n, int *one_sided)
+{
+    const lie_cluster *cl = &s->clusters[c];
+    if (whole(s, c))
+        return lie_emitter_target(s, cl->emitter, u1, u2, p, far, q, n, one_sided);
+    float b1, b2;
+    *one_sided = !s->emitters[cl->emitter].double_sided;
+    return point_on(s, s->cluster_tris + cl->first, 0, cl->n_tris, s->cluster_cdf + cl->first, cl->area, u1, u2, q,
+                    n, &b1, &b2);
+}
+
+int lie_cluster_can_reach(const lie_scene *s, int c, uint32_t tri, const lie_vec3 V[3], lie_vec3 ng, int two_sided)
+{
+    const lie_cluster *cl = &s->clusters[c];
+    if (whole(s, c))
+        return lie_emitter_can_reach(s, cl->emitter, tri, V, ng, two_sided);
+    const lie_emitter *em = &s->emitters[cl->emitter];
+    return !lie_emitter_owns(em, tri) &&
+           area_may_reach(s, em, s->cluster_tris + cl->first, 0, cl->n_tris, V, ng, two_sided);
 }

@@ -40,6 +40,15 @@ static void free_world(lie_scene *s)
     free(s->tri_instance);
     free(s->tri_removed);
     free(s->tri_emitter);
+    free(s->clusters);
+    free(s->cluster_tris);
+    free(s->cluster_cdf);
+    free(s->tri_cluster);
+    s->clusters = NULL;
+    s->cluster_tris = NULL;
+    s->cluster_cdf = NULL;
+    s->tri_cluster = NULL;
+    s->n_clusters = 0;
     for (int i = 0; i < s->n_emitters; i++)
         free(s->emitters[i].tri_cdf);
     free(s->emitters);
@@ -595,6 +604,10 @@ lie_status lie_scene_flatten(lie_scene *s, lie_error *err)
             free_world(s);
             return lie_error_set(err, LIE_ERR_FORMAT, path, "triangle %zu has a non-finite vertex", i / 3);
         }
+    }
+    if (lie_scene_cluster(s) != LIE_OK) {
+        free_world(s);
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
     }
     lie_hasher *h = lie_hasher_create(0);
     if (!h) {

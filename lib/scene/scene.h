@@ -236,7 +236,27 @@ typedef struct lie_emitter {
     float intensity[3];    /* colour x intensity: cd (point/spot) or lux (directional) */
     float cos_inner, cos_outer; /* spot cone; point: both -2 (no cone) */
     float range;           /* 0 = infinite */
+    /* its clusters: s->clusters[first_cluster .. first_cluster + n_clusters) */
+    int first_cluster, n_clusters;
 } lie_emitter;
+
+/* A cluster: a part of an emitter that LIEs see as a visibility source of
+ * its own (lib/lie builds one unit per triangle and cluster).  Clustering
+ * partitions visibility only: the renderer samples the emitter whole, as
+ * ever, and sends each sample's shadow test to its triangle's cluster.  An
+ * area emitter of few triangles, or compact, is one cluster; a large one is
+ * split in space (lib/scene/cluster.c).  A punctual emitter is one cluster
+ * without triangles. */
+#define LIE_CLUSTER_MAX 16     /* clusters per emitter at most */
+#define LIE_CLUSTER_MIN_TRIS 16 /* triangles per cluster at least */
+typedef struct lie_cluster {
+    int emitter;
+    uint32_t first, n_tris; /* its triangles: s->cluster_tris[first .. first + n_tris), ascending */
+    float area;
+    /* like lie_emitter's hull: a box's corners, or (n_hull 0) its vertices */
+    lie_vec3 hull[8];
+    int n_hull;
+} lie_cluster;
 
 typedef struct lie_camera {
     char *name;            /* node name, else camera name; may be NULL */
@@ -283,6 +303,10 @@ typedef struct lie_scene {
     uint8_t *tri_removed;     /* 1: slot of a removed node (an empty triangle) */
     lie_emitter *emitters;    int n_emitters;
     int32_t *tri_emitter;     /* area emitter of each triangle, or -1 */
+    lie_cluster *clusters;    int n_clusters;  /* emitter by emitter, in emitter order */
+    uint32_t *cluster_tris;   /* every cluster's triangles (see lie_cluster) */
+    float *cluster_cdf;       /* beside cluster_tris: cumulative area within its cluster */
+    int32_t *tri_cluster;     /* cluster of each emitter triangle, or -1 */
     lie_camera *cameras;      int n_cameras;
     lie_box3 bounds;
     float max_tri_area;
@@ -362,6 +386,26 @@ uint32_t lie_emitter_target(const lie_scene *s, int e, float u1, float u2, lie_v
  * and shaded from both sides when two_sided) can receive light from any
  * point of emitter e with a non-zero geometric term; 1 when it may. */
 int lie_emitter_can_reach(const lie_scene *s, int e, uint32_t tri, const lie_vec3 V[3], lie_vec3 ng, int two_sided);
+
+/* ---- clusters (lib/scene/cluster.c) --------------------------------------
+ * The same questions asked of one cluster c (lie_cluster): lib/lie builds
+ * its units per cluster.  For the single cluster of an emitter they are the
+ * emitter's answers exactly. */
+int lie_cluster_hull_cap(const lie_scene *s, int c);
+int lie_cluster_hull_points(const lie_scene *s, int c, const lie_vec3 V[3], float far, lie_vec3 *out);
+const lie_vec3 *lie_cluster_facing(const lie_scene *s, int c);
+/* A segment's target on cluster c: a point picked by area on its triangles. */
+uint32_t lie_cluster_target(const lie_scene *s, int c, float u1, float u2, lie_vec3 p, float far, lie_vec3 *q,
+                            lie_vec3 *n, int *one_sided);
+int lie_cluster_can_reach(const lie_scene *s, int c, uint32_t tri, const lie_vec3 V[3], lie_vec3 ng, int two_sided);
+/* Partition every emitter into clusters (s->clusters and the arrays beside
+ * it), a function of each emitter's own triangles alone.  Called by
+ * lie_scene_flatten; LIE_ERR_NOMEM. */
+lie_status lie_scene_cluster(lie_scene *s);
+/* A 32-bit digest of emitter e's partition (its clusters' triangles, in
+ * order); 0 for an emitter of one cluster.  Caches record it, so a cache
+ * is never read against another clustering. */
+uint32_t lie_scene_cluster_digest(const lie_scene *s, int e);
 
 /* Bilinear lookup with the texture's wrap modes; rgba out. */
 void lie_texture_sample(const lie_texture *t, float u, float v, float rgba[4]);

@@ -23,10 +23,12 @@ lie_status lie_shade_scratch_init(lie_shade_scratch *sc, int cap, int max_blocke
     size_t stride = ((size_t)cap + 15) & ~(size_t)15;
     float *block = aligned_alloc(64, sizeof(float) * 15 * stride);
     sc->occ = aligned_alloc(64, sizeof *sc->occ * stride);
+    sc->occ2 = aligned_alloc(64, sizeof *sc->occ2 * stride);
     sc->idx = malloc(sizeof(int) * stride);
-    if (!block || !sc->occ || !sc->idx) {
+    if (!block || !sc->occ || !sc->occ2 || !sc->idx) {
         free(block);
         free(sc->occ);
+        free(sc->occ2);
         free(sc->idx);
         memset(sc, 0, sizeof *sc);
         return LIE_ERR_NOMEM;
@@ -57,6 +59,7 @@ void lie_shade_scratch_free(lie_shade_scratch *sc)
         return;
     free(sc->wr);
     free(sc->occ);
+    free(sc->occ2);
     free(sc->idx);
     free(sc->batch.occluded);
     free(sc->blockers);
@@ -380,6 +383,106 @@ static void add_scaled(const float k[3], double omega, float rgb[3])
     rgb[2] += k[2] * w;
 }
 
+/* Embree answers the query's samples that would contribute (and, when
+ * `want` is given, have want[i] set) into sc->occ. */
+static void embree_occlusion(const lie_shade_ctx *c, lie_shade_scratch *sc, lie_shadow_query *q, int n,
+                             const uint32_t *want)
+{
+    lie_shadow_segments(q);
+    lie_ray_batch *b = &sc->batch;
+    int m = 0;
+    for (int i = 0; i < n; i++) {
+        float w = sc->scalar ? sc->wr[i] : sc->wr[i] + sc->wg[i] + sc->wb[i];
+        if (!(w > 0.0f) || (want && !want[i]))
+            continue;
+        b->ox[m] = q->o.x;
+        b->oy[m] = q->o.y;
+        b->oz[m] = q->o.z;
+        b->dx[m] = q->dx[i];
+        b->dy[m] = q->dy[i];
+        b->dz[m] = q->dz[i];
+        b->tnear[m] = 0.0f;
+        b->tfar[m] = 1.0f;
+        sc->idx[m] = i;
+        m++;
+    }
+    b->n = m;
+    if (m > 0) {
+        lie_rt_occluded_batch(c->rt, b, c->opt->rays);
+        for (int k = 0; k < m; k++)
+            sc->occ[sc->idx[k]] = b->occluded[k] ? ~0u : 0u;
+    }
+    sc->stats.shadow_rays += (uint64_t)m;
+}
+
+/* An emitter of several clusters (lie_cluster) under the LIE: the samples
+ * are the emitter's, as ever; each sample's shadow test goes to the pair of
+ * the cluster holding its triangle.  classify_clusters looks every
+ * cluster's pair up: OCCLUDED if all are occluded or unlit, VISIBLE if all
+ * are visible, else VISCLASS_CLUSTERS with each pair in sc->ccls/cpair. */
+#define VISCLASS_CLUSTERS ((lie_vis_class)5)
+static lie_vis_class classify_clusters(const lie_shade_ctx *c, const lie_surface *sf, const lie_emitter *em,
+                                       lie_shade_scratch *sc, int *unbuilt)
+{
+    const lie_vis_oracle *vo = c->opt->oracle;
+    int all_occ = 1, all_vis = 1;
+    for (int j = 0; j < em->n_clusters; j++) {
+        const void *pair = NULL;
+        lie_vis_class k = vo->classify(vo->ctx, sf, em->first_cluster + j, &pair);
+        if (k == LIE_VISCLASS_UNBUILT) {
+            *unbuilt = 1;
+            k = LIE_VISCLASS_TEST_ALL;
+        }
+        if ((k == LIE_VISCLASS_TEST_ALL && (c->opt->lie_skip & LIE_SKIP_FALLBACK)) ||
+            (k == LIE_VISCLASS_BLOCKERS && (c->opt->lie_skip & LIE_SKIP_BLOCKERS)))
+            k = LIE_VISCLASS_VISIBLE;
+        sc->ccls[j] = (int)k;
+        sc->cpair[j] = pair;
+        all_occ &= k == LIE_VISCLASS_OCCLUDED;
+        all_vis &= k == LIE_VISCLASS_VISIBLE;
+    }
+    return all_occ ? LIE_VISCLASS_OCCLUDED : all_vis ? LIE_VISCLASS_VISIBLE : VISCLASS_CLUSTERS;
+}
+
+/* sc->occ for the query's samples, each by its cluster's pair. */
+static void clustered_occlusion(const lie_shade_ctx *c, lie_shade_scratch *sc, lie_shadow_query *q, int n,
+                                const lie_emitter *em)
+{
+    const lie_scene *s = c->s;
+    const lie_vis_oracle *vo = c->opt->oracle;
+    const uint32_t *tri = q->ls->tri;
+    const int first = em->first_cluster;
+    lie_render_stats *st = &sc->stats;
+    memset(sc->occ, 0, sizeof *sc->occ * (size_t)n);
+    int any_embree = 0;
+    for (int j = 0; j < em->n_clusters; j++) {
+        const int k = sc->ccls[j];
+        if (k == LIE_VISCLASS_OCCLUDED) {
+            for (int i = 0; i < n; i++)
+                if (s->tri_cluster[tri[i]] - first == j)
+                    sc->occ[i] = ~0u;
+            st->pairs_occluded++;
+        } else if (k == LIE_VISCLASS_BLOCKERS) {
+            int nb = vo->select(vo->ctx, sc->cpair[j], first + j, q->o, q->eps, sc->blockers);
+            if (nb == 0)
+                continue;
+            vo->occluded(vo->ctx, sc->blockers, nb, q, sc->occ2);
+            for (int i = 0; i < n; i++)
+                if (s->tri_cluster[tri[i]] - first == j)
+                    sc->occ[i] = sc->occ2[i];
+            st->pairs_blockers++;
+        } else if (k == LIE_VISCLASS_TEST_ALL) {
+            any_embree = 1;
+        }
+    }
+    if (any_embree) {
+        for (int i = 0; i < n; i++)
+            sc->occ2[i] = sc->ccls[s->tri_cluster[tri[i]] - first] == LIE_VISCLASS_TEST_ALL;
+        embree_occlusion(c, sc, q, n, sc->occ2);
+        st->pairs_embree++;
+    }
+}
+
 static inline double clock_if(int on) { return on ? lie_time_now() : 0.0; }
 
 void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pixel, int depth,
@@ -404,8 +507,22 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
         lie_vis_class cls = LIE_VISCLASS_TEST_ALL;
         const void *pair = NULL;
         int n_blockers = 0;
-        if (opt->visibility == LIE_VIS_LIE && opt->oracle) {
-            cls = opt->oracle->classify(opt->oracle->ctx, sf, e, &pair);
+        const int clustered = opt->visibility == LIE_VIS_LIE && opt->oracle && em->n_clusters > 1;
+        if (clustered) {
+            int unbuilt = 0;
+            cls = classify_clusters(c, sf, em, sc, &unbuilt);
+            if (unbuilt) {
+                st->pairs_unbuilt++;
+                st->points_unbuilt += !unbuilt_seen;
+                unbuilt_seen = 1;
+            }
+            if (cls == LIE_VISCLASS_OCCLUDED) {
+                sc->stats.shadow_rays_skipped += (uint64_t)opt->light_samples;
+                st->pairs_occluded++;
+                continue;
+            }
+        } else if (opt->visibility == LIE_VIS_LIE && opt->oracle) {
+            cls = opt->oracle->classify(opt->oracle->ctx, sf, em->first_cluster, &pair);
             if (cls == LIE_VISCLASS_UNBUILT) {
                 st->pairs_unbuilt++;
                 st->points_unbuilt += !unbuilt_seen;
@@ -419,7 +536,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
             }
             if (cls == LIE_VISCLASS_BLOCKERS) {
                 /* of the patch's blockers, those this point's segments can meet */
-                n_blockers = opt->oracle->select(opt->oracle->ctx, pair, e, o, eps, sc->blockers);
+                n_blockers = opt->oracle->select(opt->oracle->ctx, pair, em->first_cluster, o, eps, sc->blockers);
                 if (n_blockers == 0 || (opt->lie_skip & LIE_SKIP_BLOCKERS))
                     cls = LIE_VISCLASS_VISIBLE;
             } else if (cls == LIE_VISCLASS_TEST_ALL && (opt->lie_skip & LIE_SKIP_FALLBACK)) {
@@ -520,7 +637,12 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                 sdz[0] *= len;
             }
             double t0 = clock_if(timers);
-            if (cls == LIE_VISCLASS_BLOCKERS) {
+            if (cls == VISCLASS_CLUSTERS) {
+                clustered_occlusion(c, sc, &q, n, em);
+                sc->stats.shadow_rays_skipped += (uint64_t)n;
+                if (timers)
+                    st->t_blockers += lie_time_now() - t0;
+            } else if (cls == LIE_VISCLASS_BLOCKERS) {
                 /* short lists: test every sample, no compaction */
                 opt->oracle->occluded(opt->oracle->ctx, sc->blockers, n_blockers, &q, sc->occ);
                 sc->stats.shadow_rays_skipped += (uint64_t)n;
@@ -528,32 +650,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                 if (timers)
                     st->t_blockers += lie_time_now() - t0;
             } else {
-                /* Embree: rays only for samples that would contribute */
-                lie_shadow_segments(&q);
-                lie_ray_batch *b = &sc->batch;
-                int m = 0;
-                for (int i = 0; i < n; i++) {
-                    float w = sc->scalar ? sc->wr[i] : sc->wr[i] + sc->wg[i] + sc->wb[i];
-                    if (!(w > 0.0f))
-                        continue;
-                    b->ox[m] = o.x;
-                    b->oy[m] = o.y;
-                    b->oz[m] = o.z;
-                    b->dx[m] = sdx[i];
-                    b->dy[m] = sdy[i];
-                    b->dz[m] = sdz[i];
-                    b->tnear[m] = 0.0f;
-                    b->tfar[m] = 1.0f;
-                    sc->idx[m] = i;
-                    m++;
-                }
-                b->n = m;
-                if (m > 0) {
-                    lie_rt_occluded_batch(c->rt, b, opt->rays);
-                    for (int k = 0; k < m; k++)
-                        sc->occ[sc->idx[k]] = b->occluded[k] ? ~0u : 0u;
-                }
-                sc->stats.shadow_rays += (uint64_t)m;
+                embree_occlusion(c, sc, &q, n, NULL);
                 st->pairs_embree++;
                 if (timers)
                     st->t_embree += lie_time_now() - t0;

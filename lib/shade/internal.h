@@ -14,6 +14,10 @@ typedef struct lie_shade_scratch {
     float scale[3];
     float *dx, *dy, *dz, *dist;
     uint32_t *occ;             /* per sample: ~0 blocked, 0 free */
+    uint32_t *occ2;            /* the same, for one cluster's blockers */
+    /* per cluster of the emitter at hand (lie_cluster) */
+    int ccls[LIE_CLUSTER_MAX];
+    const void *cpair[LIE_CLUSTER_MAX];
     uint32_t *blockers;        /* the oracle's selected blockers */
     float *bwork;              /* lie_shadow_query.work */
     uint32_t *bkind;

@@ -20,7 +20,7 @@ struct lie_lie_vis {
     const lie_env *env;
     mt_tri *tris;
     sphere *tri_sphere;     /* per triangle */
-    sphere *emitter_sphere; /* per emitter; r < 0: no culling (directional) */
+    sphere *emitter_sphere; /* per cluster (lie_cluster); r < 0: no culling (directional) */
     /* per triangle, side by side, for the selection loops (which gather
      * them by a list's triangle indices): its sphere's x, y, z, r and its
      * vertices a x, y, z, b x, y, z, c x, y, z */
@@ -63,8 +63,9 @@ static int select_blockers(void *ctx, const void *pair, int e, lie_vec3 o, float
 {
     const lie_lie_vis *v = ctx;
     const lie_pnode *nd = pair;
-    if (v->s->emitters[e].planar)
-        return select_planar(v, nd, &v->s->emitters[e], o, eps, out);
+    const lie_emitter *em = &v->s->emitters[v->s->clusters[e].emitter];
+    if (em->planar) /* a cluster lies in its emitter's plane, within its extent */
+        return select_planar(v, nd, em, o, eps, out);
     const uint32_t *list = v->env->pool + nd->list;
     const int count = (int)nd->count;
     const sphere E = v->emitter_sphere[e];
@@ -510,10 +511,10 @@ static sphere bounding_sphere(const lie_vec3 *p, uint32_t n)
 lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vis **out, lie_error *err)
 {
     *out = NULL;
-    if (env->n_tris != s->n_tris || env->n_emitters != s->n_emitters)
+    if (env->n_tris != s->n_tris || env->n_clusters != s->n_clusters)
         return lie_error_set(err, LIE_ERR_ARG, s->path,
-                             "the cache has %u triangles and %d emitters, the scene %u and %d", env->n_tris,
-                             env->n_emitters, s->n_tris, s->n_emitters);
+                             "the cache has %u triangles and %d emitter clusters, the scene %u and %d", env->n_tris,
+                             env->n_clusters, s->n_tris, s->n_clusters);
     lie_lie_vis *v = calloc(1, sizeof *v);
     if (!v)
         return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
@@ -528,17 +529,28 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
         v->tris[t] = m;
     }
     v->tri_sphere = malloc(sizeof *v->tri_sphere * ((size_t)s->n_tris + 1));
-    v->emitter_sphere = malloc(sizeof *v->emitter_sphere * ((size_t)s->n_emitters + 1));
+    v->emitter_sphere = malloc(sizeof *v->emitter_sphere * ((size_t)s->n_clusters + 1));
     if (!v->tri_sphere || !v->emitter_sphere) {
         lie_lie_vis_destroy(v);
         return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
     }
     for (uint32_t t = 0; t < s->n_tris; t++)
         v->tri_sphere[t] = bounding_sphere(&s->tri_p[3 * (size_t)t], 3);
-    for (int e = 0; e < s->n_emitters; e++) {
-        const lie_emitter *em = &s->emitters[e];
-        if (em->type == LIE_EMITTER_AREA) {
+    for (int e = 0; e < s->n_clusters; e++) {
+        const lie_cluster *cl = &s->clusters[e];
+        const lie_emitter *em = &s->emitters[cl->emitter];
+        if (em->type == LIE_EMITTER_AREA && em->n_clusters == 1) {
             v->emitter_sphere[e] = bounding_sphere(&s->tri_p[3 * (size_t)em->first_tri], 3 * em->n_tris);
+        } else if (em->type == LIE_EMITTER_AREA) {
+            lie_vec3 *pts = malloc(sizeof *pts * 3 * ((size_t)cl->n_tris + 1));
+            if (!pts) {
+                lie_lie_vis_destroy(v);
+                return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
+            }
+            for (uint32_t k = 0; k < cl->n_tris; k++)
+                memcpy(pts + 3 * k, &s->tri_p[3 * (size_t)s->cluster_tris[cl->first + k]], sizeof *pts * 3);
+            v->emitter_sphere[e] = bounding_sphere(pts, 3 * cl->n_tris);
+            free(pts);
         } else if (em->type == LIE_EMITTER_POINT) {
             sphere p = {em->position.x, em->position.y, em->position.z, 0.0f};
             v->emitter_sphere[e] = p;

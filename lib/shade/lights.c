@@ -25,13 +25,14 @@ lie_status lie_light_samples_alloc(lie_light_samples *ls, int n)
     memset(ls, 0, sizeof *ls);
     if (n < 1)
         n = 1;
-    /* One block, 11 arrays, each padded to a multiple of 16 floats (64
-     * bytes) so vector loops may read whole registers. */
+    /* One block, 11 arrays of floats and the triangles', each padded to a
+     * multiple of 16 (64 bytes) so vector loops may read whole registers. */
     size_t stride = ((size_t)n + 15) & ~(size_t)15;
-    float *block = aligned_alloc(64, sizeof(float) * 11 * stride);
+    float *block = aligned_alloc(64, sizeof(float) * 12 * stride);
     if (!block)
         return LIE_ERR_NOMEM;
-    memset(block, 0, sizeof(float) * 11 * stride);
+    memset(block, 0, sizeof(float) * 12 * stride);
+    ls->tri = (uint32_t *)(void *)(block + 11 * stride);
     float **arr[11] = {&ls->x, &ls->y, &ls->z, &ls->nx, &ls->ny, &ls->nz, &ls->r, &ls->g, &ls->b, &ls->s, &ls->t};
     for (int k = 0; k < 11; k++)
         *arr[k] = block + (size_t)k * stride;
@@ -90,6 +91,7 @@ void lie_light_samples_generate(const lie_scene *s, int e, int n, float su, floa
         lie_vec3 p, ng;
         float b1, b2;
         uint32_t g = lie_emitter_point(s, e, u1, u2, &p, &ng, &b1, &b2);
+        out->tri[i] = g;
         float le[3] = {em->radiance[0], em->radiance[1], em->radiance[2]};
         if (tex) {
             float rgba[4], xu, xv;

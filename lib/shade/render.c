@@ -124,9 +124,13 @@ static void describe_pixel(const render_job *j, int x, int y, size_t pi)
     if (lie_rt_intersect(j->sc.rt, org, d, 0.0f, INFINITY, 1, &hit)) {
         lie_surface sf;
         lie_surface_from_hit(j->sc.s, &hit, d, &sf);
-        int ne = j->sc.s->n_emitters;
-        int e0 = opt->aov_emitter >= 0 ? opt->aov_emitter : 0;
-        int e1 = opt->aov_emitter >= 0 ? opt->aov_emitter + 1 : ne;
+        /* every cluster (lie_cluster) of the emitters asked for */
+        const lie_scene *sc = j->sc.s;
+        int ne = sc->n_emitters;
+        int k0 = opt->aov_emitter >= 0 ? opt->aov_emitter : 0;
+        int k1 = opt->aov_emitter >= 0 ? opt->aov_emitter + 1 : ne;
+        int e0 = k0 < ne ? sc->emitters[k0].first_cluster : sc->n_clusters;
+        int e1 = k1 < ne ? sc->emitters[k1].first_cluster : sc->n_clusters;
         int cls[64];
         uint32_t cnt[64];
         uint64_t id = 0;

@@ -37,6 +37,7 @@ typedef struct lie_light_samples {
     float po[3], pu[3], pv[3], pn[3];
     float *s, *t;
     float smin, smax, tmin, tmax;
+    uint32_t *tri;         /* area: each sample's emitter triangle (its cluster answers its visibility) */
 } lie_light_samples;
 
 /* Samples of emitter e: a Hammersley point set over the unit square,

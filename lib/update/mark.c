@@ -37,15 +37,18 @@ int lie_update_same_subtree(const lie_env *A, uint32_t a, const lie_env *B, uint
 }
 
 /* An emitter continues when the same, unmoved instance emits before and
- * after: its committed index, or -1. */
-static int32_t emitter_before(const lie_cache *c, const lie_emitter *em, const uint8_t *moved)
+ * after, split into the same clusters: its committed index, or -1. */
+static int32_t emitter_before(const lie_cache *c, const lie_scene *s, int e, const uint8_t *moved)
 {
+    const lie_emitter *em = &s->emitters[e];
     int32_t o = -1;
     if (moved[em->node])
         return -1;
+    uint32_t dig = lie_scene_cluster_digest(s, e);
     for (int k = 0; k < c->n_emitters; k++)
         if (c->emitters[k].type == (uint32_t)em->type && c->emitters[k].node == em->node &&
-            c->emitters[k].first_tri == em->first_tri && c->emitters[k].n_tris == em->n_tris)
+            c->emitters[k].first_tri == em->first_tri && c->emitters[k].n_tris == em->n_tris &&
+            c->emitters[k].n_clusters == (uint32_t)em->n_clusters && c->emitters[k].partition == dig)
             o = k;
     return o;
 }
@@ -56,32 +59,47 @@ static lie_status map_units(lie_update *u)
 {
     const lie_scene *s = u->scene;
     const lie_cache *c = u->cache;
-    size_t n_units = (size_t)s->n_tris * (size_t)s->n_emitters;
+    size_t n_units = (size_t)s->n_tris * (size_t)s->n_clusters;
     uint8_t *moved = calloc((size_t)s->n_nodes + 1, 1);
     int32_t *emap = malloc(sizeof *emap * ((size_t)s->n_emitters + 1));
+    int32_t *cmap = malloc(sizeof *cmap * ((size_t)s->n_clusters + 1));  /* committed cluster, or -1 */
+    int32_t *ofirst = malloc(sizeof *ofirst * ((size_t)c->n_emitters + 1)); /* committed first clusters */
     u->old_unit = malloc(sizeof *u->old_unit * (n_units + 1));
-    if (!moved || !emap || !u->old_unit) {
+    if (!moved || !emap || !cmap || !ofirst || !u->old_unit) {
         free(moved);
         free(emap);
+        free(cmap);
+        free(ofirst);
         return LIE_ERR_NOMEM;
+    }
+    for (int k = 0, f = 0; k < c->n_emitters; k++) {
+        ofirst[k] = f;
+        f += (int)c->emitters[k].n_clusters;
     }
     for (int k = 0; k < u->n_moved; k++)
         if (u->moved[k] >= 0 && u->moved[k] < s->n_nodes)
             moved[u->moved[k]] = 1;
     for (int e = 0; e < s->n_emitters; e++)
-        emap[e] = emitter_before(c, &s->emitters[e], moved);
+        emap[e] = emitter_before(c, s, e, moved);
+    for (int k = 0; k < s->n_clusters; k++) {
+        int e = s->clusters[k].emitter;
+        cmap[k] = emap[e] < 0 ? -1 : ofirst[emap[e]] + (k - s->emitters[e].first_cluster);
+    }
+    const size_t old_nc = (size_t)u->cache->env->n_clusters;
     int everything = u->opt.full || s->max_tri_area != u->base_max_area;
     for (uint32_t t = 0; t < s->n_tris; t++) {
         int patch_moved = t >= u->base_tris || moved[s->instances[s->tri_instance[t]].node];
-        for (int e = 0; e < s->n_emitters; e++) {
-            size_t unit = (size_t)t * (size_t)s->n_emitters + (size_t)e;
-            u->old_unit[unit] = everything || patch_moved || emap[e] < 0
+        for (int k = 0; k < s->n_clusters; k++) {
+            size_t unit = (size_t)t * (size_t)s->n_clusters + (size_t)k;
+            u->old_unit[unit] = everything || patch_moved || cmap[k] < 0
                                     ? -1
-                                    : (int32_t)((size_t)t * (size_t)c->n_emitters + (size_t)emap[e]);
+                                    : (int32_t)((size_t)t * old_nc + (size_t)cmap[k]);
         }
     }
     free(moved);
     free(emap);
+    free(cmap);
+    free(ofirst);
     return LIE_OK;
 }
 
@@ -108,7 +126,9 @@ static lie_status flag_nodes(lie_update *u)
         u->st.nodes_flagged_5d += u->flags[i];
     int same_emitters = s->n_emitters == c->n_emitters;
     for (int e = 0; same_emitters && e < s->n_emitters; e++)
-        same_emitters = c->emitters[e].node == s->emitters[e].node && c->emitters[e].first_tri == s->emitters[e].first_tri;
+        same_emitters = c->emitters[e].node == s->emitters[e].node && c->emitters[e].first_tri == s->emitters[e].first_tri &&
+                        c->emitters[e].n_clusters == (uint32_t)s->emitters[e].n_clusters &&
+                        c->emitters[e].partition == lie_scene_cluster_digest(s, e);
     if (u->rst && same_emitters)
         lie_rst_refine(s, env, u->boxes, u->n_boxes, u->flags);
     else if (u->rst)
@@ -161,7 +181,7 @@ static lie_status make_work(lie_update *u)
 {
     const lie_env *env = u->cache->env;
     const lie_scene *s = u->scene;
-    size_t n_units = (size_t)s->n_tris * (size_t)s->n_emitters;
+    size_t n_units = (size_t)s->n_tris * (size_t)s->n_clusters;
     uint64_t nodes = 0, pool = 0;
     for (size_t k = 0; k < n_units; k++) {
         uint32_t a = 1, b = 0;
@@ -182,7 +202,7 @@ static lie_status make_work(lie_update *u)
         return LIE_ERR_NOMEM;
     *w = *env;
     w->n_tris = s->n_tris;
-    w->n_emitters = s->n_emitters;
+    w->n_clusters = s->n_clusters;
     w->root = malloc(sizeof *w->root * (n_units + 1));
     w->nodes = malloc(sizeof *w->nodes * ((size_t)nodes + 1));
     w->pool = malloc(sizeof *w->pool * ((size_t)pool + 1));
@@ -232,7 +252,7 @@ lie_status lie_update_mark(lie_update *u, lie_error *err)
     if (st != LIE_OK)
         return lie_error_set(err, st, u->scene->path, "marking the units to update: %s", lie_status_str(st));
     const lie_scene *s = u->scene;
-    size_t n_units = (size_t)s->n_tris * (size_t)s->n_emitters;
+    size_t n_units = (size_t)s->n_tris * (size_t)s->n_clusters;
     u->st.units = n_units;
     u->st.units_rebuilt = u->st.units_flagged = 0;
     for (size_t k = 0; k < n_units; k++) {

@@ -40,7 +40,7 @@ lie_status lie_update_create(lie_cache *cache, lie_scene *scene, const lie_updat
                              lie_error *err)
 {
     *out = NULL;
-    if (!cache->env || cache->env->n_tris != scene->n_tris || cache->env->n_emitters != scene->n_emitters ||
+    if (!cache->env || cache->env->n_tris != scene->n_tris || cache->env->n_clusters != scene->n_clusters ||
         cache->n_emitters != scene->n_emitters || cache->state_hash != scene->hash)
         return lie_error_set(err, LIE_ERR_ARG, scene->path, "the scene is not the state the cache was built for");
     lie_update *u = calloc(1, sizeof *u);
@@ -206,7 +206,7 @@ static lie_status commit(lie_update *u, lie_error *err)
     const lie_scene *s = u->scene;
     lie_cache *c = u->cache;
     lie_env *w = u->work;
-    size_t n_units = (size_t)s->n_tris * (size_t)s->n_emitters;
+    size_t n_units = (size_t)s->n_tris * (size_t)s->n_clusters;
     u->st.units_changed = 0;
     for (size_t k = 0; k < n_units; k++) {
         if (u->old_unit[k] < 0)
@@ -246,7 +246,7 @@ static lie_status recompute(lie_update *u, const uint8_t *chosen, lie_error *err
 {
     lie_env *w = u->work;
     const lie_scene *s = u->scene;
-    size_t n_units = (size_t)s->n_tris * (size_t)s->n_emitters;
+    size_t n_units = (size_t)s->n_tris * (size_t)s->n_clusters;
     int32_t *old_unit = malloc(sizeof *old_unit * (n_units + 1));
     uint8_t *flags = malloc((size_t)w->n_nodes + 1);
     uint32_t *root = malloc(sizeof *root * (n_units + 1));
@@ -318,7 +318,7 @@ lie_status lie_update_step(lie_update *u, size_t max_units, size_t *remaining, l
         t0 = lie_time_now();
     }
     if (u->n_pending) {
-        size_t n_units = (size_t)u->scene->n_tris * (size_t)u->scene->n_emitters;
+        size_t n_units = (size_t)u->scene->n_tris * (size_t)u->scene->n_clusters;
         uint8_t *chosen = calloc(n_units + 1, 1);
         if (!chosen)
             return nomem(u, err);
@@ -349,7 +349,7 @@ lie_status lie_update_snapshot(const lie_update *u, lie_env **out, lie_error *er
     if (!c)
         return lie_error_set(err, LIE_ERR_NOMEM, u->scene->path, "out of memory");
     *c = *e;
-    size_t units = (size_t)e->n_tris * (size_t)e->n_emitters;
+    size_t units = (size_t)e->n_tris * (size_t)e->n_clusters;
     c->root = malloc(sizeof *c->root * (units + 1));
     c->nodes = malloc(sizeof *c->nodes * ((size_t)e->n_nodes + 1));
     c->pool = malloc(sizeof *c->pool * ((size_t)e->n_pool + 1));

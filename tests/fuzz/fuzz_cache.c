@@ -80,7 +80,7 @@ static void fc_check(const unsigned char *data, size_t size)
     lie_build_stats st;
     lie_env_stats(c->env, &st);
     uint64_t nodes = 0;
-    for (size_t u = 0; u < (size_t)c->env->n_tris * (size_t)c->env->n_emitters; u++)
+    for (size_t u = 0; u < (size_t)c->env->n_tris * (size_t)c->env->n_clusters; u++)
         nodes += fc_walk(c->env, c->env->root[u], 0);
     if (nodes != c->env->n_nodes)
         abort();

@@ -42,4 +42,16 @@ static inline lie_scene *occluder_scene(void)
     return s;
 }
 
+/* Two environments are the same bytes: counts, roots, nodes, lists. */
+static inline void assert_env_equal(const lie_env *a, const lie_env *b)
+{
+    assert_int_equal(a->n_clusters, b->n_clusters);
+    assert_int_equal(a->n_nodes, b->n_nodes);
+    assert_int_equal(a->n_pool, b->n_pool);
+    assert_memory_equal(a->root, b->root, sizeof(uint32_t) * a->n_tris * (size_t)a->n_clusters);
+    assert_memory_equal(a->nodes, b->nodes, sizeof(lie_pnode) * a->n_nodes);
+    if (a->n_pool)
+        assert_memory_equal(a->pool, b->pool, sizeof(uint32_t) * a->n_pool);
+}
+
 #endif

@@ -146,7 +146,7 @@ static void assemble(const sect *s, int n, unsigned char **out, size_t *size)
     unsigned char *b = calloc(1, total);
     assert_non_null(b);
     memcpy(b, "LIECACHE", 8);
-    put32(b + 8, 2);
+    put32(b + 8, 3);
     put32(b + 20, (uint32_t)n);
     put64(b + 24, total);
     for (int i = 0; i < n; i++) {
@@ -170,7 +170,7 @@ enum { META, PARM, EDIT, EMIT, ROOT, NODE, POOL, N_SECT };
 static void spec_sections(const lie_cache *c, sect s[N_SECT])
 {
     const lie_env *env = c->env;
-    size_t pl = strlen(c->scene_path), units = (size_t)c->n_tris * (size_t)c->n_emitters;
+    size_t pl = strlen(c->scene_path), units = (size_t)c->n_tris * (size_t)env->n_clusters;
     s[META] = (sect){id4("META"), calloc(1, 48 + pl), 48 + pl};
     put64(s[META].data, c->scene_hash);
     put64(s[META].data + 8, c->state_hash);
@@ -207,12 +207,14 @@ static void spec_sections(const lie_cache *c, sect s[N_SECT])
         memcpy(p + 8 + nl, c->edits[i].text, c->edits[i].size);
         p += 8 + nl + c->edits[i].size;
     }
-    s[EMIT] = (sect){id4("EMIT"), calloc(1, 16 * (size_t)c->n_emitters + 1), 16 * (size_t)c->n_emitters};
+    s[EMIT] = (sect){id4("EMIT"), calloc(1, 24 * (size_t)c->n_emitters + 1), 24 * (size_t)c->n_emitters};
     for (int e = 0; e < c->n_emitters; e++) {
-        put32(s[EMIT].data + 16 * e, c->emitters[e].type);
-        put32(s[EMIT].data + 16 * e + 4, (uint32_t)c->emitters[e].node);
-        put32(s[EMIT].data + 16 * e + 8, c->emitters[e].first_tri);
-        put32(s[EMIT].data + 16 * e + 12, c->emitters[e].n_tris);
+        put32(s[EMIT].data + 24 * e, c->emitters[e].type);
+        put32(s[EMIT].data + 24 * e + 4, (uint32_t)c->emitters[e].node);
+        put32(s[EMIT].data + 24 * e + 8, c->emitters[e].first_tri);
+        put32(s[EMIT].data + 24 * e + 12, c->emitters[e].n_tris);
+        put32(s[EMIT].data + 24 * e + 16, c->emitters[e].n_clusters);
+        put32(s[EMIT].data + 24 * e + 20, c->emitters[e].partition);
     }
     s[ROOT] = (sect){id4("ROOT"), calloc(1, 4 * units + 1), 4 * units};
     for (size_t u = 0; u < units; u++)
@@ -288,7 +290,7 @@ static void assert_caches_equal(const lie_cache *a, const lie_cache *b)
     }
     const lie_env *x = a->env, *y = b->env;
     assert_int_equal(x->n_tris, y->n_tris);
-    assert_int_equal(x->n_emitters, y->n_emitters);
+    assert_int_equal(x->n_clusters, y->n_clusters);
     assert_int_equal(x->n_nodes, y->n_nodes);
     assert_int_equal(x->n_pool, y->n_pool);
     assert_true(x->scene_hash == y->scene_hash);
@@ -298,7 +300,7 @@ static void assert_caches_equal(const lie_cache *a, const lie_cache *b)
     assert_int_equal(x->params.complex_cap, y->params.complex_cap);
     assert_memory_equal(&x->params.min_patch, &y->params.min_patch, sizeof(float));
     assert_int_equal(x->params.mode, y->params.mode);
-    size_t units = (size_t)x->n_tris * (size_t)x->n_emitters;
+    size_t units = (size_t)x->n_tris * (size_t)x->n_clusters;
     assert_memory_equal(x->root, y->root, units * sizeof *x->root);
     for (uint32_t i = 0; i < x->n_nodes; i++) {
         assert_int_equal(x->nodes[i].child, y->nodes[i].child);
@@ -534,6 +536,61 @@ static void test_not_a_cache_is_rejected(void **state)
     expect_reject(NULL, 0, LIE_ERR_FORMAT, "empty");
 }
 
+/* EMITTERS as versions 1 and 2 lay it out: 16 bytes, no clusters. */
+static void emitters_v2(const lie_cache *c, sect s[N_SECT])
+{
+    free(s[EMIT].data);
+    s[EMIT] = (sect){id4("EMIT"), calloc(1, 16 * (size_t)c->n_emitters + 1), 16 * (size_t)c->n_emitters};
+    for (int e = 0; e < c->n_emitters; e++) {
+        assert_int_equal(c->emitters[e].n_clusters, 1);
+        put32(s[EMIT].data + 16 * e, c->emitters[e].type);
+        put32(s[EMIT].data + 16 * e + 4, (uint32_t)c->emitters[e].node);
+        put32(s[EMIT].data + 16 * e + 8, c->emitters[e].first_tri);
+        put32(s[EMIT].data + 16 * e + 12, c->emitters[e].n_tris);
+    }
+}
+
+/* c's sections as a file of an older version: 16-byte EMITTERS, PARAMS of
+ * params_size bytes. */
+static void old_file(const lie_cache *c, sect s[N_SECT], uint32_t version, size_t params_size, unsigned char **a,
+                     size_t *na)
+{
+    spec_sections(c, s);
+    emitters_v2(c, s);
+    s[PARM].size = params_size;
+    assemble(s, N_SECT, a, na);
+    put32(*a + 8, version);
+    reseal(*a, *na);
+}
+
+/* A version 2 file (16-byte EMITTERS) reads with one cluster per emitter;
+ * a version 3 file with 16-byte records is damaged. */
+static void test_version_2_reads_with_one_cluster_each(void **state)
+{
+    (void)state;
+    lie_cache *c = cornell_cache(LIE_BLOCKERS_SAMPLED);
+    sect s[N_SECT];
+    unsigned char *a;
+    size_t na;
+    old_file(c, s, 2, 28, &a, &na);
+    lie_cache *d = NULL;
+    lie_error err;
+    assert_int_equal(lie_cache_decode(a, na, "v2.lie", &d, &err), LIE_OK);
+    assert_int_equal(d->n_emitters, c->n_emitters);
+    for (int e = 0; e < d->n_emitters; e++) {
+        assert_int_equal(d->emitters[e].n_clusters, 1);
+        assert_int_equal(d->emitters[e].partition, 0);
+    }
+    assert_int_equal(d->env->n_clusters, c->env->n_clusters);
+    lie_cache_destroy(d);
+    put32(a + 8, 3);
+    reseal(a, na);
+    expect_reject(a, na, LIE_ERR_FORMAT, "section EMITTERS");
+    free_sections(s, N_SECT);
+    free(a);
+    lie_cache_destroy(c);
+}
+
 /* A version 1 file (PARAMS of 24 bytes, no split_gain) still reads: its
  * trees were built splitting wherever a list was too long, split_gain 0. */
 static void test_version_1_reads_with_split_gain_0(void **state)
@@ -541,13 +598,9 @@ static void test_version_1_reads_with_split_gain_0(void **state)
     (void)state;
     lie_cache *c = cornell_cache(LIE_BLOCKERS_SAMPLED);
     sect s[N_SECT];
-    spec_sections(c, s);
-    s[PARM].size = 24;
     unsigned char *a;
     size_t na;
-    assemble(s, N_SECT, &a, &na);
-    put32(a + 8, 1);
-    reseal(a, na);
+    old_file(c, s, 1, 24, &a, &na);
     lie_cache *d = NULL;
     lie_error err;
     assert_int_equal(lie_cache_decode(a, na, "v1.lie", &d, &err), LIE_OK);
@@ -571,12 +624,12 @@ static void test_newer_version_is_unsupported(void **state)
     unsigned char *a;
     size_t na;
     encode(c, &a, &na);
-    put32(a + 8, 3);
+    put32(a + 8, 4);
     /* a newer file may lay out anything after the version: only the
      * invariant trailing checksum must hold */
     memset(a + 12, 0xAB, na - 20);
     reseal(a, na);
-    expect_reject(a, na, LIE_ERR_UNSUPPORTED, "version 3");
+    expect_reject(a, na, LIE_ERR_UNSUPPORTED, "version 4");
     free(a);
     encode(c, &a, &na);
     put32(a + 8, 0);
@@ -860,7 +913,7 @@ static void test_trees_deeper_than_max_depth_or_with_orphans_are_rejected(void *
     (void)state;
     lie_cache *c = small_cache();
     lie_env *env = c->env;
-    size_t units = (size_t)env->n_tris * (size_t)env->n_emitters;
+    size_t units = (size_t)env->n_tris * (size_t)env->n_clusters;
     for (int depth = LIE_PATCH_MAX_DEPTH; depth <= LIE_PATCH_MAX_DEPTH + 1; depth++) {
         uint32_t n = (uint32_t)units + 4u * (uint32_t)depth;
         lie_pnode *nodes = calloc(n, sizeof *nodes);
@@ -922,7 +975,7 @@ static void test_empty_scene_round_trips(void **state)
     /* no emitters: no units, no nodes */
     lie_cache *c = small_cache();
     lie_env *env = c->env;
-    env->n_emitters = 0;
+    env->n_clusters = 0;
     env->n_nodes = 0;
     env->n_pool = 0;
     c->n_emitters = 0;
@@ -1004,7 +1057,7 @@ static void test_absurd_counts_are_refused_without_allocating(void **state)
         {META, 16, 0xFFFFFFFFu, 0, "units is not"},                /* n_tris without n_units */
         {META, 32, 0xFFFFFFFFu, 0, "section NODES"},              /* n_nodes */
         {META, 36, 0xFFFFFFFFu, 0, "section POOL"},               /* n_pool */
-        {META, 20, 0x7FFFFFFFu, 0, "units is not"},               /* n_emitters */
+        {META, 20, 0x7FFFFFFFu, 0, "section EMITTERS"},           /* n_emitters */
         {EDIT, 0, 0xFFFFFFFFu, 0, "section EDITS"},               /* n_edits */
         {EDIT, 4, 0xFFFFFFF0u, 0, "section EDITS"},               /* a name length */
     };
@@ -1116,6 +1169,7 @@ int main(void)
         cmocka_unit_test(test_not_a_cache_is_rejected),
         cmocka_unit_test(test_version_1_reads_with_split_gain_0),
         cmocka_unit_test(test_newer_version_is_unsupported),
+        cmocka_unit_test(test_version_2_reads_with_one_cluster_each),
         cmocka_unit_test(test_unknown_required_flag_is_unsupported_optional_ignored),
         cmocka_unit_test(test_unknown_sections_are_skipped_and_order_is_free),
         cmocka_unit_test(test_missing_or_repeated_section_is_rejected),

@@ -101,7 +101,7 @@ static int setup(void **state)
     assert_int_equal(lie_rst_build(f->s, f->env, 2, &f->rst, &rs, &err), LIE_OK);
     assert_true(rs.regions > 0);
     /* patch trees below the roots, for refine to walk */
-    assert_true(f->env->n_nodes > 2 * f->env->n_tris * (uint32_t)f->env->n_emitters);
+    assert_true(f->env->n_nodes > 2 * f->env->n_tris * (uint32_t)f->env->n_clusters);
     int cap = 0;
     for (int e = 0; e < f->s->n_emitters; e++)
         cap = cap > lie_pair_hull_cap(f->s, e) ? cap : lie_pair_hull_cap(f->s, e);
@@ -161,7 +161,7 @@ static void test_rst_query_never_misses_a_root_whose_hull_meets_the_box(void **s
     fixture *f = *state;
     const lie_env *env = f->env;
     uint8_t *flags = malloc(env->n_nodes + 1), *is_root = calloc(env->n_nodes + 1, 1);
-    size_t n_units = (size_t)env->n_tris * (size_t)env->n_emitters;
+    size_t n_units = (size_t)env->n_tris * (size_t)env->n_clusters;
     for (size_t u = 0; u < n_units; u++)
         is_root[env->root[u]] = 1;
     uint64_t exact = 0, flagged = 0;
@@ -170,8 +170,8 @@ static void test_rst_query_never_misses_a_root_whose_hull_meets_the_box(void **s
         memset(flags, 0, env->n_nodes);
         lie_rst_query(f->rst, b, flags);
         for (uint32_t t = 0; t < env->n_tris; t++)
-            for (int e = 0; e < env->n_emitters; e++) {
-                uint32_t r = env->root[(size_t)t * (size_t)env->n_emitters + (size_t)e];
+            for (int e = 0; e < env->n_clusters; e++) {
+                uint32_t r = env->root[(size_t)t * (size_t)env->n_clusters + (size_t)e];
                 int cls = (int)env->nodes[r].cls;
                 int meets = hull_meets(f, t, lie_patch_root(), e, &b);
                 exact += meets && cls != LIE_CLASS_UNLIT;
@@ -206,8 +206,8 @@ static void test_rst_refine_equals_brute_force_walk_of_every_patch_tree(void **s
         lie_rst_query(f->rst, b, flags);
         lie_rst_refine(f->s, env, &b, 1, flags);
         for (uint32_t t = 0; t < env->n_tris; t++)
-            for (int e = 0; e < env->n_emitters; e++) {
-                uint32_t r = env->root[(size_t)t * (size_t)env->n_emitters + (size_t)e];
+            for (int e = 0; e < env->n_clusters; e++) {
+                uint32_t r = env->root[(size_t)t * (size_t)env->n_clusters + (size_t)e];
                 if (env->nodes[r].cls != LIE_CLASS_UNLIT)
                     brute_walk(f, r, t, lie_patch_root(), e, &b, brute);
             }
@@ -236,7 +236,7 @@ static void test_rst_spread_flags_whole_subtrees(void **state)
     fixture *f = *state;
     const lie_env *env = f->env;
     uint8_t *flags = calloc(env->n_nodes + 1, 1);
-    size_t n_units = (size_t)env->n_tris * (size_t)env->n_emitters;
+    size_t n_units = (size_t)env->n_tris * (size_t)env->n_clusters;
     for (size_t u = 0; u < n_units; u += 3)
         flags[env->root[u]] = 1;
     lie_rst_spread(env, flags);

@@ -86,11 +86,11 @@ static lie_env *rebuild(const char *const *texts, int n, lie_scene **scene)
 static void assert_env_equal(const lie_env *a, const lie_env *b)
 {
     assert_int_equal(a->n_tris, b->n_tris);
-    assert_int_equal(a->n_emitters, b->n_emitters);
+    assert_int_equal(a->n_clusters, b->n_clusters);
     assert_int_equal(a->n_nodes, b->n_nodes);
     assert_int_equal(a->n_pool, b->n_pool);
     assert_true(a->scene_hash == b->scene_hash);
-    assert_memory_equal(a->root, b->root, sizeof(uint32_t) * a->n_tris * (size_t)a->n_emitters);
+    assert_memory_equal(a->root, b->root, sizeof(uint32_t) * a->n_tris * (size_t)a->n_clusters);
     assert_memory_equal(a->nodes, b->nodes, sizeof(lie_pnode) * a->n_nodes);
     if (a->n_pool)
         assert_memory_equal(a->pool, b->pool, sizeof(uint32_t) * a->n_pool);
@@ -305,9 +305,9 @@ static void test_update_snapshots_never_show_a_changed_answer(void **state)
         lie_env *snap = NULL;
         assert_int_equal(lie_update_snapshot(u, &snap, &err), LIE_OK);
         assert_int_equal(snap->n_tris, s->n_tris);
-        assert_int_equal(snap->n_emitters, s->n_emitters);
+        assert_int_equal(snap->n_clusters, s->n_clusters);
         snap_check k = {snap, final, 0, 0, 0};
-        for (size_t unit = 0; unit < (size_t)s->n_tris * (size_t)s->n_emitters; unit++) {
+        for (size_t unit = 0; unit < (size_t)s->n_tris * (size_t)s->n_clusters; unit++) {
             k.final_root = final->root[unit];
             check_leaves(&k, snap->root[unit], lie_patch_root());
         }

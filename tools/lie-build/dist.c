@@ -125,7 +125,7 @@ lie_status build_dist(const lie_scene *s, const lie_rt *rt, const lie_build_para
     j.rt = rt;
     j.p = p;
     j.mask = tri_mask;
-    uint64_t n_units = (uint64_t)s->n_tris * (uint64_t)s->n_emitters;
+    uint64_t n_units = (uint64_t)s->n_tris * (uint64_t)s->n_clusters;
     j.n_items = plan(NULL, n_units, ranks);
     j.items = calloc(j.n_items + 1, sizeof *j.items);
     j.parts = calloc(j.n_items + 1, sizeof *j.parts);

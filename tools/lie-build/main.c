@@ -102,9 +102,9 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
         patches += st->patches_per_depth[d];
     double mean = st->pairs[LIE_CLASS_PARTIAL] ? (double)st->blocker_total / (double)st->pairs[LIE_CLASS_PARTIAL] : 0.0;
     if (json) {
-        fprintf(stderr, "{\"tool\":\"lie-build\",\"triangles\":%u,\"emitters\":%d,\"units\":%llu,\"patches\":%llu,"
-                        "\"leaf_pairs\":%llu,\"pairs\":{",
-                s->n_tris, s->n_emitters, (unsigned long long)s->n_tris * (unsigned long long)s->n_emitters,
+        fprintf(stderr, "{\"tool\":\"lie-build\",\"triangles\":%u,\"emitters\":%d,\"clusters\":%d,\"units\":%llu,"
+                        "\"patches\":%llu,\"leaf_pairs\":%llu,\"pairs\":{",
+                s->n_tris, s->n_emitters, s->n_clusters, (unsigned long long)s->n_tris * (unsigned long long)s->n_clusters,
                 (unsigned long long)patches, (unsigned long long)leaves);
         for (int k = 0; k < LIE_CLASS_COUNT; k++)
             if (k != LIE_CLASS_SPLIT)
@@ -131,8 +131,8 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
         fprintf(stderr, "}\n");
         return;
     }
-    fprintf(stderr, "%s: %s: %u triangles, %d emitters, %llu units\n", prog, input, s->n_tris, s->n_emitters,
-            (unsigned long long)s->n_tris * (unsigned long long)s->n_emitters);
+    fprintf(stderr, "%s: %s: %u triangles, %d emitters in %d clusters, %llu units\n", prog, input, s->n_tris,
+            s->n_emitters, s->n_clusters, (unsigned long long)s->n_tris * (unsigned long long)s->n_clusters);
     fprintf(stderr, "  pairs:");
     for (int k = 0; k < LIE_CLASS_COUNT; k++)
         if (k != LIE_CLASS_SPLIT)

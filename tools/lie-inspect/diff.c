@@ -258,13 +258,14 @@ int inspect_diff(const char *pa, const char *pb, const inspect_options *o)
     compare_headers(&d, A, B, o->strict);
 
     uint32_t nt = A->n_tris > B->n_tris ? A->n_tris : B->n_tris;
-    int ne = A->n_emitters > B->n_emitters ? A->n_emitters : B->n_emitters;
+    int na = A->env->n_clusters, nb = B->env->n_clusters; /* units per triangle */
+    int ne = na > nb ? na : nb;
     uint64_t compared = 0, identical = 0, only_a = 0, only_b = 0;
     for (uint32_t t = 0; t < nt; t++)
         for (int e = 0; e < ne; e++) {
-            int in_a = t < A->n_tris && e < A->n_emitters, in_b = t < B->n_tris && e < B->n_emitters;
-            uint32_t ra = in_a ? d.a->root[(size_t)t * (size_t)A->n_emitters + (size_t)e] : 0;
-            uint32_t rb = in_b ? d.b->root[(size_t)t * (size_t)B->n_emitters + (size_t)e] : 0;
+            int in_a = t < A->n_tris && e < na, in_b = t < B->n_tris && e < nb;
+            uint32_t ra = in_a ? d.a->root[(size_t)t * (size_t)na + (size_t)e] : 0;
+            uint32_t rb = in_b ? d.b->root[(size_t)t * (size_t)nb + (size_t)e] : 0;
             if (in_a && in_b) {
                 compared++;
                 identical += !compare(&d, ra, rb, t, e, lie_patch_root());

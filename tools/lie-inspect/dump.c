@@ -68,7 +68,7 @@ static void header_text(const lie_cache *c, uint64_t n_nodes, uint64_t n_leaves)
         printf("emitter %d %s node %d first-tri %u tris %u\n", e, inspect_emitter_type_name(m->type), m->node,
                m->first_tri, m->n_tris);
     }
-    printf("units %llu\n", (unsigned long long)((uint64_t)c->n_tris * (uint64_t)c->n_emitters));
+    printf("units %llu\n", (unsigned long long)((uint64_t)c->n_tris * (uint64_t)c->env->n_clusters));
     printf("nodes %llu\n", (unsigned long long)n_nodes);
     printf("leaves %llu\n", (unsigned long long)n_leaves);
 }
@@ -98,7 +98,7 @@ static void header_json(const lie_cache *c, uint64_t n_nodes, uint64_t n_leaves)
                inspect_emitter_type_name(m->type), m->node, m->first_tri, m->n_tris);
     }
     printf("],\"units\":%llu,\"nodes\":%llu,\"leaves\":%llu,\"pairs\":[",
-           (unsigned long long)((uint64_t)c->n_tris * (uint64_t)c->n_emitters), (unsigned long long)n_nodes,
+           (unsigned long long)((uint64_t)c->n_tris * (uint64_t)c->env->n_clusters), (unsigned long long)n_nodes,
            (unsigned long long)n_leaves);
 }
 
@@ -125,8 +125,8 @@ int inspect_dump(const char *path, const inspect_options *o)
     int first = 1;
     for (uint32_t t = 0; t < env->n_tris && !col.oom; t++) {
         col.n = 0;
-        for (int e = 0; e < env->n_emitters; e++)
-            inspect_walk(env, env->root[(size_t)t * (size_t)env->n_emitters + (size_t)e], t, e, lie_patch_root(),
+        for (int e = 0; e < env->n_clusters; e++) /* "emitter" in the dump: a cluster (lie_cluster) */
+            inspect_walk(env, env->root[(size_t)t * (size_t)env->n_clusters + (size_t)e], t, e, lie_patch_root(),
                          collect_node, &col);
         if (col.oom)
             break;

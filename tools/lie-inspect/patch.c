@@ -67,11 +67,11 @@ int inspect_patch(const char *path, const char *patch, const inspect_options *o)
         inspect_json_string(stdout, path);
         printf(",\"patch\":\"%s\",\"triangle\":%u,\"emitters\":[", want_name, tri);
     } else {
-        printf("patch %s: %d emitter%s\n", want_name, env->n_emitters, env->n_emitters == 1 ? "" : "s");
+        printf("patch %s: %d emitter%s\n", want_name, env->n_clusters, env->n_clusters == 1 ? "" : "s");
     }
-    for (int e = 0; e < env->n_emitters; e++) {
+    for (int e = 0; e < env->n_clusters; e++) {
         /* down the tree along the path, stopping at a leaf */
-        uint32_t node = env->root[(size_t)tri * (size_t)env->n_emitters + (size_t)e];
+        uint32_t node = env->root[(size_t)tri * (size_t)env->n_clusters + (size_t)e];
         lie_patch_path at = lie_patch_root();
         while (at.depth < want.depth && env->nodes[node].child) {
             int d = lie_patch_digit(want, at.depth);

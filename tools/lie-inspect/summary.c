@@ -103,7 +103,7 @@ static void summary_text(const char *path, const inspect_cache *l, const lie_bui
     printf("triangles       %u\n", c->n_tris);
     printf("emitters        %d (%d area, %d point, %d directional)\n", c->n_emitters, by_type[0], by_type[1],
            by_type[2]);
-    printf("units           %llu\n", (unsigned long long)((uint64_t)c->n_tris * (uint64_t)c->n_emitters));
+    printf("units           %llu\n", (unsigned long long)((uint64_t)c->n_tris * (uint64_t)env->n_clusters));
     printf("nodes           %u (%llu leaves)\n", env->n_nodes, (unsigned long long)leaves);
     printf("pool entries    %u\n", env->n_pool);
     printf("pairs by class (leaves):\n");
@@ -162,7 +162,7 @@ static void summary_json(const char *path, const inspect_cache *l, const lie_bui
            p->samples, p->max_samples, p->max_blockers, p->complex_cap, mp, (double)p->split_gain,
            inspect_mode_name(p->mode));
     printf(",\"triangles\":%u,\"emitters\":%d,\"units\":%llu,\"nodes\":%u,\"leaves\":%llu,\"pool_entries\":%u",
-           c->n_tris, c->n_emitters, (unsigned long long)((uint64_t)c->n_tris * (uint64_t)c->n_emitters),
+           c->n_tris, c->n_emitters, (unsigned long long)((uint64_t)c->n_tris * (uint64_t)env->n_clusters),
            env->n_nodes, (unsigned long long)leaves, env->n_pool);
     printf(",\"emitter_types\":{");
     for (uint32_t t = 0; t < 3; t++) {

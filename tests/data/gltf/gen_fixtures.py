@@ -557,6 +557,53 @@ def panel_light():
     write("panel_light.gltf", d.embedded())
 
 
+def light_strip():
+    """A corridor lit by one long emissive strip of 80 triangles along its
+    ceiling (facing down, one-sided), with three pillars and a low beam
+    between strip and floor: an emitter that lie-build splits into clusters
+    (lib/scene/cluster.c), whose pairs each see part of the strip."""
+    d = Doc()
+    fl = d.positions([(-4, 0, -1), (-4, 0, 1), (4, 0, 1), (4, 0, -1)])
+    fi = d.indices([0, 1, 2, 0, 2, 3])
+    wall = d.positions([(-4, 0, -1), (4, 0, -1), (4, 2.2, -1), (-4, 2.2, -1)])
+    boxes = []
+    for x, h in ((-2.0, 1.5), (0.3, 1.2), (2.2, 1.8)):
+        s = 0.25
+        boxes.append(d.positions([(x - s, 0, -s), (x + s, 0, -s), (x + s, 0, s), (x - s, 0, s),
+                                  (x - s, h, -s), (x + s, h, -s), (x + s, h, s), (x - s, h, s)]))
+    bi = d.indices([4, 6, 5, 4, 7, 6, 0, 1, 5, 0, 5, 4, 1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7])
+    beam = d.positions([(-1.2, 1.6, -0.1), (-0.6, 1.6, -0.1), (-0.6, 1.6, 0.1), (-1.2, 1.6, 0.1)])
+    n = 40
+    pts = []
+    for i in range(n + 1):
+        x = -3.8 + 7.6 * i / n
+        pts += [(x, 2.1, -0.15), (x, 2.1, 0.15)]
+    idx = []
+    for i in range(n):
+        a = 2 * i
+        idx += [a, a + 2, a + 1, a + 1, a + 2, a + 3]  # facing -y
+    sp = d.positions(pts)
+    si = d.indices(idx)
+    d.g["meshes"] = [{"primitives": [{"attributes": {"POSITION": fl}, "indices": fi, "material": 0}]},
+                     {"primitives": [{"attributes": {"POSITION": wall}, "indices": fi, "material": 0}]}]
+    d.g["meshes"] += [{"primitives": [{"attributes": {"POSITION": b}, "indices": bi, "material": 0}]} for b in boxes]
+    d.g["meshes"] += [{"primitives": [{"attributes": {"POSITION": beam}, "indices": fi, "material": 2}]},
+                      {"primitives": [{"attributes": {"POSITION": sp}, "indices": si, "material": 1}]}]
+    d.g["materials"] = [{"pbrMetallicRoughness": {"baseColorFactor": [0.7, 0.7, 0.7, 1], "metallicFactor": 0}},
+                        {"emissiveFactor": [1, 0.95, 0.9],
+                         "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 6}}},
+                        {"doubleSided": True,
+                         "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.6, 1], "metallicFactor": 0}}]
+    d.g["extensionsUsed"] = ["KHR_materials_emissive_strength"]
+    d.g["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.9, "znear": 0.05}}]
+    d.g["nodes"] = [{"mesh": 0, "name": "Floor"}, {"mesh": 1, "name": "Wall"},
+                    {"mesh": 2, "name": "Pillar0"}, {"mesh": 3, "name": "Pillar1"}, {"mesh": 4, "name": "Pillar2"},
+                    {"mesh": 5, "name": "Beam"}, {"mesh": 6, "name": "Strip"},
+                    {"camera": 0, "translation": [0, 1.4, 3.6], "rotation": [-0.1305, 0, 0, 0.9914]}]
+    d.g["scenes"] = [{"nodes": [0, 1, 2, 3, 4, 5, 6, 7]}]
+    write("light_strip.gltf", d.embedded())
+
+
 def alpha_mask():
     """alphaMode MASK: a floor, a light above it, and between them a screen
     whose 4x4 texture alternates solid and clear texels (cutoff 0.5), next
@@ -803,6 +850,7 @@ def main():
     bent_light()
     alpha_mask()
     panel_light()
+    light_strip()
     vertex_colors()
     quantized()
     texture_transform()
