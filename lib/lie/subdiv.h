@@ -9,6 +9,8 @@ int lie_subdiv_may_split(const build_ctx *c, uint32_t tri, lie_patch_path path);
 /* Whether a node of class cls with this list splits. */
 int lie_subdiv_splits(const build_ctx *c, uint32_t tri, lie_patch_path path, int e, lie_class cls,
                       const uint32_t *list, size_t n_list);
+/* Whether the views see triangle tri (always, in a build without views). */
+int lie_subdiv_seen(const build_ctx *c, uint32_t tri);
 /* lie_parallel_for body: build (or copy) every unit of triangle `item`
  * into c->out[item]. */
 void lie_subdiv_triangle(void *ctx, size_t item, int worker_id);
