@@ -87,7 +87,7 @@ static double predicted_saving_ns(const build_ctx *c, double pixels, lie_class c
  * segments as the node took.  Pixels grow with views, never shrink, so a
  * node this lets split still splits when a view is added (lie-build
  * --into relies on it, tools/lie-build). */
-static int pixels_pay(const build_ctx *c, uint32_t tri, lie_patch_path path, lie_class cls, size_t n_list,
+int lie_subdiv_pixels_pay(const build_ctx *c, uint32_t tri, lie_patch_path path, lie_class cls, size_t n_list,
                       uint32_t quality)
 {
     if (c->p->frames == 0)
@@ -272,7 +272,7 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
     w->st.patches_per_depth[path.depth]++;
     size_t n_list = nc.n_list;
     int splits = lie_subdiv_splits(c, tri, path, e, nc.cls, w->hits, n_list);
-    if (splits && c->pix && !pixels_pay(c, tri, path, nc.cls, n_list, nc.quality)) {
+    if (splits && c->pix && !lie_subdiv_pixels_pay(c, tri, path, nc.cls, n_list, nc.quality)) {
         /* too few pixels see the patch for a split to pay: a leaf, with the
          * exact list (a sampled one may miss small blockers of a large
          * patch) where a list is cheaper than an Embree ray */

@@ -23,7 +23,7 @@ static int includes(const lie_pixels *old_px, const lie_pixels *new_px, uint32_t
 /* Flag the leaves of node idx (patch path of unit (tri, e)) whose
  * decision more pixels may change, and their ancestors; returns whether
  * any node below idx is flagged.  Only the pixel test of a split depends
- * on pixels (lib/lie/subdiv.c, pixels_pay), and it only turns from "no"
+ * on pixels (lib/lie/subdiv.c, lie_subdiv_pixels_pay), and it only turns from "no"
  * to "yes" as pixels grow: so only a leaf that test kept from splitting
  * can change.  Such a leaf was a partial pair with a list longer than
  * max_blockers, large enough to split; it was stored as visible, as
