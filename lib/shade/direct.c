@@ -298,7 +298,7 @@ static void kernel_delta(const lie_shade_ctx *c, const lie_surface *sf, lie_vec3
 /* Each shadow ray is the segment o -> o + d_i, d_i the vector to the
  * sample shortened by eps: the same segments for Embree and for blocker
  * lists. */
-void lie_shadow_segments(lie_shadow_query *q)
+void lie_shadow_query_segments(lie_shadow_query *q)
 {
     if (q->have_segments)
         return;
@@ -425,7 +425,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                 ltc_ready = 1;
             }
             if (cls == LIE_VISCLASS_BLOCKERS && c->exact &&
-                (opt->exact == LIE_EXACT_ONLY || lie_exact_pays(opt->light_samples, n_blockers))) {
+                (opt->exact == LIE_EXACT_ONLY || lie_render_exact_pays(opt->light_samples, n_blockers))) {
                 double t0 = clock_if(timers);
                 int ok = lie_polylight_visible(pl, o, sf->n, sf->ng, s->tri_p, opt->oracle->solid, sc->blockers, n_blockers, eps,
                                                &sc->poly, &omega) == 0;
@@ -507,7 +507,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                     st->t_blockers += lie_time_now() - t0;
             } else {
                 /* Embree: rays only for samples that would contribute */
-                lie_shadow_segments(&q);
+                lie_shadow_query_segments(&q);
                 lie_ray_batch *b = &sc->batch;
                 int m = 0;
                 for (int i = 0; i < n; i++) {

@@ -42,14 +42,14 @@ static lie_status sample_views(const lie_scene *s, const lie_rt *rt, const lie_c
     return LIE_OK;
 }
 
-lie_status lie_visible_triangles(const lie_scene *s, const lie_rt *rt, const lie_camera *cams, int n_cams,
-                                 int width, int height, int max_depth, uint8_t *mask, lie_error *err)
+lie_status lie_camera_mark_visible(const lie_scene *s, const lie_rt *rt, const lie_camera *cams, int n_cams,
+                                   int width, int height, int max_depth, uint8_t *mask, lie_error *err)
 {
     return sample_views(s, rt, cams, n_cams, width, height, max_depth, mask, NULL, NULL, err);
 }
 
-lie_status lie_view_pixels(const lie_scene *s, const lie_rt *rt, const lie_camera *cams, int n_cams, int width,
-                           int height, int max_depth, lie_pixels **out, lie_error *err)
+lie_status lie_camera_pixels(const lie_scene *s, const lie_rt *rt, const lie_camera *cams, int n_cams, int width,
+                             int height, int max_depth, lie_pixels **out, lie_error *err)
 {
     *out = NULL;
     uint64_t *hits = NULL;

@@ -218,7 +218,7 @@ lie_status lie_update_view_pixels(lie_update *u, lie_pixels **out, lie_error *er
         return err->status;
     u->st.seconds_bvh += lie_time_now() - t0;
     t0 = lie_time_now();
-    lie_status st = lie_view_pixels(u->scene, u->rt, v->cams, v->n_cams, v->width, v->height, v->max_depth, out, err);
+    lie_status st = lie_camera_pixels(u->scene, u->rt, v->cams, v->n_cams, v->width, v->height, v->max_depth, out, err);
     u->st.seconds_views += lie_time_now() - t0;
     return st;
 }

@@ -45,7 +45,7 @@
  * a lock between frames); the renderer frees the env it no longer uses.
  *
  * A cache built for views (lie-build --view) keeps them: the views are
- * sampled again on the edited scene (lib/shade, lie_view_pixels), and the
+ * sampled again on the edited scene (lib/shade, lie_camera_pixels), and the
  * units of every triangle whose pixels changed are built afresh, with the
  * pixel rule of the new pixels, as lie-build --view would for the edited
  * scene.  That costs lie_update_edit an Embree build and the views' rays.

@@ -88,7 +88,7 @@ static lie_pixels *cornell_pixels(const lie_scene *s, const lie_rt *rt, const li
 {
     lie_pixels *px = NULL;
     lie_error err;
-    assert_int_equal(lie_view_pixels(s, rt, cams, n, size, size, 2, &px, &err), LIE_OK);
+    assert_int_equal(lie_camera_pixels(s, rt, cams, n, size, size, 2, &px, &err), LIE_OK);
     return px;
 }
 

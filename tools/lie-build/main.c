@@ -457,12 +457,12 @@ int main(int argc, char **argv)
             memcpy(cv.cams, old->views.cams, sizeof *cv.cams * (size_t)old->views.n_cams);
         cv.n_cams = cv.cams ? old->views.n_cams : 0;
         if (rc == LIE_OK)
-            rc = lie_view_pixels(scene, rt, cv.cams, cv.n_cams, cv.width, cv.height, cv.max_depth, &old_px, &err);
+            rc = lie_camera_pixels(scene, rt, cv.cams, cv.n_cams, cv.width, cv.height, cv.max_depth, &old_px, &err);
     }
     if (rc == LIE_OK && (n_views || path_file)) {
         rc = gather_views(scene, input, views, n_views, path_file, &cv, &err);
         if (rc == LIE_OK)
-            rc = lie_view_pixels(scene, rt, cv.cams, cv.n_cams, cv.width, cv.height, cv.max_depth, &px, &err);
+            rc = lie_camera_pixels(scene, rt, cv.cams, cv.n_cams, cv.width, cv.height, cv.max_depth, &px, &err);
     }
     if (rc == LIE_OK)
         rc = lie_dist_check(scene->hash, scene->hash, &err);
