@@ -10,19 +10,20 @@
 
 #include "core/core.h"
 #include "lie/lie.h"
+#include "scene/scene.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-#define LIE_CACHE_VERSION 3u
+#define LIE_CACHE_VERSION 4u
 
 /* What the cache knows of each emitter, to check it against a scene. */
 typedef struct lie_cache_emitter {
     uint32_t type;       /* lie_emitter_type */
     int32_t node;        /* glTF node index */
     uint32_t first_tri, n_tris;
-    uint32_t n_clusters; /* its clusters (lie_cluster); 1 in versions 1 and 2 */
+    uint32_t n_clusters; /* its clusters (lie_cluster); 1 in versions 1 to 3 */
     uint32_t partition;  /* lie_scene_cluster_digest; 0 for one cluster */
 } lie_cache_emitter;
 
@@ -34,6 +35,14 @@ typedef struct lie_cache_edit {
     size_t size;
 } lie_cache_edit;
 
+/* The views a cache was built for: cameras sampled through a width x
+ * height image, 2 x 2 rays a pixel, through up to max_depth mirrors. */
+typedef struct lie_cache_views {
+    lie_camera *cams;        /* owned; names are not kept (NULL) */
+    int n_cams;
+    int width, height, max_depth;
+} lie_cache_views;
+
 typedef struct lie_cache {
     char *scene_path;        /* as given to lie-build */
     uint64_t scene_hash;     /* content hash of the scene as loaded from the file */
@@ -44,6 +53,10 @@ typedef struct lie_cache {
     lie_cache_edit *edits;
     int n_edits;
     lie_env *env;            /* owned; env->params are the build parameters */
+    /* lie-build --view/--path: the views the units were built for (§4.3.1),
+     * which an update samples again to keep their decisions (none: every
+     * unit was built, as fine as its lists need) */
+    lie_cache_views views;
 } lie_cache;
 
 /* Free everything the cache owns (env included); NULL is fine. */
@@ -57,10 +70,12 @@ lie_status lie_cache_encode(const lie_cache *c, unsigned char **data, size_t *si
  * *bytes (may be NULL) receives the size written. */
 lie_status lie_cache_write(const char *path, const lie_cache *c, size_t *bytes, lie_error *err);
 /* Write the cache and, when scene_out is not NULL, scene `s` as glTF there
- * (lie_gltf_export): every file is complete on disk before any is renamed
- * into place, so a failure (a full disk, say) leaves all or none. */
+ * (lie_gltf_export_group with scene_opt, NULL: the defaults): every file is
+ * complete on disk before any is renamed into place, so a failure (a full
+ * disk, say) leaves all or none. */
 lie_status lie_cache_write_with_scene(const char *path, const lie_cache *c, const lie_scene *s,
-                                      const char *scene_out, size_t *bytes, lie_error *err);
+                                      const char *scene_out, const lie_gltf_export_options *scene_opt,
+                                      size_t *bytes, lie_error *err);
 
 /* Parse and validate a whole cache held in memory: magic, version, section
  * table, every size and offset, every checksum, then the structure (tree

@@ -185,3 +185,59 @@ uint32_t lie_scene_cluster_digest(const lie_scene *s, int e)
     }
     return (uint32_t)(h ^ (h >> 32)) | 1u; /* never 0: that is one cluster's */
 }
+
+/* ---- the emitter interface's geometry, of one cluster ------------------- */
+
+static int whole(const lie_scene *s, int c) { return s->emitters[s->clusters[c].emitter].n_clusters == 1; }
+
+int lie_cluster_hull_cap(const lie_scene *s, int c)
+{
+    const lie_cluster *cl = &s->clusters[c];
+    if (whole(s, c))
+        return lie_emitter_hull_cap(&s->emitters[cl->emitter]);
+    return cl->n_hull ? cl->n_hull : 3 * (int)cl->n_tris;
+}
+
+int lie_cluster_hull_points(const lie_scene *s, int c, const lie_vec3 V[3], float far, lie_vec3 *out)
+{
+    const lie_cluster *cl = &s->clusters[c];
+    if (whole(s, c))
+        return lie_emitter_hull_points(s, cl->emitter, V, far, out);
+    if (cl->n_hull) {
+        memcpy(out, cl->hull, sizeof(lie_vec3) * (size_t)cl->n_hull);
+        return cl->n_hull;
+    }
+    for (uint32_t k = 0; k < cl->n_tris; k++)
+        memcpy(out + 3 * k, &s->tri_p[3 * (size_t)s->cluster_tris[cl->first + k]], sizeof(lie_vec3) * 3);
+    return 3 * (int)cl->n_tris;
+}
+
+const lie_vec3 *lie_cluster_facing(const lie_scene *s, int c)
+{
+    const lie_cluster *cl = &s->clusters[c];
+    if (whole(s, c))
+        return lie_emitter_facing(s, cl->emitter);
+    return &s->tri_ng[s->cluster_tris[cl->first]]; /* any axis serves the separating-axis test */
+}
+
+uint32_t lie_cluster_target(const lie_scene *s, int c, float u1, float u2, lie_vec3 p, float far, lie_vec3 *q,
+                            lie_vec3 *n, int *one_sided)
+{
+    const lie_cluster *cl = &s->clusters[c];
+    if (whole(s, c))
+        return lie_emitter_target(s, cl->emitter, u1, u2, p, far, q, n, one_sided);
+    float b1, b2;
+    *one_sided = !s->emitters[cl->emitter].double_sided;
+    return lie_scene_point_on(s, s->cluster_tris + cl->first, 0, cl->n_tris, s->cluster_cdf + cl->first, cl->area,
+                              u1, u2, q, n, &b1, &b2);
+}
+
+int lie_cluster_can_reach(const lie_scene *s, int c, uint32_t tri, const lie_vec3 V[3], lie_vec3 ng, int two_sided)
+{
+    const lie_cluster *cl = &s->clusters[c];
+    if (whole(s, c))
+        return lie_emitter_can_reach(s, cl->emitter, tri, V, ng, two_sided);
+    const lie_emitter *em = &s->emitters[cl->emitter];
+    return !lie_emitter_owns(em, tri) &&
+           lie_scene_area_may_reach(s, em, s->cluster_tris + cl->first, 0, cl->n_tris, V, ng, two_sided);
+}

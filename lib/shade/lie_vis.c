@@ -26,7 +26,7 @@ struct lie_lie_vis {
      * vertices a x, y, z, b x, y, z, c x, y, z */
     float *soa_sphere[4];
     float *soa_vert[9];
-    int32_t *solid;         /* per triangle: its convex solid (lie_convex_solids) or -1 */
+    int32_t *solid;         /* per triangle: its convex solid (lie_solids_find) or -1 */
     lie_vis_oracle oracle;
 };
 
@@ -394,7 +394,7 @@ static uint32_t cone_5(const float *f, const lie_light_samples *ls, uint32_t *oc
 /* A segment from o to a light sample, both outside a convex solid, that
  * crosses it enters through a face that faces o.  When some selected face
  * of a solid faces o (so o is outside it; every light is, by
- * lie_convex_solids), that solid's faces turned away from o can block
+ * lie_solids_find), that solid's faces turned away from o can block
  * nothing more: they are dropped.  A closed column seen from the floor
  * has half its faces in a shadow's lists. */
 static void drop_far_faces(const int32_t *solid, const uint32_t *blockers, int nb, uint32_t *kind)
@@ -452,7 +452,7 @@ static void occluded(void *ctx, const uint32_t *blockers, int n_blockers, lie_sh
         planar = pv.hi > 0.0f;
     }
     if (!planar) {
-        lie_shadow_segments(q);
+        lie_shadow_query_segments(q);
         for (int j = 0; j < n_blockers; j++)
             blocker_3d(&v->tris[blockers[j]], q->o, q->dx, q->dy, q->dz, n, occ);
         return;
@@ -476,7 +476,7 @@ static void occluded(void *ctx, const uint32_t *blockers, int n_blockers, lie_sh
         if (kind == B_CONE) {
             cone_3(f, ls, occ);
         } else if (cone_5(f, ls, occ)) {
-            lie_shadow_segments(q);
+            lie_shadow_query_segments(q);
             blocker_3d(&v->tris[blockers[j]], q->o, q->dx, q->dy, q->dz, n, occ);
         }
     }
@@ -492,20 +492,13 @@ static void describe(void *ctx, const lie_surface *sf, int e, int *cls, uint32_t
     *patch_id = lie_hash_u64x4(sf->tri, path.digits, (uint64_t)path.depth, (uint64_t)e);
 }
 
-/* A sphere around points: the box's centre, the farthest point's distance
- * (slightly enlarged so rounding never culls a real blocker). */
+/* A sphere around points (lie_bound_sphere). */
 static sphere bounding_sphere(const lie_vec3 *p, uint32_t n)
 {
-    lie_box3 b = lie_box3_empty();
-    for (uint32_t i = 0; i < n; i++)
-        lie_box3_grow(&b, p[i]);
-    lie_vec3 c = lie_v3_scale(lie_v3_add(b.lo, b.hi), 0.5f);
-    float r = 0.0f;
-    for (uint32_t i = 0; i < n; i++)
-        r = fmaxf(r, lie_v3_len(lie_v3_sub(p[i], c)));
-    float mag = fmaxf(fabsf(c.x), fmaxf(fabsf(c.y), fabsf(c.z)));
-    sphere s = {c.x, c.y, c.z, r * 1.001f + 1e-5f * fmaxf(1.0f, mag)};
-    return s;
+    float f[4];
+    lie_bound_sphere(p, n, f);
+    sphere b = {f[0], f[1], f[2], f[3]};
+    return b;
 }
 
 lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vis **out, lie_error *err)
@@ -538,10 +531,10 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
         v->tri_sphere[t] = bounding_sphere(&s->tri_p[3 * (size_t)t], 3);
     for (int e = 0; e < s->n_clusters; e++) {
         const lie_cluster *cl = &s->clusters[e];
-        const lie_emitter *em = &s->emitters[cl->emitter];
-        if (em->type == LIE_EMITTER_AREA && em->n_clusters == 1) {
-            v->emitter_sphere[e] = bounding_sphere(&s->tri_p[3 * (size_t)em->first_tri], 3 * em->n_tris);
-        } else if (em->type == LIE_EMITTER_AREA) {
+        float f[4];
+        if (s->emitters[cl->emitter].n_clusters == 1) {
+            lie_emitter_bounding_sphere(s, cl->emitter, f); /* r < 0: at infinity, no culling */
+        } else {
             lie_vec3 *pts = malloc(sizeof *pts * 3 * ((size_t)cl->n_tris + 1));
             if (!pts) {
                 lie_lie_vis_destroy(v);
@@ -549,15 +542,11 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
             }
             for (uint32_t k = 0; k < cl->n_tris; k++)
                 memcpy(pts + 3 * k, &s->tri_p[3 * (size_t)s->cluster_tris[cl->first + k]], sizeof *pts * 3);
-            v->emitter_sphere[e] = bounding_sphere(pts, 3 * cl->n_tris);
+            lie_bound_sphere(pts, 3 * cl->n_tris, f);
             free(pts);
-        } else if (em->type == LIE_EMITTER_POINT) {
-            sphere p = {em->position.x, em->position.y, em->position.z, 0.0f};
-            v->emitter_sphere[e] = p;
-        } else {
-            sphere none = {0.0f, 0.0f, 0.0f, -1.0f};
-            v->emitter_sphere[e] = none;
         }
+        sphere b = {f[0], f[1], f[2], f[3]};
+        v->emitter_sphere[e] = b;
     }
     const size_t nt = (size_t)s->n_tris + 1;
     for (int k = 0; k < 4; k++)
@@ -582,7 +571,7 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
             v->soa_vert[3 * q + 2][t] = Q[q].z;
         }
     }
-    v->solid = lie_convex_solids(s);
+    v->solid = lie_solids_find(s);
     if (!v->solid) {
         lie_lie_vis_destroy(v);
         return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");

@@ -357,7 +357,7 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
         memset(j.scratch, 0, sizeof *j.scratch * (size_t)threads);
     lie_status st = fixed && j.scratch ? LIE_OK : LIE_ERR_NOMEM;
     for (int e = 0; st == LIE_OK && e < s->n_emitters; e++) {
-        int n = s->emitters[e].type == LIE_EMITTER_AREA ? opt->light_samples : 1;
+        int n = lie_emitter_sample_count(&s->emitters[e], opt->light_samples);
         st = lie_light_samples_alloc(&fixed[e], n);
         if (st == LIE_OK) {
             float su, sv;

@@ -10,6 +10,7 @@
 
 #include "core/core.h"
 #include "image/image.h"
+#include "lie/lie.h"
 #include "rt/rt.h"
 #include "scene/scene.h"
 
@@ -100,7 +101,7 @@ typedef enum lie_vis_class {
 /* One shading point's shadow segments toward one emitter: o -> o + d_i,
  * d_i the vector to sample i shortened by eps.  For an area emitter the
  * samples are `ls` and dx, dy, dz are filled only on demand
- * (lie_shadow_segments), since a planar emitter's segments can be tested
+ * (lie_shadow_query_segments), since a planar emitter's segments can be tested
  * from (s, t) alone; for a punctual one (ls NULL) the one segment is in
  * dx[0], dy[0], dz[0] from the start. */
 typedef struct lie_shadow_query {
@@ -118,7 +119,7 @@ typedef struct lie_shadow_query {
     size_t work_stride;
 } lie_shadow_query;
 #define LIE_BLOCKER_WORK 15
-void lie_shadow_segments(lie_shadow_query *q);
+void lie_shadow_query_segments(lie_shadow_query *q);
 
 /* A visibility oracle other than Embree-over-everything.  classify() looks
  * up the pair; for LIE_VISCLASS_BLOCKERS, select() keeps the pair's
@@ -137,7 +138,7 @@ typedef struct lie_vis_oracle {
     /* For AOVs: the pair's class (lie_class), list length and a patch id. */
     void (*describe)(void *ctx, const lie_surface *sf, int emitter, int *cls, uint32_t *count,
                      uint64_t *patch_id);
-    /* per triangle, its closed convex solid or -1 (lie_convex_solids); may be NULL */
+    /* per triangle, its closed convex solid or -1 (lie_solids_find); may be NULL */
     const int32_t *solid;
 } lie_vis_oracle;
 
@@ -180,7 +181,7 @@ void lie_complexity_colour_all(const int *cls, const uint32_t *count, int n, flo
  * samples' weight to all its samples' (Heitz, Hill, McGuire 2018).  With
  * LIE visibility, a partial pair's visible part can be found exactly by
  * back-projecting its blockers: LIE_EXACT_ONLY always, LIE_EXACT_AUTO when
- * that costs less than testing its samples (lie_exact_pays). */
+ * that costs less than testing its samples (lie_render_exact_pays). */
 typedef enum lie_exact_mode {
     LIE_EXACT_AUTO = 0,
     LIE_EXACT_OFF = 1,     /* partial pairs sampled (the oracle: LIE image = full image) */
@@ -195,7 +196,7 @@ typedef enum lie_exact_mode {
  * museum1 (256x256, one thread): testing n samples against b selected
  * blockers costs about n (4 + 1.5 b), the exact shadow 3000 + 2000 b.  So
  * exact shadows pay from about 1000 samples on. */
-static inline int lie_exact_pays(int n, int b)
+static inline int lie_render_exact_pays(int n, int b)
 {
     return (double)n * (4.0 + 1.5 * b) >= 3000.0 + 2000.0 * b;
 }
@@ -316,8 +317,12 @@ lie_status lie_camera_parse(const lie_scene *s, const char *spec, lie_camera *ou
  * cameras through a width x height image (2 x 2 rays per pixel) and through
  * up to max_depth mirror bounces: the patches lie-build --view builds (§4.3.1:
  * only what the user looks at). */
-lie_status lie_visible_triangles(const lie_scene *s, const lie_rt *rt, const lie_camera *cams, int n_cams,
-                                 int width, int height, int max_depth, uint8_t *mask, lie_error *err);
+lie_status lie_camera_mark_visible(const lie_scene *s, const lie_rt *rt, const lie_camera *cams, int n_cams,
+                                   int width, int height, int max_depth, uint8_t *mask, lie_error *err);
+/* The same views' pixels, where on each triangle they land (§4.3.3): the
+ * input of lie_env_build_views.  *out: lie_pixels_destroy. */
+lie_status lie_camera_pixels(const lie_scene *s, const lie_rt *rt, const lie_camera *cams, int n_cams, int width,
+                             int height, int max_depth, lie_pixels **out, lie_error *err);
 
 /* ---- camera paths (formats/camera-path.md) ---------------------------- */
 
