@@ -5,18 +5,33 @@
  *
  * Split in space, as a bounding volume hierarchy is built: the cluster of
  * largest extent is cut at the median of its triangles' centroids along
- * its longest axis, while it is larger than a quarter of the emitter's
- * extent, holds at least 2 LIE_CLUSTER_MIN_TRIS triangles, and the emitter
- * has fewer than LIE_CLUSTER_MAX clusters.  A function of the emitter's own
- * triangles alone (so an edit elsewhere never changes it), and
- * deterministic: ties are broken by triangle index. */
+ * its longest axis, while it is larger than CLUSTER_EXTENT_SHARE of the
+ * scene's extent, holds at least 2 LIE_CLUSTER_MIN_TRIS triangles, and the
+ * emitter has fewer than CLUSTER_SPLIT_MAX clusters.  A function of the
+ * emitter's triangles and the scene's bounds, deterministic (ties are
+ * broken by triangle index); lib/update compares partitions by digest and
+ * rebuilds an emitter's units when its partition changed.
+ *
+ * An emissive texture is often black over most of the surface (a wall
+ * texture with two lit windows): the triangles where it is black wherever a
+ * lookup can land form one dark cluster of their own, which no pair is
+ * built for, and only the lit ones are split in space. */
 #include "scene/internal.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-/* Split while a cluster's extent passes this share of the emitter's. */
-#define CLUSTER_EXTENT_SHARE 0.25f
+/* Lit triangles are split while a part's extent passes this share of the
+ * scene's, into at most CLUSTER_SPLIT_MAX parts.  1: no spatial split, as
+ * measured (the closing note of issue 14): every cluster repeats the
+ * per-unit sampling of the build, and splitting the lit part of
+ * bedroom_corner's emitter into 4 cost 16x the build and 5x the frame; and
+ * with tests/data/gltf/light_strip.gltf's strip split in 2, an update that
+ * removes its beam differed from the rebuild in one unit, not yet
+ * understood. */
+#define CLUSTER_EXTENT_SHARE 0.5f
+#define CLUSTER_SPLIT_MAX 1
 
 typedef struct keyed {
     float key;
@@ -52,6 +67,46 @@ static lie_box3 vertex_box(const lie_scene *s, const uint32_t *tris, uint32_t n)
     return b;
 }
 
+/* Is emissive texture t black wherever a bilinear lookup (lie_texture_sample)
+ * on triangle g of material m can read?  Every texel within one of the
+ * triangle's texture-space bounding box, wrapped as the sampler wraps. */
+static int tri_dark(const lie_scene *s, const lie_material *m, const lie_texture *t, uint32_t g)
+{
+    if (!t->rgba || t->width <= 0 || t->height <= 0)
+        return 0;
+    float u[3], v[3];
+    const float B[3][2] = {{0.0f, 0.0f}, {1.0f, 0.0f}, {0.0f, 1.0f}};
+    for (int k = 0; k < 3; k++)
+        lie_scene_slot_uv(s, m, LIE_TEX_EMISSIVE, g, B[k][0], B[k][1], &u[k], &v[k]);
+    float umin = fminf(u[0], fminf(u[1], u[2])), umax = fmaxf(u[0], fmaxf(u[1], u[2]));
+    float vmin = fminf(v[0], fminf(v[1], v[2])), vmax = fmaxf(v[0], fmaxf(v[1], v[2]));
+    if (!isfinite(umin) || !isfinite(umax) || !isfinite(vmin) || !isfinite(vmax) || umax - umin > 1e6f ||
+        vmax - vmin > 1e6f || fabsf(umin) > 1e6f || fabsf(vmin) > 1e6f)
+        return 0;
+    const int w = t->width, h = t->height;
+    /* texel columns and rows around the box, a texel wider each side than
+     * any lookup reaches; a span past two periods covers every texel */
+    double x0 = floor((double)umin * w - 0.5) - 1.0, x1 = floor((double)umax * w - 0.5) + 2.0;
+    double y0 = floor((double)vmin * h - 0.5) - 1.0, y1 = floor((double)vmax * h - 0.5) + 2.0;
+    if (x1 - x0 >= 2.0 * w) {
+        x0 = 0.0;
+        x1 = 2.0 * w - 1.0;
+    }
+    if (y1 - y0 >= 2.0 * h) {
+        y0 = 0.0;
+        y1 = 2.0 * h - 1.0;
+    }
+    for (double y = y0; y <= y1; y += 1.0)
+        for (double x = x0; x <= x1; x += 1.0) {
+            int i = lie_texture_wrap_index((long long)x, w, t->wrap_s);
+            int j = lie_texture_wrap_index((long long)y, h, t->wrap_t);
+            const float *p = t->rgba + ((size_t)j * (size_t)w + (size_t)i) * 4;
+            if (!(p[0] <= 0.0f && p[1] <= 0.0f && p[2] <= 0.0f))
+                return 0;
+        }
+    return 1;
+}
+
 static float box_diag(lie_box3 b) { return lie_box3_is_empty(&b) ? 0.0f : lie_v3_len(lie_v3_sub(b.hi, b.lo)); }
 
 typedef struct part {
@@ -61,14 +116,14 @@ typedef struct part {
 
 /* Partition tris[0..n) (one emitter's) in place into parts; returns how
  * many.  kx: scratch of n entries. */
-static int split_emitter(const lie_scene *s, uint32_t *tris, uint32_t n, keyed *kx, part *parts)
+static int split_emitter(const lie_scene *s, uint32_t *tris, uint32_t n, keyed *kx, part *parts, int kmax)
 {
     int np = 1;
     parts[0].lo = 0;
     parts[0].n = n;
     parts[0].diag = box_diag(vertex_box(s, tris, n));
-    const float limit = CLUSTER_EXTENT_SHARE * parts[0].diag;
-    while (np < LIE_CLUSTER_MAX) {
+    const float limit = CLUSTER_EXTENT_SHARE * box_diag(s->bounds);
+    while (np < kmax) {
         int best = -1;
         for (int i = 0; i < np; i++)
             if (parts[i].n >= 2 * LIE_CLUSTER_MIN_TRIS && parts[i].diag > limit &&
@@ -99,15 +154,6 @@ static int split_emitter(const lie_scene *s, uint32_t *tris, uint32_t n, keyed *
         parts[best] = a;
         parts[np++] = b;
     }
-    /* canonical: each part's triangles ascending, parts by their first */
-    for (int i = 0; i < np; i++)
-        qsort(tris + parts[i].lo, parts[i].n, sizeof *tris, u32_cmp);
-    for (int i = 1; i < np; i++)
-        for (int j = i; j > 0 && tris[parts[j].lo] < tris[parts[j - 1].lo]; j--) {
-            part t = parts[j];
-            parts[j] = parts[j - 1];
-            parts[j - 1] = t;
-        }
     return np;
 }
 
@@ -143,9 +189,40 @@ lie_status lie_scene_cluster(lie_scene *s)
             em->n_clusters = 1;
             continue;
         }
+        /* the dark triangles first (one cluster), then the lit ones, split */
+        const lie_material *mat = lie_scene_material(s, s->tri_material[em->first_tri]);
+        const lie_texture *tex =
+            mat->emissive_tex >= 0 && mat->emissive_tex < s->n_textures ? &s->textures[mat->emissive_tex] : NULL;
+        uint32_t n_dark = 0, n_lit = 0;
         for (uint32_t k = 0; k < em->n_tris; k++)
-            scratch[k] = em->first_tri + k;
-        int np = split_emitter(s, scratch, em->n_tris, kx, parts);
+            n_dark += tex && tri_dark(s, mat, tex, em->first_tri + k);
+        for (uint32_t k = 0, d = 0; k < em->n_tris; k++) {
+            uint32_t g = em->first_tri + k;
+            if (n_dark > 0 && tri_dark(s, mat, tex, g))
+                scratch[d++] = g;
+            else
+                scratch[n_dark + n_lit++] = g;
+        }
+        int np = 0;
+        if (n_dark > 0) {
+            parts[0].lo = 0;
+            parts[0].n = n_dark;
+            np = 1;
+        }
+        if (n_lit > 0)
+            np += split_emitter(s, scratch + n_dark, n_lit, kx, parts + np, tex ? 1 : CLUSTER_SPLIT_MAX);
+        for (int i = n_dark > 0; i < np; i++)
+            parts[i].lo += n_dark;
+        /* canonical: each part's triangles ascending; the dark part first,
+         * then the lit ones by their first triangle */
+        for (int i = 0; i < np; i++)
+            qsort(scratch + parts[i].lo, parts[i].n, sizeof *scratch, u32_cmp);
+        for (int i = (n_dark > 0) + 1; i < np; i++)
+            for (int j = i; j > (n_dark > 0) && scratch[parts[j].lo] < scratch[parts[j - 1].lo]; j--) {
+                part t = parts[j];
+                parts[j] = parts[j - 1];
+                parts[j - 1] = t;
+            }
         for (int i = 0; i < np; i++) {
             lie_cluster *cl = &s->clusters[nc];
             cl->emitter = e;
@@ -160,6 +237,7 @@ lie_status lie_scene_cluster(lie_scene *s)
                 s->tri_cluster[g] = nc;
             }
             cl->area = (float)acc;
+            cl->dark = n_dark > 0 && i == 0;
             lie_scene_hull_of(s, s->cluster_tris + at, 0, cl->n_tris, cl->hull, &cl->n_hull);
             at += parts[i].n;
             nc++;
@@ -235,6 +313,8 @@ uint32_t lie_cluster_target(const lie_scene *s, int c, float u1, float u2, lie_v
 int lie_cluster_can_reach(const lie_scene *s, int c, uint32_t tri, const lie_vec3 V[3], lie_vec3 ng, int two_sided)
 {
     const lie_cluster *cl = &s->clusters[c];
+    if (cl->dark)
+        return 0; /* no light leaves it */
     if (whole(s, c))
         return lie_emitter_can_reach(s, cl->emitter, tri, V, ng, two_sided);
     const lie_emitter *em = &s->emitters[cl->emitter];

@@ -256,6 +256,10 @@ typedef struct lie_cluster {
     /* like lie_emitter's hull: a box's corners, or (n_hull 0) its vertices */
     lie_vec3 hull[8];
     int n_hull;
+    /* Dark: its emissive texture is black wherever the renderer can look it
+     * up on these triangles, so no sample on them carries light and none of
+     * its pairs is built (unlit). */
+    int dark;
 } lie_cluster;
 
 typedef struct lie_camera {
@@ -476,6 +480,8 @@ lie_status lie_scene_cluster(lie_scene *s);
  * is never read against another clustering. */
 uint32_t lie_scene_cluster_digest(const lie_scene *s, int e);
 
+/* Texel index i of a row or column of n texels, wrapped as `wrap` wraps. */
+int lie_texture_wrap_index(long long i, int n, lie_wrap wrap);
 /* Bilinear lookup with the texture's wrap modes; rgba out. */
 void lie_texture_sample(const lie_texture *t, float u, float v, float rgba[4]);
 

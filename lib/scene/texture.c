@@ -27,20 +27,20 @@ static float texture_reduce(float u, lie_wrap wrap)
 }
 
 /* Texel index i (possibly -1 or up to 2n - 1 after reduction) to [0, n). */
-static int texture_wrap_index(int i, int n, lie_wrap wrap)
+int lie_texture_wrap_index(long long i, int n, lie_wrap wrap)
 {
     switch (wrap) {
     case LIE_WRAP_CLAMP:
-        return i < 0 ? 0 : (i >= n ? n - 1 : i);
+        return i < 0 ? 0 : (i >= n ? n - 1 : (int)i);
     case LIE_WRAP_MIRROR: {
-        int m = i % (2 * n);
+        int m = (int)(i % (2 * (long long)n));
         if (m < 0)
             m += 2 * n;
         return m < n ? m : 2 * n - 1 - m;
     }
     case LIE_WRAP_REPEAT:
     default: {
-        int m = i % n;
+        int m = (int)(i % n);
         return m < 0 ? m + n : m;
     }
     }
@@ -58,8 +58,8 @@ void lie_texture_sample(const lie_texture *t, float u, float v, float rgba[4])
     float x0f = floorf(x), y0f = floorf(y);
     float fx = x - x0f, fy = y - y0f;
     int x0 = (int)x0f, y0 = (int)y0f;
-    int xa = texture_wrap_index(x0, w, t->wrap_s), xb = texture_wrap_index(x0 + 1, w, t->wrap_s);
-    int ya = texture_wrap_index(y0, h, t->wrap_t), yb = texture_wrap_index(y0 + 1, h, t->wrap_t);
+    int xa = lie_texture_wrap_index(x0, w, t->wrap_s), xb = lie_texture_wrap_index(x0 + 1, w, t->wrap_s);
+    int ya = lie_texture_wrap_index(y0, h, t->wrap_t), yb = lie_texture_wrap_index(y0 + 1, h, t->wrap_t);
     const float *p00 = t->rgba + ((size_t)ya * (size_t)w + (size_t)xa) * 4;
     const float *p10 = t->rgba + ((size_t)ya * (size_t)w + (size_t)xb) * 4;
     const float *p01 = t->rgba + ((size_t)yb * (size_t)w + (size_t)xa) * 4;

@@ -397,7 +397,8 @@ static void embree_occlusion(const lie_shade_ctx *c, lie_shade_scratch *sc, lie_
  * are the emitter's, as ever; each sample's shadow test goes to the pair of
  * the cluster holding its triangle.  classify_clusters looks every
  * cluster's pair up: OCCLUDED if all are occluded or unlit, VISIBLE if all
- * are visible, else VISCLASS_CLUSTERS with each pair in sc->ccls/cpair. */
+ * are visible, else VISCLASS_CLUSTERS with each pair in sc->ccls/cpair.  A
+ * dark cluster's samples carry no light: they count as either. */
 #define VISCLASS_CLUSTERS ((lie_vis_class)5)
 static lie_vis_class classify_clusters(const lie_shade_ctx *c, const lie_surface *sf, const lie_emitter *em,
                                        lie_shade_scratch *sc, int *unbuilt)
@@ -406,6 +407,11 @@ static lie_vis_class classify_clusters(const lie_shade_ctx *c, const lie_surface
     int all_occ = 1, all_vis = 1;
     for (int j = 0; j < em->n_clusters; j++) {
         const void *pair = NULL;
+        if (c->s->clusters[em->first_cluster + j].dark) {
+            sc->ccls[j] = LIE_VISCLASS_VISIBLE; /* its samples weigh 0: any answer serves */
+            sc->cpair[j] = NULL;
+            continue;
+        }
         lie_vis_class k = vo->classify(vo->ctx, sf, em->first_cluster + j, &pair);
         if (k == LIE_VISCLASS_UNBUILT) {
             *unbuilt = 1;

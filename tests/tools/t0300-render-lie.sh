@@ -16,11 +16,14 @@ compare() { # A B MAXFRAC_ANY MAXFRAC_2PCT WHAT
 # bent_light: an emitter that is not planar, and a spot light (blocker
 # tests in 3D, not in the emitter plane).  The oracle compares shadows from
 # the same samples (--exact off); exact shadows are t0310's.
-# light_strip: an emitter of 80 triangles split into clusters (lib/scene/cluster.c),
-# each sample's shadow answered by its cluster's pair.
+# light_strip: an emitter of 80 triangles down a corridor; dark_panel: an emissive
+# texture black over part of the emitter, which is then two clusters
+# (lib/scene/cluster.c): a dark one never built, and the lit one that each lit
+# sample's shadow test goes to.
 cp "$ROOT/tests/data/gltf/panel_light.gltf" "$ROOT/tests/data/gltf/alpha_mask.gltf" \
-    "$ROOT/tests/data/gltf/bent_light.gltf" "$ROOT/tests/data/gltf/light_strip.gltf" "$TMP/"
-for scene in museum1 museum2 museum3 cornell panel_light alpha_mask bent_light light_strip; do
+    "$ROOT/tests/data/gltf/bent_light.gltf" "$ROOT/tests/data/gltf/light_strip.gltf" \
+    "$ROOT/tests/data/gltf/dark_panel.gltf" "$TMP/"
+for scene in museum1 museum2 museum3 cornell panel_light alpha_mask bent_light light_strip dark_panel; do
     S=$SCENES; [ -f "$TMP/$scene.gltf" ] && S=$TMP
     run "$B/lie-build" "$S/$scene.gltf" -q -o "$TMP/$scene-c.lie" --blockers conservative
     expect_rc 0 "$scene: conservative build"
@@ -61,11 +64,11 @@ expect_rc 0 "the written scene renders from its orthographic camera"
 run "$B/lie-render" "$TMP/museum1-s.lie" -q --size 96x64 --threads 1 -o "$TMP/t1.exr"
 run "$B/lie-render" "$TMP/museum1-s.lie" -q --size 96x64 --threads 2 -o "$TMP/t2.exr"
 expect_same "$TMP/t1.exr" "$TMP/t2.exr" "LIE frames identical for 1 and 2 threads"
-run "$B/lie-render" "$TMP/light_strip-s.lie" -q --size 96x64 --threads 1 -o "$TMP/s1.exr"
-run "$B/lie-render" "$TMP/light_strip-s.lie" -q --size 96x64 --threads 2 -o "$TMP/s2.exr"
+run "$B/lie-render" "$TMP/dark_panel-s.lie" -q --size 96x64 --threads 1 -o "$TMP/s1.exr"
+run "$B/lie-render" "$TMP/dark_panel-s.lie" -q --size 96x64 --threads 2 -o "$TMP/s2.exr"
 expect_same "$TMP/s1.exr" "$TMP/s2.exr" "LIE frames of a clustered emitter identical for 1 and 2 threads"
-run "$B/lie-build" "$TMP/light_strip.gltf" -q --threads 1 -o "$TMP/light_strip-1.lie"
-expect_same "$TMP/light_strip-s.lie" "$TMP/light_strip-1.lie" "clustered caches identical for 1 and 2 threads"
+run "$B/lie-build" "$TMP/dark_panel.gltf" -q --threads 1 -o "$TMP/dark_panel-1.lie"
+expect_same "$TMP/dark_panel-s.lie" "$TMP/dark_panel-1.lie" "clustered caches identical for 1 and 2 threads"
 "$B/lie-render" - -q --size 96x64 --threads 2 -o "$TMP/t3.exr" <"$TMP/museum1-s.lie" 2>"$TMP/err"; rc=$?
 expect_rc 0 "cache from stdin"
 compare "$TMP/t1.exr" "$TMP/t3.exr" 0 0 "stdin cache renders the same pixels"

@@ -517,17 +517,23 @@ def vertex_colors():
     write("vertex_colors.gltf", d.embedded())
 
 
-def panel_light():
-    """A tessellated, tilted emissive panel (50 triangles, so shaft tests
-    bound it by an oriented box) over a floor with a small box between,
-    and a camera: the LIE oracle on an emitter of many triangles."""
-    d = Doc()
+def floor_and_box(d):
+    """A 6 x 6 floor and a 0.8 x 0.8 x 0.8 box on it: positions and indices."""
     fl = d.positions([(-3, 0, -3), (-3, 0, 3), (3, 0, 3), (3, 0, -3)])
     fi = d.indices([0, 1, 2, 0, 2, 3])
     s = 0.4
     box = [(-s, 0, -s), (s, 0, -s), (s, 0, s), (-s, 0, s), (-s, 0.8, -s), (s, 0.8, -s), (s, 0.8, s), (-s, 0.8, s)]
     bp = d.positions(box)
     bi = d.indices([4, 6, 5, 4, 7, 6, 0, 1, 5, 0, 5, 4, 1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7])
+    return fl, fi, bp, bi
+
+
+def panel_light():
+    """A tessellated, tilted emissive panel (50 triangles, so shaft tests
+    bound it by an oriented box) over a floor with a small box between,
+    and a camera: the LIE oracle on an emitter of many triangles."""
+    d = Doc()
+    fl, fi, bp, bi = floor_and_box(d)
     n = 5
     c, sn = math.cos(0.4), math.sin(0.4)
     pts = []
@@ -602,6 +608,48 @@ def light_strip():
                     {"camera": 0, "translation": [0, 1.4, 3.6], "rotation": [-0.1305, 0, 0, 0.9914]}]
     d.g["scenes"] = [{"nodes": [0, 1, 2, 3, 4, 5, 6, 7]}]
     write("light_strip.gltf", d.embedded())
+
+
+def dark_panel():
+    """An emissive panel (8 x 2 quads facing down) whose 8 x 1 emissive
+    texture is black in its left half, clamped: the triangles of the two
+    left quads read only black texels and form a dark cluster
+    (lib/scene/cluster.c) that no pair is built for; a box below casts a
+    shadow from the lit half."""
+    d = Doc()
+    fl, fi, bp, bi = floor_and_box(d)
+    nx, nz = 8, 2
+    pts, uvs = [], []
+    for i in range(nx + 1):
+        for j in range(nz + 1):
+            pts.append((-2 + 4 * i / nx, 2.2, -0.5 + 1.0 * j / nz))
+            uvs += [i / nx, j / nz]
+    idx = []
+    for i in range(nx):
+        for j in range(nz):
+            a = i * (nz + 1) + j
+            b, e = a + 1, a + nz + 1
+            idx += [a, e, b, b, e, e + 1]  # facing -y
+    pp = d.positions(pts)
+    pu = d.accessor(f32(*uvs), FLOAT, "VEC2", len(pts))
+    pi = d.indices(idx)
+    half = [[(0, 0, 0, 255)] * 4 + [(255, 255, 255, 255)] * 4]
+    d.g["images"] = [{"uri": "data:image/png;base64," + base64.b64encode(png(8, 1, half)).decode()}]
+    d.g["samplers"] = [{"magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071}]
+    d.g["textures"] = [{"source": 0, "sampler": 0}]
+    d.g["meshes"] = [{"primitives": [{"attributes": {"POSITION": fl}, "indices": fi, "material": 0}]},
+                     {"primitives": [{"attributes": {"POSITION": bp}, "indices": bi, "material": 0}]},
+                     {"primitives": [{"attributes": {"POSITION": pp, "TEXCOORD_0": pu}, "indices": pi,
+                                      "material": 1}]}]
+    d.g["materials"] = [{"pbrMetallicRoughness": {"baseColorFactor": [0.7, 0.7, 0.7, 1], "metallicFactor": 0}},
+                        {"emissiveFactor": [1, 1, 1], "emissiveTexture": {"index": 0},
+                         "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 8}}}]
+    d.g["extensionsUsed"] = ["KHR_materials_emissive_strength"]
+    d.g["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.9, "znear": 0.05}}]
+    d.g["nodes"] = [{"mesh": 0, "name": "Floor"}, {"mesh": 1, "name": "Box"}, {"mesh": 2, "name": "Panel"},
+                    {"camera": 0, "translation": [0, 2.5, 5.5], "rotation": [-0.2588, 0, 0, 0.9659]}]
+    d.g["scenes"] = [{"nodes": [0, 1, 2, 3]}]
+    write("dark_panel.gltf", d.embedded())
 
 
 def alpha_mask():
@@ -851,6 +899,7 @@ def main():
     alpha_mask()
     panel_light()
     light_strip()
+    dark_panel()
     vertex_colors()
     quantized()
     texture_transform()
