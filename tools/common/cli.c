@@ -109,8 +109,21 @@ int lie_parse_stats(const char *arg)
     return strcmp(arg, "json") == 0 ? 2 : 0;
 }
 
+/* Under mpirun every rank parses the same command line and meets the same
+ * usage error: only rank 0 says it (Open MPI's OMPI_COMM_WORLD_RANK, or
+ * PMIx's PMIX_RANK, set before MPI_Init), and every rank exits 2. */
+static int first_rank(void)
+{
+    const char *r = getenv("OMPI_COMM_WORLD_RANK");
+    if (!r)
+        r = getenv("PMIX_RANK");
+    return !r || strcmp(r, "0") == 0;
+}
+
 int lie_usage_error(const char *prog, const char *fmt, ...)
 {
+    if (!first_rank())
+        return 2;
     va_list ap;
     va_start(ap, fmt);
     fprintf(stderr, "%s: ", prog);

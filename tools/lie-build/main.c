@@ -262,8 +262,10 @@ int main(int argc, char **argv)
     lie_error_clear(&err);
     double t0 = lie_time_now();
     lie_scene *scene = NULL;
-    if (lie_scene_load(input, &so, &scene, &err) != LIE_OK)
+    if (build_load_scene(input, &so, &scene, &err) != LIE_OK) {
+        lie_scene_destroy(scene);
         return fail(&err);
+    }
     if (!quiet)
         lie_print_scene_warnings(prog, scene, input);
     if (scene->n_emitters == 0 && !quiet)
