@@ -10,6 +10,9 @@ lie_status lie_cache_load_scene(const lie_cache *c, const char *cache_path, cons
 {
     *out = NULL;
     const char *path = override ? override : c->scene_path;
+    if (!override && strcmp(path, "-") == 0)
+        return lie_error_set(err, LIE_ERR_ARG, cache_path,
+                             "the cache was built from a scene read from stdin: name its file (--scene)");
     char alt[4096];
     /* a relative path that does not resolve from here: try it relative to
      * the cache's folder (caches travel with their scenes) */

@@ -164,3 +164,28 @@ lie_status build_load_scene(const char *input, const lie_scene_options *so, lie_
     *out = NULL;
     return lie_dist_load(so, load_scene, &in, err);
 }
+
+typedef struct path_in {
+    const char *path;
+    lie_camera_path **out;
+} path_in;
+
+static lie_status read_path(void *ctx, const lie_scene_options *so, lie_error *err)
+{
+    const path_in *in = ctx;
+    unsigned char *data = NULL;
+    size_t size = 0;
+    lie_status st = lie_file_set_read(so->files, in->path, LIE_READ_MAX_TEXT, &data, &size, err);
+    if (st == LIE_OK)
+        st = lie_camera_path_parse(data, size, in->path, in->out, err);
+    free(data);
+    return st;
+}
+
+lie_status build_read_path(const char *path, lie_camera_path **out, lie_error *err)
+{
+    path_in in = {path, out};
+    lie_scene_options so = lie_scene_options_default();
+    *out = NULL;
+    return lie_dist_load(&so, read_path, &in, err);
+}

@@ -15,4 +15,7 @@ lie_status build_dist(const lie_scene *s, const lie_rt *rt, const lie_build_para
  * when an error is returned (NULL then, or to destroy). */
 lie_status build_load_scene(const char *input, const lie_scene_options *so, lie_scene **out, lie_error *err);
 
+/* The camera path (- for stdin), read on rank 0 and broadcast likewise. */
+lie_status build_read_path(const char *path, lie_camera_path **out, lie_error *err);
+
 #endif

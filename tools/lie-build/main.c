@@ -282,7 +282,7 @@ int main(int argc, char **argv)
     if (n_views || path_file) {
         /* the views: each --view, then every frame of --path */
         lie_camera_path *cpath = NULL;
-        lie_status vs = path_file ? lie_camera_path_read(path_file, &cpath, &err) : LIE_OK;
+        lie_status vs = path_file ? build_read_path(path_file, &cpath, &err) : LIE_OK;
         int n_cams = n_views + (cpath ? cpath->n_frames : 0);
         lie_camera *cams = vs == LIE_OK ? calloc((size_t)n_cams, sizeof *cams) : NULL;
         mask = cams ? calloc((size_t)scene->n_tris + 1, 1) : NULL;

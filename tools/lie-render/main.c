@@ -187,13 +187,15 @@ static lie_status load_input(void *ctx, const lie_scene_options *so, lie_error *
     if (st != LIE_OK)
         return st;
     if (looks_like_gltf(data, size)) {
-        /* the bytes read (a pipe cannot be read twice) are the scene's file */
+        /* the scene's file: a set holds it already; stdin is read once, so
+         * its bytes go to the loader in a set of their own */
         lie_scene_options o = *so;
-        lie_file_set *own = so->files ? NULL : lie_file_set_create(LIE_FILES_RECORD);
-        if (own)
-            o.files = own;
-        st = o.files ? lie_file_set_add(o.files, in->input, data, size, err)
+        lie_file_set *own = NULL;
+        if (!so->files && strcmp(in->input, "-") == 0) {
+            o.files = own = lie_file_set_create(LIE_FILES_RECORD);
+            st = own ? lie_file_set_add(own, in->input, data, size, err)
                      : lie_error_set(err, LIE_ERR_NOMEM, in->input, "out of memory");
+        }
         free(data);
         if (st == LIE_OK)
             st = lie_scene_load(in->input, &o, &in->scene, err);
