@@ -11,21 +11,27 @@
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 # Open MPI keeps some of MPI_Init's memory to the end: ASan builds suppress
 # it by module (tests/lsan-mpi.supp), with full stacks (Open MPI's libraries
-# have no frame pointers); leaks in lie's own code are still reported
+# have no frame pointers); leaks in lie's own code are still reported.
+# Unwinding every malloc the slow way costs about 2 s a launch under ASan,
+# most of it in MPI_Init: launches whose lib/dist paths another launch
+# covers run without the leak check ($MPI_NOLEAK).
 export LSAN_OPTIONS="suppressions=$ROOT/tests/lsan-mpi.supp:fast_unwind_on_malloc=0${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
 MPI="timeout 120 mpirun --oversubscribe -x LSAN_OPTIONS"
+MPI_NOLEAK="env LSAN_OPTIONS=detect_leaks=0 $MPI"
 # rank 0 in $A, which holds the scenes; ranks 1 and 2 in the empty $E
 A="$TMP/a" E="$TMP/empty"
 mkdir "$A" "$E"
 cp "$S/museum1.gltf" "$S/museum1.bin" "$ROOT/tests/data/gltf/bent_light.gltf" "$A/"
-split3() { # ARGS...: the same command, rank 0 in $A, ranks 1-2 in $E
-    $MPI -np 1 --wdir "$A" "$@" : -np 2 --wdir "$E" "$@"
+split3() { # MPIRUN ARGS...: the same command, rank 0 in $A, ranks 1-2 in $E
+    m=$1
+    shift
+    $m -np 1 --wdir "$A" "$@" : -np 2 --wdir "$E" "$@"
 }
 json_member() { tr ',' '\n' <"$TMP/err" | grep "\"$1\":" | head -1 | sed 's/.*://; s/[]}]//g'; }
 
 # Build: museum1 on 3 ranks; only rank 0 can read the scene and its .bin
 (cd "$A" && "$B/lie-build" museum1.gltf -q --min-patch 3e-3 -o "$A/m-1.lie") || not_ok "one-process build"
-run split3 "$B/lie-build" museum1.gltf -q --min-patch 3e-3 --threads 1 -o "$A/m-3.lie" --stats=json
+run split3 "$MPI" "$B/lie-build" museum1.gltf -q --min-patch 3e-3 --threads 1 -o "$A/m-3.lie" --stats=json
 expect_rc 0 "build on 3 ranks, the scene readable by rank 0 only"
 expect_same "$A/m-1.lie" "$A/m-3.lie" "3-rank cache = one process's"
 if [ "$(json_member files_broadcast)" = 2 ] && [ "$(json_member bytes_broadcast)" -gt $((2 * 240872)) ]; then
@@ -36,7 +42,7 @@ fi
 # bent_light has 2 emitters, so ranges split a triangle's units; 3 ranks x 2
 # threads, conservative lists
 "$B/lie-build" "$A/bent_light.gltf" -q --blockers conservative -o "$TMP/bl-1.lie"
-run $MPI -np 3 "$B/lie-build" "$A/bent_light.gltf" -q --threads 2 --blockers conservative -o "$TMP/bl-3.lie"
+run $MPI_NOLEAK -np 3 "$B/lie-build" "$A/bent_light.gltf" -q --threads 2 --blockers conservative -o "$TMP/bl-3.lie"
 expect_rc 0 "bent_light: build on 3 ranks x 2 threads"
 expect_same "$TMP/bl-1.lie" "$TMP/bl-3.lie" "bent_light, conservative: 3 ranks x 2 threads = one process"
 
@@ -44,7 +50,7 @@ expect_same "$TMP/bl-1.lie" "$TMP/bl-3.lie" "bent_light, conservative: 3 ranks x
 # broadcast, the scene too), 3 ranks x 2 threads, EXR to stdout
 OPTS="-q --size 96x80 --light-samples 16 --aov depth,complexity"
 (cd "$A" && "$B/lie-render" - $OPTS -o "$TMP/f1.exr" <"$A/m-1.lie") || not_ok "one-process frame"
-split3 "$B/lie-render" - $OPTS --threads 2 --stats=json -o - <"$A/m-1.lie" >"$TMP/f3.exr" 2>"$TMP/err"; rc=$?
+split3 "$MPI_NOLEAK" "$B/lie-render" - $OPTS --threads 2 --stats=json -o - <"$A/m-1.lie" >"$TMP/f3.exr" 2>"$TMP/err"; rc=$?
 expect_rc 0 "frame on 3 ranks x 2 threads, cache from stdin, EXR to stdout"
 expect_same "$TMP/f1.exr" "$TMP/f3.exr" "3-rank frame = one process's"
 tiles=$(( ((96 + 15) / 16) * ((80 + 15) / 16) ))
@@ -67,7 +73,7 @@ YAML
 mkdir "$TMP/p1" "$TMP/p3"
 POPTS="-q --size 48x40 --light-samples 16 --visibility full --path path.yaml"
 (cd "$A" && "$B/lie-render" - $POPTS -o "$TMP/p1/f_%02d.exr" <museum1.gltf) || not_ok "one-process path"
-split3 "$B/lie-render" - $POPTS --threads 1 -o "$TMP/p3/f_%02d.exr" --stats=json <"$A/museum1.gltf" >"$TMP/out" 2>"$TMP/err"
+split3 "$MPI" "$B/lie-render" - $POPTS --threads 1 -o "$TMP/p3/f_%02d.exr" --stats=json <"$A/museum1.gltf" >"$TMP/out" 2>"$TMP/err"
 rc=$?
 expect_rc 0 "path on 3 ranks, glTF on stdin"
 same=0
@@ -98,7 +104,7 @@ expect_no_file "$TMP/miss.exr" "no output when a rank fails"
 
 # A different binary on one rank is refused
 cp "$B/lie-build" "$TMP/lie-build-other" && printf 'x' >>"$TMP/lie-build-other"
-run $MPI -np 1 "$B/lie-build" "$A/bent_light.gltf" -q -o "$TMP/mix.lie" : -np 1 "$TMP/lie-build-other" "$A/bent_light.gltf" -q -o "$TMP/mix.lie"
+run $MPI_NOLEAK -np 1 "$B/lie-build" "$A/bent_light.gltf" -q -o "$TMP/mix.lie" : -np 1 "$TMP/lie-build-other" "$A/bent_light.gltf" -q -o "$TMP/mix.lie"
 if [ "$rc" -ne 0 ] && grep -q "^lie-build: rank 1: runs a different binary" "$TMP/err"; then
     ok "a different binary on rank 1 refused: $(grep '^lie-build' "$TMP/err")"
 else
@@ -111,7 +117,7 @@ expect_no_file "$TMP/mix.lie" "no cache when binaries differ"
 # no output.  -v's "bvh" line comes after every rank's setup check: rank 1
 # is rendering tiles from then on.
 mkdir "$TMP/kill"
-$MPI -np 3 "$B/lie-render" "$A/m-1.lie" -q -v --size 1024x1024 --spp 16 --threads 1 \
+$MPI_NOLEAK -np 3 "$B/lie-render" "$A/m-1.lie" -q -v --size 1024x1024 --spp 16 --threads 1 \
     -o "$TMP/kill/k.exr" >"$TMP/out" 2>"$TMP/err" &
 mp=$!
 victim=""

@@ -124,12 +124,14 @@ int lie_usage_error(const char *prog, const char *fmt, ...)
 {
     if (!first_rank())
         return 2;
+    /* one write: under mpirun stderr is forwarded in chunks that other
+     * output may otherwise split */
+    char msg[1024];
     va_list ap;
     va_start(ap, fmt);
-    fprintf(stderr, "%s: ", prog);
-    vfprintf(stderr, fmt, ap);
-    fprintf(stderr, " (see --help)\n");
+    vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
+    fprintf(stderr, "%s: %s (see --help)\n", prog, msg);
     return 2;
 }
 
