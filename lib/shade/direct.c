@@ -265,44 +265,22 @@ static void kernel_area(const lie_surface *sf, lie_vec3 o, const lie_light_sampl
     }
 }
 
-/* One punctual sample (point, spot or directional), scalar. */
-static void kernel_punctual(const lie_shade_ctx *c, const lie_surface *sf, lie_vec3 o, const lie_emitter *em,
-                            lie_shade_scratch *sc)
+/* One delta light's sample (point, spot or directional), scalar: its
+ * light at o in closed form (lie_emitter_incident) times the BRDF. */
+static void kernel_delta(const lie_shade_ctx *c, const lie_surface *sf, lie_vec3 o, int e, lie_shade_scratch *sc)
 {
-    lie_vec3 wi;
-    float atten, dist;
-    if (em->type == LIE_EMITTER_DIRECTIONAL) {
-        wi = lie_v3_scale(em->direction, -1.0f);
-        atten = 1.0f;
-        dist = c->ray_far;
-    } else {
-        lie_vec3 d = lie_v3_sub(em->position, o);
-        float d2 = lie_v3_dot(d, d);
-        dist = sqrtf(d2);
-        wi = dist > 0.0f ? lie_v3_scale(d, 1.0f / dist) : lie_v3(0.0f, 0.0f, 1.0f);
-        atten = d2 > 0.0f ? 1.0f / d2 : 0.0f;
-        if (em->cos_outer > -1.5f) {
-            /* KHR_lights_punctual's recommended spot falloff. */
-            float scale = 1.0f / fmaxf(0.001f, em->cos_inner - em->cos_outer);
-            float cd = -lie_v3_dot(em->direction, wi);
-            float a = fminf(fmaxf((cd - em->cos_outer) * scale, 0.0f), 1.0f);
-            atten *= a * a;
-        }
-        if (em->range > 0.0f) {
-            float r = dist / em->range, r4 = r * r * r * r;
-            atten *= fminf(fmaxf(1.0f - r4, 0.0f), 1.0f);
-        }
-    }
+    lie_emitter_incident li;
+    lie_emitter_light_at(c->s, e, o, c->ray_far, &li);
     float f[3] = {0.0f, 0.0f, 0.0f};
-    if (lie_v3_dot(sf->ng, wi) > 0.0f)
-        lie_brdf_eval_cos(sf, wi, f);
-    sc->wr[0] = em->intensity[0] * atten * f[0];
-    sc->wg[0] = em->intensity[1] * atten * f[1];
-    sc->wb[0] = em->intensity[2] * atten * f[2];
-    sc->dx[0] = wi.x;
-    sc->dy[0] = wi.y;
-    sc->dz[0] = wi.z;
-    sc->dist[0] = dist;
+    if (lie_v3_dot(sf->ng, li.wi) > 0.0f)
+        lie_brdf_eval_cos(sf, li.wi, f);
+    sc->wr[0] = li.li[0] * f[0];
+    sc->wg[0] = li.li[1] * f[1];
+    sc->wb[0] = li.li[2] * f[2];
+    sc->dx[0] = li.wi.x;
+    sc->dy[0] = li.wi.y;
+    sc->dz[0] = li.wi.z;
+    sc->dist[0] = li.dist;
     sc->scalar = 0;
 }
 
@@ -388,7 +366,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
     int ltc_ready = 0, unbuilt_seen = 0;
     for (int e = 0; e < s->n_emitters; e++) {
         const lie_emitter *em = &s->emitters[e];
-        if (em->type == LIE_EMITTER_AREA && em->first_tri <= sf->tri && sf->tri < em->first_tri + em->n_tris)
+        if (lie_emitter_owns(em, sf->tri))
             continue; /* an emitter does not light itself */
         lie_vis_class cls = LIE_VISCLASS_TEST_ALL;
         const void *pair = NULL;
@@ -402,7 +380,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                 cls = LIE_VISCLASS_TEST_ALL;
             }
             if (cls == LIE_VISCLASS_OCCLUDED) {
-                sc->stats.shadow_rays_skipped += (uint64_t)(em->type == LIE_EMITTER_AREA ? opt->light_samples : 1);
+                sc->stats.shadow_rays_skipped += (uint64_t)lie_emitter_sample_count(em, opt->light_samples);
                 st->pairs_occluded++;
                 continue;
             }
@@ -502,7 +480,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
         double t_shade = clock_if(timers);
         int n;
         const lie_light_samples *ls = NULL;
-        if (em->type == LIE_EMITTER_AREA) {
+        if (!lie_emitter_is_delta(em)) {
             ls = use_bits ? &bm->ls : &c->fixed[e];
             if (opt->pattern == LIE_PATTERN_ROTATED) {
                 uint64_t h = lie_hash_u64x4(pixel, (uint64_t)e, (uint64_t)depth, 0x726f74ull);
@@ -513,7 +491,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
             kernel_area(sf, o, ls, em->double_sided, sc);
             n = ls->n;
         } else {
-            kernel_punctual(c, sf, o, em, sc);
+            kernel_delta(c, sf, o, e, sc);
             n = 1;
         }
         if (timers)

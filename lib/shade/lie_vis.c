@@ -546,20 +546,13 @@ static void describe(void *ctx, const lie_surface *sf, int e, int *cls, uint32_t
     *patch_id = lie_hash_u64x4(sf->tri, path.digits, (uint64_t)path.depth, (uint64_t)e);
 }
 
-/* A sphere around points: the box's centre, the farthest point's distance
- * (slightly enlarged so rounding never culls a real blocker). */
+/* A sphere around points (lie_bound_sphere). */
 static sphere bounding_sphere(const lie_vec3 *p, uint32_t n)
 {
-    lie_box3 b = lie_box3_empty();
-    for (uint32_t i = 0; i < n; i++)
-        lie_box3_grow(&b, p[i]);
-    lie_vec3 c = lie_v3_scale(lie_v3_add(b.lo, b.hi), 0.5f);
-    float r = 0.0f;
-    for (uint32_t i = 0; i < n; i++)
-        r = fmaxf(r, lie_v3_len(lie_v3_sub(p[i], c)));
-    float mag = fmaxf(fabsf(c.x), fmaxf(fabsf(c.y), fabsf(c.z)));
-    sphere s = {c.x, c.y, c.z, r * 1.001f + 1e-5f * fmaxf(1.0f, mag)};
-    return s;
+    float f[4];
+    lie_bound_sphere(p, n, f);
+    sphere b = {f[0], f[1], f[2], f[3]};
+    return b;
 }
 
 lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vis **out, lie_error *err)
@@ -591,16 +584,10 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
     for (uint32_t t = 0; t < s->n_tris; t++)
         v->tri_sphere[t] = bounding_sphere(&s->tri_p[3 * (size_t)t], 3);
     for (int e = 0; e < s->n_emitters; e++) {
-        const lie_emitter *em = &s->emitters[e];
-        if (em->type == LIE_EMITTER_AREA) {
-            v->emitter_sphere[e] = bounding_sphere(&s->tri_p[3 * (size_t)em->first_tri], 3 * em->n_tris);
-        } else if (em->type == LIE_EMITTER_POINT) {
-            sphere p = {em->position.x, em->position.y, em->position.z, 0.0f};
-            v->emitter_sphere[e] = p;
-        } else {
-            sphere none = {0.0f, 0.0f, 0.0f, -1.0f};
-            v->emitter_sphere[e] = none;
-        }
+        float f[4];
+        lie_emitter_bounding_sphere(s, e, f); /* r < 0: at infinity, no culling */
+        sphere b = {f[0], f[1], f[2], f[3]};
+        v->emitter_sphere[e] = b;
     }
     const size_t nt = (size_t)s->n_tris + 1;
     for (int k = 0; k < 4; k++)

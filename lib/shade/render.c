@@ -355,7 +355,7 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
         memset(j.scratch, 0, sizeof *j.scratch * (size_t)threads);
     lie_status st = fixed && j.scratch ? LIE_OK : LIE_ERR_NOMEM;
     for (int e = 0; st == LIE_OK && e < s->n_emitters; e++) {
-        int n = s->emitters[e].type == LIE_EMITTER_AREA ? opt->light_samples : 1;
+        int n = lie_emitter_sample_count(&s->emitters[e], opt->light_samples);
         st = lie_light_samples_alloc(&fixed[e], n);
         if (st == LIE_OK) {
             float su, sv;
@@ -385,7 +385,7 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
         j.sc.bits = calloc((size_t)s->n_emitters + 1, sizeof *j.sc.bits);
         st = j.sc.bits ? LIE_OK : LIE_ERR_NOMEM;
         for (int e = 0; st == LIE_OK && e < s->n_emitters; e++)
-            if (s->emitters[e].type == LIE_EMITTER_AREA)
+            if (!lie_emitter_is_delta(&s->emitters[e]))
                 st = lie_bitmask_create(&fixed[e], &j.sc.bits[e]);
     }
     if (st == LIE_OK) {

@@ -2,6 +2,8 @@
 #ifndef LIE_TEST_FIXTURES_H
 #define LIE_TEST_FIXTURES_H
 
+#include <stdlib.h>
+
 #include "lie.h"
 
 /* Form factor from a point to a parallel rectangle a x b whose corner is
