@@ -485,7 +485,7 @@ typedef struct lie_pose {
 lie_status lie_animation_pose(const lie_scene *s, int a, double t, lie_pose **out, lie_error *err);
 void lie_pose_destroy(lie_pose *p);
 /* The local matrix of a node's TRS (10 doubles as in lie_node.trs). */
-lie_mat4 lie_trs_matrix(const double trs[10]);
+lie_mat4 lie_node_trs_matrix(const double trs[10]);
 /* Animation by name or index; -1 when none matches. */
 int lie_scene_find_animation(const lie_scene *s, const char *spec);
 /* Whether node n is the default scene's (reachable from its roots). */

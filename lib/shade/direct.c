@@ -287,7 +287,7 @@ static void kernel_delta(const lie_shade_ctx *c, const lie_surface *sf, lie_vec3
 /* Each shadow ray is the segment o -> o + d_i, d_i the vector to the
  * sample shortened by eps: the same segments for Embree and for blocker
  * lists. */
-void lie_shadow_segments(lie_shadow_query *q)
+void lie_shadow_query_segments(lie_shadow_query *q)
 {
     if (q->have_segments)
         return;
@@ -408,9 +408,9 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
          * (bitmask.h) where asked, or where cheaper than testing them one by
          * one (the exact shadow is weighed against both below). */
         const lie_bitmask *bm = cls == LIE_VISCLASS_BLOCKERS && c->bits ? c->bits[e] : NULL;
-        const double bits_cost = bm ? lie_bitmask_cost(opt->light_samples, n_blockers, !(pl && sf->lambert && bm->ls.uniform)) : 0.0;
+        const double bits_cost = bm ? lie_render_bitmask_cost(opt->light_samples, n_blockers, !(pl && sf->lambert && bm->ls.uniform)) : 0.0;
         const int use_bits =
-            bm && (opt->bitmask == LIE_BITMASK_ONLY || bits_cost < lie_samples_cost(opt->light_samples, n_blockers));
+            bm && (opt->bitmask == LIE_BITMASK_ONLY || bits_cost < lie_render_samples_cost(opt->light_samples, n_blockers));
         double omega = 0.0;
         float kc[3] = {0.0f, 0.0f, 0.0f}, kl[3] = {0.0f, 0.0f, 0.0f};
         if (pl) {
@@ -422,8 +422,8 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
             }
             if (cls == LIE_VISCLASS_BLOCKERS && c->exact &&
                 (opt->exact == LIE_EXACT_ONLY ||
-                 (lie_exact_pays(opt->light_samples, n_blockers) &&
-                  !(use_bits && (opt->bitmask == LIE_BITMASK_ONLY || bits_cost < lie_exact_cost(n_blockers)))))) {
+                 (lie_render_exact_pays(opt->light_samples, n_blockers) &&
+                  !(use_bits && (opt->bitmask == LIE_BITMASK_ONLY || bits_cost < lie_render_exact_cost(n_blockers)))))) {
                 double t0 = clock_if(timers);
                 int ok = lie_polylight_visible(pl, o, sf->n, sf->ng, s->tri_p, opt->oracle->solid, sc->blockers, n_blockers, eps,
                                                &sc->poly, &omega) == 0;
@@ -532,7 +532,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                     st->t_blockers += lie_time_now() - t0;
             } else {
                 /* Embree: rays only for samples that would contribute */
-                lie_shadow_segments(&q);
+                lie_shadow_query_segments(&q);
                 lie_ray_batch *b = &sc->batch;
                 int m = 0;
                 for (int i = 0; i < n; i++) {

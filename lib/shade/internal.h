@@ -107,7 +107,7 @@ typedef struct lie_shade_ctx {
 /* Per triangle, the instance it belongs to if that instance is a closed
  * convex mesh with every light outside it (solids.c), else -1; NULL when
  * out of memory. */
-int32_t *lie_convex_solids(const lie_scene *s);
+int32_t *lie_solids_find(const lie_scene *s);
 
 /* Direct lighting at sf from every emitter, added to rgb.  `pixel` seeds the
  * rotated pattern. */

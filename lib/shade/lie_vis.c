@@ -27,7 +27,7 @@ struct lie_lie_vis {
      * vertices a x, y, z, b x, y, z, c x, y, z */
     float *soa_sphere[4];
     float *soa_vert[9];
-    int32_t *solid;         /* per triangle: its convex solid (lie_convex_solids) or -1 */
+    int32_t *solid;         /* per triangle: its convex solid (lie_solids_find) or -1 */
     lie_vis_oracle oracle;
 };
 
@@ -394,7 +394,7 @@ static uint32_t cone_5(const float *f, const lie_light_samples *ls, uint32_t *oc
 /* A segment from o to a light sample, both outside a convex solid, that
  * crosses it enters through a face that faces o.  When some selected face
  * of a solid faces o (so o is outside it; every light is, by
- * lie_convex_solids), that solid's faces turned away from o can block
+ * lie_solids_find), that solid's faces turned away from o can block
  * nothing more: they are dropped.  A closed column seen from the floor
  * has half its faces in a shadow's lists. */
 static void drop_far_faces(const int32_t *solid, const uint32_t *blockers, int nb, uint32_t *kind)
@@ -484,7 +484,7 @@ static void occluded(void *ctx, const uint32_t *blockers, int n_blockers, lie_sh
     const lie_light_samples *ls = q->ls;
     const int planar = prepare_2d(v, blockers, n_blockers, q);
     if (planar == 0) {
-        lie_shadow_segments(q);
+        lie_shadow_query_segments(q);
         for (int j = 0; j < n_blockers; j++)
             blocker_3d(&v->tris[blockers[j]], q->o, q->dx, q->dy, q->dz, n, occ);
         return;
@@ -500,7 +500,7 @@ static void occluded(void *ctx, const uint32_t *blockers, int n_blockers, lie_sh
         if (kind == B_CONE) {
             cone_3(f, ls, occ);
         } else if (cone_5(f, ls, occ)) {
-            lie_shadow_segments(q);
+            lie_shadow_query_segments(q);
             blocker_3d(&v->tris[blockers[j]], q->o, q->dx, q->dy, q->dz, n, occ);
         }
     }
@@ -612,7 +612,7 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
             v->soa_vert[3 * q + 2][t] = Q[q].z;
         }
     }
-    v->solid = lie_convex_solids(s);
+    v->solid = lie_solids_find(s);
     if (!v->solid) {
         lie_lie_vis_destroy(v);
         return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");

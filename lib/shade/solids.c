@@ -156,7 +156,7 @@ static int convex_solid(const lie_scene *s, const lie_instance *in, mesh_scratch
     return 1;
 }
 
-int32_t *lie_convex_solids(const lie_scene *s)
+int32_t *lie_solids_find(const lie_scene *s)
 {
     int32_t *id = malloc(sizeof *id * ((size_t)s->n_tris + 1));
     if (!id)

@@ -1,8 +1,8 @@
 /* The triangles a camera sees, directly or in mirrors (lie-build --view). */
 #include "shade/shade.h"
 
-lie_status lie_visible_triangles(const lie_scene *s, const lie_rt *rt, const lie_camera *cams, int n_cams,
-                                 int width, int height, int max_depth, uint8_t *mask, lie_error *err)
+lie_status lie_camera_mark_visible(const lie_scene *s, const lie_rt *rt, const lie_camera *cams, int n_cams,
+                                   int width, int height, int max_depth, uint8_t *mask, lie_error *err)
 {
     if (width < 1 || height < 1)
         return lie_error_set(err, LIE_ERR_ARG, s->path, "view size %dx%d out of range", width, height);

@@ -265,7 +265,7 @@ static void oracle_case(int two_sided, int n, tally *tl)
                     tl->fallbacks++;
                     continue;
                 }
-                lie_shadow_segments(&qs);
+                lie_shadow_query_segments(&qs);
                 for (int i = 0; i < n; i++) {
                     assert_int_equal(bit(mask, i), occ[i] != 0); /* the same bits as the per-sample path */
                     int emb = lie_rt_occluded(rt, o, lie_v3(dx[i], dy[i], dz[i]), 0.0f, 1.0f);

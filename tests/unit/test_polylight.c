@@ -272,7 +272,7 @@ static void test_polylight_convex_solid_casts_its_faces_shadow(void **state)
     box_blocker(t + 108, lo2, hi2);
     fixture f;
     fixture_make(&f, 1.0f, 1.0f, 0, t, 24);
-    int32_t *solid = lie_convex_solids(f.s);
+    int32_t *solid = lie_solids_find(f.s);
     assert_non_null(solid);
     const lie_vec3 up = lie_v3(0, 1, 0);
     const lie_vec3 pts[3] = {lie_v3(0, 0, 0), lie_v3(-0.1f, 0, 0.3f), lie_v3(0.4f, 0, -0.4f)};

@@ -294,7 +294,7 @@ int main(int argc, char **argv)
         for (int i = n_views; vs == LIE_OK && i < n_cams; i++)
             cams[i] = lie_camera_path_frame(cpath, i - n_views);
         if (vs == LIE_OK)
-            vs = lie_visible_triangles(scene, rt, cams, n_cams, view_w, view_h, LIE_MAX_DEPTH_DEFAULT, mask, &err);
+            vs = lie_camera_mark_visible(scene, rt, cams, n_cams, view_w, view_h, LIE_MAX_DEPTH_DEFAULT, mask, &err);
         free(cams);
         lie_camera_path_destroy(cpath);
         if (vs != LIE_OK) {
