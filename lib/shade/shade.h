@@ -10,6 +10,7 @@
 
 #include "core/core.h"
 #include "image/image.h"
+#include "lie/lie.h"
 #include "rt/rt.h"
 #include "scene/scene.h"
 
@@ -351,6 +352,10 @@ lie_status lie_camera_parse(const lie_scene *s, const char *spec, lie_camera *ou
  * only what the user looks at). */
 lie_status lie_camera_mark_visible(const lie_scene *s, const lie_rt *rt, const lie_camera *cams, int n_cams,
                                    int width, int height, int max_depth, uint8_t *mask, lie_error *err);
+/* The same views' pixels, where on each triangle they land (§4.3.3): the
+ * input of lie_env_build_views.  *out: lie_pixels_destroy. */
+lie_status lie_camera_pixels(const lie_scene *s, const lie_rt *rt, const lie_camera *cams, int n_cams, int width,
+                             int height, int max_depth, lie_pixels **out, lie_error *err);
 
 /* ---- camera paths (formats/camera-path.md) ---------------------------- */
 
