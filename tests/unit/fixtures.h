@@ -4,6 +4,39 @@
 
 #include "lie.h"
 
+#include <stdio.h>
+
+/* A bundled scene (tests/scenes/NAME), loaded, or the test fails. */
+static inline lie_scene *test_scene(const char *name)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s", TEST_SCENES, name);
+    lie_scene *s = NULL;
+    lie_error err;
+    assert_int_equal(lie_scene_load(path, NULL, &s, &err), LIE_OK);
+    return s;
+}
+
+/* A material of grey base colour `base` (metallic 0: Lambert when rough)
+ * emitting radiance `emit` (0: none), one- or two-sided; its index. */
+static inline int test_material(lie_scene *s, float base, float emit, int double_sided)
+{
+    lie_material m = lie_material_default();
+    m.metallic = 0.0f;
+    m.base_color[0] = m.base_color[1] = m.base_color[2] = base;
+    m.emissive[0] = m.emissive[1] = m.emissive[2] = emit;
+    m.double_sided = double_sided;
+    return lie_scene_add_material(s, &m);
+}
+
+/* The default build parameters with the smallest patch at min_patch. */
+static inline lie_build_params test_params(float min_patch)
+{
+    lie_build_params p = lie_build_params_default();
+    p.min_patch = min_patch;
+    return p;
+}
+
 /* Form factor from a point to a parallel rectangle a x b whose corner is
  * straight above it at height h (Howell's catalogue, configuration B-3). */
 static inline double ff_corner(double a, double b, double h)

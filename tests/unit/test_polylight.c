@@ -20,14 +20,8 @@ static lie_scene *light_and_blockers(float a, float h, int two_sided, const floa
 {
     lie_scene *s = lie_scene_new("polylight");
     assert_non_null(s);
-    lie_material light = lie_material_default();
-    light.base_color[0] = light.base_color[1] = light.base_color[2] = 0.0f;
-    light.emissive[0] = light.emissive[1] = light.emissive[2] = 1.0f;
-    light.double_sided = two_sided;
-    int ml = lie_scene_add_material(s, &light);
-    lie_material grey = lie_material_default();
-    grey.metallic = 0.0f;
-    int mg = lie_scene_add_material(s, &grey);
+    int ml = test_material(s, 0.0f, 1.0f, two_sided);
+    int mg = test_material(s, 1.0f, 0.0f, 0);
     float r = 0.5f * a;
     float lp[12] = {-r, h, -r, r, h, -r, r, h, r, -r, h, r};
     uint32_t li[6] = {0, 1, 2, 0, 2, 3};
