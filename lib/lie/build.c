@@ -21,6 +21,12 @@
 
 static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32_t n_tris, int n_emitters,
                            const int32_t *old_unit, uint64_t unit_lo, uint64_t unit_hi);
+static lie_status build_env(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                            const uint8_t *tri_mask, const lie_pixels *px, lie_progress *progress, lie_env **out,
+                            lie_build_stats *stats, lie_error *err);
+static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                              const uint8_t *tri_mask, const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
+                              lie_env_part *out, lie_build_stats *stats, lie_error *err);
 
 static void workers_free(worker *ws, int n)
 {
@@ -53,7 +59,7 @@ static uint32_t *build_weights(const build_ctx *c, uint32_t n_items, size_t ne)
         size_t pairs = c->s->n_emitters == 0 ? 1 : u1 > u0 ? u1 - u0 : 0;
         double ratio = c->min_area > 0.0f ? (double)c->s->tri_area[tri] / (double)c->min_area : 1.0;
         double depth = 1.0 + (ratio > 1.0 ? pow(ratio, 0.75) : 0.0);
-        if (c->tri_mask && !c->tri_mask[tri])
+        if (!lie_subdiv_seen(c, tri))
             depth = 0.05;
         double v = (double)pairs * depth * 4.0;
         w[i] = v < 1.0 ? 1u : v > 1e9 ? 1000000000u : (uint32_t)v;
@@ -64,8 +70,9 @@ static uint32_t *build_weights(const build_ctx *c, uint32_t n_items, size_t ne)
 /* Build (or, with a mask, rebuild some units of) every triangle, then
  * concatenate the per-triangle buffers in unit order. */
 static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, const int32_t *old_unit,
-                           const uint8_t *node_flags, const uint8_t *tri_mask, uint64_t unit_lo, uint64_t unit_hi,
-                           int threads, lie_progress *progress, lie_build_stats *stats)
+                           const uint8_t *node_flags, const uint8_t *tri_mask, const lie_pixels *px,
+                           uint64_t unit_lo, uint64_t unit_hi, int threads, lie_progress *progress,
+                           lie_build_stats *stats)
 {
     build_ctx c;
     memset(&c, 0, sizeof c);
@@ -78,6 +85,7 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     c.old_unit = old_unit;
     c.node_flags = node_flags;
     c.tri_mask = tri_mask;
+    c.pix = px;
     /* the triangles holding units [unit_lo, unit_hi) */
     size_t ne = s->n_emitters > 0 ? (size_t)s->n_emitters : 1;
     c.unit_lo = unit_lo;
@@ -244,6 +252,22 @@ lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_
                                 const uint8_t *tri_mask, lie_progress *progress, lie_env **out,
                                 lie_build_stats *stats, lie_error *err)
 {
+    return build_env(s, rt, p, tri_mask, NULL, progress, out, stats, err);
+}
+
+lie_status lie_env_build_views(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                               const lie_pixels *px, lie_progress *progress, lie_env **out,
+                               lie_build_stats *stats, lie_error *err)
+{
+    if (px && px->n_tris != s->n_tris)
+        return lie_error_set(err, LIE_ERR_ARG, s->path, "pixels for %u triangles, not %u", px->n_tris, s->n_tris);
+    return build_env(s, rt, p, NULL, px, progress, out, stats, err);
+}
+
+static lie_status build_env(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                            const uint8_t *tri_mask, const lie_pixels *px, lie_progress *progress, lie_env **out,
+                            lie_build_stats *stats, lie_error *err)
+{
     *out = NULL;
     if (lie_build_params_check(p, err) != LIE_OK)
         return LIE_ERR_ARG;
@@ -259,7 +283,7 @@ lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_
     if (stats)
         memset(stats, 0, sizeof *stats);
     uint64_t n_units = (uint64_t)s->n_tris * (uint64_t)s->n_emitters;
-    lie_status st = run_build(env, s, rt, NULL, NULL, tri_mask, 0, n_units, p->threads, progress, stats);
+    lie_status st = run_build(env, s, rt, NULL, NULL, tri_mask, px, 0, n_units, p->threads, progress, stats);
     if (st != LIE_OK) {
         lie_env_destroy(env);
         if (st == LIE_ERR_LIMIT)
@@ -277,6 +301,23 @@ lie_status lie_env_build_range(const lie_scene *s, const lie_rt *rt, const lie_b
                                const uint8_t *tri_mask, uint64_t first_unit, uint64_t n_units, lie_env_part *out,
                                lie_build_stats *stats, lie_error *err)
 {
+    return build_range(s, rt, p, tri_mask, NULL, first_unit, n_units, out, stats, err);
+}
+
+lie_status lie_env_build_range_views(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                                     const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
+                                     lie_env_part *out, lie_build_stats *stats, lie_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (px && px->n_tris != s->n_tris)
+        return lie_error_set(err, LIE_ERR_ARG, s->path, "pixels for %u triangles, not %u", px->n_tris, s->n_tris);
+    return build_range(s, rt, p, NULL, px, first_unit, n_units, out, stats, err);
+}
+
+static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                              const uint8_t *tri_mask, const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
+                              lie_env_part *out, lie_build_stats *stats, lie_error *err)
+{
     memset(out, 0, sizeof *out);
     if (lie_build_params_check(p, err) != LIE_OK)
         return LIE_ERR_ARG;
@@ -293,7 +334,8 @@ lie_status lie_env_build_range(const lie_scene *s, const lie_rt *rt, const lie_b
         memset(stats, 0, sizeof *stats);
     lie_status st = LIE_OK;
     if (n_units)
-        st = run_build(&part, s, rt, NULL, NULL, tri_mask, first_unit, first_unit + n_units, p->threads, NULL, stats);
+        st = run_build(&part, s, rt, NULL, NULL, tri_mask, px, first_unit, first_unit + n_units, p->threads, NULL,
+                       stats);
     if (st != LIE_OK) {
         free(part.root);
         free(part.nodes);
@@ -337,10 +379,19 @@ lie_status lie_env_rebuild_units(lie_env *env, const lie_scene *s, const lie_rt 
 lie_status lie_env_update(lie_env *env, const lie_scene *s, const lie_rt *rt, const int32_t *old_unit,
                           const uint8_t *node_flags, int threads, lie_build_stats *stats, lie_error *err)
 {
+    return lie_env_update_views(env, s, rt, NULL, old_unit, node_flags, threads, stats, err);
+}
+
+lie_status lie_env_update_views(lie_env *env, const lie_scene *s, const lie_rt *rt, const lie_pixels *px,
+                                const int32_t *old_unit, const uint8_t *node_flags, int threads,
+                                lie_build_stats *stats, lie_error *err)
+{
+    if (px && px->n_tris != s->n_tris)
+        return lie_error_set(err, LIE_ERR_ARG, s->path, "pixels for %u triangles, not %u", px->n_tris, s->n_tris);
     double t0 = lie_time_now();
     if (stats)
         memset(stats, 0, sizeof *stats);
-    lie_status st = run_build(env, s, rt, old_unit, node_flags, NULL, 0,
+    lie_status st = run_build(env, s, rt, old_unit, node_flags, NULL, px, 0,
                               (uint64_t)s->n_tris * (uint64_t)s->n_emitters, threads, NULL, stats);
     if (stats)
         stats->seconds = lie_time_now() - t0;

@@ -6,6 +6,7 @@
 #include "lie.h"
 
 #include <getopt.h>
+#include <time.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -16,6 +17,7 @@ static void usage(FILE *fp)
     lie_build_params d = lie_build_params_default();
     fprintf(fp,
             "usage: %s SCENE.gltf|SCENE.glb -o CACHE|- [options]\n"
+            "       %s --into CACHE --view CAMERA|--path PATH.yaml [-o OUT] [SCENE]\n"
             "\n"
             "Build local illumination environments (per patch and emitter: visible,\n"
             "occluded, or partial with a blocker list) and write them to a cache.\n"
@@ -43,7 +45,21 @@ static void usage(FILE *fp)
             "                        visibility (§4.3.1)\n"
             "      --path PATH.yaml  build only the patches seen from the frames of this camera\n"
             "                        path (formats/camera-path.md), as --view does for one camera\n"
-            "      --view-size WxH   the image the views are sampled at (default 512x512)\n"
+            "      --view-size WxH   the image the views are sampled at (default 512x512); its\n"
+            "                        pixels decide how fine the views' patches get (§4.3.3)\n"
+            "      --into CACHE      add the units more views need to CACHE, a cache built for\n"
+            "                        views: units already built are kept (or refined where the\n"
+            "                        new pixels make a split pay), and the result is the cache\n"
+            "                        one build for all the views gives.  CACHE's parameters,\n"
+            "                        scene (SCENE overrides its path) and view size are used;\n"
+            "                        written back to CACHE unless -o\n"
+            "    The cost model (views only: a split must save more render time over the\n"
+            "    frames than it costs to build; --stats shows its predictions):\n"
+            "      --frames N        frames the cache will serve (default %u; 0: no pixel\n"
+            "                        rule, patches as fine as their lists need)\n"
+            "      --light-samples N shadow rays per pixel and emitter in them (default %u)\n"
+            "      --cost S,B,R      ns per build segment, per blocker test, per Embree shadow\n"
+            "                        ray (default %g,%g,%g; make bench-build measures them)\n"
             "      --threads N       worker threads (default: all cores); the cache is the\n"
             "                        same for any N\n"
             "      --allow-external-uris  let the glTF reference files outside its folder\n"
@@ -55,9 +71,10 @@ static void usage(FILE *fp)
             "\n"
             "Under mpirun the ranks share the units out and rank 0 writes the cache one\n"
             "process writes (docs/mpi.md).\n",
-            prog, d.samples, d.max_samples, d.max_blockers, (double)LIE_MIN_PATCH_MIN, (double)d.min_patch,
+            prog, prog, d.samples, d.max_samples, d.max_blockers, (double)LIE_MIN_PATCH_MIN, (double)d.min_patch,
             (double)d.split_gain,
-            (unsigned long long)LIE_MAX_NODES_DEFAULT, d.complex_cap);
+            (unsigned long long)LIE_MAX_NODES_DEFAULT, d.complex_cap, d.frames, d.light_samples,
+            (double)d.ns_segment, (double)d.ns_blocker, (double)d.ns_ray);
 }
 
 #define usage_error(...) lie_usage_error(prog, __VA_ARGS__)
@@ -66,7 +83,8 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 
 enum {
     OPT_SAMPLES = 256, OPT_MAX_SAMPLES, OPT_MAX_BLOCKERS, OPT_MIN_PATCH, OPT_SPLIT_GAIN, OPT_COMPLEX_CAP, OPT_BLOCKERS,
-    OPT_THREADS, OPT_VIEW, OPT_VIEW_SIZE, OPT_PATH, OPT_MAX_NODES
+    OPT_THREADS, OPT_VIEW, OPT_VIEW_SIZE, OPT_PATH, OPT_MAX_NODES,
+    OPT_INTO, OPT_FRAMES, OPT_LIGHT_SAMPLES, OPT_COST
 };
 
 static const struct option long_opts[] = {
@@ -82,6 +100,10 @@ static const struct option long_opts[] = {
     {"view", required_argument, NULL, OPT_VIEW},
     {"view-size", required_argument, NULL, OPT_VIEW_SIZE},
     {"path", required_argument, NULL, OPT_PATH},
+    {"into", required_argument, NULL, OPT_INTO},
+    {"frames", required_argument, NULL, OPT_FRAMES},
+    {"light-samples", required_argument, NULL, OPT_LIGHT_SAMPLES},
+    {"cost", required_argument, NULL, OPT_COST},
     {"threads", required_argument, NULL, OPT_THREADS},
     LIE_OPT_ENTRY_EXTERNAL,
     LIE_OPT_ENTRY_STATS,
@@ -90,7 +112,8 @@ static const struct option long_opts[] = {
 };
 
 static void print_stats(const char *input, const lie_scene *s, const lie_env *env, const lie_build_stats *st,
-                        double t_load, double t_bvh, double t_build, double t_write, size_t bytes, int json)
+                        const lie_add_stats *as, const lie_prediction *pred, double cpu_build, double t_load,
+                        double t_bvh, double t_build, double t_write, size_t bytes, int json)
 {
     uint64_t leaves = 0, patches = 0;
     for (int k = 0; k < LIE_CLASS_COUNT; k++)
@@ -98,6 +121,14 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
     for (int d = 0; d <= LIE_PATCH_MAX_DEPTH; d++)
         patches += st->patches_per_depth[d];
     double mean = st->pairs[LIE_CLASS_PARTIAL] ? (double)st->blocker_total / (double)st->pairs[LIE_CLASS_PARTIAL] : 0.0;
+    /* the model against the build: its build time (segments only) against
+     * the CPU time the build took; the render time the splits save per
+     * frame, predicted before each lookahead and as the children's lists
+     * gave it; and one frame of the views, with full visibility and with
+     * this cache (CPU seconds over all threads; bench/build.sh renders them) */
+    const lie_build_params *p = &env->params;
+    double model_build = 1e-9 * (double)st->segments * (double)p->ns_segment;
+    double sp = 1e-9 * st->split_saving_predicted_ns, sm = 1e-9 * st->split_saving_measured_ns;
     if (json) {
         fprintf(stderr, "{\"tool\":\"lie-build\",\"triangles\":%u,\"emitters\":%d,\"units\":%llu,\"patches\":%llu,"
                         "\"leaf_pairs\":%llu,\"pairs\":{",
@@ -118,12 +149,28 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
         for (int b = 0; b < 18; b++)
             fprintf(stderr, "%s%llu", b ? "," : "", (unsigned long long)st->list_hist[b]);
         fprintf(stderr,
-                "],\"mean_list_length\":%.3f,\"segments\":%llu,\"splits_undone\":%llu,\"nodes\":%u,\"pool\":%u,"
+                "],\"mean_list_length\":%.3f,\"segments\":%llu,\"splits_undone\":%llu,\"splits_kept\":%llu,"
+                "\"splits_pixels\":%llu,\"nodes\":%u,\"pool\":%u,"
                 "\"seconds_load\":%.6f,\"seconds_bvh\":%.6f,\"seconds_build\":%.6f,\"seconds_write\":%.6f,"
                 "\"bytes\":%zu",
                 mean, (unsigned long long)st->segments, (unsigned long long)st->splits_undone,
-                env->n_nodes, env->n_pool, t_load, t_bvh, t_build, t_write,
-                bytes);
+                (unsigned long long)st->splits_kept, (unsigned long long)st->splits_pixels,
+                env->n_nodes, env->n_pool, t_load, t_bvh, t_build, t_write, bytes);
+        fprintf(stderr, ",\"model\":{\"build_cpu_s_predicted\":%.6f,\"build_cpu_s_measured\":%.6f", model_build,
+                cpu_build);
+        if (pred)
+            fprintf(stderr,
+                    ",\"split_saving_s_predicted\":%.6f,\"split_saving_s_measured\":%.6f,\"view_pixels\":%.0f,"
+                    "\"frame_shadow_cpu_s_full\":%.6f,\"frame_shadow_cpu_s_lie\":%.6f,\"frame_full_rays\":%.0f,"
+                    "\"frame_list_entries\":%.0f,\"frame_lie_rays\":%.0f",
+                    sp, sm, pred->pixels, 1e-9 * pred->full_ns, 1e-9 * pred->lie_ns, pred->full_rays,
+                    pred->list_entries, pred->env_rays);
+        fprintf(stderr, "}");
+        if (as)
+            fprintf(stderr, ",\"into\":{\"units_kept\":%llu,\"units_refined\":%llu,\"units_new\":%llu,"
+                            "\"nodes_recomputed\":%llu}",
+                    (unsigned long long)as->units_kept, (unsigned long long)as->units_refined,
+                    (unsigned long long)as->units_new, (unsigned long long)as->nodes_flagged);
         lie_dist_stats_print(stderr, "units", 1);
         fprintf(stderr, "}\n");
         return;
@@ -148,25 +195,74 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
             else
                 fprintf(stderr, " %u-%u:%llu", lo, hi, (unsigned long long)st->list_hist[b]);
         }
-    fprintf(stderr, "\n  segments cast %llu; splits undone (did not shorten lists) %llu; %u nodes, %u pooled blockers, "
-                    "%zu bytes written\n",
-            (unsigned long long)st->segments, (unsigned long long)st->splits_undone, env->n_nodes, env->n_pool, bytes);
+    fprintf(stderr, "\n  segments cast %llu; splits kept %llu, undone (did not shorten lists) %llu, not tried "
+                    "(too few pixels) %llu; %u nodes, %u pooled blockers, %zu bytes written\n",
+            (unsigned long long)st->segments, (unsigned long long)st->splits_kept,
+            (unsigned long long)st->splits_undone, (unsigned long long)st->splits_pixels, env->n_nodes, env->n_pool,
+            bytes);
     fprintf(stderr, "  time: load %.3f s, bvh %.3f s, build %.3f s, write %.3f s\n", t_load, t_bvh, t_build,
             t_write);
+    fprintf(stderr, "  model: build %.3f CPU s predicted, %.3f measured", model_build, cpu_build);
+    if (pred)
+        fprintf(stderr, "; splits save %.4f s a frame predicted, %.4f by their lists; a frame of the views "
+                        "(%.0f pixels) costs %.3f shadow CPU s with full visibility, %.3f with this cache",
+                sp, sm, pred->pixels, 1e-9 * pred->full_ns, 1e-9 * pred->lie_ns);
+    fprintf(stderr, "\n");
+    if (as)
+        fprintf(stderr, "  into: %llu units kept, %llu refined, %llu new; %llu nodes recomputed\n",
+                (unsigned long long)as->units_kept, (unsigned long long)as->units_refined,
+                (unsigned long long)as->units_new, (unsigned long long)as->nodes_flagged);
     lie_dist_stats_print(stderr, "units", 0);
+}
+
+/* The cameras of the --view options and the frames of --path, appended to
+ * *cams (the cache's views first, with --into). */
+static lie_status gather_views(const lie_scene *scene, const char *input, const char *const *views, int n_views,
+                               const char *path_file, lie_cache_views *v, lie_error *err)
+{
+    lie_camera_path *cpath = NULL;
+    lie_status st = path_file ? lie_camera_path_read(path_file, &cpath, err) : LIE_OK;
+    int n_new = n_views + (cpath ? cpath->n_frames : 0);
+    lie_camera *cams = st == LIE_OK ? realloc(v->cams, sizeof *cams * ((size_t)(v->n_cams + n_new) + 1)) : NULL;
+    if (st == LIE_OK && !cams)
+        st = lie_error_set(err, LIE_ERR_NOMEM, input, "out of memory");
+    if (cams)
+        v->cams = cams;
+    for (int i = 0; st == LIE_OK && i < n_views; i++) {
+        st = lie_camera_parse(scene, views[i], &cams[v->n_cams], err);
+        if (st != LIE_OK && !err->file[0])
+            snprintf(err->file, sizeof err->file, "%s", input);
+        cams[v->n_cams].name = NULL; /* caches keep the geometry, not the name */
+        if (st == LIE_OK)
+            v->n_cams++;
+    }
+    for (int i = 0; st == LIE_OK && cpath && i < cpath->n_frames; i++) {
+        cams[v->n_cams] = lie_camera_path_frame(cpath, i);
+        cams[v->n_cams++].name = NULL;
+    }
+    lie_camera_path_destroy(cpath);
+    return st;
+}
+
+static double cpu_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 int main(int argc, char **argv)
 {
     lie_build_params bp = lie_build_params_default();
     lie_scene_options so = lie_scene_options_default();
-    const char *output = NULL;
+    const char *output = NULL, *into = NULL;
+    int params_given = 0, size_given = 0;
     const char *views[64], *path_file = NULL;
     int n_views = 0, view_w = 512, view_h = 512;
     long v;
     float f;
     int c;
-    lie_cli cli = {.tool = prog, .usage = usage, .missing = "missing input scene"};
+    lie_cli cli = {.tool = prog, .usage = usage};
     while ((c = lie_cli_next(&cli, argc, argv, ":o:qvh", long_opts)) > 0) {
         switch (c) {
         case 'o': output = optarg; break;
@@ -174,33 +270,63 @@ int main(int argc, char **argv)
             if (!lie_parse_long(optarg, 1, 1 << 20, &v))
                 return usage_error("--samples: expected an integer in 1..1048576, got '%s'", optarg);
             bp.samples = (uint32_t)v;
+            params_given = 1;
             break;
         case OPT_MAX_SAMPLES:
             if (!lie_parse_long(optarg, 1, 1 << 24, &v))
                 return usage_error("--max-samples: expected an integer in 1..16777216, got '%s'", optarg);
             bp.max_samples = (uint32_t)v;
+            params_given = 1;
             break;
         case OPT_MAX_BLOCKERS:
             if (!lie_parse_long(optarg, 0, 1 << 20, &v))
                 return usage_error("--max-blockers: expected an integer in 0..1048576, got '%s'", optarg);
             bp.max_blockers = (uint32_t)v;
+            params_given = 1;
             break;
         case OPT_COMPLEX_CAP:
             if (!lie_parse_long(optarg, 0, 1 << 24, &v))
                 return usage_error("--complex-cap: expected an integer in 0..16777216, got '%s'", optarg);
             bp.complex_cap = (uint32_t)v;
+            params_given = 1;
             break;
         case OPT_MIN_PATCH:
             if (!lie_parse_float(optarg, LIE_MIN_PATCH_MIN, 1.0f, &f))
                 return usage_error("--min-patch: expected a fraction in [%g, 1], got '%s'", (double)LIE_MIN_PATCH_MIN,
                                    optarg);
             bp.min_patch = f;
+            params_given = 1;
             break;
         case OPT_SPLIT_GAIN:
             if (!lie_parse_float(optarg, 0.0f, 0.999f, &f))
                 return usage_error("--split-gain: expected a share in [0, 1), got '%s'", optarg);
             bp.split_gain = f;
+            params_given = 1;
             break;
+        case OPT_FRAMES:
+            if (!lie_parse_long(optarg, 0, 1 << 24, &v))
+                return usage_error("--frames: expected an integer in 0..16777216, got '%s'", optarg);
+            bp.frames = (uint32_t)v;
+            params_given = 1;
+            break;
+        case OPT_LIGHT_SAMPLES:
+            if (!lie_parse_long(optarg, 1, 1 << 24, &v))
+                return usage_error("--light-samples: expected an integer in 1..16777216, got '%s'", optarg);
+            bp.light_samples = (uint32_t)v;
+            params_given = 1;
+            break;
+        case OPT_COST: {
+            char *end = NULL;
+            double a = strtod(optarg, &end), b = end && *end == ',' ? strtod(end + 1, &end) : -1.0,
+                   r = end && *end == ',' ? strtod(end + 1, &end) : -1.0;
+            if (!end || *end || !(a > 0 && a <= 1e9) || !(b > 0 && b <= 1e9) || !(r > 0 && r <= 1e9))
+                return usage_error("--cost: expected three times in ns, S,B,R, each in (0, 1e9], got '%s'", optarg);
+            bp.ns_segment = (float)a;
+            bp.ns_blocker = (float)b;
+            bp.ns_ray = (float)r;
+            params_given = 1;
+            break;
+        }
         case OPT_MAX_NODES:
             if (!lie_parse_long(optarg, 1, 0xFFFFFFF0L, &v))
                 return usage_error("--max-nodes: expected an integer in 1..4294967280, got '%s'", optarg);
@@ -210,6 +336,7 @@ int main(int argc, char **argv)
             if (strcmp(optarg, "sampled") == 0) bp.mode = LIE_BLOCKERS_SAMPLED;
             else if (strcmp(optarg, "conservative") == 0) bp.mode = LIE_BLOCKERS_CONSERVATIVE;
             else return usage_error("--blockers: expected sampled or conservative, got '%s'", optarg);
+            params_given = 1;
             break;
         case OPT_THREADS:
             if (!lie_parse_long(optarg, 0, 4096, &v))
@@ -222,32 +349,80 @@ int main(int argc, char **argv)
             views[n_views++] = optarg;
             break;
         case OPT_PATH: path_file = optarg; break;
+        case OPT_INTO: into = optarg; break;
         case OPT_VIEW_SIZE:
             if (!lie_parse_size(optarg, 16384, &view_w, &view_h))
                 return usage_error("--view-size: expected WxH, got '%s'", optarg);
+            size_given = 1;
             break;
         }
     }
     if (c == LIE_CLI_EXIT)
         return cli.status;
     so.allow_external_uris = cli.external;
-    const char *input = cli.operand;
-    if (!output)
-        return usage_error("%s", "missing -o CACHE");
+    if (into) {
+        if (optind + 1 < argc)
+            return usage_error("unexpected argument '%s'", argv[optind + 1]);
+        if (!n_views && !path_file)
+            return usage_error("%s", "--into: give the views to add (--view or --path)");
+        if (params_given)
+            return usage_error("%s", "--into: the cache's build parameters are used; give none");
+        if (!output)
+            output = into;
+    } else {
+        if (optind >= argc)
+            return usage_error("%s", "missing input scene");
+        if (optind + 1 < argc)
+            return usage_error("unexpected argument '%s'", argv[optind + 1]);
+        if (!output)
+            return usage_error("%s", "missing -o CACHE");
+    }
     if (bp.max_samples < bp.samples)
         bp.max_samples = bp.samples; /* --samples above the default cap: one round */
+    const char *input = optind < argc ? argv[optind] : NULL;
 
     if (lie_dist_start(&argc, &argv) > 1) {
         cli.quiet = 1; /* rank 0 prints the statistics */
         if (lie_dist_rank() != 0)
             cli.stats = 0;
+        if (into) {
+            lie_error e;
+            lie_error_set(&e, LIE_ERR_ARG, into, "--into runs in one process, not under mpirun");
+            return fail(&e);
+        }
     }
     lie_error err;
     lie_error_clear(&err);
-    double t0 = lie_time_now();
+    double t0 = lie_time_now(), cpu0 = cpu_seconds();
     lie_scene *scene = NULL;
-    if (lie_scene_load(input, &so, &scene, &err) != LIE_OK)
+    lie_cache *old = NULL;
+    lie_cache_views cv = {NULL, 0, view_w, view_h, LIE_MAX_DEPTH_DEFAULT};
+    if (into) {
+        if (lie_cache_read(into, &old, &err) != LIE_OK ||
+            lie_cache_load_scene(old, into, input, &so, &scene, &err) != LIE_OK) {
+            lie_cache_destroy(old);
+            return fail(&err);
+        }
+        if (!old->views.n_cams) {
+            lie_error_set(&err, LIE_ERR_ARG, into, "built for the whole scene, not for views: nothing to add");
+        } else if (size_given && (view_w != old->views.width || view_h != old->views.height)) {
+            lie_error_set(&err, LIE_ERR_ARG, into, "built for views of %dx%d, not %dx%d", old->views.width,
+                          old->views.height, view_w, view_h);
+        }
+        if (err.status) {
+            lie_cache_destroy(old);
+            lie_scene_destroy(scene);
+            return fail(&err);
+        }
+        bp = old->env->params;
+        cv.width = old->views.width;
+        cv.height = old->views.height;
+        cv.max_depth = old->views.max_depth;
+        input = old->scene_path;
+    } else if (build_load_scene(input, &so, &scene, &err) != LIE_OK) {
+        lie_scene_destroy(scene);
         return fail(&err);
+    }
     if (!cli.quiet)
         lie_print_scene_warnings(prog, scene, input);
     if (scene->n_emitters == 0 && !cli.quiet)
@@ -256,79 +431,97 @@ int main(int argc, char **argv)
     double t1 = lie_phase(prog, cli.verbose, "load", t0);
     lie_rt *rt = NULL;
     if (lie_rt_create(scene, &rt, &err) != LIE_OK) {
+        lie_cache_destroy(old);
         lie_scene_destroy(scene);
         return fail(&err);
     }
     double t2 = lie_phase(prog, cli.verbose, "bvh", t1);
-    uint8_t *mask = NULL;
-    if (n_views || path_file) {
-        /* the views: each --view, then every frame of --path */
-        lie_camera_path *cpath = NULL;
-        lie_status vs = path_file ? lie_camera_path_read(path_file, &cpath, &err) : LIE_OK;
-        int n_cams = n_views + (cpath ? cpath->n_frames : 0);
-        lie_camera *cams = vs == LIE_OK ? calloc((size_t)n_cams, sizeof *cams) : NULL;
-        mask = cams ? calloc((size_t)scene->n_tris + 1, 1) : NULL;
-        if (vs == LIE_OK && !mask)
-            vs = lie_error_set(&err, LIE_ERR_NOMEM, input, "out of memory");
-        for (int i = 0; vs == LIE_OK && i < n_views; i++) {
-            vs = lie_camera_parse(scene, views[i], &cams[i], &err);
-            if (vs != LIE_OK && !err.file[0])
-                snprintf(err.file, sizeof err.file, "%s", input);
-        }
-        for (int i = n_views; vs == LIE_OK && i < n_cams; i++)
-            cams[i] = lie_camera_path_frame(cpath, i - n_views);
-        if (vs == LIE_OK)
-            vs = lie_camera_mark_visible(scene, rt, cams, n_cams, view_w, view_h, LIE_MAX_DEPTH_DEFAULT, mask, &err);
-        free(cams);
-        lie_camera_path_destroy(cpath);
-        if (vs != LIE_OK) {
-            free(mask);
-            lie_rt_destroy(rt);
-            lie_scene_destroy(scene);
-            return fail(&err);
-        }
+    lie_pixels *px = NULL, *old_px = NULL;
+    lie_status rc = LIE_OK;
+    if (into) {
+        /* the old views' pixels, then the old and new views' together */
+        cv.cams = malloc(sizeof *cv.cams * ((size_t)old->views.n_cams + 1));
+        if (!cv.cams)
+            rc = lie_error_set(&err, LIE_ERR_NOMEM, into, "out of memory");
+        else
+            memcpy(cv.cams, old->views.cams, sizeof *cv.cams * (size_t)old->views.n_cams);
+        cv.n_cams = cv.cams ? old->views.n_cams : 0;
+        if (rc == LIE_OK)
+            rc = lie_camera_pixels(scene, rt, cv.cams, cv.n_cams, cv.width, cv.height, cv.max_depth, &old_px, &err);
     }
-    if (lie_dist_check(scene->hash, scene->hash, &err) != LIE_OK) {
-        free(mask);
+    if (rc == LIE_OK && (n_views || path_file)) {
+        rc = gather_views(scene, input, views, n_views, path_file, &cv, &err);
+        if (rc == LIE_OK)
+            rc = lie_camera_pixels(scene, rt, cv.cams, cv.n_cams, cv.width, cv.height, cv.max_depth, &px, &err);
+    }
+    if (rc == LIE_OK)
+        rc = lie_dist_check(scene->hash, scene->hash, &err);
+    if (rc != LIE_OK) {
+        lie_pixels_destroy(px);
+        lie_pixels_destroy(old_px);
+        free(cv.cams);
+        lie_cache_destroy(old);
         lie_rt_destroy(rt);
         lie_scene_destroy(scene);
         return fail(&err);
     }
-    if (n_views || path_file)
+    if (px)
         t2 = lie_phase(prog, cli.verbose, "views", t2);
     lie_progress prog_bar;
     lie_progress_begin(&prog_bar, stderr, "lie-build", !cli.quiet);
+    cpu0 = cpu_seconds();
     lie_env *env = NULL;
     lie_build_stats st;
-    lie_status rc = lie_dist_size() > 1 ? build_dist(scene, rt, &bp, mask, &env, &st, &err)
-                                         : lie_env_build_masked(scene, rt, &bp, mask, &prog_bar, &env, &st, &err);
-    free(mask);
+    lie_add_stats as;
+    memset(&st, 0, sizeof st);
+    memset(&as, 0, sizeof as);
+    if (into) {
+        env = old->env;
+        old->env = NULL;
+        rc = lie_env_add_views(env, scene, rt, old_px, px, bp.threads, &st, &as, &err);
+    } else if (lie_dist_size() > 1) {
+        rc = build_dist(scene, rt, &bp, px, &env, &st, &err);
+    } else {
+        rc = lie_env_build_views(scene, rt, &bp, px, &prog_bar, &env, &st, &err);
+    }
+    lie_pixels_destroy(old_px);
     lie_progress_end(&prog_bar);
-    if (rc != LIE_OK) {
+    if (rc != LIE_OK || !env) { /* !env: another rank than 0 under mpirun: rank 0 writes */
+        lie_env_destroy(env);
+        lie_pixels_destroy(px);
+        free(cv.cams);
+        lie_cache_destroy(old);
         lie_rt_destroy(rt);
         lie_scene_destroy(scene);
-        return fail(&err);
+        return rc != LIE_OK ? fail(&err) : 0;
     }
-    if (!env) { /* another rank than 0 under mpirun: rank 0 writes */
-        lie_rt_destroy(rt);
-        lie_scene_destroy(scene);
-        return 0;
-    }
-    double t3 = lie_phase(prog, cli.verbose, "build", t2);
+    double t3 = lie_phase(prog, cli.verbose, "build", t2), cpu_build = cpu_seconds() - cpu0;
     lie_cache cache;
     memset(&cache, 0, sizeof cache);
     cache.scene_path = (char *)input;
-    cache.scene_hash = scene->hash;
+    cache.scene_hash = old ? old->scene_hash : scene->hash;
+    if (old) { /* the edit log goes on */
+        cache.edits = old->edits;
+        cache.n_edits = old->n_edits;
+    }
     rc = lie_cache_set_state(&cache, scene, &err);
     cache.env = env;
+    cache.views = cv;
     size_t bytes = 0;
     if (rc == LIE_OK)
         rc = lie_cache_write(output, &cache, &bytes, &err);
     double t4 = lie_phase(prog, cli.verbose && rc == LIE_OK, "write", t3);
-    if (rc == LIE_OK && cli.stats)
-        print_stats(input, scene, env, &st, t1 - t0, t2 - t1, t3 - t2, t4 - t3, bytes, cli.stats == 2);
+    if (rc == LIE_OK && cli.stats) {
+        lie_prediction pred;
+        lie_env_predict(env, px, &pred);
+        print_stats(input, scene, env, &st, into ? &as : NULL, px ? &pred : NULL, cpu_build, t1 - t0, t2 - t1,
+                    t3 - t2, t4 - t3, bytes, cli.stats == 2);
+    }
     free(cache.emitters);
+    free(cv.cams);
+    lie_pixels_destroy(px);
     lie_env_destroy(env);
+    lie_cache_destroy(old);
     lie_rt_destroy(rt);
     lie_scene_destroy(scene);
     if (rc != LIE_OK)

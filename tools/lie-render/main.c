@@ -51,6 +51,9 @@ static void usage(FILE *fp)
             "      --exact MODE        auto (default: closed forms, and from a cache exact\n"
             "                          shadows where they cost less than the samples)\n"
             "                          | off (shadows from the samples: the oracle's mode)\n"
+            "      --bitmask MODE      partial pairs toward planar emitters with all samples at\n"
+            "                          once: auto (default: where cheaper, not under --exact\n"
+            "                          off) | off | only (the same image, samples in another order)\n"
             "      --timers            --stats also reports per-path times (benchmarks)\n"
             "      --pattern P         fixed (default: the same emitter samples everywhere)\n"
             "                          | rotated (a per-pixel rotation of the pattern)\n"
@@ -97,7 +100,7 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 enum {
     OPT_CAMERA = 256, OPT_SIZE, OPT_SPP, OPT_LIGHT_SAMPLES, OPT_PATTERN, OPT_VISIBILITY, OPT_RAYS, OPT_LIE_SKIP,
     OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_THREADS, OPT_SCENE,
-    OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS, OPT_FRAMES, OPT_SKIP_EXISTING, OPT_FORMAT, OPT_HALF
+    OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS, OPT_FRAMES, OPT_SKIP_EXISTING, OPT_FORMAT, OPT_HALF, OPT_BITMASK
 };
 
 static const struct option long_opts[] = {
@@ -114,6 +117,7 @@ static const struct option long_opts[] = {
     {"pattern", required_argument, NULL, OPT_PATTERN},
     {"exact", required_argument, NULL, OPT_EXACT},
     {"timers", no_argument, NULL, OPT_TIMERS},
+    {"bitmask", required_argument, NULL, OPT_BITMASK},
     {"visibility", required_argument, NULL, OPT_VISIBILITY},
     {"rays", required_argument, NULL, OPT_RAYS},
     {"lie-skip", required_argument, NULL, OPT_LIE_SKIP},
@@ -164,31 +168,50 @@ static int looks_like_gltf(const unsigned char *d, size_t n)
     return i < n && d[i] == '{';
 }
 
-/* Load a scene, or a cache and the scene it was built for. */
-static lie_status load_input(const char *input, const char *override, const lie_scene_options *so,
-                             lie_scene **scene, lie_cache **cache, lie_error *err)
+/* Load a scene, or a cache and the scene it was built for, and the camera
+ * path: through so->files, which under mpirun records what rank 0 reads
+ * for the other ranks (lie_dist_load).  On failure the caller frees what
+ * was made. */
+typedef struct inputs {
+    const char *input, *override, *path_file;
+    lie_scene *scene;
+    lie_cache *cache;
+    lie_camera_path *cpath;
+} inputs;
+
+static lie_status load_input(void *ctx, const lie_scene_options *so, lie_error *err)
 {
-    *scene = NULL;
-    *cache = NULL;
+    inputs *in = ctx;
     unsigned char *data = NULL;
     size_t size = 0;
-    lie_status st = lie_dist_read_file(input, &data, &size, err); /* under mpirun: read once, broadcast */
+    lie_status st = lie_file_set_read(so->files, in->input, LIE_READ_MAX_DEFAULT, &data, &size, err);
     if (st != LIE_OK)
         return st;
     if (looks_like_gltf(data, size)) {
+        /* the scene's file: a set holds it already; stdin is read once, so
+         * its bytes go to the loader in a set of their own */
+        lie_scene_options o = *so;
+        lie_file_set *own = NULL;
+        if (!so->files && strcmp(in->input, "-") == 0) {
+            o.files = own = lie_file_set_create(LIE_FILES_RECORD);
+            st = own ? lie_file_set_add(own, in->input, data, size, err)
+                     : lie_error_set(err, LIE_ERR_NOMEM, in->input, "out of memory");
+        }
         free(data);
-        if (strcmp(input, "-") == 0)
-            return lie_error_set(err, LIE_ERR_UNSUPPORTED, input, "a glTF scene cannot be read from stdin");
-        return lie_scene_load(input, so, scene, err);
+        if (st == LIE_OK)
+            st = lie_scene_load(in->input, &o, &in->scene, err);
+        lie_file_set_destroy(own);
+    } else {
+        st = lie_cache_decode(data, size, in->input, &in->cache, err);
+        free(data);
+        if (st == LIE_OK)
+            st = lie_cache_load_scene(in->cache, in->input, in->override, so, &in->scene, err);
     }
-    st = lie_cache_decode(data, size, input, cache, err);
-    free(data);
-    if (st != LIE_OK)
-        return st;
-    st = lie_cache_load_scene(*cache, input, override, so, scene, err);
-    if (st != LIE_OK) {
-        lie_cache_destroy(*cache);
-        *cache = NULL;
+    if (st == LIE_OK && in->path_file) {
+        st = lie_file_set_read(so->files, in->path_file, LIE_READ_MAX_TEXT, &data, &size, err);
+        if (st == LIE_OK)
+            st = lie_camera_path_parse(data, size, in->path_file, &in->cpath, err);
+        free(data);
     }
     return st;
 }
@@ -271,9 +294,10 @@ static void print_stats(int json, const run_stats *r, const lie_scene *scene, co
     int threads = ro->threads > 0 ? ro->threads : lie_cpu_count();
     char size[32];
     snprintf(size, sizeof size, "%dx%d", ro->width, ro->height);
-    /* pairs by path: occluded, closed form, exact, blockers, Embree, unshadowed, exact overflows */
-    const unsigned long long pairs[7] = {rs->pairs_occluded, rs->pairs_analytic, rs->pairs_exact, rs->pairs_blockers,
-                                         rs->pairs_embree,   rs->pairs_unshadowed, rs->exact_overflows};
+    /* pairs by path: occluded, closed form, exact, blockers, Embree, unshadowed, exact overflows, bitmasks */
+    const unsigned long long pairs[8] = {rs->pairs_occluded, rs->pairs_analytic,  rs->pairs_exact,
+                                         rs->pairs_blockers, rs->pairs_embree,    rs->pairs_unshadowed,
+                                         rs->exact_overflows, rs->pairs_bitmask};
     double render = r->t_render;
     double mrays = render > 0.0 ? (double)rs->shadow_rays / render * 1e-6 : 0.0;
     if (json) {
@@ -299,11 +323,11 @@ static void print_stats(int json, const run_stats *r, const lie_scene *scene, co
                 "\"exact_overflows\":%llu,\"pairs_unbuilt\":%llu,\"points_unbuilt\":%llu,"
                 "\"timers\":%s,\"cpu_seconds_analytic\":%.6f,"
                 "\"cpu_seconds_exact\":%.6f,\"cpu_seconds_blockers\":%.6f,\"cpu_seconds_embree\":%.6f,"
-                "\"cpu_seconds_sampled_shading\":%.6f",
+                "\"cpu_seconds_sampled_shading\":%.6f,\"pairs_bitmask\":%llu,\"cpu_seconds_bitmask\":%.6f",
                 exact_name(ro), pairs[0], pairs[1], pairs[2], pairs[3], pairs[4], pairs[5], pairs[6],
                 (unsigned long long)rs->pairs_unbuilt, (unsigned long long)rs->points_unbuilt,
                 ro->timers ? "true" : "false", rs->t_analytic,
-                rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading);
+                rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, pairs[7], rs->t_bitmask);
         render_dist_stats(stderr, 1);
         fprintf(stderr, "}\n");
     } else {
@@ -323,8 +347,8 @@ static void print_stats(int json, const run_stats *r, const lie_scene *scene, co
         fprintf(stderr,
                 "  pairs (exact %s): %llu occluded, %llu seen whole in closed form, %llu partial exact,\n"
                 "    %llu partial sampled against blockers, %llu sampled against the scene (Embree),\n"
-                "    %llu seen whole and sampled; %llu exact pairs fell back to samples\n",
-                exact_name(ro), pairs[0], pairs[1], pairs[2], pairs[3], pairs[4], pairs[5], pairs[6]);
+                "    %llu seen whole and sampled, %llu partial as bitmasks; %llu exact pairs fell back to samples\n",
+                exact_name(ro), pairs[0], pairs[1], pairs[2], pairs[3], pairs[4], pairs[5], pairs[7], pairs[6]);
         if (rs->pairs_unbuilt)
             fprintf(stderr, "  not built in the cache (lie-build --view/--path): %llu pairs at %llu shading points, "
                             "answered by Embree\n",
@@ -332,8 +356,8 @@ static void print_stats(int json, const run_stats *r, const lie_scene *scene, co
         if (ro->timers)
             fprintf(stderr,
                     "  worker seconds: closed form %.3f, exact shadows %.3f, blocker samples %.3f,\n"
-                    "    Embree %.3f, sampled shading %.3f\n",
-                    rs->t_analytic, rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading);
+                    "    Embree %.3f, sampled shading %.3f, bitmasks %.3f\n",
+                    rs->t_analytic, rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, rs->t_bitmask);
         render_dist_stats(stderr, 0);
     }
 }
@@ -379,6 +403,12 @@ int main(int argc, char **argv)
             if (strcmp(optarg, "auto") == 0) ro.exact = LIE_EXACT_AUTO;
             else if (strcmp(optarg, "off") == 0) ro.exact = LIE_EXACT_OFF;
             else return usage_error("--exact: expected auto or off, got '%s'", optarg);
+            break;
+        case OPT_BITMASK:
+            if (strcmp(optarg, "auto") == 0) ro.bitmask = LIE_BITMASK_AUTO;
+            else if (strcmp(optarg, "off") == 0) ro.bitmask = LIE_BITMASK_OFF;
+            else if (strcmp(optarg, "only") == 0) ro.bitmask = LIE_BITMASK_ONLY;
+            else return usage_error("--bitmask: expected auto, off or only, got '%s'", optarg);
             break;
         case OPT_TIMERS:
             ro.timers = 1;
@@ -479,18 +509,24 @@ int main(int argc, char **argv)
     lie_error err;
     lie_error_clear(&err);
     double t0 = lie_time_now();
-    lie_scene *scene = NULL;
-    lie_cache *cache = NULL;
+    inputs in = {input, scene_override, path_file, NULL, NULL, NULL};
+    if (lie_dist_load(&so, load_input, &in, &err) != LIE_OK) {
+        lie_camera_path_destroy(in.cpath);
+        lie_scene_destroy(in.scene);
+        lie_cache_destroy(in.cache);
+        return fail(&err);
+    }
+    lie_scene *scene = in.scene;
+    lie_cache *cache = in.cache;
+    lie_camera_path *cpath = in.cpath;
     lie_lie_vis *lv = NULL;
-    lie_camera_path *cpath = NULL;
     lie_rt *rt = NULL;
     lie_status st = LIE_OK;
-    if (load_input(input, scene_override, &so, &scene, &cache, &err) != LIE_OK)
-        return fail(&err);
     double t1 = lie_phase(prog, cli.verbose, "load", t0);
     if (!visibility_set)
         ro.visibility = cache ? LIE_VIS_LIE : LIE_VIS_FULL;
     if (!cache && (ro.visibility == LIE_VIS_LIE || (ro.aovs & (LIE_AOV_COMPLEXITY | LIE_AOV_PATCH)))) {
+        lie_camera_path_destroy(cpath);
         lie_scene_destroy(scene);
         return usage_error("%s: --visibility=lie and the complexity and patch layers need a cache", input);
     }
@@ -508,7 +544,7 @@ int main(int argc, char **argv)
         goto done;
     }
     lie_camera cam;
-    st = path_file ? lie_camera_path_read(path_file, &cpath, &err) : lie_camera_parse(scene, camera, &cam, &err);
+    st = path_file ? LIE_OK : lie_camera_parse(scene, camera, &cam, &err);
     if (st != LIE_OK) {
         if (!err.file[0])
             snprintf(err.file, sizeof err.file, "%s", input);
