@@ -218,10 +218,9 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
 /* The cameras of the --view options and the frames of --path, appended to
  * *cams (the cache's views first, with --into). */
 static lie_status gather_views(const lie_scene *scene, const char *input, const char *const *views, int n_views,
-                               const char *path_file, lie_cache_views *v, lie_error *err)
+                               const lie_camera_path *cpath, lie_cache_views *v, lie_error *err)
 {
-    lie_camera_path *cpath = NULL;
-    lie_status st = path_file ? lie_camera_path_read(path_file, &cpath, err) : LIE_OK;
+    lie_status st = LIE_OK;
     int n_new = n_views + (cpath ? cpath->n_frames : 0);
     lie_camera *cams = st == LIE_OK ? realloc(v->cams, sizeof *cams * ((size_t)(v->n_cams + n_new) + 1)) : NULL;
     if (st == LIE_OK && !cams)
@@ -240,7 +239,6 @@ static lie_status gather_views(const lie_scene *scene, const char *input, const 
         cams[v->n_cams] = lie_camera_path_frame(cpath, i);
         cams[v->n_cams++].name = NULL;
     }
-    lie_camera_path_destroy(cpath);
     return st;
 }
 
@@ -396,10 +394,13 @@ int main(int argc, char **argv)
     double t0 = lie_time_now(), cpu0 = cpu_seconds();
     lie_scene *scene = NULL;
     lie_cache *old = NULL;
+    lie_camera_path *cpath = NULL; /* --path */
     lie_cache_views cv = {NULL, 0, view_w, view_h, LIE_MAX_DEPTH_DEFAULT};
     if (into) {
         if (lie_cache_read(into, &old, &err) != LIE_OK ||
-            lie_cache_load_scene(old, into, input, &so, &scene, &err) != LIE_OK) {
+            lie_cache_load_scene(old, into, input, &so, &scene, &err) != LIE_OK ||
+            (path_file && lie_camera_path_read(path_file, &cpath, &err) != LIE_OK)) {
+            lie_scene_destroy(scene);
             lie_cache_destroy(old);
             return fail(&err);
         }
@@ -410,6 +411,7 @@ int main(int argc, char **argv)
                           old->views.height, view_w, view_h);
         }
         if (err.status) {
+            lie_camera_path_destroy(cpath);
             lie_cache_destroy(old);
             lie_scene_destroy(scene);
             return fail(&err);
@@ -419,7 +421,8 @@ int main(int argc, char **argv)
         cv.height = old->views.height;
         cv.max_depth = old->views.max_depth;
         input = old->scene_path;
-    } else if (build_load_scene(input, &so, &scene, &err) != LIE_OK) {
+    } else if (build_load_inputs(input, path_file, &so, &scene, &cpath, &err) != LIE_OK) {
+        lie_camera_path_destroy(cpath);
         lie_scene_destroy(scene);
         return fail(&err);
     }
@@ -431,6 +434,7 @@ int main(int argc, char **argv)
     double t1 = lie_phase(prog, cli.verbose, "load", t0);
     lie_rt *rt = NULL;
     if (lie_rt_create(scene, &rt, &err) != LIE_OK) {
+        lie_camera_path_destroy(cpath);
         lie_cache_destroy(old);
         lie_scene_destroy(scene);
         return fail(&err);
@@ -450,10 +454,11 @@ int main(int argc, char **argv)
             rc = lie_camera_pixels(scene, rt, cv.cams, cv.n_cams, cv.width, cv.height, cv.max_depth, &old_px, &err);
     }
     if (rc == LIE_OK && (n_views || path_file)) {
-        rc = gather_views(scene, input, views, n_views, path_file, &cv, &err);
+        rc = gather_views(scene, input, views, n_views, cpath, &cv, &err);
         if (rc == LIE_OK)
             rc = lie_camera_pixels(scene, rt, cv.cams, cv.n_cams, cv.width, cv.height, cv.max_depth, &px, &err);
     }
+    lie_camera_path_destroy(cpath);
     if (rc == LIE_OK)
         rc = lie_dist_check(scene->hash, scene->hash, &err);
     if (rc != LIE_OK) {
