@@ -287,9 +287,11 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
             n_list = exact_leaf_list(c, w, tri, path, e, two_sided, cap);
             if (w->nomem)
                 return;
-            if (n_list == 0)
-                nc.cls = LIE_CLASS_VISIBLE;
-            else if (n_list > cap)
+            /* the exact list holds the sampled one, longer than
+             * max_blockers; were it ever shorter, the leaf goes to Embree,
+             * so that every leaf this rule made is complex or a list
+             * longer than max_blockers (lie_env_add_views finds them so) */
+            if (n_list > cap || n_list <= c->p->max_blockers)
                 nc.cls = LIE_CLASS_COMPLEX;
         }
     }
