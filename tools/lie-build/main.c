@@ -454,9 +454,17 @@ int main(int argc, char **argv)
             rc = lie_camera_pixels(scene, rt, cv.cams, cv.n_cams, cv.width, cv.height, cv.max_depth, &old_px, &err);
     }
     if (rc == LIE_OK && (n_views || path_file)) {
+        int first_new = cv.n_cams;
         rc = gather_views(scene, input, views, n_views, cpath, &cv, &err);
         if (rc == LIE_OK)
-            rc = lie_camera_pixels(scene, rt, cv.cams, cv.n_cams, cv.width, cv.height, cv.max_depth, &px, &err);
+            rc = lie_camera_pixels(scene, rt, cv.cams + first_new, cv.n_cams - first_new, cv.width, cv.height,
+                                   cv.max_depth, &px, &err);
+        if (rc == LIE_OK && old_px) { /* the old views' pixels and the new: all the views' */
+            lie_pixels *added = px;
+            px = NULL;
+            rc = lie_pixels_merge(old_px, added, &px, &err);
+            lie_pixels_destroy(added);
+        }
     }
     lie_camera_path_destroy(cpath);
     if (rc == LIE_OK)
