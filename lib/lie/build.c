@@ -71,7 +71,7 @@ static uint32_t *build_weights(const build_ctx *c, uint32_t n_items, size_t ne)
  * concatenate the per-triangle buffers in unit order. */
 static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, const int32_t *old_unit,
                            const uint8_t *node_flags, const uint8_t *tri_mask, const lie_pixels *px,
-                           uint64_t unit_lo, uint64_t unit_hi, int threads, lie_progress *progress,
+                           uint64_t unit_lo, uint64_t unit_hi, int threads, int memo, lie_progress *progress,
                            lie_build_stats *stats)
 {
     build_ctx c;
@@ -107,7 +107,7 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     }
     lie_status st = c.workers && c.out ? lie_sample_tables(&c) : LIE_ERR_NOMEM;
     size_t n_memo = 0;
-    if (st == LIE_OK && node_flags && old_unit && c.p->mode == LIE_BLOCKERS_SAMPLED)
+    if (st == LIE_OK && memo && node_flags && old_unit && c.p->mode == LIE_BLOCKERS_SAMPLED)
         st = lie_memo_precompute(&c, threads, &n_memo);
     uint32_t *weight = st == LIE_OK && progress && progress->active ? build_weights(&c, n_items, ne) : NULL;
     if (st == LIE_OK)
@@ -283,7 +283,7 @@ static lie_status build_env(const lie_scene *s, const lie_rt *rt, const lie_buil
     if (stats)
         memset(stats, 0, sizeof *stats);
     uint64_t n_units = (uint64_t)s->n_tris * (uint64_t)s->n_clusters;
-    lie_status st = run_build(env, s, rt, NULL, NULL, tri_mask, px, 0, n_units, p->threads, progress, stats);
+    lie_status st = run_build(env, s, rt, NULL, NULL, tri_mask, px, 0, n_units, p->threads, 0, progress, stats);
     if (st != LIE_OK) {
         lie_env_destroy(env);
         if (st == LIE_ERR_LIMIT)
@@ -334,8 +334,8 @@ static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_bu
         memset(stats, 0, sizeof *stats);
     lie_status st = LIE_OK;
     if (n_units)
-        st = run_build(&part, s, rt, NULL, NULL, tri_mask, px, first_unit, first_unit + n_units, p->threads, NULL,
-                       stats);
+        st = run_build(&part, s, rt, NULL, NULL, tri_mask, px, first_unit, first_unit + n_units, p->threads, 0,
+                       NULL, stats);
     if (st != LIE_OK) {
         free(part.root);
         free(part.nodes);
@@ -386,13 +386,20 @@ lie_status lie_env_update_views(lie_env *env, const lie_scene *s, const lie_rt *
                                 const int32_t *old_unit, const uint8_t *node_flags, int threads,
                                 lie_build_stats *stats, lie_error *err)
 {
+    return lie_build_update(env, s, rt, px, old_unit, node_flags, threads, 1, stats, err);
+}
+
+lie_status lie_build_update(lie_env *env, const lie_scene *s, const lie_rt *rt, const lie_pixels *px,
+                            const int32_t *old_unit, const uint8_t *node_flags, int threads, int memo,
+                            lie_build_stats *stats, lie_error *err)
+{
     if (px && px->n_tris != s->n_tris)
         return lie_error_set(err, LIE_ERR_ARG, s->path, "pixels for %u triangles, not %u", px->n_tris, s->n_tris);
     double t0 = lie_time_now();
     if (stats)
         memset(stats, 0, sizeof *stats);
     lie_status st = run_build(env, s, rt, old_unit, node_flags, NULL, px, 0,
-                              (uint64_t)s->n_tris * (uint64_t)s->n_clusters, threads, NULL, stats);
+                              (uint64_t)s->n_tris * (uint64_t)s->n_clusters, threads, memo, NULL, stats);
     if (stats)
         stats->seconds = lie_time_now() - t0;
     if (st == LIE_ERR_LIMIT)

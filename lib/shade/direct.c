@@ -25,11 +25,13 @@ lie_status lie_shade_scratch_init(lie_shade_scratch *sc, int cap, int max_blocke
     sc->occ = aligned_alloc(64, sizeof *sc->occ * stride);
     sc->occ2 = aligned_alloc(64, sizeof *sc->occ2 * stride);
     sc->idx = malloc(sizeof(int) * stride);
-    if (!block || !sc->occ || !sc->occ2 || !sc->idx) {
+    sc->mask = malloc(sizeof *sc->mask * (stride / 64 + 1));
+    if (!block || !sc->occ || !sc->occ2 || !sc->idx || !sc->mask) {
         free(block);
         free(sc->occ);
         free(sc->occ2);
         free(sc->idx);
+        free(sc->mask);
         memset(sc, 0, sizeof *sc);
         return LIE_ERR_NOMEM;
     }
@@ -61,6 +63,7 @@ void lie_shade_scratch_free(lie_shade_scratch *sc)
     free(sc->occ);
     free(sc->occ2);
     free(sc->idx);
+    free(sc->mask);
     free(sc->batch.occluded);
     free(sc->blockers);
     free(sc->bwork);
@@ -85,9 +88,7 @@ static float unblocked_sum(const float *w, const uint32_t *occ, int n)
         __m256 free_ = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_loadu_si256((const __m256i *)(occ + i)), none));
         acc = _mm256_add_ps(acc, _mm256_and_ps(free_, _mm256_loadu_ps(w + i)));
     }
-    float lane[8];
-    _mm256_storeu_ps(lane, acc);
-    sum = ((lane[0] + lane[1]) + (lane[2] + lane[3])) + ((lane[4] + lane[5]) + (lane[6] + lane[7]));
+    sum = lie_sum8_ps(acc);
 #endif
     for (; i < n; i++)
         sum += occ[i] ? 0.0f : w[i];
@@ -104,29 +105,36 @@ static float plain_sum(const float *w, int n)
     __m256 acc = _mm256_setzero_ps();
     for (; i + 8 <= n; i += 8)
         acc = _mm256_add_ps(acc, _mm256_loadu_ps(w + i));
-    float lane[8];
-    _mm256_storeu_ps(lane, acc);
-    sum = ((lane[0] + lane[1]) + (lane[2] + lane[3])) + ((lane[4] + lane[5]) + (lane[6] + lane[7]));
+    sum = lie_sum8_ps(acc);
 #endif
     for (; i < n; i++)
         sum += w[i];
     return sum;
 }
 
+/* The weights w of the samples not blocked: by the bitmask sc->mask when
+ * `bits`, else by occ (NULL: none blocked). */
+static float visible_sum(const lie_shade_scratch *sc, const float *w, const uint32_t *occ, int bits, int n)
+{
+    if (bits)
+        return lie_bitmask_unblocked_sum(w, sc->mask, n);
+    return occ ? unblocked_sum(w, occ, n) : plain_sum(w, n);
+}
+
 /* Add the pair's contributions to rgb: the samples' weights, masked by
- * occ unless every sample is visible (occ NULL). */
-static void add_pair(const lie_shade_scratch *sc, const uint32_t *occ, int n, float rgb[3])
+ * occ (or the bitmask) unless every sample is visible (occ NULL). */
+static void add_pair(const lie_shade_scratch *sc, const uint32_t *occ, int bits, int n, float rgb[3])
 {
     if (sc->scalar) {
-        float sum = occ ? unblocked_sum(sc->wr, occ, n) : plain_sum(sc->wr, n);
+        float sum = visible_sum(sc, sc->wr, occ, bits, n);
         rgb[0] += sum * sc->scale[0];
         rgb[1] += sum * sc->scale[1];
         rgb[2] += sum * sc->scale[2];
         return;
     }
-    rgb[0] += occ ? unblocked_sum(sc->wr, occ, n) : plain_sum(sc->wr, n);
-    rgb[1] += occ ? unblocked_sum(sc->wg, occ, n) : plain_sum(sc->wg, n);
-    rgb[2] += occ ? unblocked_sum(sc->wb, occ, n) : plain_sum(sc->wb, n);
+    rgb[0] += visible_sum(sc, sc->wr, occ, bits, n);
+    rgb[1] += visible_sum(sc, sc->wg, occ, bits, n);
+    rgb[2] += visible_sum(sc, sc->wb, occ, bits, n);
 }
 
 /* A Lambert receiver under an emitter of one colour: wr holds the
@@ -155,37 +163,18 @@ static void kernel_area(const lie_surface *sf, lie_vec3 o, const lie_light_sampl
     float *restrict wr = sc->wr, *restrict wg = sc->wg, *restrict wb = sc->wb;
     const float sgn = two_sided ? -1.0f : 1.0f; /* two-sided: |cos| via max(c, -c) */
     if (sf->lambert && ls->uniform && ls->planar) {
-        /* ... and a planar emitter: d = w + s u + t v with w = po - o, so the
-         * emitter's cosine is one number, the receiver's cosines are
-         * linear forms in (s, t), and G = (n.d)(-pn.d) / |d|^4 needs one
-         * division and no square root. */
-        const float wx = ls->po[0] - px, wy = ls->po[1] - py, wz = ls->po[2] - pz;
-        const float ux = ls->pu[0], uy = ls->pu[1], uz = ls->pu[2];
-        const float vx = ls->pv[0], vy = ls->pv[1], vz = ls->pv[2];
-        float ce = -(ls->pn[0] * wx + ls->pn[1] * wy + ls->pn[2] * wz);
-        ce = ce > sgn * ce ? ce : sgn * ce;
-        const float r0 = nx * wx + ny * wy + nz * wz, ru = nx * ux + ny * uy + nz * uz,
-                    rv = nx * vx + ny * vy + nz * vz;
-        const float g0 = gx * wx + gy * wy + gz * wz, gu = gx * ux + gy * uy + gz * uz,
-                    gv = gx * vx + gy * vy + gz * vz;
+        /* ... and a planar emitter: the emitter's cosine is one number,
+         * the receiver's cosines are linear forms in (s, t), and G needs
+         * one division and no square root (internal.h). */
+        lie_planar_lambert P;
         const float *restrict ss = ls->s, *restrict ts = ls->t;
         float *restrict G_out = sc->wr;
-        if (!(ce > 0.0f)) {
+        if (!lie_planar_lambert_setup(ls, o, sf->n, sf->ng, two_sided, &P)) {
             memset(G_out, 0, sizeof *G_out * (size_t)n); /* behind the emitter */
         } else {
 #pragma omp simd
-            for (int i = 0; i < n; i++) {
-                float s = ss[i], t = ts[i];
-                float dx = fmaf(t, vx, fmaf(s, ux, wx)), dy = fmaf(t, vy, fmaf(s, uy, wy)),
-                      dz = fmaf(t, vz, fmaf(s, uz, wz));
-                float d2 = fmaf(dz, dz, fmaf(dy, dy, dx * dx));
-                float cr = fmaf(t, rv, fmaf(s, ru, r0));
-                float cg = fmaf(t, gv, fmaf(s, gu, g0));
-                float inv = 1.0f / d2;
-                float G = (cr * ce) * (inv * inv);
-                int ok = (cr > 0.0f) & (cg > 0.0f) & (d2 > 0.0f);
-                G_out[i] = ok ? G : 0.0f;
-            }
+            for (int i = 0; i < n; i++)
+                G_out[i] = lie_planar_lambert_g(P, ss[i], ts[i]);
         }
         lambert_colour(sf, ls, sc);
         return;
@@ -538,6 +527,13 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
          * default. */
         const lie_polylight *pl =
             c->analytic && c->poly && (sf->lambert || opt->exact == LIE_EXACT_ONLY) ? c->poly[e] : NULL;
+        /* A partial pair toward a planar emitter: all samples at once
+         * (bitmask.h) where asked, or where cheaper than testing them one by
+         * one (the exact shadow is weighed against both below). */
+        const lie_bitmask *bm = cls == LIE_VISCLASS_BLOCKERS && c->bits ? c->bits[e] : NULL;
+        const double bits_cost = bm ? lie_render_bitmask_cost(opt->light_samples, n_blockers, !(pl && sf->lambert && bm->ls.uniform)) : 0.0;
+        const int use_bits =
+            bm && (opt->bitmask == LIE_BITMASK_ONLY || bits_cost < lie_render_samples_cost(opt->light_samples, n_blockers));
         double omega = 0.0;
         float kc[3] = {0.0f, 0.0f, 0.0f}, kl[3] = {0.0f, 0.0f, 0.0f};
         if (pl) {
@@ -548,7 +544,9 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                 ltc_ready = 1;
             }
             if (cls == LIE_VISCLASS_BLOCKERS && c->exact &&
-                (opt->exact == LIE_EXACT_ONLY || lie_render_exact_pays(opt->light_samples, n_blockers))) {
+                (opt->exact == LIE_EXACT_ONLY ||
+                 (lie_render_exact_pays(opt->light_samples, n_blockers) &&
+                  !(use_bits && (opt->bitmask == LIE_BITMASK_ONLY || bits_cost < lie_render_exact_cost(n_blockers)))))) {
                 double t0 = clock_if(timers);
                 int ok = lie_polylight_visible(pl, o, sf->n, sf->ng, s->tri_p, opt->oracle->solid, sc->blockers, n_blockers, eps,
                                                &sc->poly, &omega) == 0;
@@ -583,11 +581,30 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                 continue;
             }
         }
+        if (use_bits && pl && sf->lambert && bm->ls.uniform) {
+            /* All samples at once, and of the blocked and the visible
+             * samples only the fewer shaded (lie_bitmask_lambert): no
+             * per-sample pass over the pattern. */
+            double t0 = clock_if(timers);
+            lie_planar_lambert P;
+            const int lit = lie_planar_lambert_setup(&bm->ls, o, sf->n, sf->ng, em->double_sided, &P);
+            lie_shadow_query q = {o,         eps,       &bm->ls,    bm->n, 0, sc->dx, sc->dy, sc->dz,
+                                  sc->bwork, sc->bkind, sc->bstride};
+            if (!lit || opt->oracle->occluded_mask(opt->oracle->ctx, sc->blockers, n_blockers, &q, bm, sc->mask)) {
+                if (lit)
+                    add_scaled(kc, lie_bitmask_lambert(bm, &P, sc->mask, omega, em->area), rgb);
+                st->pairs_bitmask++;
+                st->shadow_rays_skipped += (uint64_t)bm->n;
+                if (timers)
+                    st->t_bitmask += lie_time_now() - t0;
+                continue;
+            }
+        }
         double t_shade = clock_if(timers);
         int n;
         const lie_light_samples *ls = NULL;
         if (!lie_emitter_is_delta(em)) {
-            ls = &c->fixed[e];
+            ls = use_bits ? &bm->ls : &c->fixed[e];
             if (opt->pattern == LIE_PATTERN_ROTATED) {
                 uint64_t h = lie_hash_u64x4(pixel, (uint64_t)e, (uint64_t)depth, 0x726f74ull);
                 lie_light_samples_generate(s, e, opt->light_samples, lie_hash_to_unit(h),
@@ -606,10 +623,12 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
         if (cls == LIE_VISCLASS_VISIBLE) {
             sc->stats.shadow_rays_skipped += (uint64_t)n;
             st->pairs_unshadowed++;
-            add_pair(sc, NULL, n, rgb);
+            add_pair(sc, NULL, 0, n, rgb);
             continue;
         }
-        memset(sc->occ, 0, sizeof *sc->occ * (size_t)n);
+        int bits = 0; /* sc->mask answers, not sc->occ */
+        if (!use_bits)
+            memset(sc->occ, 0, sizeof *sc->occ * (size_t)n);
         {
             lie_shadow_query q = {o,     eps,       ls,       n, ls == NULL, sc->dx, sc->dy, sc->dz,
                                   sc->bwork, sc->bkind, sc->bstride};
@@ -626,6 +645,12 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                 sc->stats.shadow_rays_skipped += (uint64_t)n;
                 if (timers)
                     st->t_blockers += lie_time_now() - t0;
+            } else if (use_bits && opt->oracle->occluded_mask(opt->oracle->ctx, sc->blockers, n_blockers, &q, bm, sc->mask)) {
+                bits = 1;
+                sc->stats.shadow_rays_skipped += (uint64_t)n;
+                st->pairs_bitmask++;
+                if (timers)
+                    st->t_bitmask += lie_time_now() - t0;
             } else if (cls == LIE_VISCLASS_BLOCKERS) {
                 /* short lists: test every sample, no compaction */
                 opt->oracle->occluded(opt->oracle->ctx, sc->blockers, n_blockers, &q, sc->occ);
@@ -645,7 +670,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
              * samples' weight that is visible (sc->scalar: a Lambert
              * receiver under an emitter of one colour) */
             float all = plain_sum(sc->wr, n);
-            float vis = unblocked_sum(sc->wr, sc->occ, n);
+            float vis = visible_sum(sc, sc->wr, sc->occ, bits, n);
             add_scaled(kc, all > 0.0f ? omega * (double)(vis / all) : omega, rgb);
             continue;
         }
@@ -654,11 +679,11 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
             const float *wc[3] = {sc->wr, sc->scalar ? sc->wr : sc->wg, sc->scalar ? sc->wr : sc->wb};
             for (int k = 0; k < 3; k++) {
                 float all = plain_sum(wc[k], n);
-                float vis = unblocked_sum(wc[k], sc->occ, n);
+                float vis = visible_sum(sc, wc[k], sc->occ, bits, n);
                 rgb[k] += all > 0.0f ? kl[k] * (vis / all) : kl[k];
             }
             continue;
         }
-        add_pair(sc, sc->occ, n, rgb);
+        add_pair(sc, sc->occ, bits, n, rgb);
     }
 }

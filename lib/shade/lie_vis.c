@@ -1,5 +1,6 @@
 /* Shadow rays answered by local illumination environments (§4.2). */
 #include "lie/lie.h"
+#include "shade/bitmask.h"
 #include "shade/internal.h"
 
 #include <stdlib.h>
@@ -426,53 +427,77 @@ static void drop_far_faces(const int32_t *solid, const uint32_t *blockers, int n
     }
 }
 
+/* The 2D set-up shared by the per-sample and the bitmask answers: the
+ * plane view and each selected blocker's kind and forms in q->work (and
+ * the far faces of convex solids dropped).  Returns 0 when the segments
+ * are to be tested in 3D (not a planar emitter, o at its plane), 2 when
+ * some blocker blocks every sample, else 1. */
+static int prepare_2d(const lie_lie_vis *v, const uint32_t *blockers, int n_blockers, lie_shadow_query *q)
+{
+    const lie_light_samples *ls = q->ls;
+    if (!ls || !ls->planar)
+        return 0;
+    plane_view pv = {0};
+    pv.wx = ls->po[0] - q->o.x;
+    pv.wy = ls->po[1] - q->o.y;
+    pv.wz = ls->po[2] - q->o.z;
+    float d = pv.wx * ls->pn[0] + pv.wy * ls->pn[1] + pv.wz * ls->pn[2];
+    float sg = d > 0.0f ? 1.0f : -1.0f;
+    pv.kx = sg * ls->pn[0];
+    pv.ky = sg * ls->pn[1];
+    pv.kz = sg * ls->pn[2];
+    pv.D = sg * d;
+    pv.hi = pv.D - 2.0f * q->eps;
+    const float ext[4] = {ls->smin, ls->smax, ls->tmin, ls->tmax};
+    pv.end = unreached_depth(pv.D, q->eps, pv.wx, pv.wy, pv.wz, ext);
+    if (!(pv.hi > 0.0f))
+        return 0;
+    setup_2d(v, blockers, n_blockers, q->o, &pv, ls, q->work, q->work_stride, q->kind);
+    for (int j = 0; j < n_blockers; j++)
+        if ((q->kind[j] & B_KIND) == B_ALL)
+            return 2;
+    if (v->solid)
+        drop_far_faces(v->solid, blockers, n_blockers, q->kind);
+    return 1;
+}
+
+/* The first blocker from j on that prepare_2d left something to do
+ * (n_blockers if none), its kind and its forms, out of the work arrays. */
+static int next_blocker(const lie_shadow_query *q, int n_blockers, int j, uint32_t *kind, float f[LIE_BLOCKER_WORK])
+{
+    while (j < n_blockers && (q->kind[j] & B_KIND) == B_NONE)
+        j++;
+    if (j == n_blockers)
+        return j;
+    *kind = q->kind[j] & B_KIND;
+    for (int k = 0; k < LIE_BLOCKER_WORK; k++)
+        f[k] = q->work[(size_t)k * q->work_stride + (size_t)j];
+    return j;
+}
+
 /* The query's segments against the selected blockers: in 2D where the
- * emitter is planar and the blocker lies between (blocker_2d), else in 3D. */
+ * emitter is planar and the blocker lies between (prepare_2d), else in 3D. */
 static void occluded(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q, uint32_t *occ)
 {
     const lie_lie_vis *v = ctx;
     const int n = q->n;
     memset(occ, 0, sizeof *occ * (size_t)n);
     const lie_light_samples *ls = q->ls;
-    plane_view pv = {0};
-    int planar = ls && ls->planar;
-    if (planar) {
-        pv.wx = ls->po[0] - q->o.x;
-        pv.wy = ls->po[1] - q->o.y;
-        pv.wz = ls->po[2] - q->o.z;
-        float d = pv.wx * ls->pn[0] + pv.wy * ls->pn[1] + pv.wz * ls->pn[2];
-        float sg = d > 0.0f ? 1.0f : -1.0f;
-        pv.kx = sg * ls->pn[0];
-        pv.ky = sg * ls->pn[1];
-        pv.kz = sg * ls->pn[2];
-        pv.D = sg * d;
-        pv.hi = pv.D - 2.0f * q->eps;
-        const float ext[4] = {ls->smin, ls->smax, ls->tmin, ls->tmax};
-        pv.end = unreached_depth(pv.D, q->eps, pv.wx, pv.wy, pv.wz, ext);
-        planar = pv.hi > 0.0f;
-    }
-    if (!planar) {
+    const int planar = prepare_2d(v, blockers, n_blockers, q);
+    if (planar == 0) {
         lie_shadow_query_segments(q);
         for (int j = 0; j < n_blockers; j++)
             blocker_3d(&v->tris[blockers[j]], q->o, q->dx, q->dy, q->dz, n, occ);
         return;
     }
-    setup_2d(v, blockers, n_blockers, q->o, &pv, ls, q->work, q->work_stride, q->kind);
-    for (int j = 0; j < n_blockers; j++)
-        if ((q->kind[j] & B_KIND) == B_ALL) {
-            for (int i = 0; i < n; i++)
-                occ[i] = ~0u;
-            return;
-        }
-    if (v->solid)
-        drop_far_faces(v->solid, blockers, n_blockers, q->kind);
-    for (int j = 0; j < n_blockers; j++) {
-        const uint32_t kind = q->kind[j] & B_KIND;
-        if (kind == B_NONE)
-            continue;
-        float f[LIE_BLOCKER_WORK];
-        for (int k = 0; k < LIE_BLOCKER_WORK; k++)
-            f[k] = q->work[(size_t)k * q->work_stride + (size_t)j];
+    if (planar == 2) {
+        for (int i = 0; i < n; i++)
+            occ[i] = ~0u;
+        return;
+    }
+    uint32_t kind = B_NONE;
+    float f[LIE_BLOCKER_WORK] = {0.0f};
+    for (int j = 0; (j = next_blocker(q, n_blockers, j, &kind, f)) < n_blockers; j++) {
         if (kind == B_CONE) {
             cone_3(f, ls, occ);
         } else if (cone_5(f, ls, occ)) {
@@ -480,6 +505,36 @@ static void occluded(void *ctx, const uint32_t *blockers, int n_blockers, lie_sh
             blocker_3d(&v->tris[blockers[j]], q->o, q->dx, q->dy, q->dz, n, occ);
         }
     }
+}
+
+/* The same as a bitmask over the samples of bm (bitmask.h; q->ls must be
+ * bm's pattern): the same forms, every blocker's covered samples ORed in.
+ * Returns 0, mask undefined, where only 3D tests decide (then occluded()
+ * answers the pair). */
+static int occluded_mask(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
+                         const lie_bitmask *bm, uint64_t *mask)
+{
+    const lie_lie_vis *v = ctx;
+    const int words = lie_bitmask_words(bm);
+    const int planar = prepare_2d(v, blockers, n_blockers, q);
+    if (planar == 0)
+        return 0;
+    if (planar == 2) {
+        for (int w = 0; w < words; w++)
+            mask[w] = ~0ull;
+        mask[words - 1] = bm->last;
+        return 1;
+    }
+    memset(mask, 0, sizeof *mask * (size_t)words);
+    uint32_t kind = B_NONE;
+    float f[LIE_BLOCKER_WORK] = {0.0f};
+    for (int j = 0; (j = next_blocker(q, n_blockers, j, &kind, f)) < n_blockers; j++) {
+        if (kind == B_CONE)
+            lie_bitmask_cone(bm, f, mask);
+        else if (lie_bitmask_cone_depth(bm, f, mask))
+            return 0;
+    }
+    return 1;
 }
 
 static void describe(void *ctx, const lie_surface *sf, int e, int *cls, uint32_t *count, uint64_t *patch_id)
@@ -581,6 +636,7 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
     v->oracle.ctx = v;
     v->oracle.classify = classify;
     v->oracle.occluded = occluded;
+    v->oracle.occluded_mask = occluded_mask;
     v->oracle.select = select_blockers;
     uint32_t longest = 0;
     for (uint32_t i = 0; i < env->n_nodes; i++)

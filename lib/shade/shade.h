@@ -128,6 +128,7 @@ void lie_shadow_query_segments(lie_shadow_query *q);
  * triangle indices; none left means the point sees the emitter whole) and
  * occluded() answers the query's segments against them (occ[i] = ~0 if
  * blocked, 0 if free). */
+typedef struct lie_bitmask lie_bitmask; /* lib/shade/bitmask.h */
 typedef struct lie_vis_oracle {
     void *ctx;
     int max_blockers;
@@ -135,6 +136,11 @@ typedef struct lie_vis_oracle {
     int (*select)(void *ctx, const void *pair, int emitter, lie_vec3 o, float eps, uint32_t *out);
     void (*occluded)(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
                      uint32_t *occ);
+    /* Optional: the same as a bitmask over bm's samples (q->ls is bm's
+     * pattern), bit i set if sample i is blocked; returns 0 where it cannot
+     * answer (then occluded() does). */
+    int (*occluded_mask)(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
+                         const lie_bitmask *bm, uint64_t *mask);
     /* For AOVs: the pair's class (lie_class), list length and a patch id. */
     void (*describe)(void *ctx, const lie_surface *sf, int emitter, int *cls, uint32_t *count,
                      uint64_t *patch_id);
@@ -200,6 +206,32 @@ static inline int lie_render_exact_pays(int n, int b)
 {
     return (double)n * (4.0 + 1.5 * b) >= 3000.0 + 2000.0 * b;
 }
+/* Partial pairs toward a planar emitter may also be answered with all
+ * samples at once (lib/shade/bitmask.h): LIE_BITMASK_AUTO where the cost
+ * model below says it is the cheapest of samples, bitmask and exact;
+ * LIE_BITMASK_ONLY wherever it applies (not with LIE_EXACT_ONLY, whose
+ * exact shadows win); LIE_BITMASK_OFF never.  AUTO is off under
+ * LIE_EXACT_OFF, the oracle's mode (the same samples in the same order as
+ * full visibility).  It needs the fixed pattern and LIE_BITMASK_MIN_SAMPLES
+ * samples. */
+typedef enum lie_bitmask_mode {
+    LIE_BITMASK_AUTO = 0,
+    LIE_BITMASK_OFF = 1,
+    LIE_BITMASK_ONLY = 2
+} lie_bitmask_mode;
+#define LIE_BITMASK_MIN_SAMPLES 64
+/* Its cost in the units of lie_render_exact_pays, measured the same way
+ * (museum1, --timers, side by side with the per-sample path): a set-up
+ * and the sum over the fewer of the blocked and the visible samples, 300,
+ * and per blocker a walk whose cost grows with its shadow's perimeter in
+ * groups of 8 samples, 420 + 9 sqrt(n).  A receiver that is not Lambert's
+ * still shades every sample (shade_all), 4 n. */
+static inline double lie_render_bitmask_cost(int n, int b, int shade_all)
+{
+    return 300.0 + (shade_all ? 4.0 * n : 0.0) + (double)b * (420.0 + 9.0 * __builtin_sqrt((double)n));
+}
+static inline double lie_render_samples_cost(int n, int b) { return (double)n * (4.0 + 1.5 * b); }
+static inline double lie_render_exact_cost(int b) { return 3000.0 + 2000.0 * b; }
 
 typedef struct lie_render_options {
     int width, height;
@@ -219,6 +251,7 @@ typedef struct lie_render_options {
     const char *progress_label; /* its label (NULL: "render"), e.g. "frame 3/20" */
     lie_exact_mode exact;  /* closed-form shading and exact visibility (polylight.h) */
     int timers;            /* per-worker timers of each path into the stats (costs a clock read per pair) */
+    lie_bitmask_mode bitmask; /* all samples at once for partial pairs (bitmask.h) */
 } lie_render_options;
 
 /* Benchmark ablations of --visibility=lie: answer partial pairs (their
@@ -243,11 +276,12 @@ typedef struct lie_render_stats {
     uint64_t pairs_blockers;  /* partial, samples against the blocker list */
     uint64_t pairs_embree;    /* samples against the whole scene */
     uint64_t pairs_unshadowed; /* seen whole, sampled shading */
+    uint64_t pairs_bitmask;   /* partial, all samples at once as a bitmask (bitmask.h) */
     uint64_t exact_overflows; /* exact pairs that fell back to samples */
     uint64_t pairs_unbuilt;   /* of pairs_embree: units lie-build left out (--view, --path) */
     uint64_t points_unbuilt;  /* shading points with such a pair: pixels, at 1 spp without mirrors */
     /* with lie_render_options.timers: seconds summed over workers */
-    double t_analytic, t_exact, t_blockers, t_embree, t_sampled_shading;
+    double t_analytic, t_exact, t_blockers, t_embree, t_sampled_shading, t_bitmask;
     double seconds;
 } lie_render_stats;
 /* acc += w, field by field */

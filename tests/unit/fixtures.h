@@ -2,7 +2,42 @@
 #ifndef LIE_TEST_FIXTURES_H
 #define LIE_TEST_FIXTURES_H
 
+#include <stdlib.h>
+
 #include "lie.h"
+
+#include <stdio.h>
+
+/* A bundled scene (tests/scenes/NAME), loaded, or the test fails. */
+static inline lie_scene *test_scene(const char *name)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s", TEST_SCENES, name);
+    lie_scene *s = NULL;
+    lie_error err;
+    assert_int_equal(lie_scene_load(path, NULL, &s, &err), LIE_OK);
+    return s;
+}
+
+/* A material of grey base colour `base` (metallic 0: Lambert when rough)
+ * emitting radiance `emit` (0: none), one- or two-sided; its index. */
+static inline int test_material(lie_scene *s, float base, float emit, int double_sided)
+{
+    lie_material m = lie_material_default();
+    m.metallic = 0.0f;
+    m.base_color[0] = m.base_color[1] = m.base_color[2] = base;
+    m.emissive[0] = m.emissive[1] = m.emissive[2] = emit;
+    m.double_sided = double_sided;
+    return lie_scene_add_material(s, &m);
+}
+
+/* The default build parameters with the smallest patch at min_patch. */
+static inline lie_build_params test_params(float min_patch)
+{
+    lie_build_params p = lie_build_params_default();
+    p.min_patch = min_patch;
+    return p;
+}
 
 /* Form factor from a point to a parallel rectangle a x b whose corner is
  * straight above it at height h (Howell's catalogue, configuration B-3). */
@@ -52,6 +87,35 @@ static inline void assert_env_equal(const lie_env *a, const lie_env *b)
     assert_memory_equal(a->nodes, b->nodes, sizeof(lie_pnode) * a->n_nodes);
     if (a->n_pool)
         assert_memory_equal(a->pool, b->pool, sizeof(uint32_t) * a->n_pool);
+}
+
+/* A square emitter of side a centred at (0, h, 0), facing down (or both
+ * ways), then the blocker triangles tris[0..n) (9 floats each). */
+static inline lie_scene *square_light_and_blockers(float a, float h, int two_sided, const float *tris, int n)
+{
+    lie_scene *s = lie_scene_new("polylight");
+    assert_non_null(s);
+    int ml = test_material(s, 0.0f, 1.0f, two_sided);
+    int mg = test_material(s, 1.0f, 0.0f, 0);
+    float r = 0.5f * a;
+    float lp[12] = {-r, h, -r, r, h, -r, r, h, r, -r, h, r};
+    uint32_t li[6] = {0, 1, 2, 0, 2, 3};
+    int mesh_l = lie_scene_add_mesh(s, "Light", lp, NULL, NULL, 4, li, 2, ml);
+    assert_true(lie_scene_add_node(s, "Light", -1, NULL, mesh_l, -1, -1) >= 0);
+    if (n > 0) {
+        uint32_t *idx = malloc(sizeof *idx * 3 * (size_t)n);
+        assert_non_null(idx);
+        for (int i = 0; i < 3 * n; i++)
+            idx[i] = (uint32_t)i;
+        int mesh_b = lie_scene_add_mesh(s, "Blockers", tris, NULL, NULL, 3 * n, idx, n, mg);
+        free(idx);
+        assert_true(lie_scene_add_node(s, "Blockers", -1, NULL, mesh_b, -1, -1) >= 0);
+    }
+    lie_error err;
+    assert_int_equal(lie_scene_flatten(s, &err), LIE_OK);
+    assert_int_equal(s->n_emitters, 1);
+    assert_true(s->emitters[0].planar);
+    return s;
 }
 
 #endif
