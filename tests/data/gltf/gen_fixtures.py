@@ -612,10 +612,10 @@ def light_strip():
 
 def dark_panel():
     """An emissive panel (8 x 2 quads facing down) whose 8 x 1 emissive
-    texture is black in its left half, clamped: the triangles of the two
-    left quads read only black texels and form a dark cluster
+    texture is black in its left half, clamped, and beside it a second
+    panel whose texture is black everywhere: a dark cluster
     (lib/scene/cluster.c) that no pair is built for; a box below casts a
-    shadow from the lit half."""
+    shadow from the lit half of the first."""
     d = Doc()
     fl, fi, bp, bi = floor_and_box(d)
     nx, nz = 8, 2
@@ -633,22 +633,31 @@ def dark_panel():
     pp = d.positions(pts)
     pu = d.accessor(f32(*uvs), FLOAT, "VEC2", len(pts))
     pi = d.indices(idx)
+    bp2 = d.positions([(-2, 2.2, 1.0), (2, 2.2, 1.0), (2, 2.2, 1.5), (-2, 2.2, 1.5)])
+    bu2 = d.accessor(f32(0, 0, 1, 0, 1, 1, 0, 1), FLOAT, "VEC2", 4)
+    bi2 = d.indices([0, 1, 2, 0, 2, 3])  # facing -y
     half = [[(0, 0, 0, 255)] * 4 + [(255, 255, 255, 255)] * 4]
-    d.g["images"] = [{"uri": "data:image/png;base64," + base64.b64encode(png(8, 1, half)).decode()}]
+    black = [[(0, 0, 0, 255)] * 2]
+    d.g["images"] = [{"uri": "data:image/png;base64," + base64.b64encode(png(8, 1, half)).decode()},
+                     {"uri": "data:image/png;base64," + base64.b64encode(png(2, 1, black)).decode()}]
     d.g["samplers"] = [{"magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071}]
-    d.g["textures"] = [{"source": 0, "sampler": 0}]
+    d.g["textures"] = [{"source": 0, "sampler": 0}, {"source": 1, "sampler": 0}]
     d.g["meshes"] = [{"primitives": [{"attributes": {"POSITION": fl}, "indices": fi, "material": 0}]},
                      {"primitives": [{"attributes": {"POSITION": bp}, "indices": bi, "material": 0}]},
                      {"primitives": [{"attributes": {"POSITION": pp, "TEXCOORD_0": pu}, "indices": pi,
-                                      "material": 1}]}]
+                                      "material": 1}]},
+                     {"primitives": [{"attributes": {"POSITION": bp2, "TEXCOORD_0": bu2}, "indices": bi2,
+                                      "material": 2}]}]
     d.g["materials"] = [{"pbrMetallicRoughness": {"baseColorFactor": [0.7, 0.7, 0.7, 1], "metallicFactor": 0}},
                         {"emissiveFactor": [1, 1, 1], "emissiveTexture": {"index": 0},
-                         "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 8}}}]
+                         "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 8}}},
+                        {"emissiveFactor": [1, 1, 1], "emissiveTexture": {"index": 1}}]
     d.g["extensionsUsed"] = ["KHR_materials_emissive_strength"]
     d.g["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.9, "znear": 0.05}}]
     d.g["nodes"] = [{"mesh": 0, "name": "Floor"}, {"mesh": 1, "name": "Box"}, {"mesh": 2, "name": "Panel"},
-                    {"camera": 0, "translation": [0, 2.5, 5.5], "rotation": [-0.2588, 0, 0, 0.9659]}]
-    d.g["scenes"] = [{"nodes": [0, 1, 2, 3]}]
+                    {"camera": 0, "translation": [0, 2.5, 5.5], "rotation": [-0.2588, 0, 0, 0.9659]},
+                    {"mesh": 3, "name": "BlackPanel"}]
+    d.g["scenes"] = [{"nodes": [0, 1, 2, 3, 4]}]
     write("dark_panel.gltf", d.embedded())
 
 
