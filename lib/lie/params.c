@@ -63,6 +63,8 @@ void lie_stats_merge(lie_build_stats *dst, const lie_build_stats *src)
     dst->segments += src->segments;
     dst->blocker_total += src->blocker_total;
     dst->splits_undone += src->splits_undone;
+    dst->units_copied += src->units_copied;
+    dst->units_interrupted += src->units_interrupted;
 }
 
 static void stats_walk(const lie_env *env, uint32_t idx, int depth, lie_build_stats *st)

@@ -6,8 +6,10 @@
 #include "lie.h"
 
 #include <getopt.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 static const char *prog = "lie-build";
 
@@ -46,6 +48,15 @@ static void usage(FILE *fp)
             "      --view-size WxH   the image the views are sampled at (default 512x512)\n"
             "      --threads N       worker threads (default: all cores); the cache is the\n"
             "                        same for any N\n"
+            "      --partial         on SIGINT, SIGTERM or SIGHUP, stop building and write what\n"
+            "                        is done as a valid partial cache (units not built are\n"
+            "                        'none': lie-render answers them from the whole scene), then\n"
+            "                        exit 128+signal; a second signal aborts at once, writing\n"
+            "                        nothing.  Without it a signal aborts and writes nothing\n"
+            "      --resume PARTIAL  continue an interrupted build: copy the units PARTIAL holds\n"
+            "                        and build the rest; give the same scene and --view/--path.\n"
+            "                        The parameters are PARTIAL's; the cache equals an\n"
+            "                        uninterrupted build's, byte for byte\n"
             "      --allow-external-uris  let the glTF reference files outside its folder\n"
             "      --stats[=json]    print statistics to stderr\n"
             "  -q, --quiet           no progress bar\n"
@@ -66,7 +77,15 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 
 enum {
     OPT_SAMPLES = 256, OPT_MAX_SAMPLES, OPT_MAX_BLOCKERS, OPT_MIN_PATCH, OPT_SPLIT_GAIN, OPT_COMPLEX_CAP, OPT_BLOCKERS,
-    OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_VIEW, OPT_VIEW_SIZE, OPT_PATH, OPT_MAX_NODES
+    OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_VIEW, OPT_VIEW_SIZE, OPT_PATH, OPT_MAX_NODES,
+    OPT_PARTIAL, OPT_RESUME
+};
+
+/* Build parameters given on the command line (a resumed build takes the
+ * others from the partial cache). */
+enum {
+    SET_SAMPLES = 1, SET_MAX_SAMPLES = 2, SET_MAX_BLOCKERS = 4, SET_COMPLEX_CAP = 8, SET_MIN_PATCH = 16,
+    SET_SPLIT_GAIN = 32, SET_MODE = 64
 };
 
 static const struct option long_opts[] = {
@@ -83,6 +102,8 @@ static const struct option long_opts[] = {
     {"view-size", required_argument, NULL, OPT_VIEW_SIZE},
     {"path", required_argument, NULL, OPT_PATH},
     {"threads", required_argument, NULL, OPT_THREADS},
+    {"partial", no_argument, NULL, OPT_PARTIAL},
+    {"resume", required_argument, NULL, OPT_RESUME},
     {"allow-external-uris", no_argument, NULL, OPT_EXTERNAL},
     {"stats", optional_argument, NULL, OPT_STATS},
     {"quiet", no_argument, NULL, 'q'},
@@ -91,6 +112,64 @@ static const struct option long_opts[] = {
     {"version", no_argument, NULL, OPT_VERSION},
     {NULL, 0, NULL, 0},
 };
+
+/* --partial: the first SIGINT, SIGTERM or SIGHUP asks the build to stop
+ * (lie_build_control.stop); a second one aborts at once, as without
+ * --partial.  The write that follows is the library's: its handler removes
+ * the temporary and re-raises (lib/core/file.c), so the cache on disk is
+ * the whole partial cache or nothing. */
+static volatile sig_atomic_t stop_signal;
+static const int stop_signals[3] = {SIGINT, SIGTERM, SIGHUP};
+
+static void on_stop(int sig)
+{
+    if (stop_signal) {
+        signal(sig, SIG_DFL);
+        raise(sig); /* delivered with the default action once the handler returns */
+        return;
+    }
+    stop_signal = sig;
+}
+
+/* Install on_stop where a signal has its default action (a signal the
+ * caller ignores, as nohup does SIGHUP, stays ignored), or put the default
+ * back. */
+static void stop_handlers(int on, int installed[3])
+{
+    for (int i = 0; i < 3; i++) {
+        struct sigaction old, sa;
+        memset(&sa, 0, sizeof sa);
+        sigemptyset(&sa.sa_mask);
+        if (on) {
+            installed[i] = sigaction(stop_signals[i], NULL, &old) == 0 && old.sa_handler == SIG_DFL &&
+                           !(old.sa_flags & SA_SIGINFO);
+            if (!installed[i])
+                continue;
+            sa.sa_handler = on_stop;
+            for (int j = 0; j < 3; j++)
+                sigaddset(&sa.sa_mask, stop_signals[j]);
+        } else {
+            if (!installed[i])
+                continue;
+            sa.sa_handler = SIG_DFL;
+        }
+        sigaction(stop_signals[i], &sa, NULL);
+    }
+}
+
+static const char *signal_name(int sig)
+{
+    return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : sig == SIGHUP ? "SIGHUP" : "a signal";
+}
+
+/* The process's CPU seconds, user and system, over every thread. */
+static double process_cpu(void)
+{
+    struct timespec ts;
+    if (clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts) != 0)
+        return 0.0;
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
 
 static void print_stats(const char *input, const lie_scene *s, const lie_env *env, const lie_build_stats *st,
                         double t_load, double t_bvh, double t_build, double t_write, size_t bytes, int json)
@@ -123,10 +202,14 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
         fprintf(stderr,
                 "],\"mean_list_length\":%.3f,\"segments\":%llu,\"splits_undone\":%llu,\"nodes\":%u,\"pool\":%u,"
                 "\"seconds_load\":%.6f,\"seconds_bvh\":%.6f,\"seconds_build\":%.6f,\"seconds_write\":%.6f,"
-                "\"bytes\":%zu",
+                "\"bytes\":%zu,\"partial\":%s,\"units_copied\":%llu,\"units_interrupted\":%llu,"
+                "\"workers\":%d,\"seconds_cpu\":%.6f,\"seconds_cpu_workers\":%.6f,\"seconds_cpu_worker_max\":%.6f,"
+                "\"seconds_tail\":%.6f",
                 mean, (unsigned long long)st->segments, (unsigned long long)st->splits_undone,
                 env->n_nodes, env->n_pool, t_load, t_bvh, t_build, t_write,
-                bytes);
+                bytes, env->partial ? "true" : "false", (unsigned long long)st->units_copied,
+                (unsigned long long)st->units_interrupted, st->workers, process_cpu(), st->seconds_cpu_sum,
+                st->seconds_cpu_max, st->seconds_tail);
         lie_dist_stats_print(stderr, "units", 1);
         fprintf(stderr, "}\n");
         return;
@@ -156,6 +239,13 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
             (unsigned long long)st->segments, (unsigned long long)st->splits_undone, env->n_nodes, env->n_pool, bytes);
     fprintf(stderr, "  time: load %.3f s, bvh %.3f s, build %.3f s, write %.3f s\n", t_load, t_bvh, t_build,
             t_write);
+    fprintf(stderr, "  cpu: %.3f s in all; the build's %d workers %.3f s, the busiest %.3f s, cores idle for the "
+                    "last %.3f s\n", process_cpu(), st->workers, st->seconds_cpu_sum, st->seconds_cpu_max,
+            st->seconds_tail);
+    if (st->units_copied || st->units_interrupted || env->partial)
+        fprintf(stderr, "  units: %llu copied from the resumed cache, %llu left unbuilt by an interruption%s\n",
+                (unsigned long long)st->units_copied, (unsigned long long)st->units_interrupted,
+                env->partial ? " (the cache is partial)" : "");
     lie_dist_stats_print(stderr, "units", 0);
 }
 
@@ -164,8 +254,8 @@ int main(int argc, char **argv)
     lie_build_params bp = lie_build_params_default();
     lie_scene_options so = lie_scene_options_default();
     const char *output = NULL;
-    int stats = 0, quiet = 0, verbose = 0;
-    const char *views[64], *path_file = NULL;
+    int stats = 0, quiet = 0, verbose = 0, partial = 0, given = 0;
+    const char *views[64], *path_file = NULL, *resume_file = NULL;
     int n_views = 0, view_w = 512, view_h = 512;
     long v;
     float f;
@@ -177,33 +267,33 @@ int main(int argc, char **argv)
         case OPT_SAMPLES:
             if (!lie_parse_long(optarg, 1, 1 << 20, &v))
                 return usage_error("--samples: expected an integer in 1..1048576, got '%s'", optarg);
-            bp.samples = (uint32_t)v;
+            bp.samples = (uint32_t)v; given |= SET_SAMPLES;
             break;
         case OPT_MAX_SAMPLES:
             if (!lie_parse_long(optarg, 1, 1 << 24, &v))
                 return usage_error("--max-samples: expected an integer in 1..16777216, got '%s'", optarg);
-            bp.max_samples = (uint32_t)v;
+            bp.max_samples = (uint32_t)v; given |= SET_MAX_SAMPLES;
             break;
         case OPT_MAX_BLOCKERS:
             if (!lie_parse_long(optarg, 0, 1 << 20, &v))
                 return usage_error("--max-blockers: expected an integer in 0..1048576, got '%s'", optarg);
-            bp.max_blockers = (uint32_t)v;
+            bp.max_blockers = (uint32_t)v; given |= SET_MAX_BLOCKERS;
             break;
         case OPT_COMPLEX_CAP:
             if (!lie_parse_long(optarg, 0, 1 << 24, &v))
                 return usage_error("--complex-cap: expected an integer in 0..16777216, got '%s'", optarg);
-            bp.complex_cap = (uint32_t)v;
+            bp.complex_cap = (uint32_t)v; given |= SET_COMPLEX_CAP;
             break;
         case OPT_MIN_PATCH:
             if (!lie_parse_float(optarg, LIE_MIN_PATCH_MIN, 1.0f, &f))
                 return usage_error("--min-patch: expected a fraction in [%g, 1], got '%s'", (double)LIE_MIN_PATCH_MIN,
                                    optarg);
-            bp.min_patch = f;
+            bp.min_patch = f; given |= SET_MIN_PATCH;
             break;
         case OPT_SPLIT_GAIN:
             if (!lie_parse_float(optarg, 0.0f, 0.999f, &f))
                 return usage_error("--split-gain: expected a share in [0, 1), got '%s'", optarg);
-            bp.split_gain = f;
+            bp.split_gain = f; given |= SET_SPLIT_GAIN;
             break;
         case OPT_MAX_NODES:
             if (!lie_parse_long(optarg, 1, 0xFFFFFFF0L, &v))
@@ -214,6 +304,7 @@ int main(int argc, char **argv)
             if (strcmp(optarg, "sampled") == 0) bp.mode = LIE_BLOCKERS_SAMPLED;
             else if (strcmp(optarg, "conservative") == 0) bp.mode = LIE_BLOCKERS_CONSERVATIVE;
             else return usage_error("--blockers: expected sampled or conservative, got '%s'", optarg);
+            given |= SET_MODE;
             break;
         case OPT_THREADS:
             if (!lie_parse_long(optarg, 0, 4096, &v))
@@ -227,6 +318,8 @@ int main(int argc, char **argv)
             views[n_views++] = optarg;
             break;
         case OPT_PATH: path_file = optarg; break;
+        case OPT_PARTIAL: partial = 1; break;
+        case OPT_RESUME: resume_file = optarg; break;
         case OPT_VIEW_SIZE:
             if (!lie_parse_size(optarg, 16384, &view_w, &view_h))
                 return usage_error("--view-size: expected WxH, got '%s'", optarg);
@@ -252,14 +345,42 @@ int main(int argc, char **argv)
     if (bp.max_samples < bp.samples)
         bp.max_samples = bp.samples; /* --samples above the default cap: one round */
     const char *input = argv[optind];
+    lie_error err;
+    lie_error_clear(&err);
+    lie_cache *resume = NULL;
+    if (resume_file) {
+        /* the partial cache's parameters, with any given here on top (the
+         * library refuses a mismatch) */
+        if (lie_cache_read(resume_file, &resume, &err) != LIE_OK)
+            return fail(&err);
+        if (resume->n_edits) {
+            lie_cache_destroy(resume);
+            lie_error_set(&err, LIE_ERR_ARG, resume_file, "has an edit log: only lie-build's caches resume");
+            return fail(&err);
+        }
+        lie_build_params r = resume->env->params;
+        r.threads = bp.threads;
+        r.max_nodes = bp.max_nodes;
+        if (given & SET_SAMPLES) r.samples = bp.samples;
+        if (given & SET_MAX_SAMPLES) r.max_samples = bp.max_samples;
+        if (given & SET_MAX_BLOCKERS) r.max_blockers = bp.max_blockers;
+        if (given & SET_COMPLEX_CAP) r.complex_cap = bp.complex_cap;
+        if (given & SET_MIN_PATCH) r.min_patch = bp.min_patch;
+        if (given & SET_SPLIT_GAIN) r.split_gain = bp.split_gain;
+        if (given & SET_MODE) r.mode = bp.mode;
+        bp = r;
+    }
 
     if (lie_dist_start(&argc, &argv) > 1) {
+        if (partial || resume) {
+            lie_cache_destroy(resume);
+            lie_error_set(&err, LIE_ERR_ARG, input, "--partial and --resume build in one process, not under mpirun");
+            return fail(&err);
+        }
         quiet = 1; /* rank 0 prints the statistics */
         if (lie_dist_rank() != 0)
             stats = 0;
     }
-    lie_error err;
-    lie_error_clear(&err);
     double t0 = lie_time_now();
     lie_scene *scene = NULL;
     if (lie_scene_load(input, &so, &scene, &err) != LIE_OK)
@@ -316,8 +437,20 @@ int main(int argc, char **argv)
     lie_progress_begin(&prog_bar, stderr, "lie-build", !quiet);
     lie_env *env = NULL;
     lie_build_stats st;
+    lie_build_control ctl;
+    memset(&ctl, 0, sizeof ctl);
+    ctl.tri_mask = mask;
+    ctl.progress = &prog_bar;
+    ctl.resume = resume ? resume->env : NULL;
+    ctl.stop = partial ? &stop_signal : NULL;
+    int handlers[3] = {0, 0, 0};
+    if (partial)
+        stop_handlers(1, handlers);
     lie_status rc = lie_dist_size() > 1 ? build_dist(scene, rt, &bp, mask, &env, &st, &err)
-                                         : lie_env_build_masked(scene, rt, &bp, mask, &prog_bar, &env, &st, &err);
+                                         : lie_env_build_with(scene, rt, &bp, &ctl, &env, &st, &err);
+    if (partial)
+        stop_handlers(0, handlers); /* from here a signal aborts; the write's handler cleans up */
+    lie_cache_destroy(resume);
     free(mask);
     lie_progress_end(&prog_bar);
     if (rc != LIE_OK) {
@@ -344,10 +477,23 @@ int main(int argc, char **argv)
     if (rc == LIE_OK && stats)
         print_stats(input, scene, env, &st, t1 - t0, t2 - t1, t3 - t2, t4 - t3, bytes, stats == 2);
     free(cache.emitters);
+    int partial_done = env->partial;
+    uint64_t unbuilt = st.units_interrupted;
     lie_env_destroy(env);
     lie_rt_destroy(rt);
     lie_scene_destroy(scene);
     if (rc != LIE_OK)
         return fail(&err);
+    if (stop_signal) {
+        /* one line, and the shell's status for a signal: the caller sees it stopped */
+        if (partial_done)
+            fprintf(stderr, "%s: %s: interrupted by %s: wrote a partial cache, %llu units not built "
+                            "(lie-build --resume %s completes it)\n", prog, output, signal_name(stop_signal),
+                    (unsigned long long)unbuilt, strcmp(output, "-") == 0 ? "CACHE" : output);
+        else
+            fprintf(stderr, "%s: %s: interrupted by %s after the last unit: the cache is complete\n", prog, output,
+                    signal_name(stop_signal));
+        return 128 + stop_signal;
+    }
     return 0;
 }
