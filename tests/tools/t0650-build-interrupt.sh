@@ -3,7 +3,8 @@
 # middle of a build writes a valid partial cache atomically, exits 130 with
 # one line; lie-inspect calls it partial, lie-render completes it with the
 # whole scene; --resume finishes it into the bytes of an uninterrupted
-# build, for any thread count, and refuses other parameters.
+# build, for any thread count, and refuses other parameters.  --edit
+# builds the edited scene.
 . "$(dirname "$0")/lib.sh"
 cd "$TMP" || exit 1
 SC="$S/museum1.gltf"
@@ -69,4 +70,10 @@ expect_one_error_line "lie-build: $SC: the partial build to resume was made with
 expect_no_file bad.lie "--resume with other parameters: no output"
 run "$B/lie-build" "$S/cornell.gltf" -q --resume part.lie -o bad.lie
 expect_rc 1 "--resume for another scene"
+
+# --edit: the edited scene's build, its edits logged, = lie-build | rst-update
+printf '%s\n' '- move: {node: TallBlock, by: [0.05, 0, 0]}' >e.yaml
+"$B/lie-build" "$S/cornell.gltf" -q -o - | "$B/rst-update" - e.yaml -q -o upd.lie
+run "$B/lie-build" "$S/cornell.gltf" --edit e.yaml -q -o ed.lie
+expect_same ed.lie upd.lie "lie-build --edit = lie-build | rst-update"
 finish

@@ -39,6 +39,9 @@ static void usage(FILE *fp)
             "                        its shadow rays go to the whole scene (default %u)\n"
             "      --blockers MODE   sampled (default, the paper's shaft sampling) |\n"
             "                        conservative (every triangle that meets the shaft: exact)\n"
+            "      --edit EDIT.yaml  apply these edits (formats/edit.md; repeatable, in order)\n"
+            "                        to the scene first, and log them in the cache: the cache\n"
+            "                        equals lie-build SCENE | rst-update - EDIT.yaml\n"
             "      --view CAMERA     build only the patches seen from this camera (a name, an\n"
             "                        index or eye=..,target=..; repeatable), directly or in\n"
             "                        mirrors; the rest is marked 'none' and rendered with full\n"
@@ -78,7 +81,7 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 enum {
     OPT_SAMPLES = 256, OPT_MAX_SAMPLES, OPT_MAX_BLOCKERS, OPT_MIN_PATCH, OPT_SPLIT_GAIN, OPT_COMPLEX_CAP, OPT_BLOCKERS,
     OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_VIEW, OPT_VIEW_SIZE, OPT_PATH, OPT_MAX_NODES,
-    OPT_PARTIAL, OPT_RESUME
+    OPT_PARTIAL, OPT_RESUME, OPT_EDIT
 };
 
 /* Build parameters given on the command line (a resumed build takes the
@@ -104,6 +107,7 @@ static const struct option long_opts[] = {
     {"threads", required_argument, NULL, OPT_THREADS},
     {"partial", no_argument, NULL, OPT_PARTIAL},
     {"resume", required_argument, NULL, OPT_RESUME},
+    {"edit", required_argument, NULL, OPT_EDIT},
     {"allow-external-uris", no_argument, NULL, OPT_EXTERNAL},
     {"stats", optional_argument, NULL, OPT_STATS},
     {"quiet", no_argument, NULL, 'q'},
@@ -169,6 +173,40 @@ static double process_cpu(void)
     if (clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts) != 0)
         return 0.0;
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* --edit: read, parse and apply each edit file in order (a resumed build's
+ * log must hold the same texts); edit_log[i].name is set, text and size
+ * are filled. */
+static lie_status apply_edits(lie_scene *scene, const lie_scene_options *so, lie_cache_edit *edit_log, int n,
+                              const lie_cache *resume, lie_error *err)
+{
+    for (int i = 0; i < n; i++) {
+        lie_cache_edit *ed = &edit_log[i];
+        lie_edit *e = NULL;
+        ed->text = NULL;
+        if (lie_read_file_max(ed->name, LIE_READ_MAX_TEXT, &ed->text, &ed->size, err) != LIE_OK ||
+            lie_edit_parse(ed->text, ed->size, ed->name, &e, err) != LIE_OK ||
+            lie_edit_apply(scene, e, so, NULL, err) != LIE_OK) {
+            lie_edit_destroy(e);
+            for (int k = i + 1; k < n; k++)
+                edit_log[k].text = NULL;
+            return err->status;
+        }
+        lie_edit_destroy(e);
+        if (resume && (resume->edits[i].size != ed->size || memcmp(resume->edits[i].text, ed->text, ed->size))) {
+            for (int k = i + 1; k < n; k++)
+                edit_log[k].text = NULL;
+            return lie_error_set(err, LIE_ERR_ARG, ed->name, "differs from edit %d of the partial cache", i);
+        }
+    }
+    return LIE_OK;
+}
+
+static void free_edits(lie_cache_edit *edit_log, int n)
+{
+    for (int i = 0; i < n; i++)
+        free(edit_log[i].text);
 }
 
 static void print_stats(const char *input, const lie_scene *s, const lie_env *env, const lie_build_stats *st,
@@ -256,6 +294,8 @@ int main(int argc, char **argv)
     const char *output = NULL;
     int stats = 0, quiet = 0, verbose = 0, partial = 0, given = 0;
     const char *views[64], *path_file = NULL, *resume_file = NULL;
+    lie_cache_edit edit_log[64];
+    int n_edits = 0;
     int n_views = 0, view_w = 512, view_h = 512;
     long v;
     float f;
@@ -320,6 +360,11 @@ int main(int argc, char **argv)
         case OPT_PATH: path_file = optarg; break;
         case OPT_PARTIAL: partial = 1; break;
         case OPT_RESUME: resume_file = optarg; break;
+        case OPT_EDIT:
+            if (n_edits == 64)
+                return usage_error("--edit: at most 64 edit files, got another: '%s'", optarg);
+            edit_log[n_edits++].name = optarg;
+            break;
         case OPT_VIEW_SIZE:
             if (!lie_parse_size(optarg, 16384, &view_w, &view_h))
                 return usage_error("--view-size: expected WxH, got '%s'", optarg);
@@ -353,9 +398,10 @@ int main(int argc, char **argv)
          * library refuses a mismatch) */
         if (lie_cache_read(resume_file, &resume, &err) != LIE_OK)
             return fail(&err);
-        if (resume->n_edits) {
+        if (resume->n_edits != n_edits) {
             lie_cache_destroy(resume);
-            lie_error_set(&err, LIE_ERR_ARG, resume_file, "has an edit log: only lie-build's caches resume");
+            lie_error_set(&err, LIE_ERR_ARG, resume_file, "was built with %d edit files, not %d (--edit)",
+                          resume->n_edits, n_edits);
             return fail(&err);
         }
         lie_build_params r = resume->env->params;
@@ -390,6 +436,13 @@ int main(int argc, char **argv)
     if (scene->n_emitters == 0 && !quiet)
         fprintf(stderr, "%s: %s: warning: no emitters (no emissive material, no KHR_lights_punctual light): "
                         "the cache holds no environments\n", prog, input);
+    uint64_t loaded_hash = scene->hash;
+    if (apply_edits(scene, &so, edit_log, n_edits, resume, &err) != LIE_OK) {
+        free_edits(edit_log, n_edits);
+        lie_cache_destroy(resume);
+        lie_scene_destroy(scene);
+        return fail(&err);
+    }
     double t1 = lie_phase(prog, verbose, "load", t0);
     lie_rt *rt = NULL;
     if (lie_rt_create(scene, &rt, &err) != LIE_OK) {
@@ -467,7 +520,9 @@ int main(int argc, char **argv)
     lie_cache cache;
     memset(&cache, 0, sizeof cache);
     cache.scene_path = (char *)input;
-    cache.scene_hash = scene->hash;
+    cache.scene_hash = loaded_hash;
+    cache.edits = edit_log;
+    cache.n_edits = n_edits;
     rc = lie_cache_set_state(&cache, scene, &err);
     cache.env = env;
     size_t bytes = 0;
@@ -477,6 +532,7 @@ int main(int argc, char **argv)
     if (rc == LIE_OK && stats)
         print_stats(input, scene, env, &st, t1 - t0, t2 - t1, t3 - t2, t4 - t3, bytes, stats == 2);
     free(cache.emitters);
+    free_edits(edit_log, n_edits);
     int partial_done = env->partial;
     uint64_t unbuilt = st.units_interrupted;
     lie_env_destroy(env);
