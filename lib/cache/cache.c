@@ -263,12 +263,13 @@ lie_status lie_cache_write(const char *path, const lie_cache *c, size_t *bytes, 
 }
 
 lie_status lie_cache_write_with_scene(const char *path, const lie_cache *c, const lie_scene *s,
-                                      const char *scene_out, size_t *bytes, lie_error *err)
+                                      const char *scene_out, const lie_gltf_export_options *scene_opt,
+                                      size_t *bytes, lie_error *err)
 {
     lie_atomic_group *group = lie_atomic_group_create();
     if (!group)
         return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
-    lie_status st = scene_out ? lie_gltf_export_group(s, scene_out, group, err) : LIE_OK;
+    lie_status st = scene_out ? lie_gltf_export_group(s, scene_out, scene_opt, group, err) : LIE_OK;
     if (st == LIE_OK)
         st = write_group(path, c, bytes, group, err);
     if (st == LIE_OK)

@@ -10,6 +10,7 @@
 
 #include "core/core.h"
 #include "lie/lie.h"
+#include "scene/scene.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -59,10 +60,12 @@ lie_status lie_cache_encode(const lie_cache *c, unsigned char **data, size_t *si
  * *bytes (may be NULL) receives the size written. */
 lie_status lie_cache_write(const char *path, const lie_cache *c, size_t *bytes, lie_error *err);
 /* Write the cache and, when scene_out is not NULL, scene `s` as glTF there
- * (lie_gltf_export): every file is complete on disk before any is renamed
- * into place, so a failure (a full disk, say) leaves all or none. */
+ * (lie_gltf_export_group with scene_opt, NULL: the defaults): every file is
+ * complete on disk before any is renamed into place, so a failure (a full
+ * disk, say) leaves all or none. */
 lie_status lie_cache_write_with_scene(const char *path, const lie_cache *c, const lie_scene *s,
-                                      const char *scene_out, size_t *bytes, lie_error *err);
+                                      const char *scene_out, const lie_gltf_export_options *scene_opt,
+                                      size_t *bytes, lie_error *err);
 
 /* Parse and validate a whole cache held in memory: magic, version, section
  * table, every size and offset, every checksum, then the structure (tree

@@ -35,6 +35,7 @@
 #include <string>
 #include <vector>
 
+#include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -2128,11 +2129,19 @@ extern "C" lie_status lie_gltf_import(lie_scene *s, const char *path, const lie_
 
 namespace {
 
+/* asset.extras member of a .gltf listing its side files (see check_side_file) */
+const char *const SIDE_FILES = "lie.files";
+
+struct ExistsError {
+    std::string path; /* a side file that is not ours */
+};
+
 struct Png {
-    std::string path; /* where it goes */
+    std::string path, uri; /* where it goes (.gltf), as the .gltf names it */
     int width, height, bits, channels;
     std::vector<uint8_t> b8;
     std::vector<uint16_t> b16;
+    std::vector<unsigned char> bytes; /* the PNG file */
 };
 
 /* The importer's code values (code_value) for 8 and 16 bits, linear and sRGB. */
@@ -2249,6 +2258,7 @@ int gl_wrap(lie_wrap w)
 struct Export {
     const lie_scene &s;
     std::string dir, stem; /* "DIR/" (or ""), NAME */
+    bool glb;              /* one .glb: images are bufferViews of the one buffer */
     tinygltf::Model m;
     std::vector<unsigned char> bin;
     std::vector<Png> pngs;
@@ -2337,6 +2347,36 @@ bool mesh_has_triangles(const lie_mesh &mesh)
 /* Textures: one glTF texture (and PNG) per (lie_texture, colour space) that
  * a material uses, in texture order, sRGB before linear.  Returns the map
  * texture * 2 + srgb -> glTF texture. */
+/* The PNG file of png's codes, in png.bytes (the codes are freed). */
+void png_bytes(Png &png, const std::string &name)
+{
+    char *buf = nullptr;
+    size_t n = 0;
+    FILE *fp = open_memstream(&buf, &n);
+    if (!fp)
+        throw std::bad_alloc();
+    lie_error e{};
+    const void *codes = png.bits == 16 ? static_cast<const void *>(png.b16.data())
+                                       : static_cast<const void *>(png.b8.data());
+    lie_status st = lie_scene_png_write(fp, name.c_str(), png.width, png.height, png.bits, png.channels, codes, &e);
+    bool closed = fclose(fp) == 0;
+    if (st == LIE_OK && closed) {
+        try {
+            png.bytes.assign(buf, buf + n);
+        } catch (...) {
+            free(buf);
+            throw;
+        }
+    }
+    free(buf);
+    if (st != LIE_OK)
+        throw ImportError{st, e.msg, 0, 0};
+    if (!closed)
+        throw std::bad_alloc();
+    std::vector<uint8_t>().swap(png.b8);
+    std::vector<uint16_t>().swap(png.b16);
+}
+
 std::map<int, int> export_textures(Export &ex)
 {
     const lie_scene &s = ex.s;
@@ -2369,14 +2409,19 @@ std::map<int, int> export_textures(Export &ex)
             }
             int image = int(ex.m.images.size());
             std::string name = ex.stem + "_tex" + std::to_string(image) + ".png";
-            tinygltf::Image im;
-            im.uri = uri_escape(name);
-            im.mimeType = "image/png";
-            ex.m.images.push_back(im);
             Png png;
-            png.path = ex.dir + name;
             encode_texture(lt, srgb != 0, tables, png);
-            ex.pngs.push_back(std::move(png));
+            png_bytes(png, name);
+            tinygltf::Image im;
+            im.mimeType = "image/png";
+            if (ex.glb) { /* glTF 2.0 §3.9.1: an image in a bufferView names its mimeType */
+                im.bufferView = add_view(ex, png.bytes.data(), png.bytes.size(), 0);
+            } else {
+                im.uri = png.uri = uri_escape(name);
+                png.path = ex.dir + name;
+                ex.pngs.push_back(std::move(png));
+            }
+            ex.m.images.push_back(im);
             tinygltf::Texture tx;
             tx.sampler = found->second;
             tx.source = image;
@@ -2620,7 +2665,17 @@ void export_document(Export &ex)
     m.defaultScene = 0;
 }
 
-/* The glTF JSON: tinygltf's serialisation plus the external buffer. */
+std::string hash_hex(const void *data, size_t n)
+{
+    char buf[24];
+    snprintf(buf, sizeof buf, "%016llx", (unsigned long long)lie_hash_bytes(data, n, 0));
+    return buf;
+}
+
+/* The glTF JSON: tinygltf's serialisation plus the buffer, external (.gltf)
+ * or the GLB's BIN chunk (glTF 2.0 §4.4.3.3: buffer 0 without a uri).  A
+ * .gltf lists its side files with the hash of their bytes (asset.extras,
+ * SIDE_FILES): what a later export of the same name may replace. */
 std::string export_json(Export &ex)
 {
     tinygltf::TinyGLTF writer;
@@ -2632,8 +2687,18 @@ std::string export_json(Export &ex)
     if (!ex.bin.empty()) {
         nlohmann::json buffer;
         buffer["byteLength"] = uint64_t(ex.bin.size());
-        buffer["uri"] = uri_escape(ex.stem + ".bin");
+        if (!ex.glb)
+            buffer["uri"] = uri_escape(ex.stem + ".bin");
         j["buffers"] = nlohmann::json::array({buffer});
+    }
+    if (!ex.glb) {
+        nlohmann::json files = nlohmann::json::object();
+        if (!ex.bin.empty())
+            files[uri_escape(ex.stem + ".bin")] = hash_hex(ex.bin.data(), ex.bin.size());
+        for (const Png &png : ex.pngs)
+            files[png.uri] = hash_hex(png.bytes.data(), png.bytes.size());
+        if (!files.empty())
+            j["asset"]["extras"][SIDE_FILES] = files;
     }
     /* tinygltf writes an object with nothing but defaults (a node with
      * identity transform and no mesh, a scene without nodes) as null */
@@ -2646,7 +2711,91 @@ std::string export_json(Export &ex)
         for (auto &c : j["cameras"])
             if (c.contains("perspective"))
                 c["perspective"].erase("zfar");
-    return j.dump(2) + "\n";
+    return ex.glb ? j.dump() : j.dump(2) + "\n";
+}
+
+void put32(std::string &out, uint32_t v)
+{
+    for (int i = 0; i < 4; i++)
+        out += char((v >> (8 * i)) & 0xff);
+}
+
+/* glTF 2.0 §4.4: the 12-byte header, the JSON chunk padded with spaces and
+ * the BIN chunk padded with zeros, each to 4 bytes; lengths little-endian. */
+std::string glb_container(const std::string &json, const std::vector<unsigned char> &bin)
+{
+    size_t json_len = (json.size() + 3) & ~size_t(3), bin_len = (bin.size() + 3) & ~size_t(3);
+    uint64_t total = 12 + 8 + uint64_t(json_len) + (bin.empty() ? 0 : 8 + uint64_t(bin_len));
+    if (total > UINT32_MAX)
+        fail(LIE_ERR_LIMIT, "a GLB holds at most 4 GiB, this scene needs %llu bytes: write .gltf",
+             (unsigned long long)total);
+    std::string out;
+    out.reserve(size_t(total));
+    out += "glTF";
+    put32(out, 2);
+    put32(out, uint32_t(total));
+    put32(out, uint32_t(json_len));
+    put32(out, 0x4E4F534Au); /* "JSON" */
+    out += json;
+    out.append(json_len - json.size(), ' ');
+    if (!bin.empty()) {
+        put32(out, uint32_t(bin_len));
+        put32(out, 0x004E4942u); /* "BIN\0" */
+        out.append(reinterpret_cast<const char *>(bin.data()), bin.size());
+        out.append(bin_len - bin.size(), '\0');
+    }
+    return out;
+}
+
+/* ---- side files of a .gltf: replaced only when ours ----------------------
+ * A side file (DIR/NAME.bin, DIR/NAME_texK.png) that exists is "ours", and
+ * may be replaced, when the .gltf being replaced (DIR/NAME.gltf) is this
+ * exporter's (asset.generator "lie") and lists the file under
+ * asset.extras.SIDE_FILES with the XXH3-64 hash of exactly the bytes it
+ * holds now.  Anything else (no previous .gltf, another generator, a file it
+ * does not list, a file changed since) is someone else's: refused unless
+ * the caller forces it. */
+
+std::map<std::string, std::string> previous_side_files(const std::string &gltf_path)
+{
+    std::map<std::string, std::string> out;
+    unsigned char *d = nullptr;
+    size_t n = 0;
+    lie_error e{};
+    if (lie_read_file_max(gltf_path.c_str(), LIE_READ_MAX_TEXT, &d, &n, &e) != LIE_OK)
+        return out;
+    try {
+        nlohmann::json j = nlohmann::json::parse(d, d + n);
+        const nlohmann::json &a = j.at("asset");
+        if (a.at("generator") == "lie")
+            for (auto &f : a.at("extras").at(SIDE_FILES).items())
+                if (f.value().is_string())
+                    out[f.key()] = f.value().get<std::string>();
+    } catch (const nlohmann::json::exception &) {
+        out.clear(); /* not JSON, or not ours */
+    } catch (...) {
+        free(d);
+        throw;
+    }
+    free(d);
+    return out;
+}
+
+void check_side_file(const std::string &path, const std::string &uri,
+                     const std::map<std::string, std::string> &ours)
+{
+    struct stat st;
+    if (lstat(path.c_str(), &st) != 0 && errno == ENOENT)
+        return;
+    auto it = ours.find(uri);
+    unsigned char *d = nullptr;
+    size_t n = 0;
+    lie_error e{};
+    bool same = it != ours.end() && lie_read_file_max(path.c_str(), LIE_READ_MAX_GLTF, &d, &n, &e) == LIE_OK &&
+                hash_hex(d, n) == it->second;
+    free(d);
+    if (!same)
+        throw ExistsError{path};
 }
 
 /* Write one output through a temporary file of `group`; `body` fills it. */
@@ -2673,61 +2822,84 @@ lie_status write_bytes(FILE *fp, const std::string &path, const void *data, size
 
 } // namespace
 
+extern "C" lie_gltf_export_options lie_gltf_export_options_default(void)
+{
+    lie_gltf_export_options o;
+    memset(&o, 0, sizeof o);
+    return o;
+}
+
 extern "C" lie_status lie_gltf_export(const lie_scene *s, const char *path, lie_error *err)
 {
     lie_atomic_group *group = lie_atomic_group_create();
     if (!group)
         return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
-    lie_status st = lie_gltf_export_group(s, path, group, err);
+    lie_status st = lie_gltf_export_group(s, path, NULL, group, err);
     if (st == LIE_OK)
         st = lie_atomic_group_commit(group, err);
     lie_atomic_group_destroy(group);
     return st;
 }
 
-extern "C" lie_status lie_gltf_export_group(const lie_scene *s, const char *path, lie_atomic_group *group,
-                                            lie_error *err)
+static bool ends_with_glb(const std::string &base)
+{
+    return base.size() > 4 && strcasecmp(base.c_str() + base.size() - 4, ".glb") == 0;
+}
+
+extern "C" lie_status lie_gltf_export_group(const lie_scene *s, const char *path, const lie_gltf_export_options *opt,
+                                            lie_atomic_group *group, lie_error *err)
 {
     if (!s || !path || !*path)
         return lie_error_set(err, LIE_ERR_ARG, path, "lie_gltf_export: NULL scene or empty path");
+    lie_gltf_export_options o = opt ? *opt : lie_gltf_export_options_default();
     if (strcmp(path, "-") == 0)
         return lie_error_set(err, LIE_ERR_ARG, path,
-                             "a glTF export is several files (.gltf, .bin, textures): it cannot go to stdout");
+                             "a glTF export is a named file (.glb, or .gltf with its .bin and textures): it cannot go to stdout");
     std::string p(path);
     size_t slash = p.rfind('/');
     std::string dir = slash == std::string::npos ? std::string() : p.substr(0, slash + 1);
     std::string base = p.substr(dir.size());
     size_t dot = base.rfind('.');
     std::string stem = dot == std::string::npos || dot == 0 ? base : base.substr(0, dot);
+    bool glb = ends_with_glb(base);
     if (base.empty() || base == "." || base == "..")
         return lie_error_set(err, LIE_ERR_ARG, path, "not a file name");
-    if (base == stem + ".bin" || (base.compare(0, stem.size() + 4, stem + "_tex") == 0 &&
-                                  base.size() > 4 && base.compare(base.size() - 4, 4, ".png") == 0))
+    if (!glb && (base == stem + ".bin" || (base.compare(0, stem.size() + 4, stem + "_tex") == 0 &&
+                                           base.size() > 4 && base.compare(base.size() - 4, 4, ".png") == 0)))
         return lie_error_set(err, LIE_ERR_ARG, path, "the glTF would share its name with its .bin or a texture");
 
     lie_status st = LIE_OK;
     try {
-        Export ex{*s, dir, stem, tinygltf::Model(), {}, {}};
+        Export ex{*s, dir, stem, glb, tinygltf::Model(), {}, {}};
         export_document(ex);
         std::string json = export_json(ex);
+        if (glb) {
+            std::string bytes = glb_container(json, ex.bin);
+            return write_atomic(p, group, err, [&](FILE *fp) { return write_bytes(fp, p, bytes.data(), bytes.size(), err); });
+        }
+        std::string bin_path = dir + stem + ".bin";
+        if (!o.force) { /* before anything is written */
+            std::map<std::string, std::string> ours = previous_side_files(p);
+            if (!ex.bin.empty())
+                check_side_file(bin_path, uri_escape(stem + ".bin"), ours);
+            for (const Png &png : ex.pngs)
+                check_side_file(png.path, png.uri, ours);
+        }
         /* the side files first, the .gltf last: a .gltf never names a missing file */
         for (const Png &png : ex.pngs) {
-            st = write_atomic(png.path, group, err, [&](FILE *fp) {
-                const void *codes = png.bits == 16 ? static_cast<const void *>(png.b16.data())
-                                                   : static_cast<const void *>(png.b8.data());
-                return lie_scene_png_write(fp, png.path.c_str(), png.width, png.height, png.bits, png.channels,
-                                           codes, err);
-            });
+            st = write_atomic(png.path, group, err,
+                              [&](FILE *fp) { return write_bytes(fp, png.path, png.bytes.data(), png.bytes.size(), err); });
             if (st != LIE_OK)
                 break;
         }
-        std::string bin_path = dir + stem + ".bin";
         if (st == LIE_OK && !ex.bin.empty()) {
             st = write_atomic(bin_path, group, err,
                               [&](FILE *fp) { return write_bytes(fp, bin_path, ex.bin.data(), ex.bin.size(), err); });
         }
         if (st == LIE_OK)
             st = write_atomic(p, group, err, [&](FILE *fp) { return write_bytes(fp, p, json.data(), json.size(), err); });
+    } catch (const ExistsError &e) {
+        st = lie_error_set(err, LIE_ERR_IO, e.path.c_str(), "exists (use --force to overwrite)");
     } catch (const ImportError &e) {
         st = lie_error_set(err, e.status, path, "%s", e.msg.c_str());
     } catch (const std::bad_alloc &) {

@@ -1,7 +1,8 @@
 #!/bin/sh
-# rst-update --write-scene: the edited scene as glTF, which lie-build and
-# lie-render take; building it gives the updated cache's blocker lists and
-# scene state.  A bad path fails with one line and writes nothing.
+# rst-update --write-scene: the edited scene as glTF (.gltf with side files,
+# or one .glb), which lie-build and lie-render take; building it gives the
+# updated cache's blocker lists and scene state.  A bad path fails with one
+# line and writes nothing; so does a side file that is not ours (--force).
 . "$ROOT/tests/tools/lib.sh"
 
 "$B/lie-build" "$S/museum2.gltf" -q --min-patch 1e-2 -o "$TMP/m2.lie" || not_ok "build museum2"
@@ -38,8 +39,42 @@ expect_rc 1 "a scene path in a missing folder fails"
 expect_one_error_line "rst-update: $TMP/nowhere/out" "one line naming the file"
 expect_no_file "$TMP/bad.lie" "and no cache is written"
 run "$B/rst-update" "$TMP/m2.lie" "$TMP/e.yaml" -q -o "$TMP/bad.lie" --write-scene -
-expect_rc 1 "--write-scene - is refused (a glTF export is several files)"
+expect_rc 2 "--write-scene - is a usage error (a scene goes to a named .gltf or .glb)"
 expect_no_file "$TMP/bad.lie" "and no cache is written"
+run "$B/rst-update" "$TMP/m2.lie" "$TMP/e.yaml" -q -o "$TMP/bad.lie" --write-scene "$TMP/scene/out.obj"
+expect_rc 2 "--write-scene of neither .gltf nor .glb is a usage error"
+
+# .glb: one file, the same content hash as the .gltf
+mkdir "$TMP/glb"
+run "$B/rst-update" "$TMP/m2.lie" "$TMP/e.yaml" -q -o "$TMP/g.lie" --write-scene "$TMP/glb/out.glb"
+expect_rc 0 "rst-update --write-scene out.glb"
+if [ "$(ls "$TMP/glb")" = out.glb ] && [ "$(head -c 4 "$TMP/glb/out.glb")" = glTF ]; then
+    ok "one binary glTF, no side file"
+else
+    not_ok "the .glb folder holds: $(ls "$TMP/glb")"
+fi
+run "$B/lie-build" "$TMP/glb/out.glb" -q --min-patch 1e-2 -o "$TMP/bg.lie"
+[ "$(state "$TMP/bg.lie")" = "$(state "$TMP/u.lie")" ] && ok "the .glb has the edited scene's content hash" ||
+    not_ok "the .glb's hash: $(state "$TMP/bg.lie")"
+
+# side files: our own are replaced, another's are refused unless --force
+run "$B/rst-update" "$TMP/m2.lie" "$TMP/e.yaml" -q -o "$TMP/u2.lie" --write-scene "$TMP/scene/out.gltf"
+expect_rc 0 "writing over our own .bin and texture"
+printf 'mine' >"$TMP/scene/other.bin"
+run "$B/rst-update" "$TMP/m2.lie" "$TMP/e.yaml" -q -o "$TMP/u3.lie" --write-scene "$TMP/scene/other.gltf"
+expect_rc 1 "another's other.bin is refused"
+expect_one_error_line "rst-update: $TMP/scene/other.bin: exists (use --force to overwrite)" "one line"
+expect_no_file "$TMP/u3.lie" "and nothing is written: no cache"
+expect_no_file "$TMP/scene/other.gltf" "no .gltf"
+[ "$(cat "$TMP/scene/other.bin")" = mine ] && ok "the .bin is untouched" || not_ok "the .bin was replaced"
+run "$B/rst-update" "$TMP/m2.lie" "$TMP/e.yaml" -q -o "$TMP/u3.lie" --write-scene "$TMP/scene/other.gltf" --force
+expect_rc 0 "--force replaces it"
+expect_file "$TMP/scene/other_tex0.png" "with the rest"
+
 run "$B/rst-update" --help
-if grep -q -- '--write-scene OUT.gltf' "$TMP/out"; then ok "--help lists --write-scene"; else not_ok "--help"; fi
+if grep -q -- '--write-scene OUT.gltf' "$TMP/out" && grep -q -- '--force' "$TMP/out"; then
+    ok "--help lists --write-scene and --force"
+else
+    not_ok "--help"
+fi
 finish

@@ -2,7 +2,7 @@
 # Progress (issue 18): on a terminal (script -qc gives the tool one) a bar
 # with elapsed time, rate and ETA, "frame N/M" on camera paths, progress in
 # lie-build and rst-update; nothing when stderr is not a terminal; -v prints
-# each phase's time.
+# each phase's time (lie-render, lie-build, rst-update).
 . "$(dirname "$0")/lib.sh"
 if ! command -v script >/dev/null 2>&1; then not_ok "script(1) missing (util-linux)"; finish; fi
 cd "$TMP" || exit 1
@@ -57,4 +57,9 @@ run "$B/lie-build" "$SC" -o c3.lie -v
 if [ "$(grep -cE '^lie-build: (load|bvh|build|write): [0-9]+\.[0-9]{3} s$' "$TMP/err")" -eq 4 ]; then
     ok "lie-build -v: load, bvh, build, write"; else not_ok "lie-build -v:"; sed 's/^/# /' "$TMP/err"; fi
 expect_same c.lie c3.lie "-v and a terminal change no byte of the cache"
+run "$B/rst-update" c.lie e.yaml -o u2.lie -v
+if [ "$(grep -cE '^rst-update: (load|trees|edits|update|write): [0-9]+\.[0-9]{3} s$' "$TMP/err")" -eq 5 ] &&
+    [ "$(wc -l <"$TMP/err")" -eq 5 ]; then ok "rst-update -v: load, trees, edits, update, write"; else
+    not_ok "rst-update -v:"; sed 's/^/# /' "$TMP/err"; fi
+expect_same u.lie u2.lie "rst-update: -v and a terminal change no byte of the cache"
 finish

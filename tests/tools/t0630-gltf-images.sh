@@ -1,6 +1,7 @@
 #!/bin/sh
 # glTF images the decoder cannot read (issue 18): a warning naming the image,
-# one line per tool run, and the texture slot falls back to its factor (as
+# one line per tool run (every tool that loads a scene: lie-render, lie-build,
+# rst-update, lie-inspect, lie-animate, lie-view), and the texture slot falls back to its factor (as
 # Blender and three.js do); required extensions stay refused by name.
 . "$(dirname "$0")/lib.sh"
 G="$D/gltf"
@@ -34,6 +35,37 @@ if [ "$rc" -eq 0 ] && [ ! -s "$TMP/err" ]; then ok "-q: no warning"; else not_ok
 run "$B/lie-build" corrupt.gltf -o c.lie
 expect_rc 0 "lie-build: a corrupt PNG is not fatal"
 expect_one_error_line "lie-build: corrupt.gltf: warning: image 0 'wood': cannot decode" "lie-build: one warning"
+# every tool that loads the scene says it once, and -q silences it
+printf -- '- move: {node: "#0", by: [0.1, 0, 0]}\n' >move.yaml
+warned() { # TOOL WHAT: exit 0 and the image's warning exactly once
+    if [ "$rc" -eq 0 ] && [ "$(grep -c "warning: image 0 'wood'" "$TMP/err")" -eq 1 ] &&
+        grep -q "^$1: [^ ]*: warning: image 0 'wood': cannot decode" "$TMP/err"; then
+        ok "$1 $2: one warning"
+    else
+        not_ok "$1 $2 (exit $rc):"; sed 's/^/# /' "$TMP/err" | head -5
+    fi
+}
+silent() { if [ "$rc" -eq 0 ] && [ ! -s "$TMP/err" ]; then ok "$1 -q: silent"; else not_ok "$1 -q: $(cat "$TMP/err")"; fi; }
+run "$B/rst-update" c.lie move.yaml -o c2.lie
+warned rst-update ""
+run "$B/rst-update" c.lie move.yaml -o c2.lie -q
+silent rst-update
+run "$B/lie-inspect" image c.lie --camera eye=0.3,0.3,2,target=0.3,0.3,0 --size 16x16 -o fig.png
+warned lie-inspect image
+run "$B/lie-inspect" verify c.lie --scene corrupt.gltf -q
+silent "lie-inspect verify"
+anim=$(tr -d '\n ' <"$G/animated.gltf" | sed "s|\"materials\":\[{\"pbrMetallicRoughness\":{|\"images\":[{\"name\":\"wood\",\"uri\":\"data:image/png;base64,$bad\"}],\"textures\":[{\"source\":0}],\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},|")
+printf '%s\n' "$anim" >anim.gltf
+run "$B/lie-animate" anim.gltf --fps 2 -o "a_%d.yaml"
+warned lie-animate ""
+run "$B/lie-animate" anim.gltf --fps 2 -o "a_%d.yaml" -q
+silent lie-animate
+if command -v xvfb-run >/dev/null 2>&1; then
+    printf 'quit\n' >quit.txt
+    run xvfb-run -a "$B/lie-view" corrupt.gltf --size 16x16 --light-samples 1 --script quit.txt
+    warned lie-view ""
+fi
+
 run "$B/lie-render" ktx.gltf $CAM -o ktx.exr
 expect_rc 0 "lie-render: a .ktx2 source without KHR_texture_basisu is not fatal"
 expect_one_error_line "lie-render: ktx.gltf: warning: image 0 'tex.ktx2': cannot decode" "one warning naming the .ktx2"

@@ -364,18 +364,14 @@ static void test_export_scene_built_in_memory_with_unusual_texture(void **state)
 
 /* ---- output ------------------------------------------------------------- */
 
-static void test_export_is_deterministic(void **state)
+/* x.gltf, x.bin and x_tex0.png of folders a and b are byte for byte the same. */
+static void assert_same_export(void **state, const char *a, const char *b)
 {
-    lie_scene *s = load(SCENES "museum2.gltf");
-    assert_int_equal(mkdir(in_dir(state, "a"), 0777), 0);
-    assert_int_equal(mkdir(in_dir(state, "b"), 0777), 0);
-    export_ok(s, in_dir(state, "a/x.gltf"));
-    export_ok(s, in_dir(state, "b/x.gltf"));
     const char *names[] = {"x.gltf", "x.bin", "x_tex0.png"};
     for (size_t i = 0; i < sizeof names / sizeof *names; i++) {
         char pa[PATH_MAX], pb[PATH_MAX];
-        snprintf(pa, sizeof pa, "a/%s", names[i]);
-        snprintf(pb, sizeof pb, "b/%s", names[i]);
+        snprintf(pa, sizeof pa, "%s/%s", a, names[i]);
+        snprintf(pb, sizeof pb, "%s/%s", b, names[i]);
         size_t na, nb;
         unsigned char *da = slurp(in_dir(state, pa), &na), *db = slurp(in_dir(state, pb), &nb);
         assert_int_equal(na, nb);
@@ -383,6 +379,30 @@ static void test_export_is_deterministic(void **state)
         free(da);
         free(db);
     }
+}
+
+/* Export through a group with options (force or not), committed. */
+static lie_status export_with(const lie_scene *s, const char *path, int force, lie_error *err)
+{
+    lie_gltf_export_options o = lie_gltf_export_options_default();
+    o.force = force;
+    lie_atomic_group *g = lie_atomic_group_create();
+    assert_non_null(g);
+    lie_status st = lie_gltf_export_group(s, path, &o, g, err);
+    if (st == LIE_OK)
+        st = lie_atomic_group_commit(g, err);
+    lie_atomic_group_destroy(g);
+    return st;
+}
+
+static void test_export_is_deterministic(void **state)
+{
+    lie_scene *s = load(SCENES "museum2.gltf");
+    assert_int_equal(mkdir(in_dir(state, "a"), 0777), 0);
+    assert_int_equal(mkdir(in_dir(state, "b"), 0777), 0);
+    export_ok(s, in_dir(state, "a/x.gltf"));
+    export_ok(s, in_dir(state, "b/x.gltf"));
+    assert_same_export(state, "a", "b");
     assert_int_equal(count_entries(in_dir(state, "a")), 3); /* no temporary left */
     lie_scene_destroy(s);
 }
@@ -421,7 +441,8 @@ static void test_export_failure_part_way_removes_files_written(void **state)
     assert_int_equal(mkdir(in_dir(state, "out.bin"), 0777), 0);
     lie_error err;
     lie_error_clear(&err);
-    lie_status st = lie_gltf_export(s, in_dir(state, "out.gltf"), &err);
+    /* forced: the folder is not ours, and would be refused before writing */
+    lie_status st = export_with(s, in_dir(state, "out.gltf"), 1, &err);
     assert_int_equal(st, LIE_ERR_IO);
     assert_non_null(strstr(err.file, "out.bin"));
     assert_int_equal(count_entries(*state), 1);
@@ -442,6 +463,136 @@ static void test_export_to_stdout_or_own_sidecar_name_refused(void **state)
     lie_scene_destroy(s);
 }
 
+/* ---- GLB ----------------------------------------------------------------- */
+
+static uint32_t le32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+/* The container of glTF 2.0 §4.4: header, a JSON chunk padded with spaces,
+ * one BIN chunk padded with zeros, nothing after; the JSON names no file. */
+static void assert_glb_container(const char *path)
+{
+    size_t n;
+    unsigned char *d = slurp(path, &n);
+    assert_true(n >= 28);
+    assert_memory_equal(d, "glTF", 4);
+    assert_int_equal(le32(d + 4), 2);
+    assert_int_equal(le32(d + 8), n);
+    uint32_t jl = le32(d + 12);
+    assert_int_equal(le32(d + 16), 0x4E4F534Au);
+    assert_int_equal(jl % 4, 0);
+    assert_true(20 + (size_t)jl + 8 <= n);
+    char *json = malloc(jl + 1);
+    assert_non_null(json);
+    memcpy(json, d + 20, jl);
+    json[jl] = 0;
+    size_t end = strlen(json);
+    while (end > 0 && json[end - 1] == ' ')
+        end--;
+    assert_int_equal(json[end - 1], '}'); /* padding is spaces only */
+    assert_null(strstr(json, "\"uri\""));
+    assert_non_null(strstr(json, "\"mimeType\":\"image/png\""));
+    free(json);
+    size_t at = 20 + jl;
+    uint32_t bl = le32(d + at);
+    assert_int_equal(le32(d + at + 4), 0x004E4942u);
+    assert_int_equal(bl % 4, 0);
+    assert_int_equal(at + 8 + bl, n); /* one BIN chunk, and it ends the file */
+    free(d);
+}
+
+static void test_export_glb_round_trip_keeps_hash_and_textures(void **state)
+{
+    /* several images, both colour spaces, a 16-bit one: all inside the .glb */
+    lie_scene *s = load(FIXTURES "materials.gltf");
+    assert_true(s->n_textures >= 2);
+    lie_scene *r = round_trip(state, s, "out.glb");
+    assert_same_world(s, r); /* textures pixel for pixel, then the content hash */
+    assert_glb_container(in_dir(state, "out.glb"));
+    assert_int_equal(count_entries(*state), 1); /* no .bin, no PNG, no temporary */
+    lie_scene_destroy(r);
+    lie_scene_destroy(s);
+}
+
+static void test_export_gltf_to_glb_to_gltf_gives_the_same_files(void **state)
+{
+    lie_scene *s = load(SCENES "museum2.gltf");
+    assert_int_equal(mkdir(in_dir(state, "a"), 0777), 0);
+    assert_int_equal(mkdir(in_dir(state, "c"), 0777), 0);
+    lie_scene *a = round_trip(state, s, "a/x.gltf");
+    lie_scene *b = round_trip(state, a, "b.GLB"); /* the extension in any case */
+    lie_scene *c = round_trip(state, b, "c/x.gltf");
+    assert_same_world(s, b);
+    assert_same_world(a, c);
+    assert_glb_container(in_dir(state, "b.GLB"));
+    assert_same_export(state, "a", "c");
+    lie_scene_destroy(c);
+    lie_scene_destroy(b);
+    lie_scene_destroy(a);
+    lie_scene_destroy(s);
+}
+
+/* ---- side files: replaced only when ours ---------------------------------- */
+
+static void write_text(const char *path, const char *text)
+{
+    FILE *fp = fopen(path, "wb");
+    assert_non_null(fp);
+    assert_int_equal(fputs(text, fp) >= 0, 1);
+    assert_int_equal(fclose(fp), 0);
+}
+
+static void expect_refused(const lie_scene *s, const char *out, const char *side, int entries, void **state)
+{
+    lie_error err;
+    lie_error_clear(&err);
+    assert_int_equal(export_with(s, out, 0, &err), LIE_ERR_IO);
+    assert_string_equal(err.file, side);
+    assert_string_equal(err.msg, "exists (use --force to overwrite)");
+    assert_int_equal(count_entries(*state), entries); /* nothing written, no temporary */
+}
+
+static void test_export_side_files_of_another_are_refused_unless_forced(void **state)
+{
+    lie_scene *s = load(SCENES "museum2.gltf");
+    const char *out = in_dir(state, "x.gltf");
+    char bin[PATH_MAX], png[PATH_MAX];
+    snprintf(bin, sizeof bin, "%s", in_dir(state, "x.bin"));
+    snprintf(png, sizeof png, "%s", in_dir(state, "x_tex0.png"));
+    lie_error err;
+    lie_error_clear(&err);
+
+    /* a .bin nobody listed */
+    write_text(bin, "someone else's");
+    expect_refused(s, out, bin, 1, state);
+    assert_true(has_text(bin, "someone else's"));
+    assert_int_equal(export_with(s, out, 1, &err), LIE_OK); /* forced */
+    assert_int_equal(count_entries(*state), 3);
+
+    /* our own files, untouched: replaced without --force */
+    assert_int_equal(export_with(s, out, 0, &err), LIE_OK);
+    assert_true(has_text(out, "\"lie.files\""));
+
+    /* ours once, changed since: refused */
+    FILE *fp = fopen(png, "ab");
+    assert_non_null(fp);
+    fputc('x', fp);
+    fclose(fp);
+    expect_refused(s, out, png, 3, state);
+
+    /* listed by a .gltf another program wrote: not ours either */
+    assert_int_equal(export_with(s, out, 1, &err), LIE_OK);
+    write_text(out, "{\"asset\":{\"version\":\"2.0\",\"generator\":\"other\","
+                    "\"extras\":{\"lie.files\":{\"x.bin\":\"0\"}}}}");
+    expect_refused(s, out, bin, 3, state);
+
+    /* a .glb has no side files: nothing to refuse */
+    assert_int_equal(export_with(s, in_dir(state, "x.glb"), 0, &err), LIE_OK);
+    lie_scene_destroy(s);
+}
+
 #define T(f) cmocka_unit_test_setup_teardown(f, make_dir, remove_dir)
 
 int main(void)
@@ -459,6 +610,9 @@ int main(void)
         T(test_export_into_missing_directory_fails_cleanly),
         T(test_export_failure_part_way_removes_files_written),
         T(test_export_to_stdout_or_own_sidecar_name_refused),
+        T(test_export_glb_round_trip_keeps_hash_and_textures),
+        T(test_export_gltf_to_glb_to_gltf_gives_the_same_files),
+        T(test_export_side_files_of_another_are_refused_unless_forced),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

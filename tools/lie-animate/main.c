@@ -267,6 +267,8 @@ int main(int argc, char **argv)
     int rc = 1, cam = -1;
     if (lie_scene_load(scene_path, &so, &s, &err) != LIE_OK)
         goto done;
+    if (!quiet)
+        lie_print_scene_warnings(prog, s, scene_path);
     if (s->n_animations == 0) {
         lie_error_set(&err, LIE_ERR_NOT_FOUND, scene_path, "the scene has no animations");
         goto done;

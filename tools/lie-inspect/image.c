@@ -26,6 +26,8 @@ int inspect_image(const char *path, const inspect_options *o)
     uint8_t *rgb = NULL;
     lie_camera cam;
     lie_status st = lie_cache_load_scene(l.cache, path, o->scene, &so, &s, &err);
+    if (st == LIE_OK && !o->quiet)
+        lie_print_scene_warnings(inspect_prog, s, path);
     if (st == LIE_OK && o->emitter >= s->n_emitters)
         st = lie_error_set(&err, LIE_ERR_ARG, path, "--emitter %d: the scene has %d emitters", o->emitter,
                            s->n_emitters);

@@ -68,7 +68,8 @@ static void usage(FILE *fp)
             "                            writing them (default %d)\n"
             "      --dry-run             clean: list what would be removed, remove nothing\n"
             "  -q, --quiet               verify, diff, clean: report by exit status only;\n"
-            "                            image: no progress bar\n"
+            "                            image: no progress bar; both: no scene warnings\n"
+            "                            (an image the decoder cannot read)\n"
             "  -h, --help                this help\n"
             "      --version             print the version\n",
             inspect_prog, INSPECT_DIFF_SHOWN, LIE_RENDER_WIDTH_DEFAULT, LIE_RENDER_HEIGHT_DEFAULT,

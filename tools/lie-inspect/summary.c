@@ -32,6 +32,8 @@ static int check_scene(const char *cache_path, const lie_cache *c, const inspect
     lie_error err;
     if (lie_cache_load_scene(c, cache_path, o->scene, &so, &s, &err) != LIE_OK)
         return inspect_fail(&err, 1);
+    if (!o->quiet)
+        lie_print_scene_warnings(inspect_prog, s, cache_path);
     int rc = 0;
     for (int e = 0; e < c->n_emitters && e < s->n_emitters; e++) {
         const lie_emitter *se = &s->emitters[e];

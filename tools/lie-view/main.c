@@ -683,6 +683,8 @@ int main(int argc, char **argv)
         return fail_line(&err);
     }
     const lie_scene *scene = view_world_scene(S.w);
+    if (!S.quiet)
+        lie_print_scene_warnings(prog, scene, input);
     lie_camera start;
     if (lie_camera_parse(scene, camera, &start, &err) != LIE_OK) {
         if (!err.file[0])

@@ -7,6 +7,7 @@
 #include <getopt.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 static const char *prog = "rst-update";
 
@@ -22,11 +23,18 @@ static void usage(FILE *fp)
             "\n"
             "  -o, --output FILE     the cache to write; - writes to stdout\n"
             "      --full            recompute everything (the reference for update = rebuild)\n"
-            "      --write-scene OUT.gltf  also write the edited scene as glTF\n"
+            "      --write-scene OUT.gltf|OUT.glb  also write the edited scene: .glb is one\n"
+            "                        binary glTF file (images inside); .gltf also writes\n"
+            "                        OUT.bin and OUT_texN.png beside it\n"
+            "      --force           let --write-scene replace side files (OUT.bin,\n"
+            "                        OUT_texN.png) that are not its own; its own are the\n"
+            "                        ones the OUT.gltf being replaced lists, with the hash\n"
+            "                        of the bytes they still hold (lie wrote them)\n"
             "      --threads N       worker threads (default: all cores)\n"
             "      --allow-external-uris  let glTF files reference files outside their folder\n"
             "      --stats[=json]    pairs flagged, pairs really changed, time per phase\n"
             "  -q, --quiet           no progress bar, no warnings\n"
+            "  -v, --verbose         each phase's time on stderr (load, update, write)\n"
             "  -h, --help            this help\n"
             "      --version         print the version\n"
             "\n"
@@ -39,20 +47,29 @@ static void usage(FILE *fp)
 
 static int fail(const lie_error *err) { return lie_report_error(prog, err, 1); }
 
-enum { OPT_FULL = 256, OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_WRITE_SCENE };
+enum { OPT_FULL = 256, OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_WRITE_SCENE, OPT_FORCE };
 
 static const struct option long_opts[] = {
     {"output", required_argument, NULL, 'o'},
     {"full", no_argument, NULL, OPT_FULL},
     {"write-scene", required_argument, NULL, OPT_WRITE_SCENE},
+    {"force", no_argument, NULL, OPT_FORCE},
     {"threads", required_argument, NULL, OPT_THREADS},
     {"allow-external-uris", no_argument, NULL, OPT_EXTERNAL},
     {"stats", optional_argument, NULL, OPT_STATS},
     {"quiet", no_argument, NULL, 'q'},
+    {"verbose", no_argument, NULL, 'v'},
     {"help", no_argument, NULL, 'h'},
     {"version", no_argument, NULL, OPT_VERSION},
     {NULL, 0, NULL, 0},
 };
+
+/* --write-scene names a .gltf or a .glb (lie_gltf_export_group). */
+static int scene_format_ok(const char *path)
+{
+    size_t n = strlen(path);
+    return (n > 5 && strcasecmp(path + n - 5, ".gltf") == 0) || (n > 4 && strcasecmp(path + n - 4, ".glb") == 0);
+}
 
 /* Read and parse every edit file first: a bad edit leaves everything untouched. */
 static lie_status read_edits(char **files, int n, lie_edit **edits, unsigned char **texts, size_t *sizes,
@@ -119,9 +136,17 @@ static void print_stats(const char *input, const lie_scene *s, const lie_update_
 }
 
 /* Read the cache and its scene, update them (lib/update), write the cache. */
-static lie_status run(const char *input, char **files, int n_files, const char *output, const char *scene_out,
-                      const lie_update_options *uo, int quiet, int stats, lie_error *err)
+/* What main hands run(). */
+typedef struct run_opts {
+    const char *output, *scene_out;
+    lie_gltf_export_options scene_opt;
+    int quiet, verbose, stats;
+} run_opts;
+
+static lie_status run(const char *input, char **files, int n_files, const lie_update_options *uo, const run_opts *ro,
+                      lie_error *err)
 {
+    int quiet = ro->quiet, stats = ro->stats;
     double t0 = lie_time_now();
     lie_cache *cache = NULL;
     lie_scene *scene = NULL;
@@ -141,17 +166,24 @@ static lie_status run(const char *input, char **files, int n_files, const char *
         st = lie_cache_load_scene(cache, input, NULL, &uo->scene, &scene, err);
     if (st == LIE_OK) {
         t_load = lie_time_now() - t0;
+        lie_phase(prog, ro->verbose, "load", t0);
+        if (!quiet)
+            lie_print_scene_warnings(prog, scene, input);
         st = lie_update_create(cache, scene, uo, &u, err);
     }
+    double tp = lie_phase(prog, ro->verbose && st == LIE_OK, "trees", t0 + t_load);
     for (int i = 0; st == LIE_OK && i < n_files; i++)
         st = lie_update_edit(u, edits[i], texts[i], sizes[i], err);
+    tp = lie_phase(prog, ro->verbose && st == LIE_OK, "edits", tp);
     if (st == LIE_OK)
         st = run_steps(u, quiet, err);
+    lie_phase(prog, ro->verbose && st == LIE_OK, "update", tp);
     if (st == LIE_OK && scene->n_emitters == 0 && !quiet)
         fprintf(stderr, "%s: %s: warning: the edited scene has no emitters: every pixel is black\n", prog, input);
     double ta = lie_time_now();
     if (st == LIE_OK)
-        st = lie_cache_write_with_scene(output, cache, scene, scene_out, &bytes, err);
+        st = lie_cache_write_with_scene(ro->output, cache, scene, ro->scene_out, &ro->scene_opt, &bytes, err);
+    lie_phase(prog, ro->verbose && st == LIE_OK, "write", ta);
     if (st == LIE_OK && stats) {
         lie_update_get_stats(u, &ust);
         print_stats(input, scene, &ust, t_load, lie_time_now() - ta, bytes, stats == 2);
@@ -172,16 +204,16 @@ static lie_status run(const char *input, char **files, int n_files, const char *
 int main(int argc, char **argv)
 {
     lie_update_options uo = lie_update_options_default();
-    const char *output = NULL, *scene_out = NULL;
-    int stats = 0, quiet = 0;
+    run_opts ro = {NULL, NULL, lie_gltf_export_options_default(), 0, 0, 0};
     long v;
     int c;
     opterr = 0;
-    while ((c = getopt_long(argc, argv, ":o:qh", long_opts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":o:qvh", long_opts, NULL)) != -1) {
         switch (c) {
-        case 'o': output = optarg; break;
+        case 'o': ro.output = optarg; break;
         case OPT_FULL: uo.full = 1; break;
-        case OPT_WRITE_SCENE: scene_out = optarg; break;
+        case OPT_WRITE_SCENE: ro.scene_out = optarg; break;
+        case OPT_FORCE: ro.scene_opt.force = 1; break;
         case OPT_THREADS:
             if (!lie_parse_long(optarg, 0, 4096, &v))
                 return usage_error("--threads: expected an integer in 0..4096, got '%s'", optarg);
@@ -189,10 +221,11 @@ int main(int argc, char **argv)
             break;
         case OPT_EXTERNAL: uo.scene.allow_external_uris = 1; break;
         case OPT_STATS:
-            if (!(stats = lie_parse_stats(optarg)))
+            if (!(ro.stats = lie_parse_stats(optarg)))
                 return usage_error("--stats: expected --stats or --stats=json, got '%s'", optarg);
             break;
-        case 'q': quiet = 1; break;
+        case 'q': ro.quiet = 1; break;
+        case 'v': ro.verbose = 1; break;
         case 'h': usage(stdout); return 0;
         case OPT_VERSION: { char vr[512]; lie_version_report(prog, vr, sizeof vr); fputs(vr, stdout); return 0; }
         case ':': return usage_error("%s: missing value", argv[optind - 1]);
@@ -203,8 +236,12 @@ int main(int argc, char **argv)
         return usage_error("%s", "missing input cache");
     if (optind + 1 >= argc)
         return usage_error("%s", "missing edit files");
-    if (!output)
+    if (!ro.output)
         return usage_error("%s", "missing -o CACHE");
+    if (ro.scene_out && strcmp(ro.scene_out, "-") == 0)
+        return usage_error("%s", "--write-scene: not to stdout: name a .gltf or .glb file");
+    if (ro.scene_out && !scene_format_ok(ro.scene_out))
+        return usage_error("--write-scene: %s: cannot write this format: use .gltf or .glb", ro.scene_out);
     const char *input = argv[optind];
     int n_files = argc - optind - 1;
     char **files = argv + optind + 1;
@@ -213,7 +250,7 @@ int main(int argc, char **argv)
             return usage_error("%s", "only one of the cache and the edit files can be stdin");
     lie_error err;
     lie_error_clear(&err);
-    if (run(input, files, n_files, output, scene_out, &uo, quiet, stats, &err) != LIE_OK)
+    if (run(input, files, n_files, &uo, &ro, &err) != LIE_OK)
         return fail(&err);
     return 0;
 }
