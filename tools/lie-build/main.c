@@ -433,9 +433,6 @@ int main(int argc, char **argv)
         return fail(&err);
     if (!quiet)
         lie_print_scene_warnings(prog, scene, input);
-    if (scene->n_emitters == 0 && !quiet)
-        fprintf(stderr, "%s: %s: warning: no emitters (no emissive material, no KHR_lights_punctual light): "
-                        "the cache holds no environments\n", prog, input);
     uint64_t loaded_hash = scene->hash;
     if (apply_edits(scene, &so, edit_log, n_edits, resume, &err) != LIE_OK) {
         free_edits(edit_log, n_edits);
@@ -443,6 +440,9 @@ int main(int argc, char **argv)
         lie_scene_destroy(scene);
         return fail(&err);
     }
+    if (scene->n_emitters == 0 && !quiet) /* after --edit, which may add some */
+        fprintf(stderr, "%s: %s: warning: no emitters (no emissive material, no KHR_lights_punctual light): "
+                        "the cache holds no environments\n", prog, input);
     double t1 = lie_phase(prog, verbose, "load", t0);
     lie_rt *rt = NULL;
     if (lie_rt_create(scene, &rt, &err) != LIE_OK) {
