@@ -216,6 +216,7 @@ lie_status lie_parallel_for_ordered(size_t n, int threads, lie_parallel_fn fn, v
 /* ---- time and progress ------------------------------------------------ */
 
 double lie_time_now(void); /* seconds, monotonic */
+double lie_cpu_time(void); /* the process's CPU seconds, user and system, over all threads */
 
 /* A progress bar on `stream` if it is a terminal and `enabled`, redrawn at
  * most a few times a second, with the elapsed time, the rate (in `unit`s

@@ -149,9 +149,9 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     }
     if (stats) {
         stats->workers = rep.workers;
-        stats->seconds_cpu_sum += rep.cpu_sum;
-        stats->seconds_cpu_max += rep.cpu_max;
-        stats->seconds_tail += rep.tail;
+        stats->seconds_cpu_sum += c.par_cpu_sum + rep.cpu_sum;
+        stats->seconds_cpu_max += c.par_cpu_max + rep.cpu_max;
+        stats->seconds_tail += c.par_tail + rep.tail;
     }
     if (st == LIE_OK)
         st = assemble(env, c.out, c.tri_lo, n_items, s->n_emitters, old_unit, unit_lo, unit_hi);

@@ -60,6 +60,9 @@ typedef struct build_ctx {
     int32_t *memo_new;    /* open-addressing table of the memo entries of new nodes */
     size_t memo_new_mask;
     const volatile sig_atomic_t *stop; /* lie_build_control.stop, or NULL */
+    /* the parallel loops' CPU seconds so far (lie_parallel_report): summed
+     * over workers, the busiest worker's per loop summed, idle tails */
+    double par_cpu_sum, par_cpu_max, par_tail;
     double *halton;       /* radical inverses in bases 2, 3, 5, 7 of 0..n_halton-1 */
     uint32_t n_halton;
 } build_ctx;

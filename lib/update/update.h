@@ -97,6 +97,9 @@ typedef struct lie_update_stats {
     uint64_t nodes_recomputed; /* patch-tree nodes computed by the steps */
     lie_rst_stats rst;         /* the trees the flags came from */
     double seconds_rst, seconds_edit, seconds_query, seconds_bvh, seconds_update;
+    /* the recomputation's parallel loops (lie_build_stats): CPU seconds of
+     * all workers, of the busiest worker per loop, idle tails */
+    double seconds_cpu_workers, seconds_cpu_worker_max, seconds_tail;
 } lie_update_stats;
 
 typedef struct lie_update lie_update;

@@ -9,7 +9,6 @@
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 static const char *prog = "lie-build";
 
@@ -166,15 +165,6 @@ static const char *signal_name(int sig)
     return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : sig == SIGHUP ? "SIGHUP" : "a signal";
 }
 
-/* The process's CPU seconds, user and system, over every thread. */
-static double process_cpu(void)
-{
-    struct timespec ts;
-    if (clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts) != 0)
-        return 0.0;
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* --edit: read, parse and apply each edit file in order (a resumed build's
  * log must hold the same texts); edit_log[i].name is set, text and size
  * are filled. */
@@ -246,7 +236,7 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
                 mean, (unsigned long long)st->segments, (unsigned long long)st->splits_undone,
                 env->n_nodes, env->n_pool, t_load, t_bvh, t_build, t_write,
                 bytes, env->partial ? "true" : "false", (unsigned long long)st->units_copied,
-                (unsigned long long)st->units_interrupted, st->workers, process_cpu(), st->seconds_cpu_sum,
+                (unsigned long long)st->units_interrupted, st->workers, lie_cpu_time(), st->seconds_cpu_sum,
                 st->seconds_cpu_max, st->seconds_tail);
         lie_dist_stats_print(stderr, "units", 1);
         fprintf(stderr, "}\n");
@@ -278,7 +268,7 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
     fprintf(stderr, "  time: load %.3f s, bvh %.3f s, build %.3f s, write %.3f s\n", t_load, t_bvh, t_build,
             t_write);
     fprintf(stderr, "  cpu: %.3f s in all; the build's %d workers %.3f s, the busiest %.3f s, cores idle for the "
-                    "last %.3f s\n", process_cpu(), st->workers, st->seconds_cpu_sum, st->seconds_cpu_max,
+                    "last %.3f s\n", lie_cpu_time(), st->workers, st->seconds_cpu_sum, st->seconds_cpu_max,
             st->seconds_tail);
     if (st->units_copied || st->units_interrupted || env->partial)
         fprintf(stderr, "  units: %llu copied from the resumed cache, %llu left unbuilt by an interruption%s\n",
