@@ -19,6 +19,7 @@ void lie_cache_destroy(lie_cache *c)
         free(c->edits[i].text);
     }
     free(c->edits);
+    free(c->views.cams);
     lie_env_destroy(c->env);
     free(c);
 }
@@ -31,7 +32,7 @@ void lie_cache_section_name(uint32_t id, char name[16])
     } known[] = {
         {LIE_CACHE_ID_META, "META"},         {LIE_CACHE_ID_PARAMS, "PARAMS"}, {LIE_CACHE_ID_EDITS, "EDITS"},
         {LIE_CACHE_ID_EMITTERS, "EMITTERS"}, {LIE_CACHE_ID_ROOTS, "ROOTS"},   {LIE_CACHE_ID_NODES, "NODES"},
-        {LIE_CACHE_ID_POOL, "POOL"},         {LIE_CACHE_ID_RST, "RST"},
+        {LIE_CACHE_ID_POOL, "POOL"},         {LIE_CACHE_ID_RST, "RST"},       {LIE_CACHE_ID_VIEWS, "VIEWS"},
     };
     for (size_t i = 0; i < sizeof known / sizeof known[0]; i++) {
         if (known[i].id == id) {
@@ -52,11 +53,11 @@ void lie_cache_section_name(uint32_t id, char name[16])
 
 /* ---- encoding ------------------------------------------------------------ */
 
-enum { S_META, S_PARAMS, S_EDITS, S_EMITTERS, S_ROOTS, S_NODES, S_POOL, S_COUNT };
+enum { S_META, S_PARAMS, S_EDITS, S_EMITTERS, S_ROOTS, S_NODES, S_POOL, S_VIEWS, S_COUNT };
 
 static const uint32_t section_ids[S_COUNT] = {
     LIE_CACHE_ID_META, LIE_CACHE_ID_PARAMS, LIE_CACHE_ID_EDITS, LIE_CACHE_ID_EMITTERS,
-    LIE_CACHE_ID_ROOTS, LIE_CACHE_ID_NODES, LIE_CACHE_ID_POOL,
+    LIE_CACHE_ID_ROOTS, LIE_CACHE_ID_NODES, LIE_CACHE_ID_POOL, LIE_CACHE_ID_VIEWS,
 };
 
 /* Everything a reader would reject is refused here too, so a cache that
@@ -94,6 +95,9 @@ static lie_status check_cache(const lie_cache *c, const char *name, lie_error *e
         if (!ed->name || strlen(ed->name) > UINT32_MAX || ed->size > UINT32_MAX || (ed->size && !ed->text))
             return lie_error_set(err, LIE_ERR_ARG, name, "refusing to write a cache: edit %d is malformed", i);
     }
+    const char *vwhy = lie_cache_check_views(&c->views);
+    if (vwhy)
+        return lie_error_set(err, LIE_ERR_ARG, name, "refusing to write a cache: views: %s", vwhy);
     if (!env->root || !env->nodes || (env->n_pool && !env->pool))
         return lie_error_set(err, LIE_ERR_ARG, name, "refusing to write a cache: env arrays missing");
     return lie_cache_check_env(env, LIE_ERR_ARG, name, "refusing to write an invalid env: ", err);
@@ -121,8 +125,11 @@ static lie_status encode(const lie_cache *c, const char *name, unsigned char **d
     sz[S_ROOTS] = 4 * n_units;
     sz[S_NODES] = LIE_CACHE_NODE_SIZE * (uint64_t)env->n_nodes;
     sz[S_POOL] = 4 * (uint64_t)env->n_pool;
-    uint64_t pos = LIE_CACHE_HEADER_SIZE + LIE_CACHE_ENTRY_SIZE * S_COUNT;
-    for (int s = 0; s < S_COUNT; s++) {
+    sz[S_VIEWS] = LIE_CACHE_VIEWS_FIXED + LIE_CACHE_VIEW_SIZE * (uint64_t)c->views.n_cams;
+    /* VIEWS only in a cache built for views: others keep their layout */
+    const int n_sections = c->views.n_cams ? S_COUNT : S_VIEWS;
+    uint64_t pos = LIE_CACHE_HEADER_SIZE + LIE_CACHE_ENTRY_SIZE * (uint64_t)n_sections;
+    for (int s = 0; s < n_sections; s++) {
         off[s] = pos;
         pos = lie_cache_align8(pos + sz[s]);
     }
@@ -140,7 +147,7 @@ static lie_status encode(const lie_cache *c, const char *name, unsigned char **d
     lie_cache_put_u32(buf + 8, LIE_CACHE_VERSION);
     lie_cache_put_u32(buf + 12, 0); /* required flags */
     lie_cache_put_u32(buf + 16, env->partial ? LIE_CACHE_OPT_PARTIAL : 0u); /* optional flags */
-    lie_cache_put_u32(buf + 20, S_COUNT);
+    lie_cache_put_u32(buf + 20, (uint32_t)n_sections);
     lie_cache_put_u64(buf + 24, total);
 
     /* META */
@@ -165,6 +172,11 @@ static lie_status encode(const lie_cache *c, const char *name, unsigned char **d
     lie_cache_put_u32(p + 16, lie_cache_f32_bits(env->params.min_patch));
     lie_cache_put_u32(p + 20, (uint32_t)env->params.mode);
     lie_cache_put_u32(p + 24, lie_cache_f32_bits(env->params.split_gain));
+    lie_cache_put_u32(p + 28, env->params.frames);
+    lie_cache_put_u32(p + 32, env->params.light_samples);
+    lie_cache_put_u32(p + 36, lie_cache_f32_bits(env->params.ns_segment));
+    lie_cache_put_u32(p + 40, lie_cache_f32_bits(env->params.ns_blocker));
+    lie_cache_put_u32(p + 44, lie_cache_f32_bits(env->params.ns_ray));
 
     /* EDITS */
     p = buf + off[S_EDITS];
@@ -208,8 +220,26 @@ static lie_status encode(const lie_cache *c, const char *name, unsigned char **d
     for (uint32_t i = 0; i < env->n_pool; i++, p += 4)
         lie_cache_put_u32(p, env->pool[i]);
 
+    /* VIEWS */
+    if (n_sections > S_VIEWS) {
+        p = buf + off[S_VIEWS];
+        lie_cache_put_u32(p + 0, (uint32_t)c->views.width);
+        lie_cache_put_u32(p + 4, (uint32_t)c->views.height);
+        lie_cache_put_u32(p + 8, (uint32_t)c->views.max_depth);
+        lie_cache_put_u32(p + 12, (uint32_t)c->views.n_cams);
+        p += LIE_CACHE_VIEWS_FIXED;
+        for (int i = 0; i < c->views.n_cams; i++) {
+            const lie_camera *cam = &c->views.cams[i];
+            const float f[12] = {cam->eye.x,     cam->eye.y,     cam->eye.z, cam->forward.x, cam->forward.y,
+                                 cam->forward.z, cam->up.x,      cam->up.y,  cam->up.z,      cam->yfov,
+                                 cam->aspect,    cam->ymag};
+            for (int k = 0; k < 12; k++, p += 4)
+                lie_cache_put_u32(p, lie_cache_f32_bits(f[k]));
+        }
+    }
+
     /* section table, then the file checksum over everything before it */
-    for (int s = 0; s < S_COUNT; s++) {
+    for (int s = 0; s < n_sections; s++) {
         unsigned char *t = buf + LIE_CACHE_HEADER_SIZE + LIE_CACHE_ENTRY_SIZE * (size_t)s;
         lie_cache_put_u32(t + 0, section_ids[s]);
         lie_cache_put_u32(t + 4, 0);

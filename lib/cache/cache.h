@@ -16,7 +16,7 @@
 extern "C" {
 #endif
 
-#define LIE_CACHE_VERSION 2u
+#define LIE_CACHE_VERSION 3u
 /* optional_flags bit: an interrupted lie-build (env->partial); a reader
  * that ignores it still renders correctly, as the unbuilt units are class
  * none (formats/lie-cache.md) */
@@ -37,6 +37,14 @@ typedef struct lie_cache_edit {
     size_t size;
 } lie_cache_edit;
 
+/* The views a cache was built for: cameras sampled through a width x
+ * height image, 2 x 2 rays a pixel, through up to max_depth mirrors. */
+typedef struct lie_cache_views {
+    lie_camera *cams;        /* owned; names are not kept (NULL) */
+    int n_cams;
+    int width, height, max_depth;
+} lie_cache_views;
+
 typedef struct lie_cache {
     char *scene_path;        /* as given to lie-build */
     uint64_t scene_hash;     /* content hash of the scene as loaded from the file */
@@ -47,6 +55,10 @@ typedef struct lie_cache {
     lie_cache_edit *edits;
     int n_edits;
     lie_env *env;            /* owned; env->params are the build parameters */
+    /* lie-build --view/--path: the views the units were built for (§4.3.1),
+     * which an update samples again to keep their decisions (none: every
+     * unit was built, as fine as its lists need) */
+    lie_cache_views views;
 } lie_cache;
 
 /* Free everything the cache owns (env included); NULL is fine. */

@@ -23,6 +23,33 @@ const char *lie_cache_check_emitter(const lie_cache_emitter *e, uint32_t n_tris)
     return NULL;
 }
 
+static int finite_f(float f) { return f == f && f - f == 0.0f; }
+
+const char *lie_cache_check_views(const lie_cache_views *v)
+{
+    if (v->n_cams == 0)
+        return NULL;
+    if (v->n_cams < 0 || !v->cams)
+        return "bad camera array";
+    if (v->width < 1 || v->width > LIE_CACHE_VIEW_MAX || v->height < 1 || v->height > LIE_CACHE_VIEW_MAX)
+        return "image size out of range";
+    if (v->max_depth < 0 || v->max_depth > 64)
+        return "mirror depth out of range";
+    for (int i = 0; i < v->n_cams; i++) {
+        const lie_camera *c = &v->cams[i];
+        const float f[12] = {c->eye.x, c->eye.y, c->eye.z, c->forward.x, c->forward.y, c->forward.z,
+                             c->up.x,  c->up.y,  c->up.z,  c->yfov,      c->aspect,    c->ymag};
+        for (int k = 0; k < 12; k++)
+            if (!finite_f(f[k]) || f[k] > 1e30f || f[k] < -1e30f)
+                return "a camera field is not a finite number";
+        if (lie_v3_dot(c->forward, c->forward) < 0.25f || lie_v3_dot(c->up, c->up) < 0.25f)
+            return "a camera's forward or up is not a unit vector";
+        if (c->aspect < 0.0f || c->ymag < 0.0f || (c->ymag == 0.0f && !(c->yfov > 0.0f && c->yfov < 3.1415f)))
+            return "a camera's field of view, aspect or height is out of range";
+    }
+    return NULL;
+}
+
 /* Per node: 0 = not reached yet, else its depth + 1. */
 typedef uint8_t node_state;
 

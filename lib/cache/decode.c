@@ -144,7 +144,9 @@ static lie_status parse_meta(const unsigned char *p, uint64_t size, const char *
 static lie_status parse_params(const unsigned char *p, uint64_t size, uint32_t version, const char *name,
                                lie_build_params *bp, lie_error *err)
 {
-    const uint32_t want = version == 1 ? LIE_CACHE_PARAMS_SIZE_V1 : LIE_CACHE_PARAMS_SIZE;
+    const uint32_t want = version == 1   ? LIE_CACHE_PARAMS_SIZE_V1
+                          : version == 2 ? LIE_CACHE_PARAMS_SIZE_V2
+                                         : LIE_CACHE_PARAMS_SIZE;
     if (size != want)
         return FAIL("section PARAMS: %llu bytes, expected %u", (ull)size, want);
     memset(bp, 0, sizeof *bp);
@@ -160,9 +162,53 @@ static lie_status parse_params(const unsigned char *p, uint64_t size, uint32_t v
     /* version 1 caches were built splitting wherever a list was too long */
     bp->split_gain = version == 1 ? 0.0f : lie_cache_bits_f32(lie_cache_get_u32(p + 24));
     bp->threads = 0;
+    /* the cost model came with version 3; it decides nothing in a cache
+     * without views, and older caches have none */
+    lie_build_params d = lie_build_params_default();
+    bp->frames = version >= 3 ? lie_cache_get_u32(p + 28) : d.frames;
+    bp->light_samples = version >= 3 ? lie_cache_get_u32(p + 32) : d.light_samples;
+    bp->ns_segment = version >= 3 ? lie_cache_bits_f32(lie_cache_get_u32(p + 36)) : d.ns_segment;
+    bp->ns_blocker = version >= 3 ? lie_cache_bits_f32(lie_cache_get_u32(p + 40)) : d.ns_blocker;
+    bp->ns_ray = version >= 3 ? lie_cache_bits_f32(lie_cache_get_u32(p + 44)) : d.ns_ray;
     lie_error perr;
     if (lie_build_params_check(bp, &perr) != LIE_OK)
         return FAIL("section PARAMS: %s", perr.msg);
+    return LIE_OK;
+}
+
+static lie_status parse_views(const unsigned char *p, uint64_t size, const char *name, lie_cache *c, lie_error *err)
+{
+    if (size < LIE_CACHE_VIEWS_FIXED)
+        return FAIL("section VIEWS: %llu bytes, too short", (ull)size);
+    uint32_t n = lie_cache_get_u32(p + 12);
+    if (n == 0 || n > (size - LIE_CACHE_VIEWS_FIXED) / LIE_CACHE_VIEW_SIZE ||
+        size != LIE_CACHE_VIEWS_FIXED + (uint64_t)LIE_CACHE_VIEW_SIZE * n)
+        return FAIL("section VIEWS: %u views do not fill %llu bytes", n, (ull)size);
+    uint32_t w = lie_cache_get_u32(p), h = lie_cache_get_u32(p + 4), d = lie_cache_get_u32(p + 8);
+    if (w < 1 || w > LIE_CACHE_VIEW_MAX || h < 1 || h > LIE_CACHE_VIEW_MAX || d > 64)
+        return FAIL("section VIEWS: image %ux%u or mirror depth %u out of range", w, h, d);
+    lie_cache_views v = {calloc(n, sizeof *v.cams), (int)n, (int)w, (int)h, (int)d};
+    if (!v.cams)
+        return lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory");
+    const unsigned char *q = p + LIE_CACHE_VIEWS_FIXED;
+    for (uint32_t i = 0; i < n; i++) {
+        float f[12];
+        for (int k = 0; k < 12; k++, q += 4)
+            f[k] = lie_cache_bits_f32(lie_cache_get_u32(q));
+        lie_camera *cam = &v.cams[i];
+        cam->eye = (lie_vec3){f[0], f[1], f[2]};
+        cam->forward = (lie_vec3){f[3], f[4], f[5]};
+        cam->up = (lie_vec3){f[6], f[7], f[8]};
+        cam->yfov = f[9];
+        cam->aspect = f[10];
+        cam->ymag = f[11];
+    }
+    const char *why = lie_cache_check_views(&v);
+    if (why) {
+        free(v.cams);
+        return FAIL("section VIEWS: %s", why);
+    }
+    c->views = v;
     return LIE_OK;
 }
 
@@ -313,6 +359,9 @@ lie_status lie_cache_decode(const unsigned char *data, size_t size, const char *
         st = parse_emitters(data + s[3]->offset, s[3]->size, name, &m, c, err);
     if (st == LIE_OK)
         st = parse_env(data, s[4], s[5], s[6], name, &m, env, err);
+    const lie_cache_section *sv = find(sec, n, LIE_CACHE_ID_VIEWS);
+    if (st == LIE_OK && sv && lie_cache_get_u32(data + 8) >= 3)
+        st = parse_views(data + sv->offset, sv->size, name, c, err);
     if (st != LIE_OK) {
         lie_cache_destroy(c);
         return st;

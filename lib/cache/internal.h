@@ -12,8 +12,11 @@
 #define LIE_CACHE_HEADER_SIZE 32u
 #define LIE_CACHE_ENTRY_SIZE 32u
 #define LIE_CACHE_META_FIXED 48u
-#define LIE_CACHE_PARAMS_SIZE 28u    /* version 2; version 1: 24 (no split_gain) */
+#define LIE_CACHE_PARAMS_SIZE 48u    /* version 3; version 2: 28 (no cost model); version 1: 24 */
+#define LIE_CACHE_PARAMS_SIZE_V2 28u
 #define LIE_CACHE_PARAMS_SIZE_V1 24u
+#define LIE_CACHE_VIEWS_FIXED 16u
+#define LIE_CACHE_VIEW_SIZE 48u
 #define LIE_CACHE_EMITTER_SIZE 16u
 #define LIE_CACHE_NODE_SIZE 20u
 
@@ -28,6 +31,7 @@
 #define LIE_CACHE_ID_NODES LIE_CACHE_ID('N', 'O', 'D', 'E')
 #define LIE_CACHE_ID_POOL LIE_CACHE_ID('P', 'O', 'O', 'L')
 #define LIE_CACHE_ID_RST LIE_CACHE_ID('R', 'S', 'T', 'S') /* reserved for rst-update */
+#define LIE_CACHE_ID_VIEWS LIE_CACHE_ID('V', 'I', 'E', 'W')
 
 static inline void lie_cache_put_u32(unsigned char *p, uint32_t v)
 {
@@ -84,5 +88,8 @@ lie_status lie_cache_check_env(const lie_env *env, lie_status status, const char
 /* Check one emitter record against a scene of n_tris triangles; returns a
  * static description of the problem, or NULL when the record is valid. */
 const char *lie_cache_check_emitter(const lie_cache_emitter *e, uint32_t n_tris);
+/* NULL, or what is wrong with the views (formats/lie-cache.md, VIEWS). */
+#define LIE_CACHE_VIEW_MAX 16384
+const char *lie_cache_check_views(const lie_cache_views *v);
 
 #endif

@@ -109,6 +109,10 @@ static inline void lie_box3_grow(lie_box3 *b, lie_vec3 p)
     b->hi = lie_v3_max(b->hi, p);
 }
 static inline int lie_box3_is_empty(const lie_box3 *b) { return !(b->lo.x <= b->hi.x); }
+/* A sphere around n points, as x, y, z, r: their box's centre and the
+ * farthest point's distance, enlarged so rounding never leaves a point out
+ * (culling tests may trust it). */
+void lie_bound_sphere(const lie_vec3 *p, uint32_t n, float sphere[4]);
 
 /* Orthonormal basis around unit vector n (Duff et al. 2017, branchless). */
 void lie_onb(lie_vec3 n, lie_vec3 *t, lie_vec3 *b);

@@ -152,3 +152,19 @@ lie_mat4 lie_mat4_translation(double x, double y, double z)
     r.m[14] = z;
     return r;
 }
+
+void lie_bound_sphere(const lie_vec3 *p, uint32_t n, float sphere[4])
+{
+    lie_box3 b = lie_box3_empty();
+    for (uint32_t i = 0; i < n; i++)
+        lie_box3_grow(&b, p[i]);
+    lie_vec3 c = lie_v3_scale(lie_v3_add(b.lo, b.hi), 0.5f);
+    float r = 0.0f;
+    for (uint32_t i = 0; i < n; i++)
+        r = fmaxf(r, lie_v3_len(lie_v3_sub(p[i], c)));
+    float mag = fmaxf(fabsf(c.x), fmaxf(fabsf(c.y), fabsf(c.z)));
+    sphere[0] = c.x;
+    sphere[1] = c.y;
+    sphere[2] = c.z;
+    sphere[3] = r * 1.001f + 1e-5f * fmaxf(1.0f, mag);
+}

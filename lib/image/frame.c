@@ -99,7 +99,7 @@ void lie_frame_destroy(lie_frame *f)
 #define SRGB_LINEAR_KNEE 0.0031306684425005883
 #define SRGB_ENCODED_KNEE (12.92 * SRGB_LINEAR_KNEE)
 
-float lie_linear_to_srgb(float x)
+float lie_image_srgb_encode(float x)
 {
     if (!(x > 0.0f))
         return 0.0f; /* also NaN */
@@ -109,7 +109,7 @@ float lie_linear_to_srgb(float x)
     return (float)(v <= SRGB_LINEAR_KNEE ? 12.92 * v : 1.055 * pow(v, 1.0 / 2.4) - 0.055);
 }
 
-float lie_srgb_to_linear(float x)
+float lie_image_srgb_decode(float x)
 {
     if (!(x > 0.0f))
         return 0.0f;

@@ -159,8 +159,8 @@ lie_status lie_frame_write(const char *path, const lie_frame *f, const lie_frame
 
 /* Linear to sRGB-encoded value (IEC 61966-2-1); both clamp to [0, 1] and
  * map NaN to 0. */
-float lie_linear_to_srgb(float x);
-float lie_srgb_to_linear(float x);
+float lie_image_srgb_encode(float x);
+float lie_image_srgb_decode(float x);
 
 #ifdef __cplusplus
 }

@@ -101,7 +101,7 @@ lie_status lie_png_write_rgb8(const char *path, int width, int height, const uin
 /* clamp(srgb(x)) to 8 bits, rounded to nearest; NaN gives 0. */
 static uint8_t encode_8bit(float x)
 {
-    float v = lie_linear_to_srgb(x);
+    float v = lie_image_srgb_encode(x);
     if (!(v > 0.0f))
         return 0;
     if (v >= 1.0f)

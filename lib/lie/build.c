@@ -21,6 +21,9 @@
 
 static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32_t n_tris, int n_emitters,
                            const int32_t *old_unit, uint64_t unit_lo, uint64_t unit_hi);
+static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                              const uint8_t *tri_mask, const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
+                              lie_env_part *out, lie_build_stats *stats, lie_error *err);
 
 static void workers_free(worker *ws, int n)
 {
@@ -58,7 +61,7 @@ static uint32_t *build_weights(const build_ctx *c, uint32_t n_items, size_t ne)
                 pairs -= c->old_unit[u] >= 0; /* copied */
         double ratio = c->min_area > 0.0f ? (double)c->s->tri_area[tri] / (double)c->min_area : 1.0;
         double depth = 1.0 + (ratio > 1.0 ? pow(ratio, 0.75) : 0.0);
-        if (c->tri_mask && !c->tri_mask[tri])
+        if (!lie_subdiv_seen(c, tri))
             depth = 0.05;
         double v = (double)(pairs ? pairs : 1) * (pairs ? depth : 0.05) * 4.0;
         w[i] = v < 1.0 ? 1u : v > 1e9 ? 1000000000u : (uint32_t)v;
@@ -89,8 +92,9 @@ static uint32_t *heaviest_first(const uint32_t *w, uint32_t n)
  * concatenate the per-triangle buffers in unit order.  `stop` (may be
  * NULL) interrupts it: env->partial says whether a unit was left out. */
 static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, const int32_t *old_unit,
-                           const uint8_t *node_flags, const uint8_t *tri_mask, uint64_t unit_lo, uint64_t unit_hi,
-                           int threads, lie_progress *progress, const volatile sig_atomic_t *stop,
+                           const uint8_t *node_flags, const uint8_t *tri_mask, const lie_pixels *px,
+                           uint64_t unit_lo, uint64_t unit_hi, int threads, lie_progress *progress,
+                           const volatile sig_atomic_t *stop,
                            lie_build_stats *stats)
 {
     build_ctx c;
@@ -104,6 +108,7 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     c.old_unit = old_unit;
     c.node_flags = node_flags;
     c.tri_mask = tri_mask;
+    c.pix = px;
     c.stop = stop;
     /* the triangles holding units [unit_lo, unit_hi) */
     size_t ne = s->n_emitters > 0 ? (size_t)s->n_emitters : 1;
@@ -293,6 +298,17 @@ lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_
     return lie_env_build_with(s, rt, p, &ctl, out, stats, err);
 }
 
+lie_status lie_env_build_views(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                               const lie_pixels *px, lie_progress *progress, lie_env **out,
+                               lie_build_stats *stats, lie_error *err)
+{
+    lie_build_control ctl;
+    memset(&ctl, 0, sizeof ctl);
+    ctl.pixels = px;
+    ctl.progress = progress;
+    return lie_env_build_with(s, rt, p, &ctl, out, stats, err);
+}
+
 /* A resumed env must be the interrupted build of this very build: the same
  * scene and every parameter a cache stores. */
 static lie_status resume_check(const lie_env *r, const lie_scene *s, const lie_build_params *p, lie_error *err)
@@ -314,6 +330,9 @@ lie_status lie_env_build_with(const lie_scene *s, const lie_rt *rt, const lie_bu
     *out = NULL;
     if (lie_build_params_check(p, err) != LIE_OK)
         return LIE_ERR_ARG;
+    if (ctl->pixels && ctl->pixels->n_tris != s->n_tris)
+        return lie_error_set(err, LIE_ERR_ARG, s->path, "pixels for %u triangles, not %u", ctl->pixels->n_tris,
+                             s->n_tris);
     if (ctl->resume && resume_check(ctl->resume, s, p, err) != LIE_OK)
         return LIE_ERR_ARG;
     double t0 = lie_time_now();
@@ -352,8 +371,8 @@ lie_status lie_env_build_with(const lie_scene *s, const lie_rt *rt, const lie_bu
     env->scene_hash = s->hash;
     if (stats)
         memset(stats, 0, sizeof *stats);
-    lie_status st = run_build(env, s, rt, old_unit, NULL, ctl->tri_mask, 0, n_units, p->threads, ctl->progress,
-                              ctl->stop, stats);
+    lie_status st = run_build(env, s, rt, old_unit, NULL, ctl->tri_mask, ctl->pixels, 0, n_units, p->threads,
+                              ctl->progress, ctl->stop, stats);
     free(old_unit);
     if (st != LIE_OK) {
         lie_env_destroy(env);
@@ -372,6 +391,23 @@ lie_status lie_env_build_range(const lie_scene *s, const lie_rt *rt, const lie_b
                                const uint8_t *tri_mask, uint64_t first_unit, uint64_t n_units, lie_env_part *out,
                                lie_build_stats *stats, lie_error *err)
 {
+    return build_range(s, rt, p, tri_mask, NULL, first_unit, n_units, out, stats, err);
+}
+
+lie_status lie_env_build_range_views(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                                     const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
+                                     lie_env_part *out, lie_build_stats *stats, lie_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (px && px->n_tris != s->n_tris)
+        return lie_error_set(err, LIE_ERR_ARG, s->path, "pixels for %u triangles, not %u", px->n_tris, s->n_tris);
+    return build_range(s, rt, p, NULL, px, first_unit, n_units, out, stats, err);
+}
+
+static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                              const uint8_t *tri_mask, const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
+                              lie_env_part *out, lie_build_stats *stats, lie_error *err)
+{
     memset(out, 0, sizeof *out);
     if (lie_build_params_check(p, err) != LIE_OK)
         return LIE_ERR_ARG;
@@ -388,7 +424,8 @@ lie_status lie_env_build_range(const lie_scene *s, const lie_rt *rt, const lie_b
         memset(stats, 0, sizeof *stats);
     lie_status st = LIE_OK;
     if (n_units)
-        st = run_build(&part, s, rt, NULL, NULL, tri_mask, first_unit, first_unit + n_units, p->threads, NULL, NULL, stats);
+        st = run_build(&part, s, rt, NULL, NULL, tri_mask, px, first_unit, first_unit + n_units, p->threads, NULL,
+                       NULL, stats);
     if (st != LIE_OK) {
         free(part.root);
         free(part.nodes);
@@ -432,10 +469,19 @@ lie_status lie_env_rebuild_units(lie_env *env, const lie_scene *s, const lie_rt 
 lie_status lie_env_update(lie_env *env, const lie_scene *s, const lie_rt *rt, const int32_t *old_unit,
                           const uint8_t *node_flags, int threads, lie_build_stats *stats, lie_error *err)
 {
+    return lie_env_update_views(env, s, rt, NULL, old_unit, node_flags, threads, stats, err);
+}
+
+lie_status lie_env_update_views(lie_env *env, const lie_scene *s, const lie_rt *rt, const lie_pixels *px,
+                                const int32_t *old_unit, const uint8_t *node_flags, int threads,
+                                lie_build_stats *stats, lie_error *err)
+{
+    if (px && px->n_tris != s->n_tris)
+        return lie_error_set(err, LIE_ERR_ARG, s->path, "pixels for %u triangles, not %u", px->n_tris, s->n_tris);
     double t0 = lie_time_now();
     if (stats)
         memset(stats, 0, sizeof *stats);
-    lie_status st = run_build(env, s, rt, old_unit, node_flags, NULL, 0,
+    lie_status st = run_build(env, s, rt, old_unit, node_flags, NULL, px, 0,
                               (uint64_t)s->n_tris * (uint64_t)s->n_emitters, threads, NULL, NULL, stats);
     if (stats)
         stats->seconds = lie_time_now() - t0;

@@ -54,6 +54,16 @@ typedef struct lie_build_params {
     int threads;           /* not stored in caches: results never depend on it */
     uint64_t max_nodes;    /* patch-tree nodes a build may make (--max-nodes); 0: the default.
                               Not stored in caches: a build within it gives the same cache */
+    /* The cost model (§4.3.3; Table 2's "simple cost model"), in time units,
+     * used where a build knows the pixels that see each patch (views): a
+     * split pays if the render time it saves over `frames` frames of
+     * `light_samples` shadow rays per pixel and emitter beats its build
+     * time.  The constants are measured (make bench-build prints them). */
+    uint32_t frames;        /* frames the cache is expected to serve (--frames) */
+    uint32_t light_samples; /* shadow rays per pixel and emitter in those frames */
+    float ns_segment;       /* build: one sampled shadow segment, in ns */
+    float ns_blocker;       /* render: one blocker-list triangle test, in ns */
+    float ns_ray;           /* render: one Embree shadow ray (complex and unbuilt pairs), in ns */
 } lie_build_params;
 
 #define LIE_SAMPLES_DEFAULT 128u
@@ -62,6 +72,16 @@ typedef struct lie_build_params {
 #define LIE_COMPLEX_CAP_DEFAULT 128u
 #define LIE_MIN_PATCH_DEFAULT 1e-4f
 #define LIE_SPLIT_GAIN_DEFAULT 0.25f
+#define LIE_FRAMES_DEFAULT 10u
+#define LIE_MODEL_LIGHT_SAMPLES_DEFAULT 100u
+/* Measured on museum3 at 512x512 (CPU time per event; bench/build.sh
+ * prints the measured values beside these).  A blocker test is an
+ * effective figure, per light sample and list entry: the renderer answers
+ * lists per shading point (lib/shade/polylight.c), so it is far below an
+ * Embree ray's share. */
+#define LIE_NS_SEGMENT_DEFAULT 300.0f
+#define LIE_NS_BLOCKER_DEFAULT 0.3f
+#define LIE_NS_RAY_DEFAULT 33.0f
 /* --min-patch's lower bound: 1e-8 of the largest triangle is about 13
  * subdivision levels; below that the trees grow by 4x a level for nothing
  * an image can show. */
@@ -106,6 +126,13 @@ typedef struct lie_build_stats {
     uint64_t splits_undone;            /* splits classified but not kept: they did not pay */
     uint64_t units_copied;             /* units copied whole from an old or resumed env */
     uint64_t units_interrupted;        /* units a stop left unbuilt (LIE_CLASS_NONE) */
+    uint64_t splits_pixels;            /* splits not tried: too few pixels see the patch (views) */
+    uint64_t splits_kept;              /* splits made */
+    /* the model against the build, over the splits made: the render time
+     * they save per frame as the model predicts it before the lookahead
+     * (half the parent's list), and as the children's lists give it */
+    double split_saving_predicted_ns;
+    double split_saving_measured_ns;
     double seconds;
     /* the parallel phase: workers, their summed and largest CPU seconds (each
      * thread's own clock, so other processes do not count), and the wall
@@ -127,10 +154,13 @@ lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_
                                 lie_build_stats *stats, lie_error *err);
 
 /* How a build runs, beyond its parameters; zeroed means lie_env_build. */
+struct lie_pixels;
 typedef struct lie_build_control {
     const uint8_t *tri_mask;   /* build only these triangles (NULL: all), as lie_env_build_masked */
+    const struct lie_pixels *pixels; /* or build for these views, as lie_env_build_views (NULL: none) */
     lie_progress *progress;    /* may be NULL */
-    /* An interrupted build of the same scene, parameters and tri_mask (its
+    /* An interrupted build of the same scene, parameters and tri_mask or
+     * pixels (its
      * partial flag set, or not): its built units are copied, its unbuilt
      * ones built, so the result is exactly the uninterrupted build's. */
     const lie_env *resume;
@@ -186,6 +216,81 @@ lie_status lie_env_rebuild_units(lie_env *env, const lie_scene *s, const lie_rt 
  * emitter changed is built afresh. */
 lie_status lie_env_update(lie_env *env, const lie_scene *s, const lie_rt *rt, const int32_t *old_unit,
                           const uint8_t *node_flags, int threads, lie_build_stats *stats, lie_error *err);
+
+/* ---- views: pixels per patch (§4.3.3) ------------------------------------
+ *
+ * The hits of a view's pixel rays (several per pixel, directly and through
+ * mirrors), per triangle: each hit's key is the path of the patch holding
+ * it down LIE_PIXEL_LEVELS levels (level 1 in the top bits), sorted, so a
+ * patch's pixels are one range of its triangle's keys. */
+#define LIE_PIXEL_LEVELS 16
+typedef struct lie_pixels {
+    uint32_t n_tris;
+    uint32_t rays_per_pixel; /* hits that make one pixel */
+    uint64_t n_hits;
+    uint64_t *first;         /* n_tris + 1: triangle t's keys are key[first[t] .. first[t + 1]) */
+    uint32_t *key;
+} lie_pixels;
+/* The key of local point (b1, b2). */
+uint32_t lie_pixels_key(float b1, float b2);
+/* From hits (triangle << 32 | key), which are sorted in place: any order
+ * of the same hits gives the same result.  *out: lie_pixels_destroy. */
+lie_status lie_pixels_create(uint32_t n_tris, uint32_t rays_per_pixel, uint64_t *hits, size_t n_hits,
+                             lie_pixels **out, lie_error *err);
+void lie_pixels_destroy(lie_pixels *px);
+/* Hits inside patch `path` of triangle tri (0 when px is NULL). */
+uint64_t lie_pixels_hits(const lie_pixels *px, uint32_t tri, lie_patch_path path);
+/* A hash of triangle tri's keys (0: no hit): equal hashes, equal decisions. */
+uint64_t lie_pixels_tri_hash(const lie_pixels *px, uint32_t tri);
+
+/* The model's render cost of one shadow ray answered by a node of class
+ * cls with n_list blockers, in ns. */
+double lie_cost_list_ns(const lie_build_params *p, lie_class cls, size_t n_list);
+
+/* What the model predicts one frame of the views costs in shadow rays:
+ * with full visibility and with env (per pixel and emitter: light_samples
+ * rays, unlit pairs none, visible and occluded ones nothing with env).
+ * Times are CPU ns summed over threads. */
+typedef struct lie_prediction {
+    double pixels;                        /* pixels the views see */
+    double pair_pixels[LIE_CLASS_COUNT];  /* pixel x emitter, by the class of its leaf */
+    double full_ns, lie_ns;
+    /* the counts those times come from, to calibrate the constants */
+    double full_rays;     /* shadow rays with full visibility */
+    double list_entries;  /* blocker tests with env: light samples x list length */
+    double env_rays;      /* Embree rays with env (complex and unbuilt pairs) */
+} lie_prediction;
+void lie_env_predict(const lie_env *env, const lie_pixels *px, lie_prediction *pred);
+
+/* Builds for views: as lie_env_build_masked with the triangles px sees (no
+ * px: all), and, where px is not NULL, patches only as fine as the cost
+ * model finds their pixels need. */
+lie_status lie_env_build_views(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                               const lie_pixels *px, lie_progress *progress, lie_env **out,
+                               lie_build_stats *stats, lie_error *err);
+lie_status lie_env_build_range_views(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                                     const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
+                                     lie_env_part *out, lie_build_stats *stats, lie_error *err);
+/* lie_env_update for an env built for views: px are the views' pixels on s
+ * (NULL: an env built without views). */
+lie_status lie_env_update_views(lie_env *env, const lie_scene *s, const lie_rt *rt, const lie_pixels *px,
+                                const int32_t *old_unit, const uint8_t *node_flags, int threads,
+                                lie_build_stats *stats, lie_error *err);
+
+/* Add views to an env built for views old_px (a lie_env_build_views
+ * result for s): new_px are the pixels of the old views and the new ones
+ * together.  Units the old views did not see are built; units whose
+ * pixels grew are refined where a patch kept from splitting by too few
+ * pixels may now split (only those nodes and their ancestors are
+ * recomputed); the others are kept.  The result is exactly
+ * lie_env_build_views(s, new_px). */
+typedef struct lie_add_stats {
+    uint64_t units_kept, units_refined, units_new;
+    uint64_t nodes_flagged;   /* old nodes recomputed */
+} lie_add_stats;
+lie_status lie_env_add_views(lie_env *env, const lie_scene *s, const lie_rt *rt, const lie_pixels *old_px,
+                             const lie_pixels *new_px, int threads, lie_build_stats *stats, lie_add_stats *as,
+                             lie_error *err);
 
 /* Statistics of an existing env (no build time). */
 void lie_env_stats(const lie_env *env, lie_build_stats *stats);

@@ -165,6 +165,8 @@ lie_status lie_memo_precompute(build_ctx *c, int threads, size_t *n_memo)
         for (size_t e = 0; e < ne; e++) {
             int32_t ou = c->old_unit[(size_t)t * ne + e];
             uint32_t r = ou < 0 ? MEMO_NO_OLD : old->root[ou];
+            if (r == MEMO_NO_OLD && !lie_subdiv_seen(c, t))
+                continue; /* outside the views: one none node, nothing to sample */
             if ((r == MEMO_NO_OLD || c->node_flags[r]) && !memo_push(c, &n, &cap, r, t, lie_patch_root(), (int)e)) {
                 *n_memo = n;
                 return LIE_ERR_NOMEM;
@@ -190,7 +192,8 @@ lie_status lie_memo_precompute(build_ctx *c, int threads, size_t *n_memo)
         for (size_t i = first; st == LIE_OK && i < end; i++) {
             const memo_entry m = c->memo[i];
             uint32_t child = m.old == MEMO_NO_OLD ? 0 : old->nodes[m.old].child;
-            if (!lie_subdiv_splits(c, m.tri, m.path, m.e, m.cls, m.list, m.n_list))
+            if (!lie_subdiv_splits(c, m.tri, m.path, m.e, m.cls, m.list, m.n_list) ||
+                (c->pix && !lie_subdiv_pixels_pay(c, m.tri, m.path, m.cls, m.n_list, m.quality)))
                 continue;
             /* the children build_node will compute: flagged old ones, or
              * all four when the node had none (unflagged ones are copied) */

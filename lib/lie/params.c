@@ -22,6 +22,11 @@ lie_build_params lie_build_params_default(void)
     p.min_patch = LIE_MIN_PATCH_DEFAULT;
     p.split_gain = LIE_SPLIT_GAIN_DEFAULT;
     p.mode = LIE_BLOCKERS_SAMPLED;
+    p.frames = LIE_FRAMES_DEFAULT;
+    p.light_samples = LIE_MODEL_LIGHT_SAMPLES_DEFAULT;
+    p.ns_segment = LIE_NS_SEGMENT_DEFAULT;
+    p.ns_blocker = LIE_NS_BLOCKER_DEFAULT;
+    p.ns_ray = LIE_NS_RAY_DEFAULT;
     return p;
 }
 
@@ -37,6 +42,11 @@ lie_status lie_build_params_check(const lie_build_params *p, lie_error *err)
         return lie_error_set(err, LIE_ERR_ARG, NULL, "min-patch must be in [%g, 1]", (double)LIE_MIN_PATCH_MIN);
     if (!(p->split_gain >= 0.0f) || !(p->split_gain < 1.0f))
         return lie_error_set(err, LIE_ERR_ARG, NULL, "split-gain must be in [0, 1)");
+    if (p->frames > (1u << 24) || p->light_samples < 1 || p->light_samples > (1u << 24))
+        return lie_error_set(err, LIE_ERR_ARG, NULL, "frames must be in 0..%u, light-samples in 1..%u", 1u << 24, 1u << 24);
+    if (!(p->ns_segment > 0.0f && p->ns_segment <= 1e9f) || !(p->ns_blocker > 0.0f && p->ns_blocker <= 1e9f) ||
+        !(p->ns_ray > 0.0f && p->ns_ray <= 1e9f))
+        return lie_error_set(err, LIE_ERR_ARG, NULL, "the cost model's times must be in (0, 1e9] ns");
     if (p->mode != LIE_BLOCKERS_SAMPLED && p->mode != LIE_BLOCKERS_CONSERVATIVE)
         return lie_error_set(err, LIE_ERR_ARG, NULL, "unknown blocker mode");
     return LIE_OK;
@@ -65,6 +75,10 @@ void lie_stats_merge(lie_build_stats *dst, const lie_build_stats *src)
     dst->splits_undone += src->splits_undone;
     dst->units_copied += src->units_copied;
     dst->units_interrupted += src->units_interrupted;
+    dst->splits_pixels += src->splits_pixels;
+    dst->splits_kept += src->splits_kept;
+    dst->split_saving_predicted_ns += src->split_saving_predicted_ns;
+    dst->split_saving_measured_ns += src->split_saving_measured_ns;
 }
 
 static void stats_walk(const lie_env *env, uint32_t idx, int depth, lie_build_stats *st)

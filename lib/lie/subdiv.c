@@ -65,6 +65,38 @@ int lie_subdiv_splits(const build_ctx *c, uint32_t tri, lie_patch_path path, int
 
 static void copy_node(const lie_env *old, uint32_t from, worker *w, unit_buf *u, uint32_t idx);
 
+int lie_subdiv_seen(const build_ctx *c, uint32_t tri)
+{
+    if (c->tri_mask && !c->tri_mask[tri])
+        return 0;
+    return !c->pix || c->pix->first[tri + 1] > c->pix->first[tri];
+}
+
+/* The model's saving per frame of splitting a node of class cls with this
+ * list, before its children are known: half the list's cost (a kept split
+ * shortens lists by split_gain at least; bench/build.sh prints what splits
+ * really gave), on every pixel and light sample of the patch. */
+static double predicted_saving_ns(const build_ctx *c, double pixels, lie_class cls, size_t n_list)
+{
+    return 0.5 * pixels * (double)c->p->light_samples * lie_cost_list_ns(c->p, cls, n_list);
+}
+
+/* §4.3.3 with the cost model: a patch is worth splitting only if the
+ * render time the split can save over the frames the cache serves beats
+ * what finding out costs: four children sampled with about as many
+ * segments as the node took.  Pixels grow with views, never shrink, so a
+ * node this lets split still splits when a view is added (lie-build
+ * --into relies on it, tools/lie-build). */
+int lie_subdiv_pixels_pay(const build_ctx *c, uint32_t tri, lie_patch_path path, lie_class cls, size_t n_list,
+                      uint32_t quality)
+{
+    if (c->p->frames == 0)
+        return 1; /* --frames 0: the views choose units, not patches */
+    double pixels = (double)lie_pixels_hits(c->pix, tri, path) / (double)c->pix->rays_per_pixel;
+    double segs = (double)(quality > c->p->samples ? quality : c->p->samples);
+    return (double)c->p->frames * predicted_saving_ns(c, pixels, cls, n_list) > 4.0 * segs * (double)c->p->ns_segment;
+}
+
 /* A node's classification, before it becomes a leaf or splits. */
 typedef struct node_class {
     lie_class cls;
@@ -114,6 +146,28 @@ static void classify(const build_ctx *c, worker *w, uint32_t tri, lie_patch_path
 static double render_weight(lie_class cls, size_t n_list)
 {
     return cls == LIE_CLASS_PARTIAL || cls == LIE_CLASS_SPLIT || cls == LIE_CLASS_COMPLEX ? (double)n_list : 0.0;
+}
+
+/* The exact list of a leaf: every triangle meeting the pair's hull
+ * (§4.1.2), counted up to `cap` (more: the count only), less a planar
+ * emitter's own triangles, which end every segment; left in w->hits. */
+static size_t exact_leaf_list(const build_ctx *c, worker *w, uint32_t tri, lie_patch_path path, int e, int two_sided,
+                              size_t cap)
+{
+    const lie_scene *s = c->s;
+    lie_vec3 V[3];
+    size_t n_leaf = 0;
+    lie_patch_world(path, &s->tri_p[3 * (size_t)tri], V);
+    lie_cull_conservative(c, w, tri, V, two_sided, e, NULL, 0, cap, &n_leaf);
+    const lie_emitter *em = &s->emitters[e];
+    if (em->type == LIE_EMITTER_AREA && em->planar && n_leaf <= cap) {
+        size_t k = 0;
+        for (size_t j = 0; j < n_leaf; j++)
+            if (w->hits[j] - em->first_tri >= em->n_tris)
+                w->hits[k++] = w->hits[j];
+        n_leaf = k;
+    }
+    return n_leaf;
 }
 
 /* The same for an old node an update copies (its class and count are
@@ -221,12 +275,34 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
         return;
     w->st.patches_per_depth[path.depth]++;
     size_t n_list = nc.n_list;
-    if (lie_subdiv_splits(c, tri, path, e, nc.cls, w->hits, n_list)) {
+    int splits = lie_subdiv_splits(c, tri, path, e, nc.cls, w->hits, n_list);
+    if (splits && c->pix && !lie_subdiv_pixels_pay(c, tri, path, nc.cls, n_list, nc.quality)) {
+        /* too few pixels see the patch for a split to pay: a leaf, with the
+         * exact list (a sampled one may miss small blockers of a large
+         * patch) where a list is cheaper than an Embree ray */
+        splits = 0;
+        w->st.splits_pixels++;
+        size_t cap = (size_t)((double)c->p->ns_ray / (double)c->p->ns_blocker);
+        if (cap > c->p->complex_cap)
+            cap = c->p->complex_cap;
+        if (n_list > cap) {
+            nc.cls = LIE_CLASS_COMPLEX;
+        } else if (c->p->mode == LIE_BLOCKERS_SAMPLED) {
+            n_list = exact_leaf_list(c, w, tri, path, e, two_sided, cap);
+            if (w->nomem)
+                return;
+            if (n_list == 0)
+                nc.cls = LIE_CLASS_VISIBLE;
+            else if (n_list > cap)
+                nc.cls = LIE_CLASS_COMPLEX;
+        }
+    }
+    if (splits) {
         /* §4.1.1: a patch whose list is too long splits while it is large,
          * if the split pays (split_pays): classify the four children first */
         uint32_t *keep = malloc(sizeof *keep * (n_list ? n_list : 1));
         node_class kid[4];
-        double kid_w[4];
+        double kid_w[4], kid_ns[4];
         int n_kid = 0;
         uint32_t old_child = old >= 0 ? c->old->nodes[old].child : 0;
         if (!keep) {
@@ -240,12 +316,14 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
             kid[n_kid].n_list = 0;
             if (ok >= 0 && !(c->node_flags && c->node_flags[ok])) {
                 kid_w[n_kid] = old_weight(&c->old->nodes[ok]);
+                kid_ns[n_kid] = lie_cost_list_ns(c->p, (lie_class)c->old->nodes[ok].cls, c->old->nodes[ok].count);
                 continue;
             }
             classify(c, w, tri, lie_patch_child(path, n_kid), e, two_sided, keep, n_list, ok, &kid[n_kid]);
             if (w->nomem)
                 break;
             kid_w[n_kid] = render_weight(kid[n_kid].cls, kid[n_kid].n_list);
+            kid_ns[n_kid] = lie_cost_list_ns(c->p, kid[n_kid].cls, kid[n_kid].n_list);
             if (kid[n_kid].n_list) {
                 kid[n_kid].list = malloc(sizeof *kid[n_kid].list * kid[n_kid].n_list);
                 if (!kid[n_kid].list) {
@@ -266,18 +344,19 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
          * exact already. */
         size_t n_leaf = n_list;
         if (!pays && !w->nomem && c->p->mode == LIE_BLOCKERS_SAMPLED && n_list <= c->p->complex_cap) {
-            lie_vec3 V[3];
-            lie_patch_world(path, &s->tri_p[3 * (size_t)tri], V);
-            lie_cull_conservative(c, w, tri, V, two_sided, e, NULL, 0, c->p->complex_cap, &n_leaf);
-            const lie_emitter *em = &s->emitters[e];
-            if (em->type == LIE_EMITTER_AREA && em->planar && n_leaf <= c->p->complex_cap) {
-                size_t k = 0;
-                for (size_t j = 0; j < n_leaf; j++)
-                    if (w->hits[j] - em->first_tri >= em->n_tris)
-                        w->hits[k++] = w->hits[j];
-                n_leaf = k;
-            }
+            n_leaf = exact_leaf_list(c, w, tri, path, e, two_sided, c->p->complex_cap);
             pays = n_leaf > c->p->complex_cap;
+        }
+        if (pays && !w->nomem) {
+            w->st.splits_kept++;
+            if (c->pix) {
+                double pixels = (double)lie_pixels_hits(c->pix, tri, path) / (double)c->pix->rays_per_pixel;
+                double before = lie_cost_list_ns(c->p, nc.cls, n_list), after = 0.0;
+                for (int k = 0; k < 4; k++)
+                    after += 0.25 * kid_ns[k];
+                w->st.split_saving_predicted_ns += predicted_saving_ns(c, pixels, nc.cls, n_list);
+                w->st.split_saving_measured_ns += pixels * (double)c->p->light_samples * (before - after);
+            }
         }
         int first = -1;
         if (pays && !w->nomem) {
@@ -429,7 +508,7 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
             return;
         u->roots[e] = (uint32_t)root;
         int64_t old = c->old_unit && c->old_unit[unit] >= 0 ? (int64_t)c->old->root[c->old_unit[unit]] : -1;
-        if (c->tri_mask && !c->tri_mask[tri]) {
+        if (!lie_subdiv_seen(c, tri)) {
             u->nodes[root].cls = LIE_CLASS_NONE; /* outside the views: not built */
             w->st.pairs[LIE_CLASS_NONE]++;
             continue;

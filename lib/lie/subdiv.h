@@ -9,6 +9,12 @@ int lie_subdiv_may_split(const build_ctx *c, uint32_t tri, lie_patch_path path);
 /* Whether a node of class cls with this list splits. */
 int lie_subdiv_splits(const build_ctx *c, uint32_t tri, lie_patch_path path, int e, lie_class cls,
                       const uint32_t *list, size_t n_list);
+/* With views (c->pix): whether a node that lie_subdiv_splits lets split is
+ * seen by enough pixels for the split to pay (§4.3.3, the cost model). */
+int lie_subdiv_pixels_pay(const build_ctx *c, uint32_t tri, lie_patch_path path, lie_class cls, size_t n_list,
+                          uint32_t quality);
+/* Whether the views see triangle tri (always, in a build without views). */
+int lie_subdiv_seen(const build_ctx *c, uint32_t tri);
 /* lie_parallel_for body: build (or copy) every unit of triangle `item`
  * into c->out[item]. */
 void lie_subdiv_triangle(void *ctx, size_t item, int worker_id);

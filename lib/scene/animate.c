@@ -18,7 +18,7 @@ void lie_pose_destroy(lie_pose *p)
     free(p);
 }
 
-lie_mat4 lie_trs_matrix(const double trs[10])
+lie_mat4 lie_node_trs_matrix(const double trs[10])
 {
     return lie_mat4_from_trs(trs, trs + 3, trs + 7);
 }

@@ -330,19 +330,22 @@ uint32_t lie_emitter_point(const lie_scene *s, int e, float u1, float u2, lie_ve
                            float *b1, float *b2);
 
 /* ---- the emitter interface -----------------------------------------------
- * What lie-build, the ray segment trees and the cache tools ask of an
- * emitter, in one place, as pbrt-v4 gives each light one interface: its
- * name, its triangles, its points for a pair's hull, the point a shadow
- * segment aims at, and whether it can reach a patch at all.  A new emitter
- * type is added here (lib/scene/emitter.c), in the import (lib/scene), in
- * the cache format (formats/lie-cache.md) and in the shading kernels
- * (lib/shade: its samples and radiance); docs/architecture.md. */
+ * Everything lie-build, the ray segment trees, the cache tools and the
+ * renderer ask of an emitter, in one place, as pbrt-v4 gives each light one
+ * interface.  Each type implements it in its own file (lib/scene/emitter_area.c,
+ * emitter_point.c for point and spot lights, emitter_directional.c), and
+ * lib/scene/emitter.c dispatches to it in one table; no other code switches
+ * on lie_emitter_type.  A new emitter type is a new file, a line in that
+ * table, its creation in the import (lib/scene/scene.c) and its code in the
+ * cache format (formats/lie-cache.md); docs/architecture.md. */
 const char *lie_emitter_type_name(lie_emitter_type t);
-/* Whether triangle tri is one of the emitter's own. */
+/* Whether triangle tri is one of the emitter's own (punctual emitters own none). */
 static inline int lie_emitter_owns(const lie_emitter *em, uint32_t tri)
 {
-    return em->type == LIE_EMITTER_AREA && tri - em->first_tri < em->n_tris;
+    return tri - em->first_tri < em->n_tris;
 }
+
+/* -- geometry: shafts, hulls, culls (lib/lie, lib/rst, lib/shade) -- */
 /* How many points lie_emitter_hull_points writes at most. */
 int lie_emitter_hull_cap(const lie_emitter *em);
 /* The emitter's points of the hull of its pair with patch V (world
@@ -362,6 +365,72 @@ uint32_t lie_emitter_target(const lie_scene *s, int e, float u1, float u2, lie_v
  * and shaded from both sides when two_sided) can receive light from any
  * point of emitter e with a non-zero geometric term; 1 when it may. */
 int lie_emitter_can_reach(const lie_scene *s, int e, uint32_t tri, const lie_vec3 V[3], lie_vec3 ng, int two_sided);
+/* Points whose convex hull holds every point of the emitter: *pts points
+ * into the scene (not copied); returns how many, 0 for a light at infinity. */
+int lie_emitter_extent(const lie_scene *s, int e, const lie_vec3 **pts);
+/* A sphere holding the emitter, as x, y, z, r (lie_bound_sphere of its
+ * vertices for an area emitter, radius 0 for a point light); r < 0 for a
+ * light at infinity, which no sphere holds. */
+void lie_emitter_bounding_sphere(const lie_scene *s, int e, float sphere[4]);
+
+/* -- radiance and sampling (lib/shade) -- */
+/* One point of an emitter (lie_emitter_sample). */
+typedef struct lie_emitter_sample {
+    lie_vec3 p;        /* area, point: the point; directional: the unit direction towards the light */
+    lie_vec3 n;        /* area: its surface's front normal; punctual: where the light points */
+    float le[3];       /* area: radiance at p (the emissive texture applied), nits;
+                          point and spot: intensity, cd; directional: illuminance, lux */
+    float inv_pdf;     /* 1 / the density of p in area measure: the area of an area emitter; 1 for a delta light */
+    uint32_t tri;      /* area: the triangle holding p; else UINT32_MAX */
+} lie_emitter_sample;
+/* Light arriving at a point from a delta light (lie_emitter_light_at). */
+typedef struct lie_emitter_incident {
+    lie_vec3 wi;       /* unit direction towards the light */
+    float dist;        /* distance to it (directional: the `far` given) */
+    float li[3];       /* intensity x distance falloff x spot cone x range window (KHR_lights_punctual):
+                          the irradiance at normal incidence */
+} lie_emitter_incident;
+/* Whether the emitter is a delta light (a point, a spot, a direction): one
+ * sample says everything, lie_emitter_light_at gives it in closed form. */
+int lie_emitter_is_delta(const lie_emitter *em);
+/* How many light samples of a frame asking n per emitter it takes: n, or 1
+ * for a delta light. */
+static inline int lie_emitter_sample_count(const lie_emitter *em, int n)
+{
+    return lie_emitter_is_delta(em) ? 1 : n;
+}
+/* Sample (u1, u2) in [0,1)^2 of the emitter: an area emitter's triangle in
+ * proportion to area (lie_emitter_point), then a uniform point; a delta
+ * light's only point. */
+void lie_emitter_sample_point(const lie_scene *s, int e, float u1, float u2, lie_emitter_sample *out);
+/* The density in area measure of lie_emitter_sample_point at a point of the
+ * emitter: 1 / area; 0 for a delta light (as pbrt's PDF_Li). */
+float lie_emitter_pdf(const lie_scene *s, int e);
+/* Whether the emitter's radiance is one colour over its whole surface (an
+ * area emitter without an emissive texture); 0 for a delta light. */
+int lie_emitter_uniform(const lie_scene *s, int e);
+/* A delta light seen from o: direction, distance (a directional light's is
+ * `far`), and radiant intensity after falloff; 0 (and *out zeroed) for an
+ * area emitter, whose light is sampled. */
+int lie_emitter_light_at(const lie_scene *s, int e, lie_vec3 o, float far, lie_emitter_incident *out);
+/* An emitter that closed forms can integrate: one planar polygon (or a few
+ * triangles) of one radiance (lib/shade/polylight.c: the edge sum, exact
+ * shadows by back-projection, LTC). */
+typedef struct lie_emitter_polygon {
+    uint32_t first_tri, n_tris; /* its triangles, in the plane */
+    int two_sided;
+    float radiance[3];
+    lie_vec3 o, u, v, n;        /* the plane's frame (lie_emitter.plane_*) */
+} lie_emitter_polygon;
+/* 1 and *out filled when the emitter is such a polygon (a planar area
+ * emitter without an emissive texture), else 0. */
+int lie_emitter_polygon_of(const lie_scene *s, int e, lie_emitter_polygon *out);
+/* Emitted power in watts per channel (photometric units as given),
+ * for choosing among lights in proportion to power: area pi Le A (twice for
+ * two sides; the emissive factor, an emissive texture's mean not applied),
+ * point 4 pi I, spot 2 pi (1 - (cos_inner + cos_outer) / 2) I (pbrt-v4's
+ * SpotLight::Phi), directional pi r^2 E with r the scene's bounding radius. */
+void lie_emitter_power(const lie_scene *s, int e, float phi[3]);
 
 /* Bilinear lookup with the texture's wrap modes; rgba out. */
 void lie_texture_sample(const lie_texture *t, float u, float v, float rgba[4]);
@@ -416,7 +485,7 @@ typedef struct lie_pose {
 lie_status lie_animation_pose(const lie_scene *s, int a, double t, lie_pose **out, lie_error *err);
 void lie_pose_destroy(lie_pose *p);
 /* The local matrix of a node's TRS (10 doubles as in lie_node.trs). */
-lie_mat4 lie_trs_matrix(const double trs[10]);
+lie_mat4 lie_node_trs_matrix(const double trs[10]);
 /* Animation by name or index; -1 when none matches. */
 int lie_scene_find_animation(const lie_scene *s, const char *spec);
 /* Whether node n is the default scene's (reachable from its roots). */

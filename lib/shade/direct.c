@@ -24,10 +24,12 @@ lie_status lie_shade_scratch_init(lie_shade_scratch *sc, int cap, int max_blocke
     float *block = aligned_alloc(64, sizeof(float) * 15 * stride);
     sc->occ = aligned_alloc(64, sizeof *sc->occ * stride);
     sc->idx = malloc(sizeof(int) * stride);
-    if (!block || !sc->occ || !sc->idx) {
+    sc->mask = malloc(sizeof *sc->mask * (stride / 64 + 1));
+    if (!block || !sc->occ || !sc->idx || !sc->mask) {
         free(block);
         free(sc->occ);
         free(sc->idx);
+        free(sc->mask);
         memset(sc, 0, sizeof *sc);
         return LIE_ERR_NOMEM;
     }
@@ -58,6 +60,7 @@ void lie_shade_scratch_free(lie_shade_scratch *sc)
     free(sc->wr);
     free(sc->occ);
     free(sc->idx);
+    free(sc->mask);
     free(sc->batch.occluded);
     free(sc->blockers);
     free(sc->bwork);
@@ -82,9 +85,7 @@ static float unblocked_sum(const float *w, const uint32_t *occ, int n)
         __m256 free_ = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_loadu_si256((const __m256i *)(occ + i)), none));
         acc = _mm256_add_ps(acc, _mm256_and_ps(free_, _mm256_loadu_ps(w + i)));
     }
-    float lane[8];
-    _mm256_storeu_ps(lane, acc);
-    sum = ((lane[0] + lane[1]) + (lane[2] + lane[3])) + ((lane[4] + lane[5]) + (lane[6] + lane[7]));
+    sum = lie_sum8_ps(acc);
 #endif
     for (; i < n; i++)
         sum += occ[i] ? 0.0f : w[i];
@@ -101,29 +102,36 @@ static float plain_sum(const float *w, int n)
     __m256 acc = _mm256_setzero_ps();
     for (; i + 8 <= n; i += 8)
         acc = _mm256_add_ps(acc, _mm256_loadu_ps(w + i));
-    float lane[8];
-    _mm256_storeu_ps(lane, acc);
-    sum = ((lane[0] + lane[1]) + (lane[2] + lane[3])) + ((lane[4] + lane[5]) + (lane[6] + lane[7]));
+    sum = lie_sum8_ps(acc);
 #endif
     for (; i < n; i++)
         sum += w[i];
     return sum;
 }
 
+/* The weights w of the samples not blocked: by the bitmask sc->mask when
+ * `bits`, else by occ (NULL: none blocked). */
+static float visible_sum(const lie_shade_scratch *sc, const float *w, const uint32_t *occ, int bits, int n)
+{
+    if (bits)
+        return lie_bitmask_unblocked_sum(w, sc->mask, n);
+    return occ ? unblocked_sum(w, occ, n) : plain_sum(w, n);
+}
+
 /* Add the pair's contributions to rgb: the samples' weights, masked by
- * occ unless every sample is visible (occ NULL). */
-static void add_pair(const lie_shade_scratch *sc, const uint32_t *occ, int n, float rgb[3])
+ * occ (or the bitmask) unless every sample is visible (occ NULL). */
+static void add_pair(const lie_shade_scratch *sc, const uint32_t *occ, int bits, int n, float rgb[3])
 {
     if (sc->scalar) {
-        float sum = occ ? unblocked_sum(sc->wr, occ, n) : plain_sum(sc->wr, n);
+        float sum = visible_sum(sc, sc->wr, occ, bits, n);
         rgb[0] += sum * sc->scale[0];
         rgb[1] += sum * sc->scale[1];
         rgb[2] += sum * sc->scale[2];
         return;
     }
-    rgb[0] += occ ? unblocked_sum(sc->wr, occ, n) : plain_sum(sc->wr, n);
-    rgb[1] += occ ? unblocked_sum(sc->wg, occ, n) : plain_sum(sc->wg, n);
-    rgb[2] += occ ? unblocked_sum(sc->wb, occ, n) : plain_sum(sc->wb, n);
+    rgb[0] += visible_sum(sc, sc->wr, occ, bits, n);
+    rgb[1] += visible_sum(sc, sc->wg, occ, bits, n);
+    rgb[2] += visible_sum(sc, sc->wb, occ, bits, n);
 }
 
 /* A Lambert receiver under an emitter of one colour: wr holds the
@@ -152,37 +160,18 @@ static void kernel_area(const lie_surface *sf, lie_vec3 o, const lie_light_sampl
     float *restrict wr = sc->wr, *restrict wg = sc->wg, *restrict wb = sc->wb;
     const float sgn = two_sided ? -1.0f : 1.0f; /* two-sided: |cos| via max(c, -c) */
     if (sf->lambert && ls->uniform && ls->planar) {
-        /* ... and a planar emitter: d = w + s u + t v with w = po - o, so the
-         * emitter's cosine is one number, the receiver's cosines are
-         * linear forms in (s, t), and G = (n.d)(-pn.d) / |d|^4 needs one
-         * division and no square root. */
-        const float wx = ls->po[0] - px, wy = ls->po[1] - py, wz = ls->po[2] - pz;
-        const float ux = ls->pu[0], uy = ls->pu[1], uz = ls->pu[2];
-        const float vx = ls->pv[0], vy = ls->pv[1], vz = ls->pv[2];
-        float ce = -(ls->pn[0] * wx + ls->pn[1] * wy + ls->pn[2] * wz);
-        ce = ce > sgn * ce ? ce : sgn * ce;
-        const float r0 = nx * wx + ny * wy + nz * wz, ru = nx * ux + ny * uy + nz * uz,
-                    rv = nx * vx + ny * vy + nz * vz;
-        const float g0 = gx * wx + gy * wy + gz * wz, gu = gx * ux + gy * uy + gz * uz,
-                    gv = gx * vx + gy * vy + gz * vz;
+        /* ... and a planar emitter: the emitter's cosine is one number,
+         * the receiver's cosines are linear forms in (s, t), and G needs
+         * one division and no square root (internal.h). */
+        lie_planar_lambert P;
         const float *restrict ss = ls->s, *restrict ts = ls->t;
         float *restrict G_out = sc->wr;
-        if (!(ce > 0.0f)) {
+        if (!lie_planar_lambert_setup(ls, o, sf->n, sf->ng, two_sided, &P)) {
             memset(G_out, 0, sizeof *G_out * (size_t)n); /* behind the emitter */
         } else {
 #pragma omp simd
-            for (int i = 0; i < n; i++) {
-                float s = ss[i], t = ts[i];
-                float dx = fmaf(t, vx, fmaf(s, ux, wx)), dy = fmaf(t, vy, fmaf(s, uy, wy)),
-                      dz = fmaf(t, vz, fmaf(s, uz, wz));
-                float d2 = fmaf(dz, dz, fmaf(dy, dy, dx * dx));
-                float cr = fmaf(t, rv, fmaf(s, ru, r0));
-                float cg = fmaf(t, gv, fmaf(s, gu, g0));
-                float inv = 1.0f / d2;
-                float G = (cr * ce) * (inv * inv);
-                int ok = (cr > 0.0f) & (cg > 0.0f) & (d2 > 0.0f);
-                G_out[i] = ok ? G : 0.0f;
-            }
+            for (int i = 0; i < n; i++)
+                G_out[i] = lie_planar_lambert_g(P, ss[i], ts[i]);
         }
         lambert_colour(sf, ls, sc);
         return;
@@ -276,51 +265,29 @@ static void kernel_area(const lie_surface *sf, lie_vec3 o, const lie_light_sampl
     }
 }
 
-/* One punctual sample (point, spot or directional), scalar. */
-static void kernel_punctual(const lie_shade_ctx *c, const lie_surface *sf, lie_vec3 o, const lie_emitter *em,
-                            lie_shade_scratch *sc)
+/* One delta light's sample (point, spot or directional), scalar: its
+ * light at o in closed form (lie_emitter_incident) times the BRDF. */
+static void kernel_delta(const lie_shade_ctx *c, const lie_surface *sf, lie_vec3 o, int e, lie_shade_scratch *sc)
 {
-    lie_vec3 wi;
-    float atten, dist;
-    if (em->type == LIE_EMITTER_DIRECTIONAL) {
-        wi = lie_v3_scale(em->direction, -1.0f);
-        atten = 1.0f;
-        dist = c->ray_far;
-    } else {
-        lie_vec3 d = lie_v3_sub(em->position, o);
-        float d2 = lie_v3_dot(d, d);
-        dist = sqrtf(d2);
-        wi = dist > 0.0f ? lie_v3_scale(d, 1.0f / dist) : lie_v3(0.0f, 0.0f, 1.0f);
-        atten = d2 > 0.0f ? 1.0f / d2 : 0.0f;
-        if (em->cos_outer > -1.5f) {
-            /* KHR_lights_punctual's recommended spot falloff. */
-            float scale = 1.0f / fmaxf(0.001f, em->cos_inner - em->cos_outer);
-            float cd = -lie_v3_dot(em->direction, wi);
-            float a = fminf(fmaxf((cd - em->cos_outer) * scale, 0.0f), 1.0f);
-            atten *= a * a;
-        }
-        if (em->range > 0.0f) {
-            float r = dist / em->range, r4 = r * r * r * r;
-            atten *= fminf(fmaxf(1.0f - r4, 0.0f), 1.0f);
-        }
-    }
+    lie_emitter_incident li;
+    lie_emitter_light_at(c->s, e, o, c->ray_far, &li);
     float f[3] = {0.0f, 0.0f, 0.0f};
-    if (lie_v3_dot(sf->ng, wi) > 0.0f)
-        lie_brdf_eval_cos(sf, wi, f);
-    sc->wr[0] = em->intensity[0] * atten * f[0];
-    sc->wg[0] = em->intensity[1] * atten * f[1];
-    sc->wb[0] = em->intensity[2] * atten * f[2];
-    sc->dx[0] = wi.x;
-    sc->dy[0] = wi.y;
-    sc->dz[0] = wi.z;
-    sc->dist[0] = dist;
+    if (lie_v3_dot(sf->ng, li.wi) > 0.0f)
+        lie_brdf_eval_cos(sf, li.wi, f);
+    sc->wr[0] = li.li[0] * f[0];
+    sc->wg[0] = li.li[1] * f[1];
+    sc->wb[0] = li.li[2] * f[2];
+    sc->dx[0] = li.wi.x;
+    sc->dy[0] = li.wi.y;
+    sc->dz[0] = li.wi.z;
+    sc->dist[0] = li.dist;
     sc->scalar = 0;
 }
 
 /* Each shadow ray is the segment o -> o + d_i, d_i the vector to the
  * sample shortened by eps: the same segments for Embree and for blocker
  * lists. */
-void lie_shadow_segments(lie_shadow_query *q)
+void lie_shadow_query_segments(lie_shadow_query *q)
 {
     if (q->have_segments)
         return;
@@ -399,7 +366,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
     int ltc_ready = 0, unbuilt_seen = 0;
     for (int e = 0; e < s->n_emitters; e++) {
         const lie_emitter *em = &s->emitters[e];
-        if (em->type == LIE_EMITTER_AREA && em->first_tri <= sf->tri && sf->tri < em->first_tri + em->n_tris)
+        if (lie_emitter_owns(em, sf->tri))
             continue; /* an emitter does not light itself */
         lie_vis_class cls = LIE_VISCLASS_TEST_ALL;
         const void *pair = NULL;
@@ -413,7 +380,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                 cls = LIE_VISCLASS_TEST_ALL;
             }
             if (cls == LIE_VISCLASS_OCCLUDED) {
-                sc->stats.shadow_rays_skipped += (uint64_t)(em->type == LIE_EMITTER_AREA ? opt->light_samples : 1);
+                sc->stats.shadow_rays_skipped += (uint64_t)lie_emitter_sample_count(em, opt->light_samples);
                 st->pairs_occluded++;
                 continue;
             }
@@ -437,6 +404,13 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
          * default. */
         const lie_polylight *pl =
             c->analytic && c->poly && (sf->lambert || opt->exact == LIE_EXACT_ONLY) ? c->poly[e] : NULL;
+        /* A partial pair toward a planar emitter: all samples at once
+         * (bitmask.h) where asked, or where cheaper than testing them one by
+         * one (the exact shadow is weighed against both below). */
+        const lie_bitmask *bm = cls == LIE_VISCLASS_BLOCKERS && c->bits ? c->bits[e] : NULL;
+        const double bits_cost = bm ? lie_render_bitmask_cost(opt->light_samples, n_blockers, !(pl && sf->lambert && bm->ls.uniform)) : 0.0;
+        const int use_bits =
+            bm && (opt->bitmask == LIE_BITMASK_ONLY || bits_cost < lie_render_samples_cost(opt->light_samples, n_blockers));
         double omega = 0.0;
         float kc[3] = {0.0f, 0.0f, 0.0f}, kl[3] = {0.0f, 0.0f, 0.0f};
         if (pl) {
@@ -447,7 +421,9 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                 ltc_ready = 1;
             }
             if (cls == LIE_VISCLASS_BLOCKERS && c->exact &&
-                (opt->exact == LIE_EXACT_ONLY || lie_exact_pays(opt->light_samples, n_blockers))) {
+                (opt->exact == LIE_EXACT_ONLY ||
+                 (lie_render_exact_pays(opt->light_samples, n_blockers) &&
+                  !(use_bits && (opt->bitmask == LIE_BITMASK_ONLY || bits_cost < lie_render_exact_cost(n_blockers)))))) {
                 double t0 = clock_if(timers);
                 int ok = lie_polylight_visible(pl, o, sf->n, sf->ng, s->tri_p, opt->oracle->solid, sc->blockers, n_blockers, eps,
                                                &sc->poly, &omega) == 0;
@@ -482,11 +458,30 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                 continue;
             }
         }
+        if (use_bits && pl && sf->lambert && bm->ls.uniform) {
+            /* All samples at once, and of the blocked and the visible
+             * samples only the fewer shaded (lie_bitmask_lambert): no
+             * per-sample pass over the pattern. */
+            double t0 = clock_if(timers);
+            lie_planar_lambert P;
+            const int lit = lie_planar_lambert_setup(&bm->ls, o, sf->n, sf->ng, em->double_sided, &P);
+            lie_shadow_query q = {o,         eps,       &bm->ls,    bm->n, 0, sc->dx, sc->dy, sc->dz,
+                                  sc->bwork, sc->bkind, sc->bstride};
+            if (!lit || opt->oracle->occluded_mask(opt->oracle->ctx, sc->blockers, n_blockers, &q, bm, sc->mask)) {
+                if (lit)
+                    add_scaled(kc, lie_bitmask_lambert(bm, &P, sc->mask, omega, em->area), rgb);
+                st->pairs_bitmask++;
+                st->shadow_rays_skipped += (uint64_t)bm->n;
+                if (timers)
+                    st->t_bitmask += lie_time_now() - t0;
+                continue;
+            }
+        }
         double t_shade = clock_if(timers);
         int n;
         const lie_light_samples *ls = NULL;
-        if (em->type == LIE_EMITTER_AREA) {
-            ls = &c->fixed[e];
+        if (!lie_emitter_is_delta(em)) {
+            ls = use_bits ? &bm->ls : &c->fixed[e];
             if (opt->pattern == LIE_PATTERN_ROTATED) {
                 uint64_t h = lie_hash_u64x4(pixel, (uint64_t)e, (uint64_t)depth, 0x726f74ull);
                 lie_light_samples_generate(s, e, opt->light_samples, lie_hash_to_unit(h),
@@ -496,7 +491,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
             kernel_area(sf, o, ls, em->double_sided, sc);
             n = ls->n;
         } else {
-            kernel_punctual(c, sf, o, em, sc);
+            kernel_delta(c, sf, o, e, sc);
             n = 1;
         }
         if (timers)
@@ -505,10 +500,12 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
         if (cls == LIE_VISCLASS_VISIBLE) {
             sc->stats.shadow_rays_skipped += (uint64_t)n;
             st->pairs_unshadowed++;
-            add_pair(sc, NULL, n, rgb);
+            add_pair(sc, NULL, 0, n, rgb);
             continue;
         }
-        memset(sc->occ, 0, sizeof *sc->occ * (size_t)n);
+        int bits = 0; /* sc->mask answers, not sc->occ */
+        if (!use_bits)
+            memset(sc->occ, 0, sizeof *sc->occ * (size_t)n);
         {
             lie_shadow_query q = {o,     eps,       ls,       n, ls == NULL, sc->dx, sc->dy, sc->dz,
                                   sc->bwork, sc->bkind, sc->bstride};
@@ -520,7 +517,13 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                 sdz[0] *= len;
             }
             double t0 = clock_if(timers);
-            if (cls == LIE_VISCLASS_BLOCKERS) {
+            if (use_bits && opt->oracle->occluded_mask(opt->oracle->ctx, sc->blockers, n_blockers, &q, bm, sc->mask)) {
+                bits = 1;
+                sc->stats.shadow_rays_skipped += (uint64_t)n;
+                st->pairs_bitmask++;
+                if (timers)
+                    st->t_bitmask += lie_time_now() - t0;
+            } else if (cls == LIE_VISCLASS_BLOCKERS) {
                 /* short lists: test every sample, no compaction */
                 opt->oracle->occluded(opt->oracle->ctx, sc->blockers, n_blockers, &q, sc->occ);
                 sc->stats.shadow_rays_skipped += (uint64_t)n;
@@ -529,7 +532,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                     st->t_blockers += lie_time_now() - t0;
             } else {
                 /* Embree: rays only for samples that would contribute */
-                lie_shadow_segments(&q);
+                lie_shadow_query_segments(&q);
                 lie_ray_batch *b = &sc->batch;
                 int m = 0;
                 for (int i = 0; i < n; i++) {
@@ -564,7 +567,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
              * samples' weight that is visible (sc->scalar: a Lambert
              * receiver under an emitter of one colour) */
             float all = plain_sum(sc->wr, n);
-            float vis = unblocked_sum(sc->wr, sc->occ, n);
+            float vis = visible_sum(sc, sc->wr, sc->occ, bits, n);
             add_scaled(kc, all > 0.0f ? omega * (double)(vis / all) : omega, rgb);
             continue;
         }
@@ -573,11 +576,11 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
             const float *wc[3] = {sc->wr, sc->scalar ? sc->wr : sc->wg, sc->scalar ? sc->wr : sc->wb};
             for (int k = 0; k < 3; k++) {
                 float all = plain_sum(wc[k], n);
-                float vis = unblocked_sum(wc[k], sc->occ, n);
+                float vis = visible_sum(sc, wc[k], sc->occ, bits, n);
                 rgb[k] += all > 0.0f ? kl[k] * (vis / all) : kl[k];
             }
             continue;
         }
-        add_pair(sc, sc->occ, n, rgb);
+        add_pair(sc, sc->occ, bits, n, rgb);
     }
 }

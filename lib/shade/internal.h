@@ -2,8 +2,25 @@
 #ifndef LIE_SHADE_INTERNAL_H
 #define LIE_SHADE_INTERNAL_H
 
+#include "shade/bitmask.h"
 #include "shade/polylight.h"
 #include "shade/shade.h"
+
+#ifdef __AVX2__
+#include <immintrin.h>
+#endif
+
+/* Eight partial sums added pairwise, in one fixed order (the shading
+ * sums' last step, so every path rounds alike). */
+static inline float lie_sum8(const float l[8]) { return ((l[0] + l[1]) + (l[2] + l[3])) + ((l[4] + l[5]) + (l[6] + l[7])); }
+#ifdef __AVX2__
+static inline float lie_sum8_ps(__m256 acc)
+{
+    float lane[8];
+    _mm256_storeu_ps(lane, acc);
+    return lie_sum8(lane);
+}
+#endif
 
 /* Per-worker buffers, sized once for the largest sample count, so the
  * per-pixel path allocates nothing (CONTRIBUTING.md, Hot paths). */
@@ -14,6 +31,7 @@ typedef struct lie_shade_scratch {
     float scale[3];
     float *dx, *dy, *dz, *dist;
     uint32_t *occ;             /* per sample: ~0 blocked, 0 free */
+    uint64_t *mask;            /* the same as bits (bitmask.h) */
     uint32_t *blockers;        /* the oracle's selected blockers */
     float *bwork;              /* lie_shadow_query.work */
     uint32_t *bkind;
@@ -24,6 +42,52 @@ typedef struct lie_shade_scratch {
     lie_polylight_work poly;   /* closed-form shading's pieces */
     lie_render_stats stats;
 } lie_shade_scratch;
+
+/* A Lambert receiver's geometric term toward a planar emitter of one
+ * radiance, per sample (s, t): d = w + s u + t v (w = po - o), the
+ * receiver's cosines are linear forms in (s, t), the emitter's cosine one
+ * number ce, and G = (n.d) ce / |d|^4 (zero below either tangent plane).
+ * One function for the per-sample kernel (direct.c) and the bitmask sums
+ * (bitmask.c), so both weigh a sample alike. */
+typedef struct lie_planar_lambert {
+    float wx, wy, wz, ux, uy, uz, vx, vy, vz;
+    float r0, ru, rv; /* shading normal . d */
+    float g0, gu, gv; /* geometric normal . d */
+    float ce;         /* the emitter's cosine times |d| */
+} lie_planar_lambert;
+
+static inline float lie_planar_lambert_g(lie_planar_lambert P, float s, float t)
+{
+    float dx = fmaf(t, P.vx, fmaf(s, P.ux, P.wx)), dy = fmaf(t, P.vy, fmaf(s, P.uy, P.wy)),
+          dz = fmaf(t, P.vz, fmaf(s, P.uz, P.wz));
+    float d2 = fmaf(dz, dz, fmaf(dy, dy, dx * dx));
+    float cr = fmaf(t, P.rv, fmaf(s, P.ru, P.r0));
+    float cg = fmaf(t, P.gv, fmaf(s, P.gu, P.g0));
+    float inv = 1.0f / d2;
+    float G = (cr * P.ce) * (inv * inv);
+    int ok = (cr > 0.0f) & (cg > 0.0f) & (d2 > 0.0f);
+    return ok ? G : 0.0f;
+}
+
+/* The term's set-up from o (the lifted surface point) with shading normal
+ * n and geometric normal ng; 0 when o is behind the emitter (nothing lit). */
+static inline int lie_planar_lambert_setup(const lie_light_samples *ls, lie_vec3 o, lie_vec3 n, lie_vec3 ng,
+                                           int two_sided, lie_planar_lambert *P)
+{
+    const float sgn = two_sided ? -1.0f : 1.0f; /* two-sided: |cos| via max(c, -c) */
+    P->wx = ls->po[0] - o.x, P->wy = ls->po[1] - o.y, P->wz = ls->po[2] - o.z;
+    P->ux = ls->pu[0], P->uy = ls->pu[1], P->uz = ls->pu[2];
+    P->vx = ls->pv[0], P->vy = ls->pv[1], P->vz = ls->pv[2];
+    float ce = -(ls->pn[0] * P->wx + ls->pn[1] * P->wy + ls->pn[2] * P->wz);
+    P->ce = ce > sgn * ce ? ce : sgn * ce;
+    P->r0 = n.x * P->wx + n.y * P->wy + n.z * P->wz;
+    P->ru = n.x * P->ux + n.y * P->uy + n.z * P->uz;
+    P->rv = n.x * P->vx + n.y * P->vy + n.z * P->vz;
+    P->g0 = ng.x * P->wx + ng.y * P->wy + ng.z * P->wz;
+    P->gu = ng.x * P->ux + ng.y * P->uy + ng.z * P->uz;
+    P->gv = ng.x * P->vx + ng.y * P->vy + ng.z * P->vz;
+    return P->ce > 0.0f;
+}
 
 lie_status lie_shade_scratch_init(lie_shade_scratch *sc, int cap, int max_blockers);
 void lie_shade_scratch_free(lie_shade_scratch *sc);
@@ -37,12 +101,13 @@ typedef struct lie_shade_ctx {
     lie_polylight **poly;           /* per emitter, NULL where the closed form does not serve */
     int analytic;                   /* this frame shades Lambert receivers of poly[e] in closed form */
     int exact;                      /* ... and answers their partial pairs by back-projection */
+    lie_bitmask **bits;             /* per emitter, NULL where partial pairs are not answered as bitmasks */
 } lie_shade_ctx;
 
 /* Per triangle, the instance it belongs to if that instance is a closed
  * convex mesh with every light outside it (solids.c), else -1; NULL when
  * out of memory. */
-int32_t *lie_convex_solids(const lie_scene *s);
+int32_t *lie_solids_find(const lie_scene *s);
 
 /* Direct lighting at sf from every emitter, added to rgb.  `pixel` seeds the
  * rotated pattern. */

@@ -1,5 +1,6 @@
 /* Shadow rays answered by local illumination environments (§4.2). */
 #include "lie/lie.h"
+#include "shade/bitmask.h"
 #include "shade/internal.h"
 
 #include <stdlib.h>
@@ -26,7 +27,7 @@ struct lie_lie_vis {
      * vertices a x, y, z, b x, y, z, c x, y, z */
     float *soa_sphere[4];
     float *soa_vert[9];
-    int32_t *solid;         /* per triangle: its convex solid (lie_convex_solids) or -1 */
+    int32_t *solid;         /* per triangle: its convex solid (lie_solids_find) or -1 */
     lie_vis_oracle oracle;
 };
 
@@ -393,7 +394,7 @@ static uint32_t cone_5(const float *f, const lie_light_samples *ls, uint32_t *oc
 /* A segment from o to a light sample, both outside a convex solid, that
  * crosses it enters through a face that faces o.  When some selected face
  * of a solid faces o (so o is outside it; every light is, by
- * lie_convex_solids), that solid's faces turned away from o can block
+ * lie_solids_find), that solid's faces turned away from o can block
  * nothing more: they are dropped.  A closed column seen from the floor
  * has half its faces in a shadow's lists. */
 static void drop_far_faces(const int32_t *solid, const uint32_t *blockers, int nb, uint32_t *kind)
@@ -425,60 +426,114 @@ static void drop_far_faces(const int32_t *solid, const uint32_t *blockers, int n
     }
 }
 
+/* The 2D set-up shared by the per-sample and the bitmask answers: the
+ * plane view and each selected blocker's kind and forms in q->work (and
+ * the far faces of convex solids dropped).  Returns 0 when the segments
+ * are to be tested in 3D (not a planar emitter, o at its plane), 2 when
+ * some blocker blocks every sample, else 1. */
+static int prepare_2d(const lie_lie_vis *v, const uint32_t *blockers, int n_blockers, lie_shadow_query *q)
+{
+    const lie_light_samples *ls = q->ls;
+    if (!ls || !ls->planar)
+        return 0;
+    plane_view pv = {0};
+    pv.wx = ls->po[0] - q->o.x;
+    pv.wy = ls->po[1] - q->o.y;
+    pv.wz = ls->po[2] - q->o.z;
+    float d = pv.wx * ls->pn[0] + pv.wy * ls->pn[1] + pv.wz * ls->pn[2];
+    float sg = d > 0.0f ? 1.0f : -1.0f;
+    pv.kx = sg * ls->pn[0];
+    pv.ky = sg * ls->pn[1];
+    pv.kz = sg * ls->pn[2];
+    pv.D = sg * d;
+    pv.hi = pv.D - 2.0f * q->eps;
+    const float ext[4] = {ls->smin, ls->smax, ls->tmin, ls->tmax};
+    pv.end = unreached_depth(pv.D, q->eps, pv.wx, pv.wy, pv.wz, ext);
+    if (!(pv.hi > 0.0f))
+        return 0;
+    setup_2d(v, blockers, n_blockers, q->o, &pv, ls, q->work, q->work_stride, q->kind);
+    for (int j = 0; j < n_blockers; j++)
+        if ((q->kind[j] & B_KIND) == B_ALL)
+            return 2;
+    if (v->solid)
+        drop_far_faces(v->solid, blockers, n_blockers, q->kind);
+    return 1;
+}
+
+/* The first blocker from j on that prepare_2d left something to do
+ * (n_blockers if none), its kind and its forms, out of the work arrays. */
+static int next_blocker(const lie_shadow_query *q, int n_blockers, int j, uint32_t *kind, float f[LIE_BLOCKER_WORK])
+{
+    while (j < n_blockers && (q->kind[j] & B_KIND) == B_NONE)
+        j++;
+    if (j == n_blockers)
+        return j;
+    *kind = q->kind[j] & B_KIND;
+    for (int k = 0; k < LIE_BLOCKER_WORK; k++)
+        f[k] = q->work[(size_t)k * q->work_stride + (size_t)j];
+    return j;
+}
+
 /* The query's segments against the selected blockers: in 2D where the
- * emitter is planar and the blocker lies between (blocker_2d), else in 3D. */
+ * emitter is planar and the blocker lies between (prepare_2d), else in 3D. */
 static void occluded(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q, uint32_t *occ)
 {
     const lie_lie_vis *v = ctx;
     const int n = q->n;
     memset(occ, 0, sizeof *occ * (size_t)n);
     const lie_light_samples *ls = q->ls;
-    plane_view pv = {0};
-    int planar = ls && ls->planar;
-    if (planar) {
-        pv.wx = ls->po[0] - q->o.x;
-        pv.wy = ls->po[1] - q->o.y;
-        pv.wz = ls->po[2] - q->o.z;
-        float d = pv.wx * ls->pn[0] + pv.wy * ls->pn[1] + pv.wz * ls->pn[2];
-        float sg = d > 0.0f ? 1.0f : -1.0f;
-        pv.kx = sg * ls->pn[0];
-        pv.ky = sg * ls->pn[1];
-        pv.kz = sg * ls->pn[2];
-        pv.D = sg * d;
-        pv.hi = pv.D - 2.0f * q->eps;
-        const float ext[4] = {ls->smin, ls->smax, ls->tmin, ls->tmax};
-        pv.end = unreached_depth(pv.D, q->eps, pv.wx, pv.wy, pv.wz, ext);
-        planar = pv.hi > 0.0f;
-    }
-    if (!planar) {
-        lie_shadow_segments(q);
+    const int planar = prepare_2d(v, blockers, n_blockers, q);
+    if (planar == 0) {
+        lie_shadow_query_segments(q);
         for (int j = 0; j < n_blockers; j++)
             blocker_3d(&v->tris[blockers[j]], q->o, q->dx, q->dy, q->dz, n, occ);
         return;
     }
-    setup_2d(v, blockers, n_blockers, q->o, &pv, ls, q->work, q->work_stride, q->kind);
-    for (int j = 0; j < n_blockers; j++)
-        if ((q->kind[j] & B_KIND) == B_ALL) {
-            for (int i = 0; i < n; i++)
-                occ[i] = ~0u;
-            return;
-        }
-    if (v->solid)
-        drop_far_faces(v->solid, blockers, n_blockers, q->kind);
-    for (int j = 0; j < n_blockers; j++) {
-        const uint32_t kind = q->kind[j] & B_KIND;
-        if (kind == B_NONE)
-            continue;
-        float f[LIE_BLOCKER_WORK];
-        for (int k = 0; k < LIE_BLOCKER_WORK; k++)
-            f[k] = q->work[(size_t)k * q->work_stride + (size_t)j];
+    if (planar == 2) {
+        for (int i = 0; i < n; i++)
+            occ[i] = ~0u;
+        return;
+    }
+    uint32_t kind = B_NONE;
+    float f[LIE_BLOCKER_WORK] = {0.0f};
+    for (int j = 0; (j = next_blocker(q, n_blockers, j, &kind, f)) < n_blockers; j++) {
         if (kind == B_CONE) {
             cone_3(f, ls, occ);
         } else if (cone_5(f, ls, occ)) {
-            lie_shadow_segments(q);
+            lie_shadow_query_segments(q);
             blocker_3d(&v->tris[blockers[j]], q->o, q->dx, q->dy, q->dz, n, occ);
         }
     }
+}
+
+/* The same as a bitmask over the samples of bm (bitmask.h; q->ls must be
+ * bm's pattern): the same forms, every blocker's covered samples ORed in.
+ * Returns 0, mask undefined, where only 3D tests decide (then occluded()
+ * answers the pair). */
+static int occluded_mask(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
+                         const lie_bitmask *bm, uint64_t *mask)
+{
+    const lie_lie_vis *v = ctx;
+    const int words = lie_bitmask_words(bm);
+    const int planar = prepare_2d(v, blockers, n_blockers, q);
+    if (planar == 0)
+        return 0;
+    if (planar == 2) {
+        for (int w = 0; w < words; w++)
+            mask[w] = ~0ull;
+        mask[words - 1] = bm->last;
+        return 1;
+    }
+    memset(mask, 0, sizeof *mask * (size_t)words);
+    uint32_t kind = B_NONE;
+    float f[LIE_BLOCKER_WORK] = {0.0f};
+    for (int j = 0; (j = next_blocker(q, n_blockers, j, &kind, f)) < n_blockers; j++) {
+        if (kind == B_CONE)
+            lie_bitmask_cone(bm, f, mask);
+        else if (lie_bitmask_cone_depth(bm, f, mask))
+            return 0;
+    }
+    return 1;
 }
 
 static void describe(void *ctx, const lie_surface *sf, int e, int *cls, uint32_t *count, uint64_t *patch_id)
@@ -491,20 +546,13 @@ static void describe(void *ctx, const lie_surface *sf, int e, int *cls, uint32_t
     *patch_id = lie_hash_u64x4(sf->tri, path.digits, (uint64_t)path.depth, (uint64_t)e);
 }
 
-/* A sphere around points: the box's centre, the farthest point's distance
- * (slightly enlarged so rounding never culls a real blocker). */
+/* A sphere around points (lie_bound_sphere). */
 static sphere bounding_sphere(const lie_vec3 *p, uint32_t n)
 {
-    lie_box3 b = lie_box3_empty();
-    for (uint32_t i = 0; i < n; i++)
-        lie_box3_grow(&b, p[i]);
-    lie_vec3 c = lie_v3_scale(lie_v3_add(b.lo, b.hi), 0.5f);
-    float r = 0.0f;
-    for (uint32_t i = 0; i < n; i++)
-        r = fmaxf(r, lie_v3_len(lie_v3_sub(p[i], c)));
-    float mag = fmaxf(fabsf(c.x), fmaxf(fabsf(c.y), fabsf(c.z)));
-    sphere s = {c.x, c.y, c.z, r * 1.001f + 1e-5f * fmaxf(1.0f, mag)};
-    return s;
+    float f[4];
+    lie_bound_sphere(p, n, f);
+    sphere b = {f[0], f[1], f[2], f[3]};
+    return b;
 }
 
 lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vis **out, lie_error *err)
@@ -536,16 +584,10 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
     for (uint32_t t = 0; t < s->n_tris; t++)
         v->tri_sphere[t] = bounding_sphere(&s->tri_p[3 * (size_t)t], 3);
     for (int e = 0; e < s->n_emitters; e++) {
-        const lie_emitter *em = &s->emitters[e];
-        if (em->type == LIE_EMITTER_AREA) {
-            v->emitter_sphere[e] = bounding_sphere(&s->tri_p[3 * (size_t)em->first_tri], 3 * em->n_tris);
-        } else if (em->type == LIE_EMITTER_POINT) {
-            sphere p = {em->position.x, em->position.y, em->position.z, 0.0f};
-            v->emitter_sphere[e] = p;
-        } else {
-            sphere none = {0.0f, 0.0f, 0.0f, -1.0f};
-            v->emitter_sphere[e] = none;
-        }
+        float f[4];
+        lie_emitter_bounding_sphere(s, e, f); /* r < 0: at infinity, no culling */
+        sphere b = {f[0], f[1], f[2], f[3]};
+        v->emitter_sphere[e] = b;
     }
     const size_t nt = (size_t)s->n_tris + 1;
     for (int k = 0; k < 4; k++)
@@ -570,7 +612,7 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
             v->soa_vert[3 * q + 2][t] = Q[q].z;
         }
     }
-    v->solid = lie_convex_solids(s);
+    v->solid = lie_solids_find(s);
     if (!v->solid) {
         lie_lie_vis_destroy(v);
         return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
@@ -580,6 +622,7 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
     v->oracle.ctx = v;
     v->oracle.classify = classify;
     v->oracle.occluded = occluded;
+    v->oracle.occluded_mask = occluded_mask;
     v->oracle.select = select_blockers;
     uint32_t longest = 0;
     for (uint32_t i = 0; i < env->n_nodes; i++)

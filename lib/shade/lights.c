@@ -51,28 +51,26 @@ void lie_light_samples_generate(const lie_scene *s, int e, int n, float su, floa
                                 lie_light_samples *out)
 {
     const lie_emitter *em = &s->emitters[e];
-    if (em->type != LIE_EMITTER_AREA) {
+    lie_emitter_sample q;
+    if (lie_emitter_is_delta(em)) {
+        /* its one point (a direction for a light at infinity) and intensity */
+        lie_emitter_sample_point(s, e, 0.5f, 0.5f, &q);
         out->n = 1;
-        out->x[0] = em->type == LIE_EMITTER_POINT ? em->position.x : -em->direction.x;
-        out->y[0] = em->type == LIE_EMITTER_POINT ? em->position.y : -em->direction.y;
-        out->z[0] = em->type == LIE_EMITTER_POINT ? em->position.z : -em->direction.z;
-        out->nx[0] = em->direction.x;
-        out->ny[0] = em->direction.y;
-        out->nz[0] = em->direction.z;
-        out->r[0] = em->intensity[0];
-        out->g[0] = em->intensity[1];
-        out->b[0] = em->intensity[2];
+        out->x[0] = q.p.x;
+        out->y[0] = q.p.y;
+        out->z[0] = q.p.z;
+        out->nx[0] = q.n.x;
+        out->ny[0] = q.n.y;
+        out->nz[0] = q.n.z;
+        out->r[0] = q.le[0];
+        out->g[0] = q.le[1];
+        out->b[0] = q.le[2];
         out->uniform = 0;
         out->planar = 0;
         return;
     }
-    const lie_material *mat = lie_scene_material(s, s->tri_material[em->first_tri]);
-    const lie_texture *tex = mat->emissive_tex >= 0 && mat->emissive_tex < s->n_textures
-                                 ? &s->textures[mat->emissive_tex]
-                                 : NULL;
-    float w = em->area / (float)n;
     out->n = n;
-    out->uniform = tex == NULL;
+    out->uniform = lie_emitter_uniform(s, e);
     out->planar = em->planar;
     const lie_vec3 O = em->plane_o, U = em->plane_u, V = em->plane_v, N = em->plane_n;
     if (em->planar) {
@@ -87,17 +85,10 @@ void lie_light_samples_generate(const lie_scene *s, int e, int n, float su, floa
     for (int i = 0; i < n; i++) {
         float u1 = wrap01(((float)i + 0.5f) / (float)n + su);
         float u2 = wrap01(lie_radical_inverse2((uint32_t)i) + sv);
-        lie_vec3 p, ng;
-        float b1, b2;
-        uint32_t g = lie_emitter_point(s, e, u1, u2, &p, &ng, &b1, &b2);
-        float le[3] = {em->radiance[0], em->radiance[1], em->radiance[2]};
-        if (tex) {
-            float rgba[4], xu, xv;
-            lie_scene_slot_uv(s, mat, LIE_TEX_EMISSIVE, g, b1, b2, &xu, &xv);
-            lie_texture_sample(tex, xu, xv, rgba);
-            for (int k = 0; k < 3; k++)
-                le[k] *= rgba[k];
-        }
+        lie_emitter_sample_point(s, e, u1, u2, &q);
+        lie_vec3 p = q.p;
+        /* Le / (pdf n): the estimate is the plain sum of weight x G x f x V */
+        float w = q.inv_pdf / (float)n;
         if (em->planar) {
             /* onto the plane, and back: the point is then exactly what the
              * linear forms of lib/shade describe */
@@ -114,12 +105,12 @@ void lie_light_samples_generate(const lie_scene *s, int e, int n, float su, floa
         out->x[i] = p.x;
         out->y[i] = p.y;
         out->z[i] = p.z;
-        out->nx[i] = ng.x;
-        out->ny[i] = ng.y;
-        out->nz[i] = ng.z;
-        out->r[i] = le[0] * w;
-        out->g[i] = le[1] * w;
-        out->b[i] = le[2] * w;
+        out->nx[i] = q.n.x;
+        out->ny[i] = q.n.y;
+        out->nz[i] = q.n.z;
+        out->r[i] = q.le[0] * w;
+        out->g[i] = q.le[1] * w;
+        out->b[i] = q.le[2] * w;
     }
     /* the padding up to a whole vector: (s, t) that no linear form admits */
     for (int i = n; i < lie_light_samples_padded(out); i++)

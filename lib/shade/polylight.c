@@ -68,13 +68,10 @@ static int convex_hull(double *pts, int n, double *hull)
 lie_status lie_polylight_create(const lie_scene *s, int e, lie_polylight **out)
 {
     *out = NULL;
-    const lie_emitter *em = &s->emitters[e];
-    if (em->type != LIE_EMITTER_AREA || !em->planar || em->n_tris == 0)
-        return LIE_OK;
-    const lie_material *mat = lie_scene_material(s, s->tri_material[em->first_tri]);
-    if (mat->emissive_tex >= 0 && mat->emissive_tex < s->n_textures)
-        return LIE_OK; /* radiance varies over the emitter: sampled */
-    const size_t nv = 3 * (size_t)em->n_tris;
+    lie_emitter_polygon pg;
+    if (!lie_emitter_polygon_of(s, e, &pg))
+        return LIE_OK; /* not a polygon of one radiance: sampled */
+    const size_t nv = 3 * (size_t)pg.n_tris;
     double *pts = malloc(sizeof *pts * 2 * nv), *hull = malloc(sizeof *hull * 2 * (nv + 1));
     lie_polylight *L = calloc(1, sizeof *L);
     if (!pts || !hull || !L) {
@@ -82,35 +79,35 @@ lie_status lie_polylight_create(const lie_scene *s, int e, lie_polylight **out)
         return LIE_ERR_NOMEM;
     }
     L->emitter = e;
-    L->first_tri = em->first_tri;
-    L->n_tris = em->n_tris;
-    L->two_sided = em->double_sided;
-    memcpy(L->radiance, em->radiance, sizeof L->radiance);
-    const lie_vec3 fr[4] = {em->plane_o, em->plane_u, em->plane_v, em->plane_n};
+    L->first_tri = pg.first_tri;
+    L->n_tris = pg.n_tris;
+    L->two_sided = pg.two_sided;
+    memcpy(L->radiance, pg.radiance, sizeof L->radiance);
+    const lie_vec3 fr[4] = {pg.o, pg.u, pg.v, pg.n};
     double *dst[4] = {L->po, L->pu, L->pv, L->pn};
     for (int k = 0; k < 4; k++)
         dst[k][0] = fr[k].x, dst[k][1] = fr[k].y, dst[k][2] = fr[k].z;
-    const d3 O = d3_of(em->plane_o), U = d3_of(em->plane_u), V = d3_of(em->plane_v);
+    const d3 O = d3_of(pg.o), U = d3_of(pg.u), V = d3_of(pg.v);
     for (size_t i = 0; i < nv; i++) {
-        d3 q = d3_sub(d3_of(s->tri_p[3 * (size_t)em->first_tri + i]), O);
+        d3 q = d3_sub(d3_of(s->tri_p[3 * (size_t)pg.first_tri + i]), O);
         pts[2 * i] = d3_dot(q, U);
         pts[2 * i + 1] = d3_dot(q, V);
     }
     double area = 0.0;
-    for (uint32_t t = 0; t < em->n_tris; t++) {
+    for (uint32_t t = 0; t < pg.n_tris; t++) {
         const double *a = &pts[6 * t];
         area += 0.5 * fabs(turn(a, a + 2, a + 4));
     }
     L->area = area;
     /* the triangles as they are (counter-clockwise), before the hull sorts pts */
     lie_poly2 *tris = NULL;
-    if (em->n_tris <= LIE_POLYLIGHT_MAX_TRIS) {
-        tris = malloc(sizeof *tris * em->n_tris);
+    if (pg.n_tris <= LIE_POLYLIGHT_MAX_TRIS) {
+        tris = malloc(sizeof *tris * pg.n_tris);
         if (!tris) {
             free(pts), free(hull), free(L);
             return LIE_ERR_NOMEM;
         }
-        for (uint32_t t = 0; t < em->n_tris; t++) {
+        for (uint32_t t = 0; t < pg.n_tris; t++) {
             const double *a = &pts[6 * t];
             int flip = turn(a, a + 2, a + 4) < 0.0;
             tris[t].n = 3;
@@ -140,7 +137,7 @@ lie_status lie_polylight_create(const lie_scene *s, int e, lie_polylight **out)
         L->n_polys = 1;
     } else if (tris) {
         L->polys = tris;
-        L->n_polys = (int)em->n_tris;
+        L->n_polys = (int)pg.n_tris;
     } else {
         free(L);
         return LIE_OK; /* many triangles, not convex: sampled */

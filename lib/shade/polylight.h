@@ -81,7 +81,7 @@ double lie_polylight_unshadowed(const lie_polylight *L, lie_vec3 o, lie_vec3 n, 
  * (the emitter's own triangles are skipped); a blocker within `eps` of the
  * emitter's plane blocks nothing there, as shadow segments stop eps short.
  * solid (per triangle, its closed convex solid or -1; may be NULL, see
- * lie_convex_solids) lets the faces of one solid cast one shadow.
+ * lie_solids_find) lets the faces of one solid cast one shadow.
  * Returns 0 and fills *omega, or -1 when the region needs more pieces
  * than LIE_POLY_MAXP or a piece more than LIE_POLY_MAXV vertices (the
  * caller then samples). */

@@ -36,6 +36,7 @@ void lie_render_stats_add(lie_render_stats *acc, const lie_render_stats *w)
     acc->pairs_occluded += w->pairs_occluded;
     acc->pairs_analytic += w->pairs_analytic;
     acc->pairs_exact += w->pairs_exact;
+    acc->pairs_bitmask += w->pairs_bitmask;
     acc->pairs_blockers += w->pairs_blockers;
     acc->pairs_embree += w->pairs_embree;
     acc->pairs_unshadowed += w->pairs_unshadowed;
@@ -44,6 +45,7 @@ void lie_render_stats_add(lie_render_stats *acc, const lie_render_stats *w)
     acc->points_unbuilt += w->points_unbuilt;
     acc->t_analytic += w->t_analytic;
     acc->t_exact += w->t_exact;
+    acc->t_bitmask += w->t_bitmask;
     acc->t_blockers += w->t_blockers;
     acc->t_embree += w->t_embree;
     acc->t_sampled_shading += w->t_sampled_shading;
@@ -353,7 +355,7 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
         memset(j.scratch, 0, sizeof *j.scratch * (size_t)threads);
     lie_status st = fixed && j.scratch ? LIE_OK : LIE_ERR_NOMEM;
     for (int e = 0; st == LIE_OK && e < s->n_emitters; e++) {
-        int n = s->emitters[e].type == LIE_EMITTER_AREA ? opt->light_samples : 1;
+        int n = lie_emitter_sample_count(&s->emitters[e], opt->light_samples);
         st = lie_light_samples_alloc(&fixed[e], n);
         if (st == LIE_OK) {
             float su, sv;
@@ -373,6 +375,18 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
         st = j.sc.poly ? LIE_OK : LIE_ERR_NOMEM;
         for (int e = 0; st == LIE_OK && e < s->n_emitters; e++)
             st = lie_polylight_create(s, e, &j.sc.poly[e]);
+    }
+    /* all samples at once (bitmask.h): the fixed pattern of each planar
+     * emitter in mask order */
+    if (st == LIE_OK && opt->visibility == LIE_VIS_LIE && opt->oracle && opt->oracle->occluded_mask &&
+        (opt->bitmask == LIE_BITMASK_ONLY || (opt->bitmask == LIE_BITMASK_AUTO && opt->exact == LIE_EXACT_AUTO)) &&
+        opt->exact != LIE_EXACT_ONLY && opt->pattern == LIE_PATTERN_FIXED &&
+        opt->light_samples >= LIE_BITMASK_MIN_SAMPLES) {
+        j.sc.bits = calloc((size_t)s->n_emitters + 1, sizeof *j.sc.bits);
+        st = j.sc.bits ? LIE_OK : LIE_ERR_NOMEM;
+        for (int e = 0; st == LIE_OK && e < s->n_emitters; e++)
+            if (!lie_emitter_is_delta(&s->emitters[e]))
+                st = lie_bitmask_create(&fixed[e], &j.sc.bits[e]);
     }
     if (st == LIE_OK) {
         j.tiles_x = (opt->width + LIE_TILE - 1) / LIE_TILE;
@@ -398,6 +412,9 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
     for (int e = 0; j.sc.poly && e < s->n_emitters; e++)
         lie_polylight_destroy(j.sc.poly[e]);
     free(j.sc.poly);
+    for (int e = 0; j.sc.bits && e < s->n_emitters; e++)
+        lie_bitmask_destroy(j.sc.bits[e]);
+    free(j.sc.bits);
     if (st != LIE_OK)
         return lie_error_set(err, st, path, "%s", lie_status_str(st));
     return LIE_OK;

@@ -10,6 +10,7 @@
 
 #include "core/core.h"
 #include "image/image.h"
+#include "lie/lie.h"
 #include "rt/rt.h"
 #include "scene/scene.h"
 
@@ -99,7 +100,7 @@ typedef enum lie_vis_class {
 /* One shading point's shadow segments toward one emitter: o -> o + d_i,
  * d_i the vector to sample i shortened by eps.  For an area emitter the
  * samples are `ls` and dx, dy, dz are filled only on demand
- * (lie_shadow_segments), since a planar emitter's segments can be tested
+ * (lie_shadow_query_segments), since a planar emitter's segments can be tested
  * from (s, t) alone; for a punctual one (ls NULL) the one segment is in
  * dx[0], dy[0], dz[0] from the start. */
 typedef struct lie_shadow_query {
@@ -117,7 +118,7 @@ typedef struct lie_shadow_query {
     size_t work_stride;
 } lie_shadow_query;
 #define LIE_BLOCKER_WORK 15
-void lie_shadow_segments(lie_shadow_query *q);
+void lie_shadow_query_segments(lie_shadow_query *q);
 
 /* A visibility oracle other than Embree-over-everything.  classify() looks
  * up the pair; for LIE_VISCLASS_BLOCKERS, select() keeps the pair's
@@ -126,6 +127,7 @@ void lie_shadow_segments(lie_shadow_query *q);
  * triangle indices; none left means the point sees the emitter whole) and
  * occluded() answers the query's segments against them (occ[i] = ~0 if
  * blocked, 0 if free). */
+typedef struct lie_bitmask lie_bitmask; /* lib/shade/bitmask.h */
 typedef struct lie_vis_oracle {
     void *ctx;
     int max_blockers;
@@ -133,10 +135,15 @@ typedef struct lie_vis_oracle {
     int (*select)(void *ctx, const void *pair, int emitter, lie_vec3 o, float eps, uint32_t *out);
     void (*occluded)(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
                      uint32_t *occ);
+    /* Optional: the same as a bitmask over bm's samples (q->ls is bm's
+     * pattern), bit i set if sample i is blocked; returns 0 where it cannot
+     * answer (then occluded() does). */
+    int (*occluded_mask)(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
+                         const lie_bitmask *bm, uint64_t *mask);
     /* For AOVs: the pair's class (lie_class), list length and a patch id. */
     void (*describe)(void *ctx, const lie_surface *sf, int emitter, int *cls, uint32_t *count,
                      uint64_t *patch_id);
-    /* per triangle, its closed convex solid or -1 (lie_convex_solids); may be NULL */
+    /* per triangle, its closed convex solid or -1 (lie_solids_find); may be NULL */
     const int32_t *solid;
 } lie_vis_oracle;
 
@@ -179,7 +186,7 @@ void lie_complexity_colour_all(const int *cls, const uint32_t *count, int n, flo
  * samples' weight to all its samples' (Heitz, Hill, McGuire 2018).  With
  * LIE visibility, a partial pair's visible part can be found exactly by
  * back-projecting its blockers: LIE_EXACT_ONLY always, LIE_EXACT_AUTO when
- * that costs less than testing its samples (lie_exact_pays). */
+ * that costs less than testing its samples (lie_render_exact_pays). */
 typedef enum lie_exact_mode {
     LIE_EXACT_AUTO = 0,
     LIE_EXACT_OFF = 1,     /* partial pairs sampled (the oracle: LIE image = full image) */
@@ -194,10 +201,36 @@ typedef enum lie_exact_mode {
  * museum1 (256x256, one thread): testing n samples against b selected
  * blockers costs about n (4 + 1.5 b), the exact shadow 3000 + 2000 b.  So
  * exact shadows pay from about 1000 samples on. */
-static inline int lie_exact_pays(int n, int b)
+static inline int lie_render_exact_pays(int n, int b)
 {
     return (double)n * (4.0 + 1.5 * b) >= 3000.0 + 2000.0 * b;
 }
+/* Partial pairs toward a planar emitter may also be answered with all
+ * samples at once (lib/shade/bitmask.h): LIE_BITMASK_AUTO where the cost
+ * model below says it is the cheapest of samples, bitmask and exact;
+ * LIE_BITMASK_ONLY wherever it applies (not with LIE_EXACT_ONLY, whose
+ * exact shadows win); LIE_BITMASK_OFF never.  AUTO is off under
+ * LIE_EXACT_OFF, the oracle's mode (the same samples in the same order as
+ * full visibility).  It needs the fixed pattern and LIE_BITMASK_MIN_SAMPLES
+ * samples. */
+typedef enum lie_bitmask_mode {
+    LIE_BITMASK_AUTO = 0,
+    LIE_BITMASK_OFF = 1,
+    LIE_BITMASK_ONLY = 2
+} lie_bitmask_mode;
+#define LIE_BITMASK_MIN_SAMPLES 64
+/* Its cost in the units of lie_render_exact_pays, measured the same way
+ * (museum1, --timers, side by side with the per-sample path): a set-up
+ * and the sum over the fewer of the blocked and the visible samples, 300,
+ * and per blocker a walk whose cost grows with its shadow's perimeter in
+ * groups of 8 samples, 420 + 9 sqrt(n).  A receiver that is not Lambert's
+ * still shades every sample (shade_all), 4 n. */
+static inline double lie_render_bitmask_cost(int n, int b, int shade_all)
+{
+    return 300.0 + (shade_all ? 4.0 * n : 0.0) + (double)b * (420.0 + 9.0 * __builtin_sqrt((double)n));
+}
+static inline double lie_render_samples_cost(int n, int b) { return (double)n * (4.0 + 1.5 * b); }
+static inline double lie_render_exact_cost(int b) { return 3000.0 + 2000.0 * b; }
 
 typedef struct lie_render_options {
     int width, height;
@@ -217,6 +250,7 @@ typedef struct lie_render_options {
     const char *progress_label; /* its label (NULL: "render"), e.g. "frame 3/20" */
     lie_exact_mode exact;  /* closed-form shading and exact visibility (polylight.h) */
     int timers;            /* per-worker timers of each path into the stats (costs a clock read per pair) */
+    lie_bitmask_mode bitmask; /* all samples at once for partial pairs (bitmask.h) */
 } lie_render_options;
 
 /* Benchmark ablations of --visibility=lie: answer partial pairs (their
@@ -241,11 +275,12 @@ typedef struct lie_render_stats {
     uint64_t pairs_blockers;  /* partial, samples against the blocker list */
     uint64_t pairs_embree;    /* samples against the whole scene */
     uint64_t pairs_unshadowed; /* seen whole, sampled shading */
+    uint64_t pairs_bitmask;   /* partial, all samples at once as a bitmask (bitmask.h) */
     uint64_t exact_overflows; /* exact pairs that fell back to samples */
     uint64_t pairs_unbuilt;   /* of pairs_embree: units lie-build left out (--view, --path) */
     uint64_t points_unbuilt;  /* shading points with such a pair: pixels, at 1 spp without mirrors */
     /* with lie_render_options.timers: seconds summed over workers */
-    double t_analytic, t_exact, t_blockers, t_embree, t_sampled_shading;
+    double t_analytic, t_exact, t_blockers, t_embree, t_sampled_shading, t_bitmask;
     double seconds;
 } lie_render_stats;
 /* acc += w, field by field */
@@ -315,8 +350,12 @@ lie_status lie_camera_parse(const lie_scene *s, const char *spec, lie_camera *ou
  * cameras through a width x height image (2 x 2 rays per pixel) and through
  * up to max_depth mirror bounces: the patches lie-build --view builds (§4.3.1:
  * only what the user looks at). */
-lie_status lie_visible_triangles(const lie_scene *s, const lie_rt *rt, const lie_camera *cams, int n_cams,
-                                 int width, int height, int max_depth, uint8_t *mask, lie_error *err);
+lie_status lie_camera_mark_visible(const lie_scene *s, const lie_rt *rt, const lie_camera *cams, int n_cams,
+                                   int width, int height, int max_depth, uint8_t *mask, lie_error *err);
+/* The same views' pixels, where on each triangle they land (§4.3.3): the
+ * input of lie_env_build_views.  *out: lie_pixels_destroy. */
+lie_status lie_camera_pixels(const lie_scene *s, const lie_rt *rt, const lie_camera *cams, int n_cams, int width,
+                             int height, int max_depth, lie_pixels **out, lie_error *err);
 
 /* ---- camera paths (formats/camera-path.md) ---------------------------- */
 

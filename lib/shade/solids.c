@@ -148,23 +148,15 @@ static int convex_solid(const lie_scene *s, const lie_instance *in, mesh_scratch
     }
     /* every light outside it, so the segments end outside */
     for (int e = 0; e < s->n_emitters; e++) {
-        const lie_emitter *em = &s->emitters[e];
-        if (em->type == LIE_EMITTER_DIRECTIONAL)
-            continue; /* its segments end far away */
-        if (em->type == LIE_EMITTER_POINT) {
-            if (!outside(s, first, n, &em->position, 1, tol))
-                return 0;
-            continue;
-        }
-        const lie_vec3 *pts = em->n_hull ? em->hull : &s->tri_p[3 * (size_t)em->first_tri];
-        size_t np = em->n_hull ? (size_t)em->n_hull : 3 * (size_t)em->n_tris;
-        if (!outside(s, first, n, pts, np, tol))
-            return 0;
+        const lie_vec3 *pts;
+        int np = lie_emitter_extent(s, e, &pts);
+        if (np > 0 && !outside(s, first, n, pts, (size_t)np, tol))
+            return 0; /* a light at infinity (np 0): its segments end far away */
     }
     return 1;
 }
 
-int32_t *lie_convex_solids(const lie_scene *s)
+int32_t *lie_solids_find(const lie_scene *s)
 {
     int32_t *id = malloc(sizeof *id * ((size_t)s->n_tris + 1));
     if (!id)

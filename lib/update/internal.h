@@ -17,6 +17,7 @@ struct lie_update {
     double rst_seconds;
     uint32_t base_tris;
     float base_max_area;
+    lie_pixels *base_px;      /* a cache built for views: their pixels on the committed scene */
 
     /* Edits since the last commit. */
     int dirty;
@@ -39,7 +40,9 @@ struct lie_update {
     uint8_t *work_flags;      /* per work node: still to recompute */
     uint8_t *pending;         /* per unit: 1 = recompute flagged nodes, 2 = build afresh, 0 = done */
     size_t n_pending;
-    lie_rt *rt;               /* Embree over the edited scene, made by the first step */
+    lie_rt *rt;               /* Embree over the edited scene, made by the first step (or by
+                                 phase 1, for the views' pixels) */
+    lie_pixels *px;           /* a cache built for views: their pixels on the edited scene */
 
     lie_update_stats st;
 };
@@ -47,6 +50,9 @@ struct lie_update {
 /* Phase 1 (mark.c): after the edits since the commit, compute old_unit,
  * flags, work, work_flags and pending. */
 lie_status lie_update_mark(lie_update *u, lie_error *err);
+/* The cache's views' pixels on the scene as it is now (making u->rt for
+ * it when there is none). */
+lie_status lie_update_view_pixels(lie_update *u, lie_pixels **out, lie_error *err);
 /* Free phase 1's answers and the work env (pending work is dropped). */
 void lie_update_drop_answers(lie_update *u);
 

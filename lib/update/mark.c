@@ -50,6 +50,14 @@ static int32_t emitter_before(const lie_cache *c, const lie_emitter *em, const u
     return o;
 }
 
+/* Do the views hit triangle t at the same points before and after? */
+static int same_pixels(const lie_pixels *a, const lie_pixels *b, uint32_t t)
+{
+    uint64_t n = a->first[t + 1] - a->first[t];
+    return n == b->first[t + 1] - b->first[t] &&
+           (n == 0 || memcmp(a->key + a->first[t], b->key + b->first[t], sizeof *a->key * (size_t)n) == 0);
+}
+
 /* old_unit: units whose patch or emitter moved, new units, and all units
  * when the smallest patch size changed, are built afresh (-1). */
 static lie_status map_units(lie_update *u)
@@ -71,8 +79,14 @@ static lie_status map_units(lie_update *u)
     for (int e = 0; e < s->n_emitters; e++)
         emap[e] = emitter_before(c, &s->emitters[e], moved);
     int everything = u->opt.full || s->max_tri_area != u->base_max_area;
+    u->st.units_views = 0;
     for (uint32_t t = 0; t < s->n_tris; t++) {
         int patch_moved = t >= u->base_tris || moved[s->instances[s->tri_instance[t]].node];
+        /* a view-built cache: a triangle whose pixels changed is decided anew */
+        if (u->px && !patch_moved && !everything && !same_pixels(u->base_px, u->px, t)) {
+            patch_moved = 1;
+            u->st.units_views += (uint64_t)s->n_emitters;
+        }
         for (int e = 0; e < s->n_emitters; e++) {
             size_t unit = (size_t)t * (size_t)s->n_emitters + (size_t)e;
             u->old_unit[unit] = everything || patch_moved || emap[e] < 0
@@ -213,6 +227,8 @@ void lie_update_drop_answers(lie_update *u)
     free(u->flags);
     free(u->work_flags);
     free(u->pending);
+    lie_pixels_destroy(u->px);
+    u->px = NULL;
     lie_env_destroy(u->work);
     u->old_unit = NULL;
     u->flags = u->work_flags = u->pending = NULL;
@@ -224,7 +240,15 @@ lie_status lie_update_mark(lie_update *u, lie_error *err)
 {
     double t0 = lie_time_now();
     lie_update_drop_answers(u);
-    lie_status st = map_units(u);
+    lie_status st = LIE_OK;
+    if (u->cache->views.n_cams) {
+        /* the views' pixels on the edited scene (Embree's, kept for the steps) */
+        lie_rt_destroy(u->rt);
+        u->rt = NULL;
+        if ((st = lie_update_view_pixels(u, &u->px, err)) != LIE_OK)
+            return st;
+    }
+    st = map_units(u);
     if (st == LIE_OK)
         st = flag_nodes(u);
     if (st == LIE_OK)

@@ -1,6 +1,7 @@
 /* Updating local illumination environments after edits (§5): the update's
  * life — create, edits (phase 1, mark.c), steps (phase 2), commit. */
 #include "update/internal.h"
+#include "shade/shade.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -87,6 +88,8 @@ void lie_update_destroy(lie_update *u)
     drop_edits(u);
     lie_rst_destroy(u->rst);
     lie_rt_destroy(u->rt);
+    lie_pixels_destroy(u->base_px);
+    lie_pixels_destroy(u->px);
     free(u);
 }
 
@@ -173,6 +176,13 @@ lie_status lie_update_edit(lie_update *u, const lie_edit *edit, const unsigned c
         u->tree_flags = u->rst ? calloc((size_t)u->cache->env->n_nodes + 1, 1) : NULL;
         if (u->rst && !u->tree_flags)
             return nomem(u, err);
+        /* a cache built for views: where their pixels fall before the edits */
+        lie_pixels_destroy(u->base_px);
+        u->base_px = NULL;
+        if (u->cache->views.n_cams && lie_update_view_pixels(u, &u->base_px, err) != LIE_OK) {
+            u->failed = 1;
+            return err->status;
+        }
     }
     u->dirty = 1;
     lie_rt_destroy(u->rt); /* Embree's view of the scene is about to go stale */
@@ -199,6 +209,19 @@ lie_status lie_update_edit(lie_update *u, const lie_edit *edit, const unsigned c
 }
 
 size_t lie_update_pending(const lie_update *u) { return u->n_pending; }
+
+lie_status lie_update_view_pixels(lie_update *u, lie_pixels **out, lie_error *err)
+{
+    const lie_cache_views *v = &u->cache->views;
+    double t0 = lie_time_now();
+    if (!u->rt && lie_rt_create(u->scene, &u->rt, err) != LIE_OK)
+        return err->status;
+    u->st.seconds_bvh += lie_time_now() - t0;
+    t0 = lie_time_now();
+    lie_status st = lie_camera_pixels(u->scene, u->rt, v->cams, v->n_cams, v->width, v->height, v->max_depth, out, err);
+    u->st.seconds_views += lie_time_now() - t0;
+    return st;
+}
 
 /* The edits are done: the cache takes the new environments and state. */
 static lie_status commit(lie_update *u, lie_error *err)
@@ -267,7 +290,7 @@ static lie_status recompute(lie_update *u, const uint8_t *chosen, lie_error *err
         }
     }
     lie_build_stats bst;
-    lie_status st = lie_env_update(w, s, u->rt, old_unit, flags, u->opt.threads, &bst, err);
+    lie_status st = lie_env_update_views(w, s, u->rt, u->px, old_unit, flags, u->opt.threads, &bst, err);
     free(old_unit);
     free(flags);
     if (st != LIE_OK) {

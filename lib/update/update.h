@@ -44,6 +44,12 @@
  * hands the new env to the renderer (for example swapping a pointer under
  * a lock between frames); the renderer frees the env it no longer uses.
  *
+ * A cache built for views (lie-build --view) keeps them: the views are
+ * sampled again on the edited scene (lib/shade, lie_camera_pixels), and the
+ * units of every triangle whose pixels changed are built afresh, with the
+ * pixel rule of the new pixels, as lie-build --view would for the edited
+ * scene.  That costs lie_update_edit an Embree build and the views' rays.
+ *
  * Costs.  lie_update_edit: two passes over the scene's triangles, the tree
  * queries, the exact hull tests of the flagged nodes and one copy of the
  * environments (milliseconds where a step takes tenths of a second).
@@ -96,7 +102,9 @@ typedef struct lie_update_stats {
     uint64_t nodes_flagged;    /* patch-tree nodes flagged after the exact hull tests */
     uint64_t nodes_recomputed; /* patch-tree nodes computed by the steps */
     lie_rst_stats rst;         /* the trees the flags came from */
+    uint64_t units_views;      /* of the rebuilt units: their triangle's pixels in the views changed */
     double seconds_rst, seconds_edit, seconds_query, seconds_bvh, seconds_update;
+    double seconds_views;      /* sampling a view-built cache's views, before and after the edits */
     /* the recomputation's parallel loops (lie_build_stats): CPU seconds of
      * all workers, of the busiest worker per loop, idle tails */
     double seconds_cpu_workers, seconds_cpu_worker_max, seconds_tail;

@@ -3,7 +3,7 @@
 # middle of a build writes a valid partial cache atomically, exits 130 with
 # one line; lie-inspect calls it partial, lie-render completes it with the
 # whole scene; --resume finishes it into the bytes of an uninterrupted
-# build, for any thread count, and refuses other parameters.  --edit
+# build, for any thread count, and refuses other parameters or views.  --edit
 # builds the edited scene.
 . "$(dirname "$0")/lib.sh"
 cd "$TMP" || exit 1
@@ -17,7 +17,7 @@ ARGS="--min-patch 1e-5"
 bg_build() {
     out=$1 wait_s=$2 sig=$3
     shift 3
-    env --default-signal=INT "$B/lie-build" "$SC" $ARGS -q -o "$out" "$@" 2>"$TMP/err" &
+    env --default-signal=INT "$B/lie-build" "$SC" -q -o "$out" "$@" 2>"$TMP/err" &
     pid=$!
     sleep "$wait_s"
     kill -"$sig" $pid 2>/dev/null
@@ -28,7 +28,7 @@ bg_build() {
 run "$B/lie-build" "$SC" $ARGS -q --threads 2 -o ref.lie
 expect_rc 0 "the uninterrupted build"
 
-bg_build part.lie 0.4 INT --partial --threads 1
+bg_build part.lie 0.4 INT --partial --threads 1 $ARGS
 expect_rc 130 "SIGINT: exit 130"
 expect_one_error_line "lie-build: part.lie: interrupted by SIGINT: wrote a partial cache," "SIGINT: one line"
 expect_no_temp . "SIGINT: no temporary left"
@@ -48,10 +48,13 @@ if [ "$rc" -eq 0 ] && [ "${unbuilt:-0}" -gt 0 ]; then ok "lie-render answers $un
 # interrupted again while resuming (SIGTERM this time), then completed
 bg_build part2.lie 0.4 TERM --partial --resume part.lie --threads 2
 expect_rc 143 "SIGTERM while resuming: exit 143"
+"$B/lie-inspect" summary part2.lie --json >sum.json
+built=$(sed -n 's/.*"units":\([0-9]*\).*"units_none":\([0-9]*\).*/\1 \2/p' sum.json | awk '{ print $1 - $2 }')
 run "$B/lie-build" "$SC" -q --stats=json --threads 2 --resume part2.lie -o done.lie
 expect_rc 0 "--resume completes it"
 copied=$(sed -n 's/.*"units_copied":\([0-9]*\).*/\1/p' "$TMP/err")
-[ "${copied:-0}" -gt 0 ] && ok "the resume copied $copied units" || not_ok "the resume copied nothing"
+[ -n "$built" ] && [ "${copied:-x}" = "$built" ] && ok "the resume copied the $built units built before" ||
+    not_ok "the resume copied '${copied:-}' units, the partial cache holds '${built:-}'"
 expect_same done.lie ref.lie "resumed twice = uninterrupted, byte for byte"
 run "$B/lie-inspect" summary done.lie
 if grep -q '^partial' "$TMP/out"; then not_ok "the completed cache is still partial"; else
@@ -64,10 +67,11 @@ expect_same inplace.lie ref.lie "resumed in place on 1 thread = uninterrupted"
 
 # the partial cache's parameters, or none
 run "$B/lie-build" "$SC" -q --resume part.lie --samples 64 -o bad.lie
-expect_rc 1 "--resume with other parameters"
-expect_one_error_line "lie-build: $SC: the partial build to resume was made with other build parameters" \
-    "--resume with other parameters: one line"
-expect_no_file bad.lie "--resume with other parameters: no output"
+expect_rc 2 "--resume with build parameters: a usage error"
+expect_no_file bad.lie "--resume with build parameters: no output"
+run "$B/lie-build" "$SC" -q --resume part.lie --view 0 -o bad.lie
+expect_rc 1 "--resume for other views"
+expect_one_error_line "lie-build: part.lie: was built for other views" "--resume for other views: one line"
 run "$B/lie-build" "$S/cornell.gltf" -q --resume part.lie -o bad.lie
 expect_rc 1 "--resume for another scene"
 

@@ -2,6 +2,8 @@
 #ifndef LIE_TEST_FIXTURES_H
 #define LIE_TEST_FIXTURES_H
 
+#include <stdlib.h>
+
 #include "lie.h"
 
 /* Form factor from a point to a parallel rectangle a x b whose corner is
@@ -39,6 +41,41 @@ static inline lie_scene *occluder_scene(void)
     assert_int_equal(lie_scene_flatten(s, &err), LIE_OK);
     assert_int_equal(s->n_tris, 6);
     assert_int_equal(s->n_emitters, 1);
+    return s;
+}
+
+/* A square emitter of side a centred at (0, h, 0), facing down (or both
+ * ways), then the blocker triangles tris[0..n) (9 floats each). */
+static inline lie_scene *square_light_and_blockers(float a, float h, int two_sided, const float *tris, int n)
+{
+    lie_scene *s = lie_scene_new("polylight");
+    assert_non_null(s);
+    lie_material light = lie_material_default();
+    light.base_color[0] = light.base_color[1] = light.base_color[2] = 0.0f;
+    light.emissive[0] = light.emissive[1] = light.emissive[2] = 1.0f;
+    light.double_sided = two_sided;
+    int ml = lie_scene_add_material(s, &light);
+    lie_material grey = lie_material_default();
+    grey.metallic = 0.0f;
+    int mg = lie_scene_add_material(s, &grey);
+    float r = 0.5f * a;
+    float lp[12] = {-r, h, -r, r, h, -r, r, h, r, -r, h, r};
+    uint32_t li[6] = {0, 1, 2, 0, 2, 3};
+    int mesh_l = lie_scene_add_mesh(s, "Light", lp, NULL, NULL, 4, li, 2, ml);
+    assert_true(lie_scene_add_node(s, "Light", -1, NULL, mesh_l, -1, -1) >= 0);
+    if (n > 0) {
+        uint32_t *idx = malloc(sizeof *idx * 3 * (size_t)n);
+        assert_non_null(idx);
+        for (int i = 0; i < 3 * n; i++)
+            idx[i] = (uint32_t)i;
+        int mesh_b = lie_scene_add_mesh(s, "Blockers", tris, NULL, NULL, 3 * n, idx, n, mg);
+        free(idx);
+        assert_true(lie_scene_add_node(s, "Blockers", -1, NULL, mesh_b, -1, -1) >= 0);
+    }
+    lie_error err;
+    assert_int_equal(lie_scene_flatten(s, &err), LIE_OK);
+    assert_int_equal(s->n_emitters, 1);
+    assert_true(s->emitters[0].planar);
     return s;
 }
 

@@ -126,7 +126,7 @@ static void test_skin_follows_joints(void **state)
     memset(&op, 0, sizeof op);
     op.kind = LIE_EDIT_SET_TRANSFORM;
     op.node = "#8";
-    lie_mat4 m = lie_trs_matrix(p->trs + 10 * 8);
+    lie_mat4 m = lie_node_trs_matrix(p->trs + 10 * 8);
     memcpy(op.matrix, m.m, sizeof op.matrix);
     lie_edit e = {"unit.yaml", &op, 1};
     lie_edit_effect fx;

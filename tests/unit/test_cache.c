@@ -146,7 +146,7 @@ static void assemble(const sect *s, int n, unsigned char **out, size_t *size)
     unsigned char *b = calloc(1, total);
     assert_non_null(b);
     memcpy(b, "LIECACHE", 8);
-    put32(b + 8, 2);
+    put32(b + 8, 3);
     put32(b + 20, (uint32_t)n);
     put64(b + 24, total);
     for (int i = 0; i < n; i++) {
@@ -181,7 +181,7 @@ static void spec_sections(const lie_cache *c, sect s[N_SECT])
     put32(s[META].data + 36, env->n_pool);
     put32(s[META].data + 40, (uint32_t)pl);
     memcpy(s[META].data + 48, c->scene_path, pl);
-    s[PARM] = (sect){id4("PARM"), calloc(1, 28), 28};
+    s[PARM] = (sect){id4("PARM"), calloc(1, 48), 48};
     put32(s[PARM].data, env->params.samples);
     put32(s[PARM].data + 4, env->params.max_samples);
     put32(s[PARM].data + 8, env->params.max_blockers);
@@ -193,6 +193,13 @@ static void spec_sections(const lie_cache *c, sect s[N_SECT])
     uint32_t sg;
     memcpy(&sg, &env->params.split_gain, 4);
     put32(s[PARM].data + 24, sg);
+    put32(s[PARM].data + 28, env->params.frames);
+    put32(s[PARM].data + 32, env->params.light_samples);
+    const float *ns[3] = {&env->params.ns_segment, &env->params.ns_blocker, &env->params.ns_ray};
+    for (int k = 0; k < 3; k++) {
+        memcpy(&sg, ns[k], 4);
+        put32(s[PARM].data + 36 + 4 * k, sg);
+    }
     size_t es = 4;
     for (int i = 0; i < c->n_edits; i++)
         es += 8 + strlen(c->edits[i].name) + c->edits[i].size;
@@ -564,6 +571,81 @@ static void test_version_1_reads_with_split_gain_0(void **state)
     lie_cache_destroy(c);
 }
 
+static void test_version_2_reads_with_the_default_cost_model(void **state)
+{
+    (void)state;
+    lie_cache *c = cornell_cache(LIE_BLOCKERS_SAMPLED);
+    c->env->params.frames = 77;
+    sect s[N_SECT];
+    spec_sections(c, s);
+    s[PARM].size = 28;
+    unsigned char *a;
+    size_t na;
+    assemble(s, N_SECT, &a, &na);
+    put32(a + 8, 2);
+    reseal(a, na);
+    lie_cache *d = NULL;
+    lie_error err;
+    assert_int_equal(lie_cache_decode(a, na, "v2.lie", &d, &err), LIE_OK);
+    lie_build_params def = lie_build_params_default();
+    assert_int_equal(d->env->params.frames, def.frames);
+    assert_true(d->env->params.ns_ray == def.ns_ray);
+    assert_true(d->env->params.split_gain == c->env->params.split_gain);
+    assert_int_equal(d->views.n_cams, 0);
+    lie_cache_destroy(d);
+    /* and a version 3 file with a 28-byte PARAMS is damaged */
+    put32(a + 8, 3);
+    reseal(a, na);
+    expect_reject(a, na, LIE_ERR_FORMAT, "section PARAMS: 28 bytes, expected 48");
+    free_sections(s, N_SECT);
+    free(a);
+    lie_cache_destroy(c);
+}
+
+static void test_views_round_trip_and_bad_views_are_rejected(void **state)
+{
+    (void)state;
+    lie_cache *c = small_cache();
+    unsigned char *a0, *a;
+    size_t n0, na;
+    encode(c, &a0, &n0);
+    c->views.cams = calloc(2, sizeof *c->views.cams);
+    assert_non_null(c->views.cams);
+    c->views.n_cams = 2;
+    c->views.width = 64;
+    c->views.height = 48;
+    c->views.max_depth = 2;
+    for (int i = 0; i < 2; i++) {
+        c->views.cams[i].eye = (lie_vec3){1.0f + (float)i, 2.0f, 3.0f};
+        c->views.cams[i].forward = (lie_vec3){0.0f, 0.0f, -1.0f};
+        c->views.cams[i].up = (lie_vec3){0.0f, 1.0f, 0.0f};
+        c->views.cams[i].yfov = 0.8f;
+    }
+    c->views.cams[1].ymag = 2.5f;
+    encode(c, &a, &na);
+    assert_int_equal(na, n0 + 32 + 16 + 2 * 48);
+    lie_cache *d = NULL;
+    lie_error err;
+    assert_int_equal(lie_cache_decode(a, na, "v.lie", &d, &err), LIE_OK);
+    assert_int_equal(d->views.n_cams, 2);
+    assert_int_equal(d->views.width, 64);
+    assert_int_equal(d->views.height, 48);
+    assert_int_equal(d->views.max_depth, 2);
+    assert_memory_equal(&d->views.cams[1].eye, &c->views.cams[1].eye, sizeof(lie_vec3));
+    assert_true(d->views.cams[1].ymag == 2.5f);
+    lie_cache_destroy(d);
+    free(a);
+    /* what a reader rejects, the encoder refuses */
+    c->views.cams[0].yfov = 0.0f;
+    assert_int_equal(lie_cache_encode(c, &a, &na, &err), LIE_ERR_ARG);
+    assert_non_null(strstr(err.msg, "views"));
+    c->views.cams[0].yfov = 0.8f;
+    c->views.width = 0;
+    assert_int_equal(lie_cache_encode(c, &a, &na, &err), LIE_ERR_ARG);
+    free(a0);
+    lie_cache_destroy(c);
+}
+
 static void test_newer_version_is_unsupported(void **state)
 {
     (void)state;
@@ -571,12 +653,12 @@ static void test_newer_version_is_unsupported(void **state)
     unsigned char *a;
     size_t na;
     encode(c, &a, &na);
-    put32(a + 8, 3);
+    put32(a + 8, 4);
     /* a newer file may lay out anything after the version: only the
      * invariant trailing checksum must hold */
     memset(a + 12, 0xAB, na - 20);
     reseal(a, na);
-    expect_reject(a, na, LIE_ERR_UNSUPPORTED, "version 3");
+    expect_reject(a, na, LIE_ERR_UNSUPPORTED, "version 4");
     free(a);
     encode(c, &a, &na);
     put32(a + 8, 0);
@@ -1115,6 +1197,8 @@ int main(void)
         cmocka_unit_test(test_every_truncation_is_rejected),
         cmocka_unit_test(test_not_a_cache_is_rejected),
         cmocka_unit_test(test_version_1_reads_with_split_gain_0),
+        cmocka_unit_test(test_version_2_reads_with_the_default_cost_model),
+        cmocka_unit_test(test_views_round_trip_and_bad_views_are_rejected),
         cmocka_unit_test(test_newer_version_is_unsupported),
         cmocka_unit_test(test_unknown_required_flag_is_unsupported_optional_ignored),
         cmocka_unit_test(test_unknown_sections_are_skipped_and_order_is_free),

@@ -14,41 +14,6 @@
 #include "shade/internal.h"
 #include "fixtures.h"
 
-/* A square emitter of side a centred at (0, h, 0), facing down (or both
- * ways), then the blocker triangles tris[0..n) (9 floats each). */
-static lie_scene *light_and_blockers(float a, float h, int two_sided, const float *tris, int n)
-{
-    lie_scene *s = lie_scene_new("polylight");
-    assert_non_null(s);
-    lie_material light = lie_material_default();
-    light.base_color[0] = light.base_color[1] = light.base_color[2] = 0.0f;
-    light.emissive[0] = light.emissive[1] = light.emissive[2] = 1.0f;
-    light.double_sided = two_sided;
-    int ml = lie_scene_add_material(s, &light);
-    lie_material grey = lie_material_default();
-    grey.metallic = 0.0f;
-    int mg = lie_scene_add_material(s, &grey);
-    float r = 0.5f * a;
-    float lp[12] = {-r, h, -r, r, h, -r, r, h, r, -r, h, r};
-    uint32_t li[6] = {0, 1, 2, 0, 2, 3};
-    int mesh_l = lie_scene_add_mesh(s, "Light", lp, NULL, NULL, 4, li, 2, ml);
-    assert_true(lie_scene_add_node(s, "Light", -1, NULL, mesh_l, -1, -1) >= 0);
-    if (n > 0) {
-        uint32_t *idx = malloc(sizeof *idx * 3 * (size_t)n);
-        assert_non_null(idx);
-        for (int i = 0; i < 3 * n; i++)
-            idx[i] = (uint32_t)i;
-        int mesh_b = lie_scene_add_mesh(s, "Blockers", tris, NULL, NULL, 3 * n, idx, n, mg);
-        free(idx);
-        assert_true(lie_scene_add_node(s, "Blockers", -1, NULL, mesh_b, -1, -1) >= 0);
-    }
-    lie_error err;
-    assert_int_equal(lie_scene_flatten(s, &err), LIE_OK);
-    assert_int_equal(s->n_emitters, 1);
-    assert_true(s->emitters[0].planar);
-    return s;
-}
-
 /* Every triangle of the scene, the emitter's own included if asked. */
 static int all_blockers(const lie_scene *s, int with_emitter, uint32_t *out)
 {
@@ -122,7 +87,7 @@ typedef struct fixture {
 static void fixture_make(fixture *f, float a, float h, int two_sided, const float *tris, int n)
 {
     memset(f, 0, sizeof *f);
-    f->s = light_and_blockers(a, h, two_sided, tris, n);
+    f->s = square_light_and_blockers(a, h, two_sided, tris, n);
     assert_int_equal(lie_polylight_create(f->s, 0, &f->L), LIE_OK);
     assert_non_null(f->L);
     assert_int_equal(f->L->n_polys, 1); /* two triangles tiling a square: one piece */
@@ -307,7 +272,7 @@ static void test_polylight_convex_solid_casts_its_faces_shadow(void **state)
     box_blocker(t + 108, lo2, hi2);
     fixture f;
     fixture_make(&f, 1.0f, 1.0f, 0, t, 24);
-    int32_t *solid = lie_convex_solids(f.s);
+    int32_t *solid = lie_solids_find(f.s);
     assert_non_null(solid);
     const lie_vec3 up = lie_v3(0, 1, 0);
     const lie_vec3 pts[3] = {lie_v3(0, 0, 0), lie_v3(-0.1f, 0, 0.3f), lie_v3(0.4f, 0, -0.4f)};

@@ -486,7 +486,7 @@ static void planar_case(uint64_t seed, float tilt, int two_sided, planar_tally *
     assert_int_equal(lie_scene_flatten(s, &err), LIE_OK);
     assert_int_equal(s->n_emitters, 1);
     assert_true(s->emitters[0].planar);
-    int32_t *solid = lie_convex_solids(s);
+    int32_t *solid = lie_solids_find(s);
     assert_non_null(solid);
     assert_true(solid[s->n_tris - 1] >= 0 && solid[s->n_tris - 13] >= 0); /* both boxes */
     free(solid);
@@ -526,7 +526,7 @@ static void planar_case(uint64_t seed, float tilt, int two_sided, planar_tally *
                 orc->occluded(orc->ctx, blockers, NALL, &q2, occ2);
                 lie_shadow_query q3 = {o, eps, &ls3, n, 0, dx, dy, dz, work, kind, STRIDE};
                 orc->occluded(orc->ctx, blockers, NALL, &q3, occ3);
-                lie_shadow_segments(&q3);
+                lie_shadow_query_segments(&q3);
                 for (int i = 0; i < n; i++) {
                     int emb = lie_rt_occluded(rt, o, lie_v3(dx[i], dy[i], dz[i]), 0.0f, 1.0f);
                     tl->tested++;
@@ -662,7 +662,7 @@ static void test_convex_solids_found(void **state)
     lie_error err;
     assert_int_equal(lie_scene_flatten(s, &err), LIE_OK);
     assert_int_equal(s->n_emitters, 1);
-    int32_t *id = lie_convex_solids(s);
+    int32_t *id = lie_solids_find(s);
     assert_non_null(id);
     int found[5] = {0, 0, 0, 0, 0};
     for (int i = 0; i < s->n_instances; i++) {

@@ -179,7 +179,7 @@ static int write_frame(const char *name, const lie_scene *s, const char *scene_p
         fprintf(fp, "[]\n");
     for (int k = 0; k < tg->n_trs; k++) {
         int i = tg->trs_nodes[k];
-        lie_mat4 m = lie_trs_matrix(pose->trs + 10 * (size_t)i);
+        lie_mat4 m = lie_node_trs_matrix(pose->trs + 10 * (size_t)i);
         fprintf(fp, "- set-transform: {node: \"#%d\", matrix: [", i);
         for (int c = 0; c < 16; c++)
             fprintf(fp, "%s%.17g", c ? ", " : "", m.m[c] == 0.0 ? 0.0 : m.m[c]);
@@ -326,7 +326,7 @@ int main(int argc, char **argv)
         if (path_out) {
             /* pose the document's locals (the animated nodes only), then read the camera */
             for (int k = 0; k < tg.n_trs; k++)
-                s->nodes[tg.trs_nodes[k]].local = lie_trs_matrix(pose->trs + 10 * (size_t)tg.trs_nodes[k]);
+                s->nodes[tg.trs_nodes[k]].local = lie_node_trs_matrix(pose->trs + 10 * (size_t)tg.trs_nodes[k]);
             cp.keys[cp.n_keys++] = camera_key(s, cam);
         }
     }

@@ -17,7 +17,7 @@ typedef struct job {
     const lie_scene *s;
     const lie_rt *rt;
     const lie_build_params *p;
-    const uint8_t *mask;
+    const lie_pixels *px;
     range *items;
     size_t n_items;
     lie_env_part *parts;    /* rank 0: per item */
@@ -56,7 +56,7 @@ static lie_status run(void *ctx, size_t i, lie_dist_buf *out, lie_error *err)
         return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
     lie_env_part part;
     part_head h;
-    lie_status st = lie_env_build_range(j->s, j->rt, j->p, j->mask, j->items[i].first, j->items[i].count, &part,
+    lie_status st = lie_env_build_range_views(j->s, j->rt, j->p, j->px, j->items[i].first, j->items[i].count, &part,
                                         &h.stats, err);
     if (st != LIE_OK)
         return st;
@@ -113,7 +113,7 @@ static uint64_t units(void *ctx, size_t i)
     return j->items ? j->items[i].count : 0;
 }
 
-lie_status build_dist(const lie_scene *s, const lie_rt *rt, const lie_build_params *p, const uint8_t *tri_mask,
+lie_status build_dist(const lie_scene *s, const lie_rt *rt, const lie_build_params *p, const lie_pixels *px,
                       lie_env **out, lie_build_stats *stats, lie_error *err)
 {
     *out = NULL;
@@ -124,7 +124,7 @@ lie_status build_dist(const lie_scene *s, const lie_rt *rt, const lie_build_para
     j.s = s;
     j.rt = rt;
     j.p = p;
-    j.mask = tri_mask;
+    j.px = px;
     uint64_t n_units = (uint64_t)s->n_tris * (uint64_t)s->n_emitters;
     j.n_items = plan(NULL, n_units, ranks);
     j.items = calloc(j.n_items + 1, sizeof *j.items);

@@ -7,7 +7,7 @@
 
 /* Build the env across the ranks: ranges of units handed out dynamically,
  * gathered and joined on rank 0 (*out there; NULL on other ranks). */
-lie_status build_dist(const lie_scene *s, const lie_rt *rt, const lie_build_params *p, const uint8_t *tri_mask,
+lie_status build_dist(const lie_scene *s, const lie_rt *rt, const lie_build_params *p, const lie_pixels *px,
                       lie_env **out, lie_build_stats *stats, lie_error *err);
 
 #endif

@@ -163,6 +163,12 @@ static void compare_headers(diff_ctx *d, const lie_cache *a, const lie_cache *b,
     snprintf(y, sizeof y, "%.9g", (double)q->split_gain);
     field(d, "param split-gain", x, y, 1);
     field(d, "param blockers", inspect_mode_name(p->mode), inspect_mode_name(q->mode), 1);
+    field_u(d, "param frames", p->frames, q->frames, 1);
+    field_u(d, "param light-samples", p->light_samples, q->light_samples, 1);
+    snprintf(x, sizeof x, "%.9g %.9g %.9g", (double)p->ns_segment, (double)p->ns_blocker, (double)p->ns_ray);
+    snprintf(y, sizeof y, "%.9g %.9g %.9g", (double)q->ns_segment, (double)q->ns_blocker, (double)q->ns_ray);
+    field(d, "param cost-ns", x, y, 1);
+    field_u(d, "views", (unsigned long long)a->views.n_cams, (unsigned long long)b->views.n_cams, 1);
     int ne = a->n_emitters > b->n_emitters ? a->n_emitters : b->n_emitters;
     for (int e = 0; e < ne; e++) {
         char name[32];

@@ -56,6 +56,18 @@ static void header_text(const lie_cache *c, uint64_t n_nodes, uint64_t n_leaves)
     printf("param min-patch %.9g\n", (double)p->min_patch);
     printf("param split-gain %.9g\n", (double)p->split_gain);
     printf("param blockers %s\n", inspect_mode_name(p->mode));
+    printf("param frames %u\n", p->frames);
+    printf("param light-samples %u\n", p->light_samples);
+    printf("param cost-ns %.9g %.9g %.9g\n", (double)p->ns_segment, (double)p->ns_blocker, (double)p->ns_ray);
+    const lie_cache_views *v = &c->views;
+    printf("views %d %dx%d depth %d\n", v->n_cams, v->width, v->height, v->max_depth);
+    for (int i = 0; i < v->n_cams; i++) {
+        const lie_camera *k = &v->cams[i];
+        printf("view %d eye %.9g %.9g %.9g forward %.9g %.9g %.9g up %.9g %.9g %.9g yfov %.9g aspect %.9g ymag %.9g\n",
+               i, (double)k->eye.x, (double)k->eye.y, (double)k->eye.z, (double)k->forward.x, (double)k->forward.y,
+               (double)k->forward.z, (double)k->up.x, (double)k->up.y, (double)k->up.z, (double)k->yfov,
+               (double)k->aspect, (double)k->ymag);
+    }
     printf("edits %d\n", c->n_edits);
     for (int i = 0; i < c->n_edits; i++) {
         printf("edit %d bytes %zu xxh3 %016llx name ", i, c->edits[i].size,
@@ -81,9 +93,11 @@ static void header_json(const lie_cache *c, uint64_t n_nodes, uint64_t n_leaves)
     printf(",\"scene_hash\":\"%016llx\",\"state_hash\":\"%016llx\",\"triangles\":%u,\"emitters\":%d",
            (unsigned long long)c->scene_hash, (unsigned long long)c->state_hash, c->n_tris, c->n_emitters);
     printf(",\"params\":{\"samples\":%u,\"max_samples\":%u,\"max_blockers\":%u,\"complex_cap\":%u,"
-           "\"min_patch\":%.9g,\"split_gain\":%.9g,\"blockers\":\"%s\"}",
+           "\"min_patch\":%.9g,\"split_gain\":%.9g,\"blockers\":\"%s\",\"frames\":%u,\"light_samples\":%u,"
+           "\"cost_ns\":[%.9g,%.9g,%.9g]},\"views\":%d",
            p->samples, p->max_samples, p->max_blockers, p->complex_cap, (double)p->min_patch, (double)p->split_gain,
-           inspect_mode_name(p->mode));
+           inspect_mode_name(p->mode), p->frames, p->light_samples, (double)p->ns_segment, (double)p->ns_blocker,
+           (double)p->ns_ray, c->views.n_cams);
     printf(",\"edits\":[");
     for (int i = 0; i < c->n_edits; i++) {
         printf("%s{\"name\":", i ? "," : "");

@@ -51,6 +51,9 @@ static void usage(FILE *fp)
             "      --exact MODE        auto (default: closed forms, and from a cache exact\n"
             "                          shadows where they cost less than the samples)\n"
             "                          | off (shadows from the samples: the oracle's mode)\n"
+            "      --bitmask MODE      partial pairs toward planar emitters with all samples at\n"
+            "                          once: auto (default: where cheaper, not under --exact\n"
+            "                          off) | off | only (the same image, samples in another order)\n"
             "      --timers            --stats also reports per-path times (benchmarks)\n"
             "      --pattern P         fixed (default: the same emitter samples everywhere)\n"
             "                          | rotated (a per-pixel rotation of the pattern)\n"
@@ -97,7 +100,7 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 enum {
     OPT_CAMERA = 256, OPT_SIZE, OPT_SPP, OPT_LIGHT_SAMPLES, OPT_PATTERN, OPT_VISIBILITY, OPT_RAYS, OPT_LIE_SKIP,
     OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_SCENE,
-    OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS, OPT_FRAMES, OPT_SKIP_EXISTING, OPT_FORMAT, OPT_HALF
+    OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS, OPT_FRAMES, OPT_SKIP_EXISTING, OPT_FORMAT, OPT_HALF, OPT_BITMASK
 };
 
 static const struct option long_opts[] = {
@@ -114,6 +117,7 @@ static const struct option long_opts[] = {
     {"pattern", required_argument, NULL, OPT_PATTERN},
     {"exact", required_argument, NULL, OPT_EXACT},
     {"timers", no_argument, NULL, OPT_TIMERS},
+    {"bitmask", required_argument, NULL, OPT_BITMASK},
     {"visibility", required_argument, NULL, OPT_VISIBILITY},
     {"rays", required_argument, NULL, OPT_RAYS},
     {"lie-skip", required_argument, NULL, OPT_LIE_SKIP},
@@ -301,6 +305,12 @@ int main(int argc, char **argv)
             if (strcmp(optarg, "auto") == 0) ro.exact = LIE_EXACT_AUTO;
             else if (strcmp(optarg, "off") == 0) ro.exact = LIE_EXACT_OFF;
             else return usage_error("--exact: expected auto or off, got '%s'", optarg);
+            break;
+        case OPT_BITMASK:
+            if (strcmp(optarg, "auto") == 0) ro.bitmask = LIE_BITMASK_AUTO;
+            else if (strcmp(optarg, "off") == 0) ro.bitmask = LIE_BITMASK_OFF;
+            else if (strcmp(optarg, "only") == 0) ro.bitmask = LIE_BITMASK_ONLY;
+            else return usage_error("--bitmask: expected auto, off or only, got '%s'", optarg);
             break;
         case OPT_TIMERS:
             ro.timers = 1;
@@ -581,13 +591,14 @@ int main(int argc, char **argv)
                     "\"exact_overflows\":%llu,\"pairs_unbuilt\":%llu,\"points_unbuilt\":%llu,"
                     "\"timers\":%s,\"cpu_seconds_analytic\":%.6f,"
                     "\"cpu_seconds_exact\":%.6f,\"cpu_seconds_blockers\":%.6f,\"cpu_seconds_embree\":%.6f,"
-                    "\"cpu_seconds_sampled_shading\":%.6f",
+                    "\"cpu_seconds_sampled_shading\":%.6f,\"pairs_bitmask\":%llu,\"cpu_seconds_bitmask\":%.6f",
                     exact_name(&ro), (unsigned long long)rs.pairs_occluded, (unsigned long long)rs.pairs_analytic,
                     (unsigned long long)rs.pairs_exact, (unsigned long long)rs.pairs_blockers,
                     (unsigned long long)rs.pairs_embree, (unsigned long long)rs.pairs_unshadowed,
                     (unsigned long long)rs.exact_overflows, (unsigned long long)rs.pairs_unbuilt,
                     (unsigned long long)rs.points_unbuilt, ro.timers ? "true" : "false", rs.t_analytic,
-                    rs.t_exact, rs.t_blockers, rs.t_embree, rs.t_sampled_shading);
+                    rs.t_exact, rs.t_blockers, rs.t_embree, rs.t_sampled_shading,
+                    (unsigned long long)rs.pairs_bitmask, rs.t_bitmask);
             render_dist_stats(stderr, 1);
             fprintf(stderr, "}\n");
         } else {
@@ -607,11 +618,11 @@ int main(int argc, char **argv)
             fprintf(stderr,
                     "  pairs (exact %s): %llu occluded, %llu seen whole in closed form, %llu partial exact,\n"
                     "    %llu partial sampled against blockers, %llu sampled against the scene (Embree),\n"
-                    "    %llu seen whole and sampled; %llu exact pairs fell back to samples\n",
+                    "    %llu seen whole and sampled, %llu partial as bitmasks; %llu exact pairs fell back to samples\n",
                     exact_name(&ro), (unsigned long long)rs.pairs_occluded, (unsigned long long)rs.pairs_analytic,
                     (unsigned long long)rs.pairs_exact, (unsigned long long)rs.pairs_blockers,
                     (unsigned long long)rs.pairs_embree, (unsigned long long)rs.pairs_unshadowed,
-                    (unsigned long long)rs.exact_overflows);
+                    (unsigned long long)rs.pairs_bitmask, (unsigned long long)rs.exact_overflows);
             if (rs.pairs_unbuilt)
                 fprintf(stderr, "  not built in the cache (lie-build --view/--path): %llu pairs at %llu shading points, "
                                 "answered by Embree\n",
@@ -619,8 +630,8 @@ int main(int argc, char **argv)
             if (ro.timers)
                 fprintf(stderr,
                         "  worker seconds: closed form %.3f, exact shadows %.3f, blocker samples %.3f,\n"
-                        "    Embree %.3f, sampled shading %.3f\n",
-                        rs.t_analytic, rs.t_exact, rs.t_blockers, rs.t_embree, rs.t_sampled_shading);
+                        "    Embree %.3f, sampled shading %.3f, bitmasks %.3f\n",
+                        rs.t_analytic, rs.t_exact, rs.t_blockers, rs.t_embree, rs.t_sampled_shading, rs.t_bitmask);
             render_dist_stats(stderr, 0);
         }
     }

@@ -46,7 +46,7 @@ static uint32_t pack(const float c[3], int srgb)
 {
     uint32_t p = 0xff000000u;
     for (int k = 0; k < 3; k++) {
-        float v = srgb ? lie_linear_to_srgb(c[k]) : (c[k] < 0.0f ? 0.0f : c[k] > 1.0f ? 1.0f : c[k]);
+        float v = srgb ? lie_image_srgb_encode(c[k]) : (c[k] < 0.0f ? 0.0f : c[k] > 1.0f ? 1.0f : c[k]);
         p |= (uint32_t)(v * 255.0f + 0.5f) << (16 - 8 * k);
     }
     return p;

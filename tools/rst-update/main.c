@@ -105,31 +105,36 @@ static void print_stats(const char *input, const lie_scene *s, const lie_update_
     double precision = st->units_flagged ? (double)st->units_changed / (double)st->units_flagged : 1.0;
     if (json) {
         fprintf(stderr,
-                "{\"tool\":\"rst-update\",\"edits\":%d,\"units\":%llu,\"units_rebuilt\":%llu,"
+                "{\"tool\":\"rst-update\",\"edits\":%d,\"units\":%llu,\"units_rebuilt\":%llu,\"units_views\":%llu,"
                 "\"units_flagged\":%llu,\"units_changed\":%llu,\"precision\":%.4f,\"nodes_flagged_5d\":%llu,\"nodes_flagged\":%llu,"
                 "\"nodes_recomputed\":%llu,\"rst_regions\":%llu,\"rst_fallback\":%llu,\"rst_tree_nodes\":%llu,"
                 "\"rst_bytes\":%zu,\"seconds_load\":%.6f,\"seconds_rst\":%.6f,\"seconds_edit\":%.6f,"
-                "\"seconds_query\":%.6f,\"seconds_bvh\":%.6f,\"seconds_update\":%.6f,\"seconds_write\":%.6f,\"bytes\":%zu,"
-                "\"seconds_cpu\":%.6f,\"seconds_cpu_workers\":%.6f,\"seconds_cpu_worker_max\":%.6f,\"seconds_tail\":%.6f}\n",
+                "\"seconds_query\":%.6f,\"seconds_bvh\":%.6f,\"seconds_views\":%.6f,\"seconds_update\":%.6f,"
+                "\"seconds_write\":%.6f,\"bytes\":%zu,\"seconds_cpu\":%.6f,\"seconds_cpu_workers\":%.6f,"
+                "\"seconds_cpu_worker_max\":%.6f,\"seconds_tail\":%.6f}\n",
                 st->edits, (unsigned long long)st->units, (unsigned long long)st->units_rebuilt,
+                (unsigned long long)st->units_views,
                 (unsigned long long)st->units_flagged, (unsigned long long)st->units_changed, precision,
                 (unsigned long long)st->nodes_flagged_5d, (unsigned long long)st->nodes_flagged,
                 (unsigned long long)st->nodes_recomputed, (unsigned long long)rs->regions,
                 (unsigned long long)rs->fallback, (unsigned long long)rs->tree_nodes, rs->bytes, t_load,
-                st->seconds_rst, st->seconds_edit, st->seconds_query, st->seconds_bvh, st->seconds_update, t_write,
-                bytes, lie_cpu_time(), st->seconds_cpu_workers, st->seconds_cpu_worker_max, st->seconds_tail);
+                st->seconds_rst, st->seconds_edit, st->seconds_query, st->seconds_bvh, st->seconds_views,
+                st->seconds_update, t_write, bytes, lie_cpu_time(), st->seconds_cpu_workers, st->seconds_cpu_worker_max,
+                st->seconds_tail);
         return;
     }
     fprintf(stderr,
             "%s: %s: %d edit file%s, %llu units (%u triangles x %d emitters)\n"
             "  ray segment trees: %llu regions (%llu by bounds only), %llu tree nodes, %.1f MB\n"
-            "  units rebuilt (patch or emitter edited): %llu; units flagged: %llu, really changed: %llu "
+            "  units rebuilt (patch or emitter edited, or its pixels in the cache's views changed: %llu): %llu; "
+            "units flagged: %llu, really changed: %llu "
             "(precision %.0f%%)\n"
             "  unit roots flagged by the trees %llu; patch-tree nodes flagged by exact hull tests down from them %llu, recomputed %llu\n"
             "  time: load %.3f s, trees %.3f s, edits %.3f s, queries %.3f s, bvh %.3f s, update %.3f s, write %.3f s\n",
             prog, input, st->edits, st->edits == 1 ? "" : "s", (unsigned long long)st->units, s->n_tris,
             s->n_emitters, (unsigned long long)rs->regions, (unsigned long long)rs->fallback,
-            (unsigned long long)rs->tree_nodes, (double)rs->bytes / 1e6, (unsigned long long)st->units_rebuilt,
+            (unsigned long long)rs->tree_nodes, (double)rs->bytes / 1e6, (unsigned long long)st->units_views,
+            (unsigned long long)st->units_rebuilt,
             (unsigned long long)st->units_flagged, (unsigned long long)st->units_changed, 100.0 * precision,
             (unsigned long long)st->nodes_flagged_5d, (unsigned long long)st->nodes_flagged,
             (unsigned long long)st->nodes_recomputed, t_load, st->seconds_rst, st->seconds_edit, st->seconds_query,

@@ -1,0 +1,163 @@
+/* Views in lib/lie (§4.3.3): pixel keys name the patch that holds a hit,
+ * counts per patch add up, the hits' order does not matter, the pixel rule
+ * refines what many pixels see, and adding views to an env equals
+ * building for all of them. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "lie.h"
+
+/* The key's top digits are the path lie_patch_descend takes. */
+static void test_key_digits_follow_the_patch_descent(void **state)
+{
+    (void)state;
+    const float pts[][2] = {{0.1f, 0.1f}, {0.7f, 0.1f}, {0.1f, 0.8f}, {0.3f, 0.3f}, {0.26f, 0.49f}, {0.0f, 0.0f}};
+    for (size_t i = 0; i < sizeof pts / sizeof pts[0]; i++) {
+        uint32_t key = lie_pixels_key(pts[i][0], pts[i][1]);
+        float b1 = pts[i][0], b2 = pts[i][1];
+        for (int k = 0; k < LIE_PIXEL_LEVELS; k++)
+            assert_int_equal((key >> (2 * (LIE_PIXEL_LEVELS - 1 - k))) & 3u, (uint32_t)lie_patch_descend(&b1, &b2));
+    }
+}
+
+/* Hits of a patch are the sum of its children's; the order of the hits
+ * given does not change the result. */
+static void test_counts_add_up_and_ignore_order(void **state)
+{
+    (void)state;
+    enum { N = 2000 };
+    uint64_t *a = malloc(sizeof *a * N), *b = malloc(sizeof *b * N);
+    assert_non_null(a);
+    assert_non_null(b);
+    uint64_t x = 88172645463325252ull;
+    for (int i = 0; i < N; i++) {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        float u = (float)(x & 0xffff) / 65536.0f, v = (float)((x >> 16) & 0xffff) / 65536.0f;
+        if (u + v > 1.0f) {
+            u = 1.0f - u;
+            v = 1.0f - v;
+        }
+        a[i] = (uint64_t)(x >> 40 & 3) << 32 | lie_pixels_key(u, v);
+        b[N - 1 - i] = a[i];
+    }
+    lie_pixels *p = NULL, *q = NULL;
+    lie_error err;
+    assert_int_equal(lie_pixels_create(4, 4, a, N, &p, &err), LIE_OK);
+    assert_int_equal(lie_pixels_create(4, 4, b, N, &q, &err), LIE_OK);
+    assert_memory_equal(p->first, q->first, sizeof *p->first * 5);
+    assert_memory_equal(p->key, q->key, sizeof *p->key * N);
+    uint64_t total = 0;
+    for (uint32_t t = 0; t < 4; t++) {
+        assert_int_equal(lie_pixels_tri_hash(p, t), lie_pixels_tri_hash(q, t));
+        lie_patch_path root = lie_patch_root();
+        uint64_t h = lie_pixels_hits(p, t, root), sum = 0;
+        total += h;
+        for (int k = 0; k < 4; k++) {
+            lie_patch_path c = lie_patch_child(root, k);
+            uint64_t hc = lie_pixels_hits(p, t, c), sum2 = 0;
+            sum += hc;
+            for (int j = 0; j < 4; j++)
+                sum2 += lie_pixels_hits(p, t, lie_patch_child(c, j));
+            assert_int_equal(sum2, hc);
+        }
+        assert_int_equal(sum, h);
+    }
+    assert_int_equal(total, N);
+    /* a hit on a triangle the scene does not have is refused */
+    a[0] = (uint64_t)9 << 32;
+    lie_pixels *bad = NULL;
+    assert_int_equal(lie_pixels_create(4, 4, a, N, &bad, &err), LIE_ERR_ARG);
+    assert_null(bad);
+    lie_pixels_destroy(p);
+    lie_pixels_destroy(q);
+    free(a);
+    free(b);
+}
+
+/* Pixels of cornell's whole image, from the scene's first camera, at a
+ * size: 2 x 2 rays a pixel. */
+static lie_pixels *cornell_pixels(const lie_scene *s, const lie_rt *rt, const lie_camera *cams, int n, int size)
+{
+    lie_pixels *px = NULL;
+    lie_error err;
+    assert_int_equal(lie_camera_pixels(s, rt, cams, n, size, size, 2, &px, &err), LIE_OK);
+    return px;
+}
+
+static int same_env(const lie_env *a, const lie_env *b)
+{
+    size_t units = (size_t)a->n_tris * (size_t)a->n_emitters;
+    return a->n_nodes == b->n_nodes && a->n_pool == b->n_pool &&
+           memcmp(a->root, b->root, sizeof *a->root * units) == 0 &&
+           memcmp(a->nodes, b->nodes, sizeof *a->nodes * a->n_nodes) == 0 &&
+           (a->n_pool == 0 || memcmp(a->pool, b->pool, sizeof *a->pool * a->n_pool) == 0);
+}
+
+/* More pixels never make fewer nodes (the rule is monotone, which --into
+ * relies on); adding a view gives the env of one build for both. */
+static void test_more_pixels_refine_and_adding_a_view_equals_one_build(void **state)
+{
+    (void)state;
+    lie_scene *s = NULL;
+    lie_rt *rt = NULL;
+    lie_error err;
+    assert_int_equal(lie_scene_load(TEST_SCENES "/cornell.gltf", NULL, &s, &err), LIE_OK);
+    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
+    lie_camera cams[2];
+    assert_int_equal(lie_camera_parse(s, "0", &cams[0], &err), LIE_OK);
+    assert_int_equal(lie_camera_parse(s, "eye=0.1,0.45,0.1,target=0.4,0,0.45", &cams[1], &err), LIE_OK);
+    lie_build_params p = lie_build_params_default();
+    p.samples = 16;
+    p.max_samples = 64;
+    p.min_patch = 1e-3f;
+    p.max_blockers = 1;
+    p.frames = 1;
+    lie_pixels *small = cornell_pixels(s, rt, cams, 1, 24), *big = cornell_pixels(s, rt, cams, 1, 160);
+    lie_env *es = NULL, *eb = NULL;
+    lie_build_stats st;
+    assert_int_equal(lie_env_build_views(s, rt, &p, small, NULL, &es, &st, &err), LIE_OK);
+    uint64_t pixel_stops = st.splits_pixels;
+    assert_true(pixel_stops > 0);
+    assert_int_equal(lie_env_build_views(s, rt, &p, big, NULL, &eb, &st, &err), LIE_OK);
+    assert_true(eb->n_nodes > es->n_nodes);
+    lie_env_destroy(es);
+    lie_env_destroy(eb);
+    lie_pixels_destroy(small);
+    lie_pixels_destroy(big);
+
+    lie_pixels *a = cornell_pixels(s, rt, cams, 1, 48), *ab = cornell_pixels(s, rt, cams, 2, 48);
+    lie_env *ea = NULL, *eab = NULL;
+    assert_int_equal(lie_env_build_views(s, rt, &p, a, NULL, &ea, &st, &err), LIE_OK);
+    assert_int_equal(lie_env_build_views(s, rt, &p, ab, NULL, &eab, &st, &err), LIE_OK);
+    lie_add_stats as;
+    assert_int_equal(lie_env_add_views(ea, s, rt, a, ab, 2, &st, &as, &err), LIE_OK);
+    assert_true(same_env(ea, eab));
+    assert_true(as.units_kept > 0);
+    assert_int_equal(as.units_kept + as.units_refined + as.units_new, (uint64_t)s->n_tris * (uint64_t)s->n_emitters);
+    /* views that lose pixels are refused */
+    assert_int_equal(lie_env_add_views(ea, s, rt, ab, a, 2, &st, &as, &err), LIE_ERR_ARG);
+    lie_env_destroy(ea);
+    lie_env_destroy(eab);
+    lie_pixels_destroy(a);
+    lie_pixels_destroy(ab);
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_key_digits_follow_the_patch_descent),
+        cmocka_unit_test(test_counts_add_up_and_ignore_order),
+        cmocka_unit_test(test_more_pixels_refine_and_adding_a_view_equals_one_build),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
