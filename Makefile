@@ -179,7 +179,7 @@ bench: all build-tests
 	@sh bench/build.sh
 
 # what a lie-build costs in full frames, per scene: the paper's rule against the cost rule
-bench-build: all
+bench-build: all build-tests
 	@sh bench/build.sh
 
 # lie-view's interactive loop under Xvfb (not a timed test: figures depend on the load)

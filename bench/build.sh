@@ -99,3 +99,90 @@ printf '  (frames: build seconds / one full frame; paper: --split-gain 0; cost: 
 printf '   1->%st: the default build on 1 thread / on %s, wall time, and cpu: its CPU seconds / the %s-thread\n' "$THREADS" "$THREADS" "$THREADS"
 printf '   run'"'"'s critical path (serial CPU + the busiest worker), the speed-up with a core per thread;\n'
 printf '   the atrium skips the paper build; timeouts after %s s)\n' "$TIMEOUT"
+
+# ---- views (§4.3.1, §4.3.3): what a build for the scene's camera costs and
+# saves, whole against --view with the views choosing units only (--frames
+# 0) and with the pixel rule (the default --frames), with the image against
+# full visibility (share of pixels off by more than 2%; target <= 0.1%),
+# then the cost model's predictions against what was measured (CPU seconds,
+# from /usr/bin/time: the build; one frame's shadow rays, full and LIE, less
+# an eye-rays-only frame), the constants those measurements give (ns per
+# build segment, per Embree shadow ray, per blocker-list entry) beside the
+# defaults, and --into: a second view added to the cache against one build
+# for both (cmp).
+VIEW_SCENES=${VIEW_SCENES:-"tests/scenes/museum1.gltf tests/scenes/museum3.gltf"}
+CMP=build/release/tests/exr-compare
+second_view() {
+    case $1 in
+    *museum3*) echo "eye=2,1.7,2,target=9,1,6" ;;
+    *) echo "eye=3,2,-2,target=0,0.5,0" ;;
+    esac
+}
+cpu() { awk '{ s += $1 } END { printf "%.3f", s }' "$1"; }
+# timed OUT.cpu CMD...: runs CMD, its user + system CPU seconds to OUT.cpu
+timed() { out=$1; shift; /usr/bin/time -f "%U %S" -o "$out.t" "$@" && tr ' ' '\n' <"$out.t" >"$out"; }
+off() { "$CMP" "$1" "$2" 1 1 | sed -n 's/.* by more than 2% (\([0-9.]*%\)).*/\1/p'; }
+echo
+echo "bench-build views: the scene's camera at $SIZE, $THREADS threads; CPU seconds (user + system)"
+printf '  %-22s %-6s | %8s %8s %8s | %8s %-19s %7s | %-24s | %-24s | %s\n' scene build "wall s" "cache MB" "off>2%" \
+    "cpu s" "build cpu meas/model" "LIE/ful" "frame full cpu: meas/model" "frame LIE cpu: meas/model" "ns seg/ray/blk measured"
+echo "[" >out/bench-build-views.json
+first=1
+for scene in $VIEW_SCENES; do
+    [ -f "$scene" ] || { echo "  $scene: missing, skipped"; continue; }
+    name=$(basename "$scene")
+    timed "$TMP/eye.cpu" bin/lie-render "$scene" --visibility=full --light-samples 0 --size "$SIZE" \
+        --threads "$THREADS" -q -o "$TMP/eye.exr"
+    timed "$TMP/full.cpu" bin/lie-render "$scene" --visibility=full --size "$SIZE" --threads "$THREADS" -q \
+        -o "$TMP/vfull.exr"
+    for kind in whole units pixels; do
+        case $kind in
+        whole) args="" ;;
+        units) args="--view 0 --view-size $SIZE --frames 0" ;;
+        pixels) args="--view 0 --view-size $SIZE" ;;
+        esac
+        if ! timed "$TMP/b.cpu" timeout "$TIMEOUT" bin/lie-build "$scene" $args --threads "$THREADS" -q \
+            --stats=json -o "$TMP/$kind.lie" 2>"$TMP/$kind.json"; then
+            echo "  $name $kind: failed or timed out"; continue
+        fi
+        timed "$TMP/lie.cpu" bin/lie-render "$TMP/$kind.lie" --size "$SIZE" --threads "$THREADS" -q \
+            -o "$TMP/$kind.exr"
+        J="$TMP/$kind.json"
+        wall=$(field seconds_build <"$J"); bytes=$(field bytes <"$J"); segs=$(field segments <"$J")
+        bcpu=$(cpu "$TMP/b.cpu"); bmodel=$(field build_cpu_s_predicted <"$J"); bmeas=$(field build_cpu_s_measured <"$J")
+        ecpu=$(cpu "$TMP/eye.cpu"); fcpu=$(cpu "$TMP/full.cpu"); lcpu=$(cpu "$TMP/lie.cpu")
+        pf=$(field frame_shadow_cpu_s_full <"$J"); pl=$(field frame_shadow_cpu_s_lie <"$J")
+        rays=$(field frame_full_rays <"$J"); ents=$(field frame_list_entries <"$J"); lrays=$(field frame_lie_rays <"$J")
+        fs=$(awk -v a="$fcpu" -v b="$ecpu" 'BEGIN { printf "%.3f", a - b }')
+        ls=$(awk -v a="$lcpu" -v b="$ecpu" 'BEGIN { printf "%.3f", a - b }')
+        consts=$(awk -v bc="$bmeas" -v sg="$segs" -v fs="$fs" -v r="$rays" -v ls="$ls" -v e="$ents" -v lr="$lrays" \
+            'BEGIN { if (r == "" || r == 0) { printf "%.0f/-/-", 1e9 * bc / sg; exit }
+                     ray = 1e9 * fs / r; blk = e > 0 ? (1e9 * ls - lr * ray) / e : 0
+                     printf "%.0f/%.1f/%.3f", 1e9 * bc / sg, ray, blk }')
+        [ -n "$pf" ] || { pf=-; pl=-; }
+        printf '  %-22s %-6s | %8s %8s %8s | %8s %8.3f / %-8.3f %7s | %10s / %-11s | %10s / %-11s | %s\n' "$name" "$kind" \
+            "$wall" "$(mb "$bytes")" "$(off "$TMP/vfull.exr" "$TMP/$kind.exr")" "$bcpu" "$bmeas" "$bmodel" \
+            "$(ratio "$lcpu" "$fcpu")" "$fs" "$pf" "$ls" "$pl" "$consts"
+        [ $first = 1 ] || echo "," >>out/bench-build-views.json
+        first=0
+        printf '{"scene":"%s","build":"%s","build_s":%s,"cache_bytes":%s,"off_2pct":"%s","process_cpu_s":%s,"build_cpu_s":%s,"build_cpu_s_model":%s,"full_frame_cpu_s":%s,"lie_frame_cpu_s":%s,"eye_frame_cpu_s":%s,"frame_shadow_cpu_s_full_model":"%s","frame_shadow_cpu_s_lie_model":"%s","ns_measured":"%s"}' \
+            "$name" "$kind" "$wall" "$bytes" "$(off "$TMP/vfull.exr" "$TMP/$kind.exr")" "$bcpu" "$bmeas" "$bmodel" "$fcpu" \
+            "$lcpu" "$ecpu" "$pf" "$pl" "$consts" >>out/bench-build-views.json
+    done
+    # --into: view B added to the view-0 cache, against one build for both
+    B=$(second_view "$scene")
+    cp "$TMP/pixels.lie" "$TMP/ab.lie"
+    timed "$TMP/i.cpu" bin/lie-build --into "$TMP/ab.lie" --view "$B" --threads "$THREADS" -q --stats=json \
+        2>"$TMP/into.json"
+    timed "$TMP/j.cpu" bin/lie-build "$scene" --view 0 --view "$B" --view-size "$SIZE" --threads "$THREADS" -q \
+        -o "$TMP/both.lie"
+    same=differ; cmp -s "$TMP/ab.lie" "$TMP/both.lie" && same=identical
+    printf '  %-22s --into B: %s s CPU (units kept %s, refined %s, new %s) against %s s CPU for A and B at once: %s\n' \
+        "$name" "$(cpu "$TMP/i.cpu")" "$(field units_kept <"$TMP/into.json")" \
+        "$(field units_refined <"$TMP/into.json")" "$(field units_new <"$TMP/into.json")" "$(cpu "$TMP/j.cpu")" "$same"
+done
+echo "]" >>out/bench-build-views.json
+printf '  (units: --view 0 --frames 0, the views choose units; pixels: --view 0 with the pixel rule, %s frames;\n' \
+    "$(bin/lie-build --help | sed -n 's/.*frames the cache will serve (default \([0-9]*\).*/\1/p')"
+printf '   frame cpu: one frame less an eye-rays-only frame, measured / the model (lie-build --stats=json);\n'
+printf '   ns measured: build CPU / segments, full shadow CPU / rays, LIE shadow CPU less its rays / list entries)\n'

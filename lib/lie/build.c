@@ -93,7 +93,7 @@ static uint32_t *heaviest_first(const uint32_t *w, uint32_t n)
  * NULL) interrupts it: env->partial says whether a unit was left out. */
 static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, const int32_t *old_unit,
                            const uint8_t *node_flags, const uint8_t *tri_mask, const lie_pixels *px,
-                           uint64_t unit_lo, uint64_t unit_hi, int threads, lie_progress *progress,
+                           uint64_t unit_lo, uint64_t unit_hi, int threads, int memo, lie_progress *progress,
                            const volatile sig_atomic_t *stop,
                            lie_build_stats *stats)
 {
@@ -131,7 +131,7 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     }
     lie_status st = c.workers && c.out ? lie_sample_tables(&c) : LIE_ERR_NOMEM;
     size_t n_memo = 0;
-    if (st == LIE_OK && node_flags && old_unit && c.p->mode == LIE_BLOCKERS_SAMPLED)
+    if (st == LIE_OK && memo && node_flags && old_unit && c.p->mode == LIE_BLOCKERS_SAMPLED)
         st = lie_memo_precompute(&c, threads, &n_memo);
     uint32_t *weight = st == LIE_OK ? build_weights(&c, n_items, ne) : NULL;
     uint32_t *order = weight && threads > 1 ? heaviest_first(weight, n_items) : NULL;
@@ -371,7 +371,7 @@ lie_status lie_env_build_with(const lie_scene *s, const lie_rt *rt, const lie_bu
     env->scene_hash = s->hash;
     if (stats)
         memset(stats, 0, sizeof *stats);
-    lie_status st = run_build(env, s, rt, old_unit, NULL, ctl->tri_mask, ctl->pixels, 0, n_units, p->threads,
+    lie_status st = run_build(env, s, rt, old_unit, NULL, ctl->tri_mask, ctl->pixels, 0, n_units, p->threads, 0,
                               ctl->progress, ctl->stop, stats);
     free(old_unit);
     if (st != LIE_OK) {
@@ -424,7 +424,7 @@ static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_bu
         memset(stats, 0, sizeof *stats);
     lie_status st = LIE_OK;
     if (n_units)
-        st = run_build(&part, s, rt, NULL, NULL, tri_mask, px, first_unit, first_unit + n_units, p->threads, NULL,
+        st = run_build(&part, s, rt, NULL, NULL, tri_mask, px, first_unit, first_unit + n_units, p->threads, 0, NULL,
                        NULL, stats);
     if (st != LIE_OK) {
         free(part.root);
@@ -476,13 +476,20 @@ lie_status lie_env_update_views(lie_env *env, const lie_scene *s, const lie_rt *
                                 const int32_t *old_unit, const uint8_t *node_flags, int threads,
                                 lie_build_stats *stats, lie_error *err)
 {
+    return lie_build_update(env, s, rt, px, old_unit, node_flags, threads, 1, stats, err);
+}
+
+lie_status lie_build_update(lie_env *env, const lie_scene *s, const lie_rt *rt, const lie_pixels *px,
+                            const int32_t *old_unit, const uint8_t *node_flags, int threads, int memo,
+                            lie_build_stats *stats, lie_error *err)
+{
     if (px && px->n_tris != s->n_tris)
         return lie_error_set(err, LIE_ERR_ARG, s->path, "pixels for %u triangles, not %u", px->n_tris, s->n_tris);
     double t0 = lie_time_now();
     if (stats)
         memset(stats, 0, sizeof *stats);
     lie_status st = run_build(env, s, rt, old_unit, node_flags, NULL, px, 0,
-                              (uint64_t)s->n_tris * (uint64_t)s->n_emitters, threads, NULL, NULL, stats);
+                              (uint64_t)s->n_tris * (uint64_t)s->n_emitters, threads, memo, NULL, NULL, stats);
     if (stats)
         stats->seconds = lie_time_now() - t0;
     if (st == LIE_ERR_LIMIT)

@@ -78,6 +78,12 @@ void lie_sort_u64(uint64_t *v, size_t n);
 void lie_stats_hist_add(lie_build_stats *st, uint32_t n);
 /* Add src's counts to dst's. */
 void lie_stats_merge(lie_build_stats *dst, const lie_build_stats *src);
+/* lie_env_update_views, with (memo = 1) or without the parallel
+ * recomputation of flagged nodes before the build (lib/lie/memo.c), which
+ * pays where the work sits in few units; lie_env_add_views's sits in many. */
+lie_status lie_build_update(lie_env *env, const lie_scene *s, const lie_rt *rt, const lie_pixels *px,
+                            const int32_t *old_unit, const uint8_t *node_flags, int threads, int memo,
+                            lie_build_stats *stats, lie_error *err);
 /* The error of a build that needs more than max-nodes nodes (build.c). */
 lie_status lie_budget_error(lie_error *err, const lie_scene *s, const lie_build_params *p);
 

@@ -238,6 +238,9 @@ uint32_t lie_pixels_key(float b1, float b2);
 lie_status lie_pixels_create(uint32_t n_tris, uint32_t rays_per_pixel, uint64_t *hits, size_t n_hits,
                              lie_pixels **out, lie_error *err);
 void lie_pixels_destroy(lie_pixels *px);
+/* The hits of a and b together: the pixels of both sets of views, as if
+ * sampled at once. */
+lie_status lie_pixels_merge(const lie_pixels *a, const lie_pixels *b, lie_pixels **out, lie_error *err);
 /* Hits inside patch `path` of triangle tri (0 when px is NULL). */
 uint64_t lie_pixels_hits(const lie_pixels *px, uint32_t tri, lie_patch_path path);
 /* A hash of triangle tri's keys (0: no hit): equal hashes, equal decisions. */

@@ -148,6 +148,18 @@ static double render_weight(lie_class cls, size_t n_list)
     return cls == LIE_CLASS_PARTIAL || cls == LIE_CLASS_SPLIT || cls == LIE_CLASS_COMPLEX ? (double)n_list : 0.0;
 }
 
+/* Whether an old node an update copies still tells its sampled list's
+ * length, which the lookahead weighs: a split node does (count), and so
+ * does a leaf that could not split.  A leaf large enough to split may hold
+ * its exact list instead (a split undone, or too few pixels), or be
+ * visible for an empty exact list: it is sampled again. */
+static int old_weight_known(const build_ctx *c, uint32_t tri, lie_patch_path path, const lie_pnode *x)
+{
+    if (x->child || x->cls == LIE_CLASS_UNLIT || x->cls == LIE_CLASS_OCCLUDED)
+        return 1;
+    return !lie_subdiv_may_split(c, tri, path);
+}
+
 /* The exact list of a leaf: every triangle meeting the pair's hull
  * (§4.1.2), counted up to `cap` (more: the count only), less a planar
  * emitter's own triangles, which end every segment; left in w->hits. */
@@ -291,9 +303,11 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
             n_list = exact_leaf_list(c, w, tri, path, e, two_sided, cap);
             if (w->nomem)
                 return;
-            if (n_list == 0)
-                nc.cls = LIE_CLASS_VISIBLE;
-            else if (n_list > cap)
+            /* the exact list holds the sampled one, longer than
+             * max_blockers; were it ever shorter, the leaf goes to Embree,
+             * so that every leaf this rule made is complex or a list
+             * longer than max_blockers (lie_env_add_views finds them so) */
+            if (n_list > cap || n_list <= c->p->max_blockers)
                 nc.cls = LIE_CLASS_COMPLEX;
         }
     }
@@ -314,7 +328,8 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
             int64_t ok = old_child ? (int64_t)old_child + n_kid : -1;
             kid[n_kid].list = NULL;
             kid[n_kid].n_list = 0;
-            if (ok >= 0 && !(c->node_flags && c->node_flags[ok])) {
+            if (ok >= 0 && !(c->node_flags && c->node_flags[ok]) &&
+                old_weight_known(c, tri, lie_patch_child(path, n_kid), &c->old->nodes[ok])) {
                 kid_w[n_kid] = old_weight(&c->old->nodes[ok]);
                 kid_ns[n_kid] = lie_cost_list_ns(c->p, (lie_class)c->old->nodes[ok].cls, c->old->nodes[ok].count);
                 continue;

@@ -146,3 +146,33 @@ lie_status build_dist(const lie_scene *s, const lie_rt *rt, const lie_build_para
     *stats = j.stats;
     return st;
 }
+
+typedef struct inputs {
+    const char *input, *path_file;
+    lie_scene **scene;
+    lie_camera_path **cpath;
+} inputs;
+
+static lie_status load_inputs(void *ctx, const lie_scene_options *so, lie_error *err)
+{
+    const inputs *in = ctx;
+    lie_status st = lie_scene_load(in->input, so, in->scene, err);
+    if (st != LIE_OK || !in->path_file)
+        return st;
+    unsigned char *data = NULL;
+    size_t size = 0;
+    st = lie_file_set_read(so->files, in->path_file, LIE_READ_MAX_TEXT, &data, &size, err);
+    if (st == LIE_OK)
+        st = lie_camera_path_parse(data, size, in->path_file, in->cpath, err);
+    free(data);
+    return st;
+}
+
+lie_status build_load_inputs(const char *input, const char *path_file, const lie_scene_options *so,
+                             lie_scene **scene, lie_camera_path **cpath, lie_error *err)
+{
+    inputs in = {input, path_file, scene, cpath};
+    *scene = NULL;
+    *cpath = NULL;
+    return lie_dist_load(so, load_inputs, &in, err);
+}

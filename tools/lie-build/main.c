@@ -95,7 +95,7 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 
 enum {
     OPT_SAMPLES = 256, OPT_MAX_SAMPLES, OPT_MAX_BLOCKERS, OPT_MIN_PATCH, OPT_SPLIT_GAIN, OPT_COMPLEX_CAP, OPT_BLOCKERS,
-    OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_VIEW, OPT_VIEW_SIZE, OPT_PATH, OPT_MAX_NODES,
+    OPT_THREADS, OPT_VIEW, OPT_VIEW_SIZE, OPT_PATH, OPT_MAX_NODES,
     OPT_INTO, OPT_FRAMES, OPT_LIGHT_SAMPLES, OPT_COST, OPT_PARTIAL, OPT_RESUME, OPT_EDIT
 };
 
@@ -120,13 +120,10 @@ static const struct option long_opts[] = {
     {"light-samples", required_argument, NULL, OPT_LIGHT_SAMPLES},
     {"cost", required_argument, NULL, OPT_COST},
     {"threads", required_argument, NULL, OPT_THREADS},
-    {"allow-external-uris", no_argument, NULL, OPT_EXTERNAL},
-    {"stats", optional_argument, NULL, OPT_STATS},
-    {"quiet", no_argument, NULL, 'q'},
-    {"verbose", no_argument, NULL, 'v'},
-    {"help", no_argument, NULL, 'h'},
-    {"version", no_argument, NULL, OPT_VERSION},
-    {NULL, 0, NULL, 0},
+    LIE_OPT_ENTRY_EXTERNAL,
+    LIE_OPT_ENTRY_STATS,
+    LIE_OPT_ENTRY_VERBOSE,
+    LIE_OPT_ENTRIES_END,
 };
 
 /* --partial: the first SIGINT, SIGTERM or SIGHUP asks the build to stop
@@ -346,10 +343,9 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
 /* The cameras of the --view options and the frames of --path, appended to
  * *cams (the cache's views first, with --into). */
 static lie_status gather_views(const lie_scene *scene, const char *input, const char *const *views, int n_views,
-                               const char *path_file, lie_cache_views *v, lie_error *err)
+                               const lie_camera_path *cpath, lie_cache_views *v, lie_error *err)
 {
-    lie_camera_path *cpath = NULL;
-    lie_status st = path_file ? lie_camera_path_read(path_file, &cpath, err) : LIE_OK;
+    lie_status st = LIE_OK;
     int n_new = n_views + (cpath ? cpath->n_frames : 0);
     lie_camera *cams = st == LIE_OK ? realloc(v->cams, sizeof *cams * ((size_t)(v->n_cams + n_new) + 1)) : NULL;
     if (st == LIE_OK && !cams)
@@ -368,7 +364,6 @@ static lie_status gather_views(const lie_scene *scene, const char *input, const 
         cams[v->n_cams] = lie_camera_path_frame(cpath, i);
         cams[v->n_cams++].name = NULL;
     }
-    lie_camera_path_destroy(cpath);
     return st;
 }
 
@@ -378,7 +373,7 @@ int main(int argc, char **argv)
     lie_build_params bp = lie_build_params_default();
     lie_scene_options so = lie_scene_options_default();
     const char *output = NULL, *into = NULL;
-    int stats = 0, quiet = 0, verbose = 0, params_given = 0, size_given = 0, partial = 0;
+    int params_given = 0, size_given = 0, partial = 0;
     const char *views[64], *path_file = NULL, *resume_file = NULL;
     lie_cache_edit edit_log[64];
     int n_edits = 0;
@@ -386,8 +381,8 @@ int main(int argc, char **argv)
     long v;
     float f;
     int c;
-    opterr = 0;
-    while ((c = getopt_long(argc, argv, ":o:qvh", long_opts, NULL)) != -1) {
+    lie_cli cli = {.tool = prog, .usage = usage};
+    while ((c = lie_cli_next(&cli, argc, argv, ":o:qvh", long_opts)) > 0) {
         switch (c) {
         case 'o': output = optarg; break;
         case OPT_SAMPLES:
@@ -467,7 +462,6 @@ int main(int argc, char **argv)
                 return usage_error("--threads: expected an integer in 0..4096, got '%s'", optarg);
             bp.threads = (int)v;
             break;
-        case OPT_EXTERNAL: so.allow_external_uris = 1; break;
         case OPT_VIEW:
             if (n_views == 64)
                 return usage_error("--view: at most 64 views, got another: '%s'", optarg);
@@ -488,18 +482,11 @@ int main(int argc, char **argv)
                 return usage_error("--view-size: expected WxH, got '%s'", optarg);
             size_given = 1;
             break;
-        case OPT_STATS:
-            if (!(stats = lie_parse_stats(optarg)))
-                return usage_error("--stats: expected --stats or --stats=json, got '%s'", optarg);
-            break;
-        case 'q': quiet = 1; break;
-        case 'v': verbose = 1; break;
-        case 'h': usage(stdout); return 0;
-        case OPT_VERSION: { char vr[512]; lie_version_report(prog, vr, sizeof vr); fputs(vr, stdout); return 0; }
-        case ':': return usage_error("%s: missing value", argv[optind - 1]);
-        default: return usage_error("unknown option '%s'", argv[optind - 1]);
         }
     }
+    if (c == LIE_CLI_EXIT)
+        return cli.status;
+    so.allow_external_uris = cli.external;
     if (into && (resume_file || n_edits))
         return usage_error("%s", "--into: give no --resume or --edit (rst-update edits a cache)");
     if (resume_file && params_given)
@@ -526,13 +513,13 @@ int main(int argc, char **argv)
     const char *input = optind < argc ? argv[optind] : NULL;
 
     if (lie_dist_start(&argc, &argv) > 1) {
-        quiet = 1; /* rank 0 prints the statistics */
+        cli.quiet = 1; /* rank 0 prints the statistics */
         if (lie_dist_rank() != 0)
-            stats = 0;
-        if (into || partial || resume_file) {
+            cli.stats = 0;
+        if (into || partial || resume_file || n_edits) {
             lie_error e;
             lie_error_set(&e, LIE_ERR_ARG, into ? into : input,
-                          "--into, --partial and --resume run in one process, not under mpirun");
+                          "--into, --edit, --partial and --resume run in one process, not under mpirun");
             return fail(&e);
         }
     }
@@ -550,10 +537,13 @@ int main(int argc, char **argv)
         bp.threads = threads;
         bp.max_nodes = max_nodes;
     }
+    lie_camera_path *cpath = NULL; /* --path */
     lie_cache_views cv = {NULL, 0, view_w, view_h, LIE_MAX_DEPTH_DEFAULT};
     if (into) {
         if (lie_cache_read(into, &old, &err) != LIE_OK ||
-            lie_cache_load_scene(old, into, input, &so, &scene, &err) != LIE_OK) {
+            lie_cache_load_scene(old, into, input, &so, &scene, &err) != LIE_OK ||
+            (path_file && lie_camera_path_read(path_file, &cpath, &err) != LIE_OK)) {
+            lie_scene_destroy(scene);
             lie_cache_destroy(old);
             return fail(&err);
         }
@@ -564,6 +554,7 @@ int main(int argc, char **argv)
                           old->views.height, view_w, view_h);
         }
         if (err.status) {
+            lie_camera_path_destroy(cpath);
             lie_cache_destroy(old);
             lie_scene_destroy(scene);
             return fail(&err);
@@ -573,30 +564,34 @@ int main(int argc, char **argv)
         cv.height = old->views.height;
         cv.max_depth = old->views.max_depth;
         input = old->scene_path;
-    } else if (lie_scene_load(input, &so, &scene, &err) != LIE_OK) {
+    } else if (build_load_inputs(input, path_file, &so, &scene, &cpath, &err) != LIE_OK) {
+        lie_camera_path_destroy(cpath);
+        lie_scene_destroy(scene);
         lie_cache_destroy(resume);
         return fail(&err);
     }
     uint64_t loaded_hash = scene->hash;
     if (apply_edits(scene, &so, edit_log, n_edits, resume, &err) != LIE_OK) {
         free_edits(edit_log, n_edits);
+        lie_camera_path_destroy(cpath);
         lie_cache_destroy(resume);
         lie_scene_destroy(scene);
         return fail(&err);
     }
-    if (!quiet)
+    if (!cli.quiet)
         lie_print_scene_warnings(prog, scene, input);
-    if (scene->n_emitters == 0 && !quiet) /* after --edit, which may add some */
+    if (scene->n_emitters == 0 && !cli.quiet) /* after --edit, which may add some */
         fprintf(stderr, "%s: %s: warning: no emitters (no emissive material, no KHR_lights_punctual light): "
                         "the cache holds no environments\n", prog, input);
-    double t1 = lie_phase(prog, verbose, "load", t0);
+    double t1 = lie_phase(prog, cli.verbose, "load", t0);
     lie_rt *rt = NULL;
     if (lie_rt_create(scene, &rt, &err) != LIE_OK) {
+        lie_camera_path_destroy(cpath);
         lie_cache_destroy(old);
         lie_scene_destroy(scene);
         return fail(&err);
     }
-    double t2 = lie_phase(prog, verbose, "bvh", t1);
+    double t2 = lie_phase(prog, cli.verbose, "bvh", t1);
     lie_pixels *px = NULL, *old_px = NULL;
     lie_status rc = LIE_OK;
     if (into) {
@@ -611,10 +606,19 @@ int main(int argc, char **argv)
             rc = lie_camera_pixels(scene, rt, cv.cams, cv.n_cams, cv.width, cv.height, cv.max_depth, &old_px, &err);
     }
     if (rc == LIE_OK && (n_views || path_file)) {
-        rc = gather_views(scene, input, views, n_views, path_file, &cv, &err);
+        int first_new = cv.n_cams;
+        rc = gather_views(scene, input, views, n_views, cpath, &cv, &err);
         if (rc == LIE_OK)
-            rc = lie_camera_pixels(scene, rt, cv.cams, cv.n_cams, cv.width, cv.height, cv.max_depth, &px, &err);
+            rc = lie_camera_pixels(scene, rt, cv.cams + first_new, cv.n_cams - first_new, cv.width, cv.height,
+                                   cv.max_depth, &px, &err);
+        if (rc == LIE_OK && old_px) { /* the old views' pixels and the new: all the views' */
+            lie_pixels *added = px;
+            px = NULL;
+            rc = lie_pixels_merge(old_px, added, &px, &err);
+            lie_pixels_destroy(added);
+        }
     }
+    lie_camera_path_destroy(cpath);
     if (rc == LIE_OK && resume && !same_views(&resume->views, &cv))
         rc = lie_error_set(&err, LIE_ERR_ARG, resume_file, "was built for other views (--view, --path, --view-size)");
     if (rc == LIE_OK)
@@ -631,9 +635,9 @@ int main(int argc, char **argv)
         return fail(&err);
     }
     if (px)
-        t2 = lie_phase(prog, verbose, "views", t2);
+        t2 = lie_phase(prog, cli.verbose, "views", t2);
     lie_progress prog_bar;
-    lie_progress_begin(&prog_bar, stderr, "lie-build", !quiet);
+    lie_progress_begin(&prog_bar, stderr, "lie-build", !cli.quiet);
     cpu0 = lie_cpu_time();
     lie_env *env = NULL;
     lie_build_stats st;
@@ -673,7 +677,7 @@ int main(int argc, char **argv)
         lie_scene_destroy(scene);
         return rc != LIE_OK ? fail(&err) : 0;
     }
-    double t3 = lie_phase(prog, verbose, "build", t2), cpu_build = lie_cpu_time() - cpu0;
+    double t3 = lie_phase(prog, cli.verbose, "build", t2), cpu_build = lie_cpu_time() - cpu0;
     lie_cache cache;
     memset(&cache, 0, sizeof cache);
     cache.scene_path = (char *)input;
@@ -691,12 +695,12 @@ int main(int argc, char **argv)
     size_t bytes = 0;
     if (rc == LIE_OK)
         rc = lie_cache_write(output, &cache, &bytes, &err);
-    double t4 = lie_phase(prog, verbose && rc == LIE_OK, "write", t3);
-    if (rc == LIE_OK && stats) {
+    double t4 = lie_phase(prog, cli.verbose && rc == LIE_OK, "write", t3);
+    if (rc == LIE_OK && cli.stats) {
         lie_prediction pred;
         lie_env_predict(env, px, &pred);
         print_stats(input, scene, env, &st, into ? &as : NULL, px ? &pred : NULL, cpu_build, t1 - t0, t2 - t1,
-                    t3 - t2, t4 - t3, bytes, stats == 2);
+                    t3 - t2, t4 - t3, bytes, cli.stats == 2);
     }
     free(cache.emitters);
     free(cv.cams);

@@ -47,7 +47,7 @@ static void usage(FILE *fp)
 
 static int fail(const lie_error *err) { return lie_report_error(prog, err, 1); }
 
-enum { OPT_FULL = 256, OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_WRITE_SCENE, OPT_FORCE };
+enum { OPT_FULL = 256, OPT_THREADS, OPT_WRITE_SCENE, OPT_FORCE };
 
 static const struct option long_opts[] = {
     {"output", required_argument, NULL, 'o'},
@@ -55,13 +55,10 @@ static const struct option long_opts[] = {
     {"write-scene", required_argument, NULL, OPT_WRITE_SCENE},
     {"force", no_argument, NULL, OPT_FORCE},
     {"threads", required_argument, NULL, OPT_THREADS},
-    {"allow-external-uris", no_argument, NULL, OPT_EXTERNAL},
-    {"stats", optional_argument, NULL, OPT_STATS},
-    {"quiet", no_argument, NULL, 'q'},
-    {"verbose", no_argument, NULL, 'v'},
-    {"help", no_argument, NULL, 'h'},
-    {"version", no_argument, NULL, OPT_VERSION},
-    {NULL, 0, NULL, 0},
+    LIE_OPT_ENTRY_EXTERNAL,
+    LIE_OPT_ENTRY_STATS,
+    LIE_OPT_ENTRY_VERBOSE,
+    LIE_OPT_ENTRIES_END,
 };
 
 /* --write-scene names a .gltf or a .glb (lie_gltf_export_group). */
@@ -215,8 +212,8 @@ int main(int argc, char **argv)
     run_opts ro = {NULL, NULL, lie_gltf_export_options_default(), 0, 0, 0};
     long v;
     int c;
-    opterr = 0;
-    while ((c = getopt_long(argc, argv, ":o:qvh", long_opts, NULL)) != -1) {
+    lie_cli cli = {.tool = prog, .usage = usage};
+    while ((c = lie_cli_next(&cli, argc, argv, ":o:qvh", long_opts)) > 0) {
         switch (c) {
         case 'o': ro.output = optarg; break;
         case OPT_FULL: uo.full = 1; break;
@@ -227,19 +224,14 @@ int main(int argc, char **argv)
                 return usage_error("--threads: expected an integer in 0..4096, got '%s'", optarg);
             uo.threads = (int)v;
             break;
-        case OPT_EXTERNAL: uo.scene.allow_external_uris = 1; break;
-        case OPT_STATS:
-            if (!(ro.stats = lie_parse_stats(optarg)))
-                return usage_error("--stats: expected --stats or --stats=json, got '%s'", optarg);
-            break;
-        case 'q': ro.quiet = 1; break;
-        case 'v': ro.verbose = 1; break;
-        case 'h': usage(stdout); return 0;
-        case OPT_VERSION: { char vr[512]; lie_version_report(prog, vr, sizeof vr); fputs(vr, stdout); return 0; }
-        case ':': return usage_error("%s: missing value", argv[optind - 1]);
-        default: return usage_error("unknown option '%s'", argv[optind - 1]);
         }
     }
+    if (c == LIE_CLI_EXIT)
+        return cli.status;
+    uo.scene.allow_external_uris = cli.external;
+    ro.stats = cli.stats;
+    ro.quiet = cli.quiet;
+    ro.verbose = cli.verbose;
     if (optind >= argc)
         return usage_error("%s", "missing input cache");
     if (optind + 1 >= argc)
