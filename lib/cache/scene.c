@@ -4,21 +4,24 @@
 
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 lie_status lie_cache_load_scene(const lie_cache *c, const char *cache_path, const char *override,
                                 const lie_scene_options *so, lie_scene **out, lie_error *err)
 {
     *out = NULL;
     const char *path = override ? override : c->scene_path;
+    if (!override && strcmp(path, "-") == 0)
+        return lie_error_set(err, LIE_ERR_ARG, cache_path,
+                             "the cache was built from a scene read from stdin: name its file (--scene)");
     char alt[4096];
     /* a relative path that does not resolve from here: try it relative to
      * the cache's folder (caches travel with their scenes) */
-    if (!override && c->scene_path[0] != '/' && access(path, F_OK) != 0 && cache_path) {
+    lie_file_set *files = so ? so->files : NULL; /* files read by another process, if any */
+    if (!override && c->scene_path[0] != '/' && !lie_file_set_exists(files, path) && cache_path) {
         const char *slash = strrchr(cache_path, '/');
         if (slash && (size_t)(slash - cache_path) + strlen(path) + 2 < sizeof alt) {
             snprintf(alt, sizeof alt, "%.*s/%s", (int)(slash - cache_path), cache_path, path);
-            if (access(alt, F_OK) == 0)
+            if (lie_file_set_exists(files, alt))
                 path = alt;
         }
     }

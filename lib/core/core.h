@@ -289,6 +289,39 @@ lie_status lie_read_fd(int fd, const char *name, uint64_t max, uint64_t hint, un
 lie_status lie_read_file_max(const char *path, uint64_t max, unsigned char **data, size_t *size, lie_error *err);
 lie_status lie_read_file(const char *path, unsigned char **data, size_t *size, lie_error *err);
 
+/* ---- file sets: inputs held in memory (fileset.c) ------------------------
+ * The files a load read (a scene with its buffers and images, a cache, a
+ * camera path), each under the path it was opened by, so that another
+ * process can repeat the load from memory: lib/dist reads them on rank 0
+ * and broadcasts them under mpirun.  A reader given a set
+ * (lie_scene_options.files) takes a file from it when the set holds its
+ * path; otherwise LIE_FILES_RECORD reads the file system (with all the
+ * reader's checks) and adds what it read, LIE_FILES_ONLY fails with
+ * "cannot open: " LIE_FILE_SET_MISSING.  A NULL set means the file system.
+ * Not thread-safe: one load at a time. */
+typedef enum { LIE_FILES_RECORD, LIE_FILES_ONLY } lie_file_set_mode;
+typedef struct lie_file_set lie_file_set;
+#define LIE_FILE_SET_MISSING "not among the files read by the first process"
+/* NULL when out of memory; destroy accepts NULL. */
+lie_file_set *lie_file_set_create(lie_file_set_mode mode);
+void lie_file_set_destroy(lie_file_set *set);
+lie_file_set_mode lie_file_set_get_mode(const lie_file_set *set);
+size_t lie_file_set_count(const lie_file_set *set);
+uint64_t lie_file_set_bytes(const lie_file_set *set);
+/* The bytes held for path, or NULL; owned by the set. */
+const unsigned char *lie_file_set_find(const lie_file_set *set, const char *path, size_t *size);
+/* Add a copy of data under path; a path held already keeps its bytes. */
+lie_status lie_file_set_add(lie_file_set *set, const char *path, const void *data, size_t size, lie_error *err);
+/* lie_read_file_max through the set (see above); *data is the caller's. */
+lie_status lie_file_set_read(lie_file_set *set, const char *path, uint64_t max, unsigned char **data, size_t *size,
+                             lie_error *err);
+/* Could path be read: held, or (not LIE_FILES_ONLY) it exists on disk. */
+int lie_file_set_exists(const lie_file_set *set, const char *path);
+/* The set as one malloc'd buffer, and back (the result is LIE_FILES_ONLY;
+ * every length is checked). */
+lie_status lie_file_set_pack(const lie_file_set *set, unsigned char **data, size_t *size, lie_error *err);
+lie_status lie_file_set_unpack(const unsigned char *data, size_t size, lie_file_set **out, lie_error *err);
+
 /* Escape control bytes (C0, DEL, C1) and invalid UTF-8 in s for a one-line
  * message, as git quotes paths: \n \t \r \033 ...  Writes at most size bytes
  * with a terminating NUL. */

@@ -14,11 +14,11 @@ static struct {
     int rank, size;
     int checked;       /* lie_dist_check passed: errors now travel in lie_dist_run's messages */
     int serialized;    /* MPI may be called from another thread than the main one */
-    uint64_t bcast_bytes;
+    uint64_t bcast_bytes, bcast_files;
     /* the last lie_dist_run, for statistics (rank 0) */
     lie_dist_rank_stats *per_rank;
     size_t n_items;
-} dist = {0, 0, 1, 0, 0, 0, NULL, 0};
+} dist = {0, 0, 1, 0, 0, 0, 0, NULL, 0};
 
 enum { TAG_REQ = 1, TAG_RES, TAG_ERR, TAG_ITEM };
 #define ITEM_DONE (-1)
@@ -79,6 +79,7 @@ int lie_dist_start(int *argc, char ***argv)
 int lie_dist_rank(void) { return dist.rank; }
 int lie_dist_size(void) { return dist.size; }
 uint64_t lie_dist_bytes_broadcast(void) { return dist.bcast_bytes; }
+uint64_t lie_dist_files_broadcast(void) { return dist.bcast_files; }
 
 uint64_t lie_dist_bytes_gathered(void)
 {
@@ -105,40 +106,58 @@ void lie_dist_bcast(void *data, size_t size)
         bcast_bytes(data, size);
 }
 
-lie_status lie_dist_read_file(const char *path, unsigned char **data, size_t *size, lie_error *err)
+lie_status lie_dist_load(const lie_scene_options *so, lie_dist_load_fn load, void *ctx, lie_error *err)
 {
-    if (!dist.active)
-        return lie_read_file(path, data, size, err);
-    *data = NULL;
-    *size = 0;
-    uint64_t head[2] = {0, 0}; /* status, size */
+    if (!dist.active || dist.size == 1)
+        return load(ctx, so, err);
+    lie_scene_options o = *so;
+    lie_file_set *set = NULL;
+    unsigned char *packed = NULL;
+    size_t size = 0;
+    uint64_t head[3] = {0, 0, 0}; /* status, packed size, files */
+    lie_status st = LIE_OK;
     if (dist.rank == 0) {
-        lie_status st = lie_read_file(path, data, size, err);
+        set = lie_file_set_create(LIE_FILES_RECORD);
+        st = set ? LIE_OK : lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
+        o.files = set;
+        if (st == LIE_OK)
+            st = load(ctx, &o, err);
+        if (st == LIE_OK)
+            st = lie_file_set_pack(set, &packed, &size, err);
         head[0] = (uint64_t)(int64_t)st;
-        head[1] = st == LIE_OK ? (uint64_t)*size : 0;
+        head[1] = size;
+        head[2] = lie_file_set_count(set);
+        lie_file_set_destroy(set);
+        set = NULL;
     }
-    MPI_Bcast(head, 2, MPI_UINT64_T, 0, MPI_COMM_WORLD);
-    lie_status st = (lie_status)(int64_t)head[0];
-    if (st != LIE_OK) /* rank 0's error is the one reported (lie_dist_fail) */
-        return dist.rank == 0 ? st : lie_error_set(err, st, path, "rank 0 could not read it");
+    MPI_Bcast(head, 3, MPI_UINT64_T, 0, MPI_COMM_WORLD);
+    lie_status st0 = (lie_status)(int64_t)head[0];
+    if (st0 != LIE_OK) { /* rank 0's own error is the one reported (lie_dist_fail) */
+        free(packed);
+        return dist.rank == 0 ? st : lie_error_set(err, st0, NULL, "rank 0 could not load its inputs");
+    }
     /* every rank allocates, so an out-of-memory rank still takes part */
-    unsigned char *buf = dist.rank == 0 ? *data : malloc((size_t)head[1] + 1);
-    int ok = buf != NULL, all = 0;
+    if (dist.rank != 0)
+        packed = malloc((size_t)head[1] + 1);
+    int ok = packed != NULL, all = 0;
     MPI_Allreduce(&ok, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
     if (!all) {
-        if (dist.rank != 0)
-            free(buf);
-        else
-            free(*data);
-        *data = NULL;
-        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory for %llu bytes%s",
+        free(packed);
+        return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory for the %llu bytes of the inputs%s",
                              (unsigned long long)head[1], ok ? " on another rank" : "");
     }
-    bcast_bytes(buf, (size_t)head[1]);
+    bcast_bytes(packed, (size_t)head[1]);
     dist.bcast_bytes += head[1] * (uint64_t)(dist.size - 1);
-    *data = buf;
-    *size = (size_t)head[1];
-    return LIE_OK;
+    dist.bcast_files += head[2];
+    if (dist.rank != 0) {
+        st = lie_file_set_unpack(packed, (size_t)head[1], &set, err);
+        o.files = set;
+        if (st == LIE_OK)
+            st = load(ctx, &o, err);
+        lie_file_set_destroy(set);
+    }
+    free(packed);
+    return st;
 }
 
 /* ---- the check all ranks end their setup with --------------------------- */
@@ -614,12 +633,14 @@ void lie_dist_stats_print(FILE *fp, const char *unit_name, int json)
             fprintf(fp, "%s{\"rank\":%d,\"items\":%llu,\"%s\":%llu,\"seconds\":%.6f,\"bytes_sent\":%llu}", r ? "," : "",
                     r, (unsigned long long)pr[r].items, unit_name, (unsigned long long)pr[r].units, pr[r].seconds,
                     (unsigned long long)pr[r].bytes);
-        fprintf(fp, "],\"items\":%zu,\"bytes_broadcast\":%llu,\"bytes_gathered\":%llu", dist.n_items,
-                (unsigned long long)dist.bcast_bytes, (unsigned long long)gathered);
+        fprintf(fp, "],\"items\":%zu,\"files_broadcast\":%llu,\"bytes_broadcast\":%llu,\"bytes_gathered\":%llu",
+                dist.n_items, (unsigned long long)dist.bcast_files, (unsigned long long)dist.bcast_bytes,
+                (unsigned long long)gathered);
         return;
     }
-    fprintf(fp, "  %d ranks, %zu items; %llu bytes broadcast, %llu gathered\n", dist.size, dist.n_items,
-            (unsigned long long)dist.bcast_bytes, (unsigned long long)gathered);
+    fprintf(fp, "  %d ranks, %zu items; %llu files (%llu bytes) broadcast, %llu bytes gathered\n", dist.size,
+            dist.n_items, (unsigned long long)dist.bcast_files, (unsigned long long)dist.bcast_bytes,
+            (unsigned long long)gathered);
     for (int r = 0; r < dist.size; r++)
         fprintf(fp, "  rank %d: %llu %s in %llu items, %.3f s, %llu bytes sent\n", r, (unsigned long long)pr[r].units,
                 unit_name, (unsigned long long)pr[r].items, pr[r].seconds, (unsigned long long)pr[r].bytes);

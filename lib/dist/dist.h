@@ -19,6 +19,7 @@
 #define LIE_DIST_H
 
 #include "core/core.h"
+#include "scene/scene.h"
 
 #include <stdio.h>
 
@@ -34,9 +35,15 @@ int lie_dist_start(int *argc, char ***argv);
 int lie_dist_rank(void);
 int lie_dist_size(void);
 
-/* Read a file (- for stdin) on rank 0 and broadcast its bytes to all
- * ranks; without mpirun, lie_read_file. */
-lie_status lie_dist_read_file(const char *path, unsigned char **data, size_t *size, lie_error *err);
+/* Load inputs once (the scene with every buffer and image it references,
+ * a cache, a camera path): load(ctx, so) runs on rank 0 with so->files
+ * recording every file it reads (lie_file_set, lib/core); the files are
+ * broadcast, and load runs on the other ranks from them alone, so only
+ * rank 0 needs the files ("-", a pipe, works too).  A rank that fails
+ * still returns here with its error (for lie_dist_fail); the other ranks
+ * fail with "rank 0 could not load it".  Without mpirun: load(ctx, so). */
+typedef lie_status (*lie_dist_load_fn)(void *ctx, const lie_scene_options *so, lie_error *err);
+lie_status lie_dist_load(const lie_scene_options *so, lie_dist_load_fn load, void *ctx, lie_error *err);
 
 /* Rank 0's size bytes at data on every rank (without mpirun: nothing). */
 void lie_dist_bcast(void *data, size_t size);
@@ -90,9 +97,11 @@ typedef struct lie_dist_rank_stats {
  * others "stopped: another rank failed". */
 lie_status lie_dist_run(const lie_dist_work *w, lie_error *err);
 
-/* Bytes broadcast by lie_dist_read_file; results gathered by the last
- * lie_dist_run (rank 0). */
+/* Bytes broadcast by lie_dist_load; results
+ * gathered by the last lie_dist_run (rank 0).  Files broadcast by
+ * lie_dist_load. */
 uint64_t lie_dist_bytes_broadcast(void);
+uint64_t lie_dist_files_broadcast(void);
 uint64_t lie_dist_bytes_gathered(void);
 
 /* Rank 0, after lie_dist_run: per-rank items, units (unit_name: "tiles",

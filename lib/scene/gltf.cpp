@@ -154,6 +154,7 @@ struct FsState {
     std::string refused, refused_why;            /* first URI refused by policy */
     std::map<std::string, std::string> missing;  /* URI -> why it could not be opened */
     std::string last_uri;
+    lie_file_set *files; /* lie_scene_options.files: consulted first (lib/core) */
 };
 
 /* Does a relative path climb above its starting folder ("a/../../b")? */
@@ -241,9 +242,14 @@ bool fs_exists(const std::string &path, void *user)
     FsState &fs = *static_cast<FsState *>(user);
     if (path.empty())
         return false;
+    size_t held;
+    if (lie_file_set_find(fs.files, path.c_str(), &held))
+        return true;
     struct stat st;
     const char *why = nullptr;
-    if (stat(path.c_str(), &st) != 0)
+    if (fs.files && lie_file_set_get_mode(fs.files) == LIE_FILES_ONLY)
+        why = LIE_FILE_SET_MISSING;
+    else if (stat(path.c_str(), &st) != 0)
         why = strerror(errno);
     else if (!S_ISREG(st.st_mode))
         why = "not a regular file";
@@ -278,9 +284,22 @@ std::string fd_realpath(int fd, const std::string &path)
 bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *user)
 {
     FsState &fs = *static_cast<FsState *>(user);
+    size_t held;
+    if (const unsigned char *d = lie_file_set_find(fs.files, path.c_str(), &held)) {
+        /* read on another process, through the checks below */
+        out->assign(d, d + held);
+        return true;
+    }
     int fd;
     uint64_t size;
     lie_error e{};
+    if (fs.files && lie_file_set_get_mode(fs.files) == LIE_FILES_ONLY) {
+        if (err)
+            *err = LIE_FILE_SET_MISSING;
+        if (!fs.last_uri.empty() && !fs.missing.count(fs.last_uri))
+            fs.missing[fs.last_uri] = LIE_FILE_SET_MISSING;
+        return false;
+    }
     if (lie_input_open(path.c_str(), LIE_READ_MAX_GLTF, &fd, &size, &e) != LIE_OK) {
         if (err)
             *err = e.msg;
@@ -315,6 +334,11 @@ bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::strin
         throw;
     }
     free(data);
+    if (fs.files && lie_file_set_add(fs.files, path.c_str(), out->data(), out->size(), &e) != LIE_OK) {
+        if (err)
+            *err = e.msg;
+        return false;
+    }
     return true;
 }
 
@@ -422,17 +446,13 @@ bool image_load(tinygltf::Image *image, const int index, std::string *err, std::
 
 /* ---- loading the file -------------------------------------------------- */
 
-std::vector<unsigned char> read_input(const char *path)
+/* The glTF itself: through the file set when there is one ("-" is stdin). */
+std::vector<unsigned char> read_input(const char *path, lie_file_set *files)
 {
-    int fd;
-    uint64_t size;
     lie_error e{};
-    if (lie_input_open(path, LIE_READ_MAX_GLTF, &fd, &size, &e) != LIE_OK)
-        throw ImportError{e.status, e.msg, 0, 0};
     unsigned char *buf = nullptr;
     size_t n = 0;
-    lie_status st = lie_read_fd(fd, path, LIE_READ_MAX_GLTF, size, &buf, &n, &e);
-    close(fd);
+    lie_status st = lie_file_set_read(files, path, LIE_READ_MAX_GLTF, &buf, &n, &e);
     if (st != LIE_OK)
         throw ImportError{e.status, e.msg, 0, 0};
     std::vector<unsigned char> data;
@@ -705,9 +725,10 @@ void check_json(const std::vector<unsigned char> &d, bool glb)
 void load_model(tinygltf::Model &model, const char *path, const lie_scene_options &opt,
                 std::map<int, std::string> &image_errors, std::map<int, std::string> &undecodable)
 {
-    std::vector<unsigned char> data = read_input(path);
+    std::vector<unsigned char> data = read_input(path, opt.files);
 
     FsState fs;
+    fs.files = opt.files;
     std::string p(path);
     size_t slash = p.rfind('/');
     /* the folder as tinygltf will join URIs to it ("dir/" + uri, "/" + uri) */

@@ -299,6 +299,10 @@ typedef struct lie_scene {
 typedef struct lie_scene_options {
     int allow_external_uris; /* let URIs leave the scene's folder */
     uint64_t max_triangles;  /* refuse larger scenes before allocating */
+    /* NULL: read the file system.  Else the glTF and every buffer and image
+     * it references are taken from this set when it holds them (lib/core,
+     * lie_file_set); the URI policy applies the same either way. */
+    lie_file_set *files;
 } lie_scene_options;
 #define LIE_SCENE_MAX_TRIANGLES_DEFAULT 50000000u
 lie_scene_options lie_scene_options_default(void);

@@ -52,6 +52,7 @@ seed() { # TARGET FILE...
 seed gltf tests/scenes/*.gltf tests/data/gltf/*.gltf tests/data/gltf/*.glb tests/data/gltf/escape/*.gltf
 seed edit tests/fuzz/seeds/edit/* examples/edits/*.yaml
 seed campath tests/fuzz/seeds/campath/*
+seed fileset tests/fuzz/seeds/fileset/*
 mkdir -p "$OUT/seeds/cache"
 if make -s all >/dev/null 2>&1; then
     c="$OUT/seeds/cache"

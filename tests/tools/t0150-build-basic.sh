@@ -104,4 +104,13 @@ else not_ok "split-gain: $(grep split-gain "$TMP/g0.dump" "$TMP/gd.dump") nodes 
 run "$B/lie-build" "$S/cornell.gltf"
 expect_rc 2 "missing -o"
 expect_no_file "$TMP/u.lie" "no cache after usage errors"
+# the scene on stdin ("-"): its relative URIs resolve from the working
+# folder; the cache records "-", so rendering it needs --scene
+(cd "$S" && "$B/lie-build" - -q -o "$TMP/stdin.lie" <cornell.gltf) && ok "lie-build - reads the scene from stdin" ||
+    not_ok "lie-build -"
+run "$B/lie-render" "$TMP/stdin.lie" -q --size 8x8 -o "$TMP/stdin.exr"
+expect_rc 1 "a cache built from stdin names no scene"
+expect_one_error_line "lie-render: $TMP/stdin.lie: the cache was built from a scene read from stdin: name its file (--scene)" "one line"
+run "$B/lie-render" "$TMP/stdin.lie" -q --size 8x8 --scene "$S/cornell.gltf" -o "$TMP/stdin.exr"
+expect_rc 0 "with --scene it renders"
 finish

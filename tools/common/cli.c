@@ -109,14 +109,29 @@ int lie_parse_stats(const char *arg)
     return strcmp(arg, "json") == 0 ? 2 : 0;
 }
 
+/* Under mpirun every rank parses the same command line and meets the same
+ * usage error: only rank 0 says it (Open MPI's OMPI_COMM_WORLD_RANK, or
+ * PMIx's PMIX_RANK, set before MPI_Init), and every rank exits 2. */
+static int first_rank(void)
+{
+    const char *r = getenv("OMPI_COMM_WORLD_RANK");
+    if (!r)
+        r = getenv("PMIX_RANK");
+    return !r || strcmp(r, "0") == 0;
+}
+
 int lie_usage_error(const char *prog, const char *fmt, ...)
 {
+    if (!first_rank())
+        return 2;
+    /* one write: under mpirun stderr is forwarded in chunks that other
+     * output may otherwise split */
+    char msg[1024];
     va_list ap;
     va_start(ap, fmt);
-    fprintf(stderr, "%s: ", prog);
-    vfprintf(stderr, fmt, ap);
-    fprintf(stderr, " (see --help)\n");
+    vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
+    fprintf(stderr, "%s: %s (see --help)\n", prog, msg);
     return 2;
 }
 

@@ -28,7 +28,8 @@ int lie_parse_stats(const char *arg);
 
 /* ---- tool messages: one line on stderr (CONTRIBUTING.md) -------------- */
 
-/* "PROG: message (see --help)"; returns 2, the usage-error exit status. */
+/* "PROG: message (see --help)"; returns 2, the usage-error exit status.
+ * Under mpirun only rank 0 prints it. */
 int lie_usage_error(const char *prog, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
 /* -v: one line per phase on stderr, "prog: phase: 1.234 s", when verbose;

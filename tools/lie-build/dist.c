@@ -146,3 +146,21 @@ lie_status build_dist(const lie_scene *s, const lie_rt *rt, const lie_build_para
     *stats = j.stats;
     return st;
 }
+
+typedef struct scene_in {
+    const char *input;
+    lie_scene **out;
+} scene_in;
+
+static lie_status load_scene(void *ctx, const lie_scene_options *so, lie_error *err)
+{
+    const scene_in *in = ctx;
+    return lie_scene_load(in->input, so, in->out, err);
+}
+
+lie_status build_load_scene(const char *input, const lie_scene_options *so, lie_scene **out, lie_error *err)
+{
+    scene_in in = {input, out};
+    *out = NULL;
+    return lie_dist_load(so, load_scene, &in, err);
+}

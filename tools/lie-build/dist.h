@@ -10,4 +10,9 @@
 lie_status build_dist(const lie_scene *s, const lie_rt *rt, const lie_build_params *p, const lie_pixels *px,
                       lie_env **out, lie_build_stats *stats, lie_error *err);
 
+/* The scene (- for stdin): under mpirun read on rank 0 with every file it
+ * references and broadcast (lie_dist_load); *out is the caller's, also
+ * when an error is returned (NULL then, or to destroy). */
+lie_status build_load_scene(const char *input, const lie_scene_options *so, lie_scene **out, lie_error *err);
+
 #endif

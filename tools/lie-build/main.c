@@ -430,7 +430,8 @@ int main(int argc, char **argv)
         cv.height = old->views.height;
         cv.max_depth = old->views.max_depth;
         input = old->scene_path;
-    } else if (lie_scene_load(input, &so, &scene, &err) != LIE_OK) {
+    } else if (build_load_scene(input, &so, &scene, &err) != LIE_OK) {
+        lie_scene_destroy(scene);
         return fail(&err);
     }
     if (!quiet)

@@ -171,31 +171,50 @@ static int looks_like_gltf(const unsigned char *d, size_t n)
     return i < n && d[i] == '{';
 }
 
-/* Load a scene, or a cache and the scene it was built for. */
-static lie_status load_input(const char *input, const char *override, const lie_scene_options *so,
-                             lie_scene **scene, lie_cache **cache, lie_error *err)
+/* Load a scene, or a cache and the scene it was built for, and the camera
+ * path: through so->files, which under mpirun records what rank 0 reads
+ * for the other ranks (lie_dist_load).  On failure the caller frees what
+ * was made. */
+typedef struct inputs {
+    const char *input, *override, *path_file;
+    lie_scene *scene;
+    lie_cache *cache;
+    lie_camera_path *cpath;
+} inputs;
+
+static lie_status load_input(void *ctx, const lie_scene_options *so, lie_error *err)
 {
-    *scene = NULL;
-    *cache = NULL;
+    inputs *in = ctx;
     unsigned char *data = NULL;
     size_t size = 0;
-    lie_status st = lie_dist_read_file(input, &data, &size, err); /* under mpirun: read once, broadcast */
+    lie_status st = lie_file_set_read(so->files, in->input, LIE_READ_MAX_DEFAULT, &data, &size, err);
     if (st != LIE_OK)
         return st;
     if (looks_like_gltf(data, size)) {
+        /* the scene's file: a set holds it already; stdin is read once, so
+         * its bytes go to the loader in a set of their own */
+        lie_scene_options o = *so;
+        lie_file_set *own = NULL;
+        if (!so->files && strcmp(in->input, "-") == 0) {
+            o.files = own = lie_file_set_create(LIE_FILES_RECORD);
+            st = own ? lie_file_set_add(own, in->input, data, size, err)
+                     : lie_error_set(err, LIE_ERR_NOMEM, in->input, "out of memory");
+        }
         free(data);
-        if (strcmp(input, "-") == 0)
-            return lie_error_set(err, LIE_ERR_UNSUPPORTED, input, "a glTF scene cannot be read from stdin");
-        return lie_scene_load(input, so, scene, err);
+        if (st == LIE_OK)
+            st = lie_scene_load(in->input, &o, &in->scene, err);
+        lie_file_set_destroy(own);
+    } else {
+        st = lie_cache_decode(data, size, in->input, &in->cache, err);
+        free(data);
+        if (st == LIE_OK)
+            st = lie_cache_load_scene(in->cache, in->input, in->override, so, &in->scene, err);
     }
-    st = lie_cache_decode(data, size, input, cache, err);
-    free(data);
-    if (st != LIE_OK)
-        return st;
-    st = lie_cache_load_scene(*cache, input, override, so, scene, err);
-    if (st != LIE_OK) {
-        lie_cache_destroy(*cache);
-        *cache = NULL;
+    if (st == LIE_OK && in->path_file) {
+        st = lie_file_set_read(so->files, in->path_file, LIE_READ_MAX_TEXT, &data, &size, err);
+        if (st == LIE_OK)
+            st = lie_camera_path_parse(data, size, in->path_file, &in->cpath, err);
+        free(data);
     }
     return st;
 }
@@ -423,20 +442,28 @@ int main(int argc, char **argv)
     lie_error err;
     lie_error_clear(&err);
     double t0 = lie_time_now();
-    lie_scene *scene = NULL;
-    lie_cache *cache = NULL;
-    lie_lie_vis *lv = NULL;
-    if (load_input(input, scene_override, &so, &scene, &cache, &err) != LIE_OK)
+    inputs in = {input, scene_override, path_file, NULL, NULL, NULL};
+    if (lie_dist_load(&so, load_input, &in, &err) != LIE_OK) {
+        lie_camera_path_destroy(in.cpath);
+        lie_scene_destroy(in.scene);
+        lie_cache_destroy(in.cache);
         return fail(&err);
+    }
+    lie_scene *scene = in.scene;
+    lie_cache *cache = in.cache;
+    lie_camera_path *cpath = in.cpath;
+    lie_lie_vis *lv = NULL;
     double t1 = lie_phase(prog, verbose, "load", t0);
     if (!visibility_set)
         ro.visibility = cache ? LIE_VIS_LIE : LIE_VIS_FULL;
     if (!cache && (ro.visibility == LIE_VIS_LIE || (ro.aovs & (LIE_AOV_COMPLEXITY | LIE_AOV_PATCH)))) {
+        lie_camera_path_destroy(cpath);
         lie_scene_destroy(scene);
         return usage_error("%s: --visibility=lie and the complexity and patch layers need a cache", input);
     }
     if (cache) {
         if (lie_lie_vis_create(scene, cache->env, &lv, &err) != LIE_OK) {
+            lie_camera_path_destroy(cpath);
             lie_cache_destroy(cache);
             lie_scene_destroy(scene);
             return fail(&err);
@@ -451,14 +478,14 @@ int main(int argc, char **argv)
     if (ro.aov_emitter >= scene->n_emitters) {
         lie_error_set(&err, LIE_ERR_ARG, input, "--emitter %d: the scene has %d emitters", ro.aov_emitter,
                       scene->n_emitters);
+        lie_camera_path_destroy(cpath);
         lie_lie_vis_destroy(lv);
         lie_cache_destroy(cache);
         lie_scene_destroy(scene);
         return fail(&err);
     }
     lie_camera cam;
-    lie_camera_path *cpath = NULL;
-    lie_status cst = path_file ? lie_camera_path_read(path_file, &cpath, &err) : lie_camera_parse(scene, camera, &cam, &err);
+    lie_status cst = path_file ? LIE_OK : lie_camera_parse(scene, camera, &cam, &err);
     if (cst != LIE_OK) {
         if (!err.file[0])
             snprintf(err.file, sizeof err.file, "%s", input);
