@@ -7,11 +7,15 @@
 # wherever a list is too long, down to --min-patch) and with the cost rule
 # (the default --split-gain), each in full frames, with its cache size, and
 # the LIE frame from the default cache against the full one.  Then the
-# default build on 1 thread against THREADS threads.
+# default build on 1 thread against THREADS threads: wall time, and CPU time
+# against the THREADS run's critical path (serial CPU plus its busiest
+# worker's), which other processes on a shared machine do not distort.
+# Last, a generated 250k-triangle atrium (bench/atrium.c; ATRIUM=0 skips it)
+# whose area lights an edit file adds, built for its camera only.
 #
 # Targets (issue 14): build <= 5 full frames on every scene with a light and
 # <= 2 on museum1; cache <= 16 MB under 50k triangles; LIE frame <= half the
-# full frame.  Writes out/bench-build.json.
+# full frame; the atrium built in <= 60 s.  Writes out/bench-build.json.
 set -e
 cd "$(dirname "$0")/.."
 SIZE=${SIZE:-512x512}
@@ -22,51 +26,163 @@ mkdir -p out
 TMP=$(mktemp -d); trap 'rm -rf "$TMP"' EXIT
 
 field() { sed -n "s/.*\"$1\":\"\{0,1\}\([^,\"}]*\).*/\1/p"; }
-ratio() { awk -v a="$1" -v b="$2" 'BEGIN { if (b > 0) printf "%.2f", a / b; else print "-" }'; }
-mb() { awk -v b="$1" 'BEGIN { printf "%.2f", b / 1048576 }'; }
+ratio() { awk -v a="$1" -v b="$2" 'BEGIN { if (b > 0 && a != "-" && a != "timeout") printf "%.2f", a / b; else print "-" }'; }
+mb() { awk -v b="$1" 'BEGIN { if (b + 0 > 0) printf "%.2f", b / 1048576; else print "-" }'; }
 
-# build SCENE OUT ARGS... -> "seconds bytes segments nodes" (or "timeout")
+# build SCENE OUT ARGS... -> "seconds bytes segments nodes cpu critical" (or "timeout ...")
+# cpu: the process's CPU seconds; critical: what the run would take with a
+# core per worker (its CPU less the workers', plus the busiest worker's)
 build() {
     scene=$1; out=$2; shift 2
     if timeout "$TIMEOUT" bin/lie-build "$scene" -q --stats=json -o "$out" "$@" 2>"$TMP/b.json"; then
-        echo "$(field seconds_build <"$TMP/b.json") $(field bytes <"$TMP/b.json") $(field segments <"$TMP/b.json") $(field nodes <"$TMP/b.json")"
+        cpu=$(field seconds_cpu <"$TMP/b.json")
+        crit=$(awk -v c="$cpu" -v w="$(field seconds_cpu_workers <"$TMP/b.json")" \
+            -v m="$(field seconds_cpu_worker_max <"$TMP/b.json")" 'BEGIN { printf "%.3f", c - w + m }')
+        echo "$(field seconds_build <"$TMP/b.json") $(field bytes <"$TMP/b.json") $(field segments <"$TMP/b.json") $(field nodes <"$TMP/b.json") $cpu $crit"
     else
-        echo "timeout - - -"
+        echo "timeout - - - - -"
     fi
 }
 
-echo "bench-build: $SIZE frames, 100 light samples, $THREADS threads (ratios measured side by side)"
-printf '  %-26s %7s %4s %8s | %9s %9s %8s | %9s %9s %8s %9s | %8s %7s | %7s\n' scene tris emit "frame s" \
-    "paper s" "frames" "cache MB" "cost s" "frames" "cache MB" "segments" "LIE s" "LIE/full" "1->${THREADS}t"
+echo "bench-build: $SIZE frames, 100 light samples, $THREADS threads (ratios measured side by side; load $(cut -d' ' -f1 /proc/loadavg))"
+printf '  %-26s %7s %4s %8s | %9s %9s %8s | %9s %9s %8s %9s | %8s %7s | %7s %7s\n' scene tris emit "frame s" \
+    "paper s" "frames" "cache MB" "cost s" "frames" "cache MB" "segments" "LIE s" "LIE/full" "1->${THREADS}t" "cpu"
 echo "[" >out/bench-build.json
 first=1
-for scene in $SCENES; do
-    [ -f "$scene" ] || { echo "  $scene: missing, skipped"; continue; }
-    name=$(basename "$(dirname "$scene")")/$(basename "$scene")
-    bin/lie-render "$scene" --visibility=full --size "$SIZE" --threads "$THREADS" -q --stats=json \
-        -o "$TMP/full.exr" 2>"$TMP/f.json"
-    tf=$(field seconds_render <"$TMP/f.json")
-    tris=$(field triangles <"$TMP/f.json"); emit=$(field emitters <"$TMP/f.json")
-    set -- $(build "$scene" "$TMP/paper.lie" --split-gain 0 --threads "$THREADS")
-    tp=$1; bp=$2
-    set -- $(build "$scene" "$TMP/cost.lie" --threads "$THREADS")
-    tc=$1; bc=$2; segc=$3
-    set -- $(build "$scene" "$TMP/one.lie" --threads 1)
-    t1=$1
-    tl=-
+
+# bench_scene NAME SCENE PAPER ARGS...: one row.  The full frame renders the
+# default cache (so edits in ARGS are in it); PAPER=0 skips the paper build.
+bench_scene() {
+    name=$1; scene=$2; paper=$3; shift 3
+    tp=-; bp=-
+    if [ "$paper" = 1 ]; then
+        r=$(build "$scene" "$TMP/paper.lie" --split-gain 0 --threads "$THREADS" "$@")
+        tp=$(echo "$r" | cut -d' ' -f1); bp=$(echo "$r" | cut -d' ' -f2)
+    fi
+    set -- $(build "$scene" "$TMP/cost.lie" --threads "$THREADS" "$@") "$@"
+    tc=$1; bc=$2; segc=$3; cpun=$5; critn=$6; shift 6
+    set -- $(build "$scene" "$TMP/one.lie" --threads 1 "$@") "$@"
+    t1=$1; cpu1=$5
+    tl=-; tf=-; tris=-; emit=-
     if [ "$tc" != timeout ]; then
+        bin/lie-render "$TMP/cost.lie" --visibility=full --size "$SIZE" --threads "$THREADS" -q --stats=json \
+            -o "$TMP/full.exr" 2>"$TMP/f.json"
+        tf=$(field seconds_render <"$TMP/f.json")
+        tris=$(field triangles <"$TMP/f.json"); emit=$(field emitters <"$TMP/f.json")
         bin/lie-render "$TMP/cost.lie" --size "$SIZE" --threads "$THREADS" -q --stats=json -o "$TMP/lie.exr" \
             2>"$TMP/l.json"
         tl=$(field seconds_render <"$TMP/l.json")
     fi
-    printf '  %-26s %7s %4s %8.3f | %9s %9s %8s | %9s %9s %8s %9s | %8s %7s | %7s\n' "$name" "$tris" "$emit" "$tf" \
+    printf '  %-26s %7s %4s %8s | %9s %9s %8s | %9s %9s %8s %9s | %8s %7s | %7s %7s\n' "$name" "$tris" "$emit" "$tf" \
         "$tp" "$(ratio "$tp" "$tf")" "$(mb "$bp")" "$tc" "$(ratio "$tc" "$tf")" "$(mb "$bc")" "$segc" "$tl" \
-        "$(ratio "$tl" "$tf")" "$(ratio "$t1" "$tc")"
+        "$(ratio "$tl" "$tf")" "$(ratio "$t1" "$tc")" "$(ratio "$cpu1" "$critn")"
     [ $first = 1 ] || echo "," >>out/bench-build.json
     first=0
-    printf '{"scene":"%s","triangles":%s,"emitters":%s,"full_frame_s":%s,"paper_build_s":"%s","paper_cache_bytes":"%s","cost_build_s":"%s","cost_cache_bytes":"%s","cost_segments":"%s","lie_frame_s":"%s","build_1_thread_s":"%s"}' \
-        "$name" "$tris" "$emit" "$tf" "$tp" "$bp" "$tc" "$bc" "$segc" "$tl" "$t1" >>out/bench-build.json
+    printf '{"scene":"%s","triangles":"%s","emitters":"%s","full_frame_s":"%s","paper_build_s":"%s","paper_cache_bytes":"%s","cost_build_s":"%s","cost_cache_bytes":"%s","cost_segments":"%s","lie_frame_s":"%s","build_1_thread_s":"%s","cpu_1_thread_s":"%s","cpu_s":"%s","critical_path_s":"%s"}' \
+        "$name" "$tris" "$emit" "$tf" "$tp" "$bp" "$tc" "$bc" "$segc" "$tl" "$t1" "$cpu1" "$cpun" "$critn" >>out/bench-build.json
+}
+
+for scene in $SCENES; do
+    [ -f "$scene" ] || { echo "  $scene: missing, skipped"; continue; }
+    bench_scene "$(basename "$(dirname "$scene")")/$(basename "$scene")" "$scene" 1
 done
+# issue 14's 250k-triangle target: a generated Sponza-class atrium (bench/atrium.c),
+# its area lights added by an edit file, built for one view: <= 60 s
+if [ "${ATRIUM:-1}" = 1 ]; then
+    make -s build/release/atrium-gen >/dev/null
+    mkdir -p out/atrium
+    build/release/atrium-gen out/atrium >/dev/null
+    bench_scene "atrium (--view, 250k)" out/atrium/atrium.gltf 0 --edit out/atrium/lights.yaml --view Camera
+fi
 echo "]" >>out/bench-build.json
 printf '  (frames: build seconds / one full frame; paper: --split-gain 0; cost: the default --split-gain;\n'
-printf '   1->%st: the default build on 1 thread / on %s; timeouts after %s s)\n' "$THREADS" "$THREADS" "$TIMEOUT"
+printf '   1->%st: the default build on 1 thread / on %s, wall time, and cpu: its CPU seconds / the %s-thread\n' "$THREADS" "$THREADS" "$THREADS"
+printf '   run'"'"'s critical path (serial CPU + the busiest worker), the speed-up with a core per thread;\n'
+printf '   the atrium skips the paper build; timeouts after %s s)\n' "$TIMEOUT"
+
+# ---- views (§4.3.1, §4.3.3): what a build for the scene's camera costs and
+# saves, whole against --view with the views choosing units only (--frames
+# 0) and with the pixel rule (the default --frames), with the image against
+# full visibility (share of pixels off by more than 2%; target <= 0.1%),
+# then the cost model's predictions against what was measured (CPU seconds,
+# from /usr/bin/time: the build; one frame's shadow rays, full and LIE, less
+# an eye-rays-only frame), the constants those measurements give (ns per
+# build segment, per Embree shadow ray, per blocker-list entry) beside the
+# defaults, and --into: a second view added to the cache against one build
+# for both (cmp).
+VIEW_SCENES=${VIEW_SCENES:-"tests/scenes/museum1.gltf tests/scenes/museum3.gltf"}
+CMP=build/release/tests/exr-compare
+second_view() {
+    case $1 in
+    *museum3*) echo "eye=2,1.7,2,target=9,1,6" ;;
+    *) echo "eye=3,2,-2,target=0,0.5,0" ;;
+    esac
+}
+cpu() { awk '{ s += $1 } END { printf "%.3f", s }' "$1"; }
+# timed OUT.cpu CMD...: runs CMD, its user + system CPU seconds to OUT.cpu
+timed() { out=$1; shift; /usr/bin/time -f "%U %S" -o "$out.t" "$@" && tr ' ' '\n' <"$out.t" >"$out"; }
+off() { "$CMP" "$1" "$2" 1 1 | sed -n 's/.* by more than 2% (\([0-9.]*%\)).*/\1/p'; }
+echo
+echo "bench-build views: the scene's camera at $SIZE, $THREADS threads; CPU seconds (user + system)"
+printf '  %-22s %-6s | %8s %8s %8s | %8s %-19s %7s | %-24s | %-24s | %s\n' scene build "wall s" "cache MB" "off>2%" \
+    "cpu s" "build cpu meas/model" "LIE/ful" "frame full cpu: meas/model" "frame LIE cpu: meas/model" "ns seg/ray/blk measured"
+echo "[" >out/bench-build-views.json
+first=1
+for scene in $VIEW_SCENES; do
+    [ -f "$scene" ] || { echo "  $scene: missing, skipped"; continue; }
+    name=$(basename "$scene")
+    timed "$TMP/eye.cpu" bin/lie-render "$scene" --visibility=full --light-samples 0 --size "$SIZE" \
+        --threads "$THREADS" -q -o "$TMP/eye.exr"
+    timed "$TMP/full.cpu" bin/lie-render "$scene" --visibility=full --size "$SIZE" --threads "$THREADS" -q \
+        -o "$TMP/vfull.exr"
+    for kind in whole units pixels; do
+        case $kind in
+        whole) args="" ;;
+        units) args="--view 0 --view-size $SIZE --frames 0" ;;
+        pixels) args="--view 0 --view-size $SIZE" ;;
+        esac
+        if ! timed "$TMP/b.cpu" timeout "$TIMEOUT" bin/lie-build "$scene" $args --threads "$THREADS" -q \
+            --stats=json -o "$TMP/$kind.lie" 2>"$TMP/$kind.json"; then
+            echo "  $name $kind: failed or timed out"; continue
+        fi
+        timed "$TMP/lie.cpu" bin/lie-render "$TMP/$kind.lie" --size "$SIZE" --threads "$THREADS" -q \
+            -o "$TMP/$kind.exr"
+        J="$TMP/$kind.json"
+        wall=$(field seconds_build <"$J"); bytes=$(field bytes <"$J"); segs=$(field segments <"$J")
+        bcpu=$(cpu "$TMP/b.cpu"); bmodel=$(field build_cpu_s_predicted <"$J"); bmeas=$(field build_cpu_s_measured <"$J")
+        ecpu=$(cpu "$TMP/eye.cpu"); fcpu=$(cpu "$TMP/full.cpu"); lcpu=$(cpu "$TMP/lie.cpu")
+        pf=$(field frame_shadow_cpu_s_full <"$J"); pl=$(field frame_shadow_cpu_s_lie <"$J")
+        rays=$(field frame_full_rays <"$J"); ents=$(field frame_list_entries <"$J"); lrays=$(field frame_lie_rays <"$J")
+        fs=$(awk -v a="$fcpu" -v b="$ecpu" 'BEGIN { printf "%.3f", a - b }')
+        ls=$(awk -v a="$lcpu" -v b="$ecpu" 'BEGIN { printf "%.3f", a - b }')
+        consts=$(awk -v bc="$bmeas" -v sg="$segs" -v fs="$fs" -v r="$rays" -v ls="$ls" -v e="$ents" -v lr="$lrays" \
+            'BEGIN { if (r == "" || r == 0) { printf "%.0f/-/-", 1e9 * bc / sg; exit }
+                     ray = 1e9 * fs / r; blk = e > 0 ? (1e9 * ls - lr * ray) / e : 0
+                     printf "%.0f/%.1f/%.3f", 1e9 * bc / sg, ray, blk }')
+        [ -n "$pf" ] || { pf=-; pl=-; }
+        printf '  %-22s %-6s | %8s %8s %8s | %8s %8.3f / %-8.3f %7s | %10s / %-11s | %10s / %-11s | %s\n' "$name" "$kind" \
+            "$wall" "$(mb "$bytes")" "$(off "$TMP/vfull.exr" "$TMP/$kind.exr")" "$bcpu" "$bmeas" "$bmodel" \
+            "$(ratio "$lcpu" "$fcpu")" "$fs" "$pf" "$ls" "$pl" "$consts"
+        [ $first = 1 ] || echo "," >>out/bench-build-views.json
+        first=0
+        printf '{"scene":"%s","build":"%s","build_s":%s,"cache_bytes":%s,"off_2pct":"%s","process_cpu_s":%s,"build_cpu_s":%s,"build_cpu_s_model":%s,"full_frame_cpu_s":%s,"lie_frame_cpu_s":%s,"eye_frame_cpu_s":%s,"frame_shadow_cpu_s_full_model":"%s","frame_shadow_cpu_s_lie_model":"%s","ns_measured":"%s"}' \
+            "$name" "$kind" "$wall" "$bytes" "$(off "$TMP/vfull.exr" "$TMP/$kind.exr")" "$bcpu" "$bmeas" "$bmodel" "$fcpu" \
+            "$lcpu" "$ecpu" "$pf" "$pl" "$consts" >>out/bench-build-views.json
+    done
+    # --into: view B added to the view-0 cache, against one build for both
+    B=$(second_view "$scene")
+    cp "$TMP/pixels.lie" "$TMP/ab.lie"
+    timed "$TMP/i.cpu" bin/lie-build --into "$TMP/ab.lie" --view "$B" --threads "$THREADS" -q --stats=json \
+        2>"$TMP/into.json"
+    timed "$TMP/j.cpu" bin/lie-build "$scene" --view 0 --view "$B" --view-size "$SIZE" --threads "$THREADS" -q \
+        -o "$TMP/both.lie"
+    same=differ; cmp -s "$TMP/ab.lie" "$TMP/both.lie" && same=identical
+    printf '  %-22s --into B: %s s CPU (units kept %s, refined %s, new %s) against %s s CPU for A and B at once: %s\n' \
+        "$name" "$(cpu "$TMP/i.cpu")" "$(field units_kept <"$TMP/into.json")" \
+        "$(field units_refined <"$TMP/into.json")" "$(field units_new <"$TMP/into.json")" "$(cpu "$TMP/j.cpu")" "$same"
+done
+echo "]" >>out/bench-build-views.json
+printf '  (units: --view 0 --frames 0, the views choose units; pixels: --view 0 with the pixel rule, %s frames;\n' \
+    "$(bin/lie-build --help | sed -n 's/.*frames the cache will serve (default \([0-9]*\).*/\1/p')"
+printf '   frame cpu: one frame less an eye-rays-only frame, measured / the model (lie-build --stats=json);\n'
+printf '   ns measured: build CPU / segments, full shadow CPU / rays, LIE shadow CPU less its rays / list entries)\n'

@@ -88,7 +88,7 @@ printf '%-34s %12.3f %12.3f %8s\n' "one frame ($t_items items): tool s" "$ft1" "
 printf '%-34s %12.3f %12.3f %8s\n' "build: tool seconds" "$bt1" "$bt2" "$(ratio "$bt2" "$bt1")"
 printf '%-34s %12.3f %12.3f %8s\n' "build: wall seconds" "$bw1" "$bw2" "$(ratio "$bw2" "$bw1")"
 echo "mpirun -np 2 start and stop: $sw s; path EXR writing: $pwr1 s (2 threads), $pwr2 s (rank 0, 1 thread)"
-echo "bytes: per frame gathered $fb, cache broadcast $fbc (to 1 other rank), per build gathered $bb (cache $cache)"
+echo "bytes: per frame gathered $fb, inputs broadcast (cache, scene, its .bin) $fbc (to 1 other rank), per build gathered $bb (cache $cache)"
 echo "identical to one process: path $same, build $bsame"
 cat >out/bench-mpi.json <<JSON
 {"scene":"$SCENE","size":"$SIZE","frames":12,

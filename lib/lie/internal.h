@@ -32,6 +32,7 @@ typedef struct worker {
     size_t cap_hull;
     lie_build_stats st;
     int nomem;
+    int stopped;              /* the build's stop flag was seen inside a unit: drop it */
     int over;                 /* the node budget ran out (nomem is set too, to stop) */
     atomic_uint_least64_t *nodes_made; /* shared by all workers */
     uint64_t max_nodes;
@@ -60,17 +61,29 @@ typedef struct build_ctx {
     struct memo_entry *memo;
     int32_t *memo_new;    /* open-addressing table of the memo entries of new nodes */
     size_t memo_new_mask;
+    const volatile sig_atomic_t *stop; /* lie_build_control.stop, or NULL */
+    /* the parallel loops' CPU seconds so far (lie_parallel_report): summed
+     * over workers, the busiest worker's per loop summed, idle tails */
+    double par_cpu_sum, par_cpu_max, par_tail;
     double *halton;       /* radical inverses in bases 2, 3, 5, 7 of 0..n_halton-1 */
     uint32_t n_halton;
 } build_ctx;
 
 /* Sort v[0..n) and drop repeats; returns the new length. */
 size_t lie_sort_unique(uint32_t *v, size_t n);
+/* Sort v[0..n) ascending. */
+void lie_sort_u64(uint64_t *v, size_t n);
 
 /* Count a partial list of n blockers in the list-length histogram. */
 void lie_stats_hist_add(lie_build_stats *st, uint32_t n);
 /* Add src's counts to dst's. */
 void lie_stats_merge(lie_build_stats *dst, const lie_build_stats *src);
+/* lie_env_update_views, with (memo = 1) or without the parallel
+ * recomputation of flagged nodes before the build (lib/lie/memo.c), which
+ * pays where the work sits in few units; lie_env_add_views's sits in many. */
+lie_status lie_build_update(lie_env *env, const lie_scene *s, const lie_rt *rt, const lie_pixels *px,
+                            const int32_t *old_unit, const uint8_t *node_flags, int threads, int memo,
+                            lie_build_stats *stats, lie_error *err);
 /* The error of a build that needs more than max-nodes nodes (build.c). */
 lie_status lie_budget_error(lie_error *err, const lie_scene *s, const lie_build_params *p);
 

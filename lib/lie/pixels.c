@@ -56,6 +56,27 @@ lie_status lie_pixels_create(uint32_t n_tris, uint32_t rays_per_pixel, uint64_t 
     return LIE_OK;
 }
 
+lie_status lie_pixels_merge(const lie_pixels *a, const lie_pixels *b, lie_pixels **out, lie_error *err)
+{
+    *out = NULL;
+    if (a->n_tris != b->n_tris || a->rays_per_pixel != b->rays_per_pixel)
+        return lie_error_set(err, LIE_ERR_ARG, NULL, "pixels: merging views of different scenes or samplings");
+    size_t n = (size_t)(a->n_hits + b->n_hits);
+    uint64_t *hits = malloc(sizeof *hits * (n + 1));
+    if (!hits)
+        return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory for %zu pixel hits", n);
+    size_t k = 0;
+    for (int i = 0; i < 2; i++) {
+        const lie_pixels *p = i ? b : a;
+        for (uint32_t t = 0; t < p->n_tris; t++)
+            for (uint64_t h = p->first[t]; h < p->first[t + 1]; h++)
+                hits[k++] = (uint64_t)t << 32 | p->key[h];
+    }
+    lie_status st = lie_pixels_create(a->n_tris, a->rays_per_pixel, hits, n, out, err);
+    free(hits);
+    return st;
+}
+
 void lie_pixels_destroy(lie_pixels *px)
 {
     if (!px)

@@ -148,6 +148,18 @@ static double render_weight(lie_class cls, size_t n_list)
     return cls == LIE_CLASS_PARTIAL || cls == LIE_CLASS_SPLIT || cls == LIE_CLASS_COMPLEX ? (double)n_list : 0.0;
 }
 
+/* Whether an old node an update copies still tells its sampled list's
+ * length, which the lookahead weighs: a split node does (count), and so
+ * does a leaf that could not split.  A leaf large enough to split may hold
+ * its exact list instead (a split undone, or too few pixels), or be
+ * visible for an empty exact list: it is sampled again. */
+static int old_weight_known(const build_ctx *c, uint32_t tri, lie_patch_path path, const lie_pnode *x)
+{
+    if (x->child || x->cls == LIE_CLASS_UNLIT || x->cls == LIE_CLASS_OCCLUDED)
+        return 1;
+    return !lie_subdiv_may_split(c, tri, path);
+}
+
 /* The exact list of a leaf: every triangle meeting the pair's hull
  * (§4.1.2), counted up to `cap` (more: the count only), less a planar
  * emitter's own triangles, which end every segment; left in w->hits. */
@@ -253,6 +265,10 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
         copy_node(c->old, (uint32_t)old, w, u, idx); /* no edit reached this patch's shaft */
         return;
     }
+    if (c->stop && *c->stop) {
+        w->stopped = 1; /* interrupted: lie_subdiv_triangle drops the unit */
+        return;
+    }
     const lie_scene *s = c->s;
     node_class nc;
     if (pre) {
@@ -287,9 +303,11 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
             n_list = exact_leaf_list(c, w, tri, path, e, two_sided, cap);
             if (w->nomem)
                 return;
-            if (n_list == 0)
-                nc.cls = LIE_CLASS_VISIBLE;
-            else if (n_list > cap)
+            /* the exact list holds the sampled one, longer than
+             * max_blockers; were it ever shorter, the leaf goes to Embree,
+             * so that every leaf this rule made is complex or a list
+             * longer than max_blockers (lie_env_add_views finds them so) */
+            if (n_list > cap || n_list <= c->p->max_blockers)
                 nc.cls = LIE_CLASS_COMPLEX;
         }
     }
@@ -310,7 +328,8 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
             int64_t ok = old_child ? (int64_t)old_child + n_kid : -1;
             kid[n_kid].list = NULL;
             kid[n_kid].n_list = 0;
-            if (ok >= 0 && !(c->node_flags && c->node_flags[ok])) {
+            if (ok >= 0 && !(c->node_flags && c->node_flags[ok]) &&
+                old_weight_known(c, tri, lie_patch_child(path, n_kid), &c->old->nodes[ok])) {
                 kid_w[n_kid] = old_weight(&c->old->nodes[ok]);
                 kid_ns[n_kid] = lie_cost_list_ns(c->p, (lie_class)c->old->nodes[ok].cls, c->old->nodes[ok].count);
                 continue;
@@ -485,8 +504,10 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
     unit_buf *u = &c->out[item];
     const lie_scene *s = c->s;
     size_t ne = (size_t)s->n_emitters;
-    if (copied_whole(c, tri, u))
+    if (copied_whole(c, tri, u)) {
+        w->st.units_copied += ne;
         return;
+    }
     u->roots = malloc(sizeof *u->roots * (ne + 1));
     if (!u->roots) {
         w->nomem = 1;
@@ -507,6 +528,30 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
             w->st.pairs[LIE_CLASS_NONE]++;
             continue;
         }
+        int copy = old >= 0 && !(c->node_flags && c->node_flags[old]);
+        w->st.units_copied += (uint64_t)copy;
+        if (!c->stop || copy) {
+            build_node(c, w, u, (uint32_t)root, tri, lie_patch_root(), (int)e, two_sided, NULL, 0, old, NULL);
+            continue;
+        }
+        /* A build that may be interrupted: a unit the stop reaches is
+         * dropped whole (nodes, lists, statistics), so what the partial env
+         * holds are complete units, each exactly as an uninterrupted build
+         * makes it. */
+        lie_build_stats saved = w->st;
+        uint32_t n_pool0 = u->n_pool;
+        w->stopped = 0;
         build_node(c, w, u, (uint32_t)root, tri, lie_patch_root(), (int)e, two_sided, NULL, 0, old, NULL);
+        if (!w->stopped || w->nomem)
+            continue;
+        w->stopped = 0;
+        atomic_fetch_sub_explicit(w->nodes_made, u->n_nodes - (uint32_t)root - 1, memory_order_relaxed);
+        w->st = saved;
+        u->n_nodes = (uint32_t)root + 1;
+        u->n_pool = n_pool0;
+        memset(&u->nodes[root], 0, sizeof *u->nodes);
+        u->nodes[root].cls = LIE_CLASS_NONE;
+        w->st.pairs[LIE_CLASS_NONE]++;
+        w->st.units_interrupted++;
     }
 }

@@ -26,9 +26,9 @@ static int includes(const lie_pixels *old_px, const lie_pixels *new_px, uint32_t
  * on pixels (lib/lie/subdiv.c, lie_subdiv_pixels_pay), and it only turns from "no"
  * to "yes" as pixels grow: so only a leaf that test kept from splitting
  * can change.  Such a leaf was a partial pair with a list longer than
- * max_blockers, large enough to split; it was stored as visible, as
- * partial with its exact list (at least as long as the sampled one), or
- * as complex.  Its pixels must have grown, too. */
+ * max_blockers, large enough to split; it was stored as partial with its
+ * exact list (longer than max_blockers), or as complex.  Its pixels must
+ * have grown, too. */
 static int flag_node(const lie_env *env, const lie_scene *s, const lie_pixels *old_px, const lie_pixels *new_px,
                      uint32_t idx, uint32_t tri, lie_patch_path path, uint8_t *flags)
 {
@@ -43,8 +43,7 @@ static int flag_node(const lie_env *env, const lie_scene *s, const lie_pixels *o
         const lie_build_params *p = &env->params;
         float area = s->tri_area[tri] / (float)(1u << (2 * (path.depth < 15 ? path.depth : 15)));
         int may_split = area > p->min_patch * s->max_tri_area && path.depth < LIE_PATCH_MAX_DEPTH;
-        any = may_split && (x->cls == LIE_CLASS_VISIBLE || x->cls == LIE_CLASS_COMPLEX ||
-                            (x->cls == LIE_CLASS_PARTIAL && x->count > p->max_blockers));
+        any = may_split && (x->cls == LIE_CLASS_COMPLEX || (x->cls == LIE_CLASS_PARTIAL && x->count > p->max_blockers));
     }
     if (any)
         flags[idx] = 1;
@@ -89,7 +88,7 @@ lie_status lie_env_add_views(lie_env *env, const lie_scene *s, const lie_rt *rt,
     for (uint32_t i = 0; i < env->n_nodes; i++)
         as->nodes_flagged += flags[i];
     if (st == LIE_OK)
-        st = lie_env_update_views(env, s, rt, new_px, old_unit, flags, threads, stats, err);
+        st = lie_build_update(env, s, rt, new_px, old_unit, flags, threads, 0, stats, err);
     free(old_unit);
     free(flags);
     return st;

@@ -89,15 +89,9 @@ expect_rc 2 "complexity layer without a cache"
 cat >"$TMP/path.yaml" <<'YAML'
 interpolation: smooth
 keys:
-  - eye: [3.5, 1.6, 2.9]
-    target: [-0.6, 0.45, -0.5]
-    fov: 50
-    frames: 2
-  - eye: [0.0, 2.0, 3.5]
-    target: [0.0, 0.5, 0.0]
-    frames: 2
-  - eye: [-3.0, 1.6, 2.5]
-    target: [0.5, 0.4, -0.5]
+  - {eye: [3.5, 1.6, 2.9], target: [-0.6, 0.45, -0.5], fov: 50, frames: 2}
+  - {eye: [0.0, 2.0, 3.5], target: [0.0, 0.5, 0.0], frames: 2}
+  - {eye: [-3.0, 1.6, 2.5], target: [0.5, 0.4, -0.5]}
 YAML
 run "$B/lie-render" "$TMP/museum1-s.lie" -q --size 32x32 --path "$TMP/path.yaml" -o "$TMP/frame_%03d.exr"
 expect_rc 0 "camera path renders"

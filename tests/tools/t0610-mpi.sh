@@ -40,11 +40,14 @@ else
     not_ok "files broadcast: $(json_member files_broadcast), bytes $(json_member bytes_broadcast)"
 fi
 # bent_light has 2 emitters, so ranges split a triangle's units; 3 ranks x 2
-# threads, conservative lists
-"$B/lie-build" "$A/bent_light.gltf" -q --blockers conservative -o "$TMP/bl-1.lie"
-run $MPI_NOLEAK -np 3 "$B/lie-build" "$A/bent_light.gltf" -q --threads 2 --blockers conservative -o "$TMP/bl-3.lie"
-expect_rc 0 "bent_light: build on 3 ranks x 2 threads"
-expect_same "$TMP/bl-1.lie" "$TMP/bl-3.lie" "bent_light, conservative: 3 ranks x 2 threads = one process"
+# threads, conservative lists, built for the views of a camera path that
+# only rank 0 can read
+printf 'interpolation: linear\nkeys:\n  - {eye: [0, 1.5, 4], target: [0, 0.3, 0], frames: 2}\n  - {eye: [2, 1.5, 3], target: [0, 0.3, 0]}\n' >"$A/blp.yaml"
+BL="-q --blockers conservative --path blp.yaml --view-size 64x64"
+(cd "$A" && "$B/lie-build" bent_light.gltf $BL -o "$TMP/bl-1.lie") || not_ok "one-process bent_light build"
+run split3 "$MPI_NOLEAK" "$B/lie-build" bent_light.gltf $BL --threads 2 -o "$TMP/bl-3.lie"
+expect_rc 0 "bent_light: build on 3 ranks x 2 threads, the camera path on rank 0 only"
+expect_same "$TMP/bl-1.lie" "$TMP/bl-3.lie" "bent_light, conservative, for a path's views: 3 ranks x 2 threads = one process"
 
 # A frame with AOVs, from a cache on stdin (read once on rank 0 and
 # broadcast, the scene too), 3 ranks x 2 threads, EXR to stdout

@@ -6,6 +6,39 @@
 
 #include "lie.h"
 
+#include <stdio.h>
+
+/* A bundled scene (tests/scenes/NAME), loaded, or the test fails. */
+static inline lie_scene *test_scene(const char *name)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s", TEST_SCENES, name);
+    lie_scene *s = NULL;
+    lie_error err;
+    assert_int_equal(lie_scene_load(path, NULL, &s, &err), LIE_OK);
+    return s;
+}
+
+/* A material of grey base colour `base` (metallic 0: Lambert when rough)
+ * emitting radiance `emit` (0: none), one- or two-sided; its index. */
+static inline int test_material(lie_scene *s, float base, float emit, int double_sided)
+{
+    lie_material m = lie_material_default();
+    m.metallic = 0.0f;
+    m.base_color[0] = m.base_color[1] = m.base_color[2] = base;
+    m.emissive[0] = m.emissive[1] = m.emissive[2] = emit;
+    m.double_sided = double_sided;
+    return lie_scene_add_material(s, &m);
+}
+
+/* The default build parameters with the smallest patch at min_patch. */
+static inline lie_build_params test_params(float min_patch)
+{
+    lie_build_params p = lie_build_params_default();
+    p.min_patch = min_patch;
+    return p;
+}
+
 /* Form factor from a point to a parallel rectangle a x b whose corner is
  * straight above it at height h (Howell's catalogue, configuration B-3). */
 static inline double ff_corner(double a, double b, double h)
@@ -50,14 +83,8 @@ static inline lie_scene *square_light_and_blockers(float a, float h, int two_sid
 {
     lie_scene *s = lie_scene_new("polylight");
     assert_non_null(s);
-    lie_material light = lie_material_default();
-    light.base_color[0] = light.base_color[1] = light.base_color[2] = 0.0f;
-    light.emissive[0] = light.emissive[1] = light.emissive[2] = 1.0f;
-    light.double_sided = two_sided;
-    int ml = lie_scene_add_material(s, &light);
-    lie_material grey = lie_material_default();
-    grey.metallic = 0.0f;
-    int mg = lie_scene_add_material(s, &grey);
+    int ml = test_material(s, 0.0f, 1.0f, two_sided);
+    int mg = test_material(s, 1.0f, 0.0f, 0);
     float r = 0.5f * a;
     float lp[12] = {-r, h, -r, r, h, -r, r, h, r, -r, h, r};
     uint32_t li[6] = {0, 1, 2, 0, 2, 3};

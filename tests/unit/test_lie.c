@@ -380,12 +380,10 @@ static void check_gain_leaf(const lie_env *env, const lie_pnode *n, uint32_t tri
 static void test_lie_split_kept_only_where_it_pays(void **state)
 {
     (void)state;
-    lie_scene *s = NULL;
+    lie_scene *s = test_scene("museum1.gltf");
     lie_error err;
-    assert_int_equal(lie_scene_load(TEST_SCENES "/museum1.gltf", NULL, &s, &err), LIE_OK);
     lie_rt *rt = NULL;
-    lie_build_params p = lie_build_params_default();
-    p.min_patch = 1e-3f;
+    lie_build_params p = test_params(1e-3f);
     p.split_gain = 0.0f;
     lie_env *paper = build(s, &rt, p);
     lie_env *env = NULL;
@@ -407,9 +405,7 @@ static void test_lie_split_kept_only_where_it_pays(void **state)
 static void test_lie_conservative_lists_contain_sampled_lists(void **state)
 {
     (void)state;
-    lie_scene *s = NULL;
-    lie_error err;
-    assert_int_equal(lie_scene_load(TEST_SCENES "/cornell.gltf", NULL, &s, &err), LIE_OK);
+    lie_scene *s = test_scene("cornell.gltf");
     lie_rt *rt = NULL;
     lie_build_params p = lie_build_params_default();
     p.max_blockers = 1u << 20; /* no subdivision: compare whole triangles */
@@ -463,12 +459,9 @@ static void assert_env_equal(const lie_env *a, const lie_env *b)
 static void test_lie_build_is_identical_for_any_thread_count(void **state)
 {
     (void)state;
-    lie_scene *s = NULL;
-    lie_error err;
-    assert_int_equal(lie_scene_load(TEST_SCENES "/cornell.gltf", NULL, &s, &err), LIE_OK);
+    lie_scene *s = test_scene("cornell.gltf");
     lie_rt *rt = NULL;
-    lie_build_params p = lie_build_params_default();
-    p.min_patch = 1e-3f;
+    lie_build_params p = test_params(1e-3f);
     for (int mode = 0; mode < 2; mode++) {
         p.mode = (lie_blocker_mode)mode;
         p.threads = 1;
@@ -486,12 +479,10 @@ static void test_lie_build_is_identical_for_any_thread_count(void **state)
 static void test_lie_rebuilding_units_equals_building(void **state)
 {
     (void)state;
-    lie_scene *s = NULL;
+    lie_scene *s = test_scene("cornell.gltf");
     lie_error err;
-    assert_int_equal(lie_scene_load(TEST_SCENES "/cornell.gltf", NULL, &s, &err), LIE_OK);
     lie_rt *rt = NULL;
-    lie_build_params p = lie_build_params_default();
-    p.min_patch = 1e-3f;
+    lie_build_params p = test_params(1e-3f);
     lie_env *a = build(s, &rt, p);
     lie_env *b = build(s, &rt, p);
     /* rebuild every third unit of b: nothing may change */
@@ -512,12 +503,10 @@ static void test_lie_rebuilding_units_equals_building(void **state)
 static void test_lie_parts_joined_equal_one_build(void **state)
 {
     (void)state;
-    lie_scene *s = NULL;
+    lie_scene *s = test_scene("cornell.gltf");
     lie_error err;
-    assert_int_equal(lie_scene_load(TEST_SCENES "/cornell.gltf", NULL, &s, &err), LIE_OK);
     lie_rt *rt = NULL;
-    lie_build_params p = lie_build_params_default();
-    p.min_patch = 1e-3f;
+    lie_build_params p = test_params(1e-3f);
     p.threads = 2;
     lie_env *whole = build(s, &rt, p);
     uint64_t n = (uint64_t)s->n_tris * (uint64_t)s->n_emitters;

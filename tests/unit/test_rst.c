@@ -14,7 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "lie.h"
+#include "fixtures.h"
 #include "lie/shaft.h"
 
 static uint64_t rng_state = 0x9e3779b97f4a7c15ull;
@@ -50,12 +50,8 @@ static void add_box(lie_scene *s, const char *name, const float c[3], const floa
 static lie_scene *random_scene(int n)
 {
     lie_scene *s = lie_scene_new("random-boxes");
-    lie_material white = lie_material_default();
-    white.metallic = 0.0f;
-    int mw = lie_scene_add_material(s, &white);
-    lie_material glow = white;
-    glow.emissive[0] = glow.emissive[1] = glow.emissive[2] = 5.0f;
-    int ml = lie_scene_add_material(s, &glow);
+    int mw = test_material(s, 1.0f, 0.0f, 0);
+    int ml = test_material(s, 1.0f, 5.0f, 0);
     float fl[12] = {-3, 0, -3, -3, 0, 3, 3, 0, 3, 3, 0, -3};
     add_quad(s, "Floor", fl, mw);
     for (int i = 0; i < n; i++) {

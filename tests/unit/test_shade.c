@@ -435,15 +435,8 @@ static lie_vec3 tilt_x(lie_vec3 p, float deg)
 static void planar_case(uint64_t seed, float tilt, int two_sided, planar_tally *tl)
 {
     lie_scene *s = lie_scene_new("random-blockers");
-    lie_material light = lie_material_default();
-    light.base_color[0] = light.base_color[1] = light.base_color[2] = 0.0f;
-    light.emissive[0] = light.emissive[1] = light.emissive[2] = 5.0f;
-    light.double_sided = two_sided;
-    int ml = lie_scene_add_material(s, &light);
-    lie_material grey = lie_material_default();
-    grey.metallic = 0.0f;
-    grey.double_sided = 1;
-    int mg = lie_scene_add_material(s, &grey);
+    int ml = test_material(s, 0.0f, 5.0f, two_sided);
+    int mg = test_material(s, 1.0f, 0.0f, 1);
     const lie_vec3 corner[4] = {lie_v3(-0.5f, 2, -0.5f), lie_v3(0.5f, 2, -0.5f), lie_v3(0.5f, 2, 0.5f),
                                 lie_v3(-0.5f, 2, 0.5f)};
     float lp[12];
@@ -632,12 +625,8 @@ static void test_convex_solids_found(void **state)
 {
     (void)state;
     lie_scene *s = lie_scene_new("solids");
-    lie_material grey = lie_material_default();
-    grey.metallic = 0.0f;
-    int mg = lie_scene_add_material(s, &grey);
-    lie_material light = grey;
-    light.emissive[0] = light.emissive[1] = light.emissive[2] = 5.0f;
-    int ml = lie_scene_add_material(s, &light);
+    int mg = test_material(s, 1.0f, 0.0f, 0);
+    int ml = test_material(s, 1.0f, 5.0f, 0);
     float lp[12] = {-0.5f, 3, -0.5f, 0.5f, 3, -0.5f, 0.5f, 3, 0.5f, -0.5f, 3, 0.5f};
     uint32_t qi[6] = {0, 2, 1, 0, 3, 2};
     lie_scene_add_node(s, "Light", -1, NULL, lie_scene_add_mesh(s, "Light", lp, NULL, NULL, 4, qi, 2, ml), -1, -1);

@@ -2,6 +2,7 @@
  * or 0) and the tools' messages (tools/common/cli.h). */
 #include "common/cli.h"
 #include "scene/scene.h"
+#include "version/version.h"
 
 #include <errno.h>
 #include <stdarg.h>
@@ -159,4 +160,54 @@ void lie_print_scene_warnings(const char *prog, const lie_scene *s, const char *
         fprintf(stderr, "%s: %s: warning: %s\n", prog, file, s->warnings[i]);
     if (s->n_warnings > kept)
         fprintf(stderr, "%s: %s: warning: %d more warnings\n", prog, file, s->n_warnings - kept);
+}
+
+/* A shared option: -1 to go on, else the exit status. */
+static int shared_option(lie_cli *cli, int c, const char *arg, char *const argv[])
+{
+    switch (c) {
+    case LIE_OPT_EXTERNAL: cli->external = 1; return -1;
+    case LIE_OPT_STATS:
+        if (!(cli->stats = lie_parse_stats(arg)))
+            return lie_usage_error(cli->tool, "--stats: expected --stats or --stats=json, got '%s'", arg);
+        return -1;
+    case 'q': cli->quiet = 1; return -1;
+    case 'v': cli->verbose = 1; return -1;
+    case 'h': cli->usage(stdout); return 0;
+    case LIE_OPT_VERSION: {
+        char vr[512];
+        lie_version_report(cli->tool, vr, sizeof vr);
+        fputs(vr, stdout);
+        return 0;
+    }
+    case ':': return lie_usage_error(cli->tool, "%s: missing value", argv[optind - 1]);
+    default: return lie_usage_error(cli->tool, "unknown option '%s'", argv[optind - 1]);
+    }
+}
+
+static int is_shared(int c)
+{
+    return c == LIE_OPT_EXTERNAL || c == LIE_OPT_STATS || c == LIE_OPT_VERSION || c == 'q' || c == 'v' || c == 'h' ||
+           c == ':' || c == '?';
+}
+
+int lie_cli_next(lie_cli *cli, int argc, char *const argv[], const char *shortopts, const struct option *longopts)
+{
+    opterr = 0;
+    int c;
+    while ((c = getopt_long(argc, argv, shortopts, longopts, NULL)) != -1) {
+        if (!is_shared(c))
+            return c;
+        if ((cli->status = shared_option(cli, c, optarg, argv)) >= 0)
+            return LIE_CLI_EXIT;
+    }
+    if (cli->missing) {
+        cli->status = 2;
+        if (optind >= argc)
+            return lie_usage_error(cli->tool, "%s", cli->missing), LIE_CLI_EXIT;
+        if (optind + 1 < argc)
+            return lie_usage_error(cli->tool, "unexpected argument '%s'", argv[optind + 1]), LIE_CLI_EXIT;
+        cli->operand = argv[optind];
+    }
+    return -1;
 }

@@ -7,6 +7,7 @@
 
 #include "core/core.h"
 
+#include <getopt.h>
 #include <stdio.h>
 
 /* ---- command-line values (shared by the tools) ------------------------ */
@@ -25,6 +26,42 @@ void lie_json_string(FILE *fp, const char *s);
 int lie_parse_size(const char *s, int max, int *w, int *h);
 /* The value of --stats (arg NULL: 1) or --stats=json (2); 0 for another. */
 int lie_parse_stats(const char *arg);
+
+/* ---- the options every tool shares (design/CLI.md) -------------------- */
+
+/* getopt_long codes of the shared long options, above any tool's own. */
+enum { LIE_OPT_EXTERNAL = 0x1000, LIE_OPT_STATS, LIE_OPT_VERSION };
+/* Entries for a tool's getopt_long table: the ones it takes, then
+ * LIE_OPT_ENTRIES_END (-q, -h, --version and the terminator) last. */
+#define LIE_OPT_ENTRY_EXTERNAL {"allow-external-uris", no_argument, NULL, LIE_OPT_EXTERNAL}
+#define LIE_OPT_ENTRY_STATS {"stats", optional_argument, NULL, LIE_OPT_STATS}
+#define LIE_OPT_ENTRY_VERBOSE {"verbose", no_argument, NULL, 'v'}
+#define LIE_OPT_ENTRIES_END                                                                                           \
+    {"quiet", no_argument, NULL, 'q'}, {"help", no_argument, NULL, 'h'},                                              \
+        {"version", no_argument, NULL, LIE_OPT_VERSION}, { NULL, 0, NULL, 0 }
+
+/* A tool's command line: what it says about itself, and what the shared
+ * options set. */
+typedef struct lie_cli {
+    const char *tool;        /* its name, first in every message */
+    void (*usage)(FILE *fp); /* the tool's --help text */
+    const char *missing;     /* a tool of one operand: the message when it is missing, and
+                              * lie_cli_next checks there is exactly one (operand); NULL: the
+                              * tool checks its operands itself */
+    const char *operand;     /* that operand */
+    int quiet;               /* -q */
+    int verbose;             /* -v */
+    int stats;               /* --stats: 1, --stats=json: 2 */
+    int external;            /* --allow-external-uris */
+    int status;              /* after LIE_CLI_EXIT: the exit status */
+} lie_cli;
+#define LIE_CLI_EXIT (-2)
+/* getopt_long over the tool's table, handling the shared options, getopt's
+ * errors and (with `missing`) the operand: returns the next option of the
+ * tool's own, -1 at the end, or LIE_CLI_EXIT when the tool must exit with
+ * cli->status: 0 after --help or --version (printed to stdout), 2 after a
+ * usage error (its one line printed). */
+int lie_cli_next(lie_cli *cli, int argc, char *const argv[], const char *shortopts, const struct option *longopts);
 
 /* ---- tool messages: one line on stderr (CONTRIBUTING.md) -------------- */
 

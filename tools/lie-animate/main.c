@@ -42,7 +42,7 @@ static void usage(FILE *fp)
 
 #define usage_error(...) lie_usage_error(prog, __VA_ARGS__)
 
-enum { OPT_FPS = 256, OPT_ANIMATION, OPT_FRAMES, OPT_CAMERA_PATH, OPT_CAMERA, OPT_EXTERNAL, OPT_STATS, OPT_VERSION };
+enum { OPT_FPS = 256, OPT_ANIMATION, OPT_FRAMES, OPT_CAMERA_PATH, OPT_CAMERA };
 
 static const struct option long_opts[] = {
     {"output", required_argument, NULL, 'o'},
@@ -51,12 +51,9 @@ static const struct option long_opts[] = {
     {"frames", required_argument, NULL, OPT_FRAMES},
     {"camera-path", required_argument, NULL, OPT_CAMERA_PATH},
     {"camera", required_argument, NULL, OPT_CAMERA},
-    {"allow-external-uris", no_argument, NULL, OPT_EXTERNAL},
-    {"stats", optional_argument, NULL, OPT_STATS},
-    {"quiet", no_argument, NULL, 'q'},
-    {"help", no_argument, NULL, 'h'},
-    {"version", no_argument, NULL, OPT_VERSION},
-    {NULL, 0, NULL, 0},
+    LIE_OPT_ENTRY_EXTERNAL,
+    LIE_OPT_ENTRY_STATS,
+    LIE_OPT_ENTRIES_END,
 };
 
 /* A node's name for a YAML comment: printable ASCII only. */
@@ -209,9 +206,9 @@ int main(int argc, char **argv)
     const char *output = NULL, *anim_spec = NULL, *path_out = NULL, *camera_name = NULL;
     double fps = 0.0;
     long fa = 0, fb = -1;
-    int have_frames = 0, stats = 0, quiet = 0, c;
-    opterr = 0;
-    while ((c = getopt_long(argc, argv, ":o:qh", long_opts, NULL)) != -1) {
+    int have_frames = 0, c;
+    lie_cli cli = {.tool = prog, .usage = usage, .missing = "missing scene"};
+    while ((c = lie_cli_next(&cli, argc, argv, ":o:qh", long_opts)) > 0) {
         switch (c) {
         case 'o': output = optarg; break;
         case OPT_FPS: {
@@ -229,22 +226,12 @@ int main(int argc, char **argv)
             break;
         case OPT_CAMERA_PATH: path_out = optarg; break;
         case OPT_CAMERA: camera_name = optarg; break;
-        case OPT_EXTERNAL: so.allow_external_uris = 1; break;
-        case OPT_STATS:
-            if (!(stats = lie_parse_stats(optarg)))
-                return usage_error("--stats: expected --stats or --stats=json, got '%s'", optarg);
-            break;
-        case 'q': quiet = 1; break;
-        case 'h': usage(stdout); return 0;
-        case OPT_VERSION: { char vr[512]; lie_version_report(prog, vr, sizeof vr); fputs(vr, stdout); return 0; }
-        case ':': return usage_error("%s: missing value", argv[optind - 1]);
-        default: return usage_error("unknown option '%s'", argv[optind - 1]);
         }
     }
-    if (optind >= argc)
-        return usage_error("%s", "missing scene");
-    if (optind + 1 < argc)
-        return usage_error("unexpected argument '%s'", argv[optind + 1]);
+    if (c == LIE_CLI_EXIT)
+        return cli.status;
+    so.allow_external_uris = cli.external;
+    const char *scene_path = cli.operand;
     if (!output)
         return usage_error("%s", "missing -o EDITS_%%04d.yaml");
     if (!lie_frame_pattern_ok(output))
@@ -253,7 +240,6 @@ int main(int argc, char **argv)
         return usage_error("%s", "missing --fps F");
     if (camera_name && !path_out)
         return usage_error("%s", "--camera needs --camera-path");
-    const char *scene_path = argv[optind];
 
     double t0 = lie_time_now();
     lie_error err;
@@ -267,7 +253,7 @@ int main(int argc, char **argv)
     int rc = 1, cam = -1;
     if (lie_scene_load(scene_path, &so, &s, &err) != LIE_OK)
         goto done;
-    if (!quiet)
+    if (!cli.quiet)
         lie_print_scene_warnings(prog, s, scene_path);
     if (s->n_animations == 0) {
         lie_error_set(&err, LIE_ERR_NOT_FOUND, scene_path, "the scene has no animations");
@@ -289,7 +275,7 @@ int main(int argc, char **argv)
         lie_error_set(&err, LIE_ERR_LIMIT, scene_path, "%ld frames: more than 1000000", fb + 1);
         goto done;
     }
-    if (pick_targets(s, a, quiet, scene_path, &tg, &err) != LIE_OK)
+    if (pick_targets(s, a, cli.quiet, scene_path, &tg, &err) != LIE_OK)
         goto done;
     if (path_out) {
         cam = find_camera_node(s, camera_name);
@@ -338,10 +324,10 @@ int main(int argc, char **argv)
             goto done;
     }
     rc = 0;
-    if (stats) {
+    if (cli.stats) {
         double secs = lie_time_now() - t0;
         long frames = fb - fa + 1;
-        if (stats == 2) {
+        if (cli.stats == 2) {
             fprintf(stderr, "{\"tool\":\"lie-animate\",\"animation\":%d,\"frames\":%ld,\"first\":%ld,\"fps\":%.9g,"
                             "\"duration\":%.9g,\"channels\":%d,\"transforms\":%d,\"weights\":%d,\"outside_scene\":%d,"
                             "\"inert\":%d,\"camera_path\":%d,\"seconds\":%.6f}\n",

@@ -147,20 +147,32 @@ lie_status build_dist(const lie_scene *s, const lie_rt *rt, const lie_build_para
     return st;
 }
 
-typedef struct scene_in {
-    const char *input;
-    lie_scene **out;
-} scene_in;
+typedef struct inputs {
+    const char *input, *path_file;
+    lie_scene **scene;
+    lie_camera_path **cpath;
+} inputs;
 
-static lie_status load_scene(void *ctx, const lie_scene_options *so, lie_error *err)
+static lie_status load_inputs(void *ctx, const lie_scene_options *so, lie_error *err)
 {
-    const scene_in *in = ctx;
-    return lie_scene_load(in->input, so, in->out, err);
+    const inputs *in = ctx;
+    lie_status st = lie_scene_load(in->input, so, in->scene, err);
+    if (st != LIE_OK || !in->path_file)
+        return st;
+    unsigned char *data = NULL;
+    size_t size = 0;
+    st = lie_file_set_read(so->files, in->path_file, LIE_READ_MAX_TEXT, &data, &size, err);
+    if (st == LIE_OK)
+        st = lie_camera_path_parse(data, size, in->path_file, in->cpath, err);
+    free(data);
+    return st;
 }
 
-lie_status build_load_scene(const char *input, const lie_scene_options *so, lie_scene **out, lie_error *err)
+lie_status build_load_inputs(const char *input, const char *path_file, const lie_scene_options *so,
+                             lie_scene **scene, lie_camera_path **cpath, lie_error *err)
 {
-    scene_in in = {input, out};
-    *out = NULL;
-    return lie_dist_load(so, load_scene, &in, err);
+    inputs in = {input, path_file, scene, cpath};
+    *scene = NULL;
+    *cpath = NULL;
+    return lie_dist_load(so, load_inputs, &in, err);
 }

@@ -79,7 +79,7 @@ static void usage(FILE *fp)
 #define usage_error(...) lie_usage_error(inspect_prog, __VA_ARGS__)
 
 enum {
-    OPT_SCENE = 256, OPT_JSON, OPT_VERSION, OPT_EXTERNAL, OPT_ALL, OPT_STRICT, OPT_CAMERA, OPT_EMITTER, OPT_SIZE,
+    OPT_SCENE = 256, OPT_JSON, OPT_ALL, OPT_STRICT, OPT_CAMERA, OPT_EMITTER, OPT_SIZE,
     OPT_THREADS, OPT_MIN_AGE, OPT_DRY_RUN
 };
 
@@ -93,13 +93,10 @@ static const struct option long_opts[] = {
     {"emitter", required_argument, NULL, OPT_EMITTER},
     {"size", required_argument, NULL, OPT_SIZE},
     {"threads", required_argument, NULL, OPT_THREADS},
-    {"allow-external-uris", no_argument, NULL, OPT_EXTERNAL},
+    LIE_OPT_ENTRY_EXTERNAL,
     {"min-age", required_argument, NULL, OPT_MIN_AGE},
     {"dry-run", no_argument, NULL, OPT_DRY_RUN},
-    {"quiet", no_argument, NULL, 'q'},
-    {"help", no_argument, NULL, 'h'},
-    {"version", no_argument, NULL, OPT_VERSION},
-    {NULL, 0, NULL, 0},
+    LIE_OPT_ENTRIES_END,
 };
 
 /* Which commands take which options (bits of `command`). */
@@ -132,7 +129,7 @@ static const opt_use uses[] = {
     {OPT_EMITTER, "--emitter", C_IMAGE},
     {OPT_SIZE, "--size", C_IMAGE},
     {OPT_THREADS, "--threads", C_IMAGE},
-    {OPT_EXTERNAL, "--allow-external-uris", C_VERIFY | C_IMAGE},
+    {LIE_OPT_EXTERNAL, "--allow-external-uris", C_VERIFY | C_IMAGE},
     {OPT_MIN_AGE, "--min-age", C_CLEAN},
     {OPT_DRY_RUN, "--dry-run", C_CLEAN},
     {'q', "-q", C_VERIFY | C_DIFF | C_IMAGE | C_CLEAN},
@@ -150,8 +147,8 @@ int main(int argc, char **argv)
     int given[N_USES] = {0};
     long v;
     int c;
-    opterr = 0;
-    while ((c = getopt_long(argc, argv, ":o:qh", long_opts, NULL)) != -1) {
+    lie_cli cli = {.tool = inspect_prog, .usage = usage};
+    while ((c = lie_cli_next(&cli, argc, argv, ":o:qh", long_opts)) > 0) {
         for (size_t i = 0; i < N_USES; i++)
             if (uses[i].code == c)
                 given[i] = 1;
@@ -176,20 +173,18 @@ int main(int argc, char **argv)
                 return usage_error("--threads: expected an integer in 0..4096, got '%s'", optarg);
             o.threads = (int)v;
             break;
-        case OPT_EXTERNAL: o.external = 1; break;
         case OPT_MIN_AGE:
             if (!lie_parse_long(optarg, 0, 1L << 30, &v))
                 return usage_error("--min-age: expected seconds, an integer >= 0, got '%s'", optarg);
             o.min_age = (int)v;
             break;
         case OPT_DRY_RUN: o.dry_run = 1; break;
-        case 'q': o.quiet = 1; break;
-        case 'h': usage(stdout); return 0;
-        case OPT_VERSION: { char vr[512]; lie_version_report(inspect_prog, vr, sizeof vr); fputs(vr, stdout); return 0; }
-        case ':': return usage_error("%s: missing value", argv[optind - 1]);
-        default: return usage_error("unknown option '%s'", argv[optind - 1]);
         }
     }
+    if (c == LIE_CLI_EXIT)
+        return cli.status;
+    o.external = cli.external;
+    o.quiet = cli.quiet;
     if (optind >= argc)
         return usage_error("%s", "missing command (verify, summary, dump, patch, diff, image or clean)");
     const char *name = argv[optind];

@@ -99,7 +99,7 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 
 enum {
     OPT_CAMERA = 256, OPT_SIZE, OPT_SPP, OPT_LIGHT_SAMPLES, OPT_PATTERN, OPT_VISIBILITY, OPT_RAYS, OPT_LIE_SKIP,
-    OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_SCENE,
+    OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_THREADS, OPT_SCENE,
     OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS, OPT_FRAMES, OPT_SKIP_EXISTING, OPT_FORMAT, OPT_HALF, OPT_BITMASK
 };
 
@@ -128,13 +128,10 @@ static const struct option long_opts[] = {
     {"half", no_argument, NULL, OPT_HALF},
     {"exposure", required_argument, NULL, OPT_EXPOSURE},
     {"threads", required_argument, NULL, OPT_THREADS},
-    {"allow-external-uris", no_argument, NULL, OPT_EXTERNAL},
-    {"stats", optional_argument, NULL, OPT_STATS},
-    {"quiet", no_argument, NULL, 'q'},
-    {"verbose", no_argument, NULL, 'v'},
-    {"help", no_argument, NULL, 'h'},
-    {"version", no_argument, NULL, OPT_VERSION},
-    {NULL, 0, NULL, 0},
+    LIE_OPT_ENTRY_EXTERNAL,
+    LIE_OPT_ENTRY_STATS,
+    LIE_OPT_ENTRY_VERBOSE,
+    LIE_OPT_ENTRIES_END,
 };
 
 static int parse_aovs(const char *list, unsigned *bits)
@@ -282,6 +279,89 @@ static lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie
     return lie_frame_write(name, frame, &opt, err);
 }
 
+/* What --stats prints: times are load, bvh, render and write seconds. */
+typedef struct run_stats {
+    const char *input;
+    int rendered, skipped;
+    double t_load, t_bvh, t_render, t_write;
+} run_stats;
+
+static void print_stats(int json, const run_stats *r, const lie_scene *scene, const lie_render_options *ro,
+                        const lie_render_stats *rs)
+{
+    const char *input = r->input;
+    int rendered = r->rendered, skipped = r->skipped;
+    int threads = ro->threads > 0 ? ro->threads : lie_cpu_count();
+    char size[32];
+    snprintf(size, sizeof size, "%dx%d", ro->width, ro->height);
+    /* pairs by path: occluded, closed form, exact, blockers, Embree, unshadowed, exact overflows, bitmasks */
+    const unsigned long long pairs[8] = {rs->pairs_occluded, rs->pairs_analytic,  rs->pairs_exact,
+                                         rs->pairs_blockers, rs->pairs_embree,    rs->pairs_unshadowed,
+                                         rs->exact_overflows, rs->pairs_bitmask};
+    double render = r->t_render;
+    double mrays = render > 0.0 ? (double)rs->shadow_rays / render * 1e-6 : 0.0;
+    if (json) {
+        fprintf(stderr, "{\"tool\":\"lie-render\",\"input\":");
+        lie_json_string(stderr, input);
+        fprintf(stderr,
+                ",\"frames\":%d,\"frames_skipped\":%d,\"triangles\":%u,\"emitters\":%d,"
+                "\"width\":%d,\"height\":%d,\"spp\":%d,\"light_samples\":%d,\"visibility\":\"%s\","
+                "\"rays\":\"%s\",\"threads\":%d,\"eye_rays\":%llu,\"reflection_rays\":%llu,"
+                "\"shadow_rays\":%llu,\"shading_points\":%llu,\"seconds_load\":%.6f,"
+                "\"seconds_bvh\":%.6f,\"seconds_render\":%.6f,\"seconds_write\":%.6f,"
+                "\"shadow_mrays_per_second\":%.3f,\"shadow_tests_without_embree\":%llu,"
+                "\"light_samples_total\":%llu,",
+                rendered, skipped, scene->n_tris, scene->n_emitters, ro->width, ro->height, ro->spp,
+                ro->eye_only ? 0 : ro->light_samples, vis_name(ro->visibility), rays_name(ro->rays), threads,
+                (unsigned long long)rs->eye_rays, (unsigned long long)rs->reflection_rays,
+                (unsigned long long)rs->shadow_rays, (unsigned long long)rs->shading_points, r->t_load,
+                r->t_bvh, render, r->t_write, mrays, (unsigned long long)rs->shadow_rays_skipped,
+                (unsigned long long)rs->light_samples);
+        fprintf(stderr,
+                "\"exact\":\"%s\",\"pairs_occluded\":%llu,\"pairs_analytic\":%llu,\"pairs_exact\":%llu,"
+                "\"pairs_blockers\":%llu,\"pairs_embree\":%llu,\"pairs_unshadowed\":%llu,"
+                "\"exact_overflows\":%llu,\"pairs_unbuilt\":%llu,\"points_unbuilt\":%llu,"
+                "\"timers\":%s,\"cpu_seconds_analytic\":%.6f,"
+                "\"cpu_seconds_exact\":%.6f,\"cpu_seconds_blockers\":%.6f,\"cpu_seconds_embree\":%.6f,"
+                "\"cpu_seconds_sampled_shading\":%.6f,\"pairs_bitmask\":%llu,\"cpu_seconds_bitmask\":%.6f",
+                exact_name(ro), pairs[0], pairs[1], pairs[2], pairs[3], pairs[4], pairs[5], pairs[6],
+                (unsigned long long)rs->pairs_unbuilt, (unsigned long long)rs->points_unbuilt,
+                ro->timers ? "true" : "false", rs->t_analytic,
+                rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, pairs[7], rs->t_bitmask);
+        render_dist_stats(stderr, 1);
+        fprintf(stderr, "}\n");
+    } else {
+        fprintf(stderr,
+                "%s: %s: %u triangles, %d emitters, %d points and %d lines skipped\n"
+                "  image %s, %d spp, %d light samples, visibility %s, rays %s, %d threads\n"
+                "  %d frame%s (%d skipped: their files exist); rays: %llu eye, %llu reflection, %llu shadow (Embree); %llu light samples\n"
+                "  answered without Embree: %llu (visible pairs, blocker lists, or no shadows)\n"
+                "  time: load %.3f s, bvh %.3f s, render %.3f s, write %.3f s\n"
+                "  %.1f million Embree shadow rays per second of render time\n",
+                prog, input, scene->n_tris, scene->n_emitters, scene->stats.points_skipped,
+                scene->stats.lines_skipped, size, ro->spp, ro->eye_only ? 0 : ro->light_samples,
+                vis_name(ro->visibility), rays_name(ro->rays), threads, rendered, rendered == 1 ? "" : "s", skipped,
+                (unsigned long long)rs->eye_rays, (unsigned long long)rs->reflection_rays,
+                (unsigned long long)rs->shadow_rays, (unsigned long long)rs->light_samples,
+                (unsigned long long)rs->shadow_rays_skipped, r->t_load, r->t_bvh, render, r->t_write, mrays);
+        fprintf(stderr,
+                "  pairs (exact %s): %llu occluded, %llu seen whole in closed form, %llu partial exact,\n"
+                "    %llu partial sampled against blockers, %llu sampled against the scene (Embree),\n"
+                "    %llu seen whole and sampled, %llu partial as bitmasks; %llu exact pairs fell back to samples\n",
+                exact_name(ro), pairs[0], pairs[1], pairs[2], pairs[3], pairs[4], pairs[5], pairs[7], pairs[6]);
+        if (rs->pairs_unbuilt)
+            fprintf(stderr, "  not built in the cache (lie-build --view/--path): %llu pairs at %llu shading points, "
+                            "answered by Embree\n",
+                    (unsigned long long)rs->pairs_unbuilt, (unsigned long long)rs->points_unbuilt);
+        if (ro->timers)
+            fprintf(stderr,
+                    "  worker seconds: closed form %.3f, exact shadows %.3f, blocker samples %.3f,\n"
+                    "    Embree %.3f, sampled shading %.3f, bitmasks %.3f\n",
+                    rs->t_analytic, rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, rs->t_bitmask);
+        render_dist_stats(stderr, 0);
+    }
+}
+
 int main(int argc, char **argv)
 {
     lie_render_options ro = lie_render_options_default();
@@ -291,11 +371,10 @@ int main(int argc, char **argv)
     int skip_existing = 0;
     int visibility_set = 0;
     lie_frame_options fopt = {0};
-    int stats = 0, quiet = 0, verbose = 0; /* stats: 1 human, 2 json */
     long v;
     int c;
-    opterr = 0;
-    while ((c = getopt_long(argc, argv, ":o:qvh", long_opts, NULL)) != -1) {
+    lie_cli cli = {.tool = prog, .usage = usage, .missing = "missing input scene"};
+    while ((c = lie_cli_next(&cli, argc, argv, ":o:qvh", long_opts)) > 0) {
         switch (c) {
         case 'o': output = optarg; break;
         case OPT_CAMERA: camera = optarg; break;
@@ -387,7 +466,6 @@ int main(int argc, char **argv)
             ro.threads = (int)v;
             fopt.exr.threads = ro.threads;
             break;
-        case OPT_EXTERNAL: so.allow_external_uris = 1; break;
         case OPT_SCENE: scene_override = optarg; break;
         case OPT_PATH: path_file = optarg; break;
         case OPT_FRAMES:
@@ -400,28 +478,17 @@ int main(int argc, char **argv)
                 return usage_error("--emitter: expected an emitter index, got '%s'", optarg);
             ro.aov_emitter = (int)v;
             break;
-        case OPT_STATS:
-            if (!(stats = lie_parse_stats(optarg)))
-                return usage_error("--stats: expected --stats or --stats=json, got '%s'", optarg);
-            break;
-        case 'q': quiet = 1; break;
-        case 'v': verbose = 1; break;
-        case 'h': usage(stdout); return 0;
-        case OPT_VERSION: { char vr[512]; lie_version_report(prog, vr, sizeof vr); fputs(vr, stdout); return 0; }
-        case ':': return usage_error("%s: missing value", argv[optind - 1]);
-        default: return usage_error("unknown option '%s'", argv[optind - 1]);
         }
     }
-    if (optind >= argc)
-        return usage_error("%s", "missing input scene");
-    if (optind + 1 < argc)
-        return usage_error("unexpected argument '%s'", argv[optind + 1]);
+    if (c == LIE_CLI_EXIT)
+        return cli.status;
+    so.allow_external_uris = cli.external;
+    const char *input = cli.operand;
     if (!output)
         return usage_error("%s", "missing -o OUTPUT");
     lie_frame_format out_format;
     if (fopt.format == LIE_FORMAT_AUTO && !lie_frame_format_of(output, &out_format))
         return usage_error("%s: cannot write this format: use .exr or .png (or --format exr|png)", output);
-    const char *input = argv[optind];
     if (path_file && !lie_frame_pattern_ok(output))
         return usage_error("--path: -o must hold one %%d conversion (e.g. frame_%%04d.exr), got '%s'", output);
     if (path_file && camera)
@@ -433,11 +500,11 @@ int main(int argc, char **argv)
         ro.light_samples = 1;
     }
     if (lie_dist_start(&argc, &argv) > 1) {
-        quiet = 1; /* progress and warnings: one process's are enough; rank 0 prints the statistics */
+        cli.quiet = 1; /* progress and warnings: one process's are enough; rank 0 prints the statistics */
         if (lie_dist_rank() != 0)
-            stats = 0;
+            cli.stats = 0;
     }
-    ro.progress = !quiet;
+    ro.progress = !cli.quiet;
 
     lie_error err;
     lie_error_clear(&err);
@@ -453,7 +520,9 @@ int main(int argc, char **argv)
     lie_cache *cache = in.cache;
     lie_camera_path *cpath = in.cpath;
     lie_lie_vis *lv = NULL;
-    double t1 = lie_phase(prog, verbose, "load", t0);
+    lie_rt *rt = NULL;
+    lie_status st = LIE_OK;
+    double t1 = lie_phase(prog, cli.verbose, "load", t0);
     if (!visibility_set)
         ro.visibility = cache ? LIE_VIS_LIE : LIE_VIS_FULL;
     if (!cache && (ro.visibility == LIE_VIS_LIE || (ro.aovs & (LIE_AOV_COMPLEXITY | LIE_AOV_PATCH)))) {
@@ -461,74 +530,41 @@ int main(int argc, char **argv)
         lie_scene_destroy(scene);
         return usage_error("%s: --visibility=lie and the complexity and patch layers need a cache", input);
     }
-    if (cache) {
-        if (lie_lie_vis_create(scene, cache->env, &lv, &err) != LIE_OK) {
-            lie_camera_path_destroy(cpath);
-            lie_cache_destroy(cache);
-            lie_scene_destroy(scene);
-            return fail(&err);
-        }
-        ro.oracle = lie_lie_vis_oracle(lv);
-    }
-    if (!quiet)
+    if (cache && (st = lie_lie_vis_create(scene, cache->env, &lv, &err)) != LIE_OK)
+        goto done;
+    ro.oracle = lv ? lie_lie_vis_oracle(lv) : NULL;
+    if (!cli.quiet)
         lie_print_scene_warnings(prog, scene, input);
-    if (scene->n_emitters == 0 && !quiet)
+    if (scene->n_emitters == 0 && !cli.quiet)
         fprintf(stderr, "%s: %s: warning: no emitters (no emissive material, no KHR_lights_punctual light): "
                         "the image shows emission only\n", prog, input);
     if (ro.aov_emitter >= scene->n_emitters) {
-        lie_error_set(&err, LIE_ERR_ARG, input, "--emitter %d: the scene has %d emitters", ro.aov_emitter,
-                      scene->n_emitters);
-        lie_camera_path_destroy(cpath);
-        lie_lie_vis_destroy(lv);
-        lie_cache_destroy(cache);
-        lie_scene_destroy(scene);
-        return fail(&err);
+        st = lie_error_set(&err, LIE_ERR_ARG, input, "--emitter %d: the scene has %d emitters", ro.aov_emitter,
+                           scene->n_emitters);
+        goto done;
     }
     lie_camera cam;
-    lie_status cst = path_file ? LIE_OK : lie_camera_parse(scene, camera, &cam, &err);
-    if (cst != LIE_OK) {
+    st = path_file ? LIE_OK : lie_camera_parse(scene, camera, &cam, &err);
+    if (st != LIE_OK) {
         if (!err.file[0])
             snprintf(err.file, sizeof err.file, "%s", input);
-        lie_lie_vis_destroy(lv);
-        lie_cache_destroy(cache);
-        lie_scene_destroy(scene);
-        return fail(&err);
+        goto done;
     }
-    lie_rt *rt = NULL;
-    if (lie_rt_create(scene, &rt, &err) != LIE_OK) {
-        lie_camera_path_destroy(cpath);
-        lie_lie_vis_destroy(lv);
-        lie_cache_destroy(cache);
-        lie_scene_destroy(scene);
-        return fail(&err);
-    }
-    if (lie_dist_check(scene->hash, cache ? cache->state_hash : 0, &err) != LIE_OK) {
-        lie_rt_destroy(rt);
-        lie_camera_path_destroy(cpath);
-        lie_lie_vis_destroy(lv);
-        lie_cache_destroy(cache);
-        lie_scene_destroy(scene);
-        return fail(&err);
-    }
-    double t2 = lie_phase(prog, verbose, "bvh", t1);
-    char hash[32], size[32];
+    if ((st = lie_rt_create(scene, &rt, &err)) != LIE_OK ||
+        (st = lie_dist_check(scene->hash, cache ? cache->state_hash : 0, &err)) != LIE_OK)
+        goto done;
+    double t2 = lie_phase(prog, cli.verbose, "bvh", t1);
+    char hash[32];
     snprintf(hash, sizeof hash, "%016llx", (unsigned long long)scene->hash);
-    snprintf(size, sizeof size, "%dx%d", ro.width, ro.height);
     int n_frames = cpath ? cpath->n_frames : 1, first = cpath ? cpath->first : 0, rendered = 0, skipped = 0;
     if (cpath && frame_a >= 0 && (frame_a < first || frame_b > (long)first + n_frames - 1)) {
-        lie_error_set(&err, LIE_ERR_ARG, path_file, "--frames %ld-%ld: the path has frames %d-%d", frame_a, frame_b,
-                      first, first + n_frames - 1);
-        lie_rt_destroy(rt);
-        lie_camera_path_destroy(cpath);
-        lie_lie_vis_destroy(lv);
-        lie_cache_destroy(cache);
-        lie_scene_destroy(scene);
-        return fail(&err);
+        st = lie_error_set(&err, LIE_ERR_ARG, path_file, "--frames %ld-%ld: the path has frames %d-%d", frame_a,
+                           frame_b, first, first + n_frames - 1);
+        goto done;
     }
     lie_render_stats rs;
     memset(&rs, 0, sizeof rs);
     double t_render = 0.0, t_write = 0.0;
-    lie_status st = LIE_OK;
     /* the frames to render: --frames, and --skip-existing's files as rank 0 sees them */
     int *todo = malloc(sizeof *todo * ((size_t)n_frames + 1)), n_todo = 0;
     if (!todo) {
@@ -580,88 +616,21 @@ int main(int argc, char **argv)
         lie_render_stats_add(&rs, &fs);
         if (cpath)
             snprintf(label, sizeof label, "frame %d: render", first + fi);
-        lie_phase(prog, verbose, cpath ? label : "render", ta);
+        lie_phase(prog, cli.verbose, cpath ? label : "render", ta);
         st = write_frame(&fo, fi, &fc, frame, &err);
         lie_frame_destroy(frame);
         if (cpath)
             snprintf(label, sizeof label, "frame %d: write", first + fi);
-        lie_phase(prog, verbose && st == LIE_OK, cpath ? label : "write", tb);
+        lie_phase(prog, cli.verbose && st == LIE_OK, cpath ? label : "write", tb);
         t_render += tb - ta;
         t_write += lie_time_now() - tb;
     }
     free(todo);
-    double t3 = t2 + t_render, t4 = t3 + t_write;
-    int threads = ro.threads > 0 ? ro.threads : lie_cpu_count();
-    if (st == LIE_OK && stats) {
-        double render = t_render;
-        double mrays = render > 0.0 ? (double)rs.shadow_rays / render * 1e-6 : 0.0;
-        if (stats == 2) {
-            fprintf(stderr, "{\"tool\":\"lie-render\",\"input\":");
-            lie_json_string(stderr, input);
-            fprintf(stderr,
-                    ",\"frames\":%d,\"frames_skipped\":%d,\"triangles\":%u,\"emitters\":%d,"
-                    "\"width\":%d,\"height\":%d,\"spp\":%d,\"light_samples\":%d,\"visibility\":\"%s\","
-                    "\"rays\":\"%s\",\"threads\":%d,\"eye_rays\":%llu,\"reflection_rays\":%llu,"
-                    "\"shadow_rays\":%llu,\"shading_points\":%llu,\"seconds_load\":%.6f,"
-                    "\"seconds_bvh\":%.6f,\"seconds_render\":%.6f,\"seconds_write\":%.6f,"
-                    "\"shadow_mrays_per_second\":%.3f,\"shadow_tests_without_embree\":%llu,"
-                    "\"light_samples_total\":%llu,",
-                    rendered, skipped, scene->n_tris, scene->n_emitters, ro.width, ro.height, ro.spp,
-                    ro.eye_only ? 0 : ro.light_samples, vis_name(ro.visibility), rays_name(ro.rays), threads,
-                    (unsigned long long)rs.eye_rays, (unsigned long long)rs.reflection_rays,
-                    (unsigned long long)rs.shadow_rays, (unsigned long long)rs.shading_points, t1 - t0,
-                    t2 - t1, render, t4 - t3, mrays, (unsigned long long)rs.shadow_rays_skipped,
-                    (unsigned long long)rs.light_samples);
-            fprintf(stderr,
-                    "\"exact\":\"%s\",\"pairs_occluded\":%llu,\"pairs_analytic\":%llu,\"pairs_exact\":%llu,"
-                    "\"pairs_blockers\":%llu,\"pairs_embree\":%llu,\"pairs_unshadowed\":%llu,"
-                    "\"exact_overflows\":%llu,\"pairs_unbuilt\":%llu,\"points_unbuilt\":%llu,"
-                    "\"timers\":%s,\"cpu_seconds_analytic\":%.6f,"
-                    "\"cpu_seconds_exact\":%.6f,\"cpu_seconds_blockers\":%.6f,\"cpu_seconds_embree\":%.6f,"
-                    "\"cpu_seconds_sampled_shading\":%.6f,\"pairs_bitmask\":%llu,\"cpu_seconds_bitmask\":%.6f",
-                    exact_name(&ro), (unsigned long long)rs.pairs_occluded, (unsigned long long)rs.pairs_analytic,
-                    (unsigned long long)rs.pairs_exact, (unsigned long long)rs.pairs_blockers,
-                    (unsigned long long)rs.pairs_embree, (unsigned long long)rs.pairs_unshadowed,
-                    (unsigned long long)rs.exact_overflows, (unsigned long long)rs.pairs_unbuilt,
-                    (unsigned long long)rs.points_unbuilt, ro.timers ? "true" : "false", rs.t_analytic,
-                    rs.t_exact, rs.t_blockers, rs.t_embree, rs.t_sampled_shading,
-                    (unsigned long long)rs.pairs_bitmask, rs.t_bitmask);
-            render_dist_stats(stderr, 1);
-            fprintf(stderr, "}\n");
-        } else {
-            fprintf(stderr,
-                    "%s: %s: %u triangles, %d emitters, %d points and %d lines skipped\n"
-                    "  image %s, %d spp, %d light samples, visibility %s, rays %s, %d threads\n"
-                    "  %d frame%s (%d skipped: their files exist); rays: %llu eye, %llu reflection, %llu shadow (Embree); %llu light samples\n"
-                    "  answered without Embree: %llu (visible pairs, blocker lists, or no shadows)\n"
-                    "  time: load %.3f s, bvh %.3f s, render %.3f s, write %.3f s\n"
-                    "  %.1f million Embree shadow rays per second of render time\n",
-                    prog, input, scene->n_tris, scene->n_emitters, scene->stats.points_skipped,
-                    scene->stats.lines_skipped, size, ro.spp, ro.eye_only ? 0 : ro.light_samples,
-                    vis_name(ro.visibility), rays_name(ro.rays), threads, rendered, rendered == 1 ? "" : "s", skipped,
-                    (unsigned long long)rs.eye_rays, (unsigned long long)rs.reflection_rays,
-                    (unsigned long long)rs.shadow_rays, (unsigned long long)rs.light_samples,
-                    (unsigned long long)rs.shadow_rays_skipped, t1 - t0, t2 - t1, render, t4 - t3, mrays);
-            fprintf(stderr,
-                    "  pairs (exact %s): %llu occluded, %llu seen whole in closed form, %llu partial exact,\n"
-                    "    %llu partial sampled against blockers, %llu sampled against the scene (Embree),\n"
-                    "    %llu seen whole and sampled, %llu partial as bitmasks; %llu exact pairs fell back to samples\n",
-                    exact_name(&ro), (unsigned long long)rs.pairs_occluded, (unsigned long long)rs.pairs_analytic,
-                    (unsigned long long)rs.pairs_exact, (unsigned long long)rs.pairs_blockers,
-                    (unsigned long long)rs.pairs_embree, (unsigned long long)rs.pairs_unshadowed,
-                    (unsigned long long)rs.pairs_bitmask, (unsigned long long)rs.exact_overflows);
-            if (rs.pairs_unbuilt)
-                fprintf(stderr, "  not built in the cache (lie-build --view/--path): %llu pairs at %llu shading points, "
-                                "answered by Embree\n",
-                        (unsigned long long)rs.pairs_unbuilt, (unsigned long long)rs.points_unbuilt);
-            if (ro.timers)
-                fprintf(stderr,
-                        "  worker seconds: closed form %.3f, exact shadows %.3f, blocker samples %.3f,\n"
-                        "    Embree %.3f, sampled shading %.3f, bitmasks %.3f\n",
-                        rs.t_analytic, rs.t_exact, rs.t_blockers, rs.t_embree, rs.t_sampled_shading, rs.t_bitmask);
-            render_dist_stats(stderr, 0);
-        }
+    if (st == LIE_OK && cli.stats) {
+        run_stats r = {input, rendered, skipped, t1 - t0, t2 - t1, t_render, t_write};
+        print_stats(cli.stats == 2, &r, scene, &ro, &rs);
     }
+done:
     lie_camera_path_destroy(cpath);
     lie_rt_destroy(rt);
     lie_lie_vis_destroy(lv);

@@ -62,7 +62,7 @@ static void usage(FILE *fp)
 
 enum {
     OPT_LIGHT_SAMPLES = 256, OPT_MAX_DEPTH, OPT_CAMERA, OPT_THREADS, OPT_CTOR_THREADS, OPT_SCRIPT, OPT_RECORD,
-    OPT_SAVE, OPT_EXTERNAL, OPT_STATS, OPT_VERSION
+    OPT_SAVE
 };
 
 static const struct option long_opts[] = {
@@ -75,12 +75,9 @@ static const struct option long_opts[] = {
     {"script", required_argument, NULL, OPT_SCRIPT},
     {"record", required_argument, NULL, OPT_RECORD},
     {"save", required_argument, NULL, OPT_SAVE},
-    {"allow-external-uris", no_argument, NULL, OPT_EXTERNAL},
-    {"stats", optional_argument, NULL, OPT_STATS},
-    {"quiet", no_argument, NULL, 'q'},
-    {"help", no_argument, NULL, 'h'},
-    {"version", no_argument, NULL, OPT_VERSION},
-    {NULL, 0, NULL, 0},
+    LIE_OPT_ENTRY_EXTERNAL,
+    LIE_OPT_ENTRY_STATS,
+    LIE_OPT_ENTRIES_END,
 };
 
 /* ---- the session ------------------------------------------------------- */
@@ -600,11 +597,10 @@ int main(int argc, char **argv)
     wo.so = lie_scene_options_default();
     wo.threads = 1;
     const char *camera = NULL, *script_path = NULL;
-    int stats = 0;
     long v;
     int c;
-    opterr = 0;
-    while ((c = getopt_long(argc, argv, ":s:qh", long_opts, NULL)) != -1) {
+    lie_cli cli = {.tool = prog, .usage = usage, .missing = "missing input cache or scene"};
+    while ((c = lie_cli_next(&cli, argc, argv, ":s:qh", long_opts)) > 0) {
         switch (c) {
         case 's':
             if (!lie_parse_size(optarg, 16384, &S.ro.width, &S.ro.height))
@@ -634,23 +630,13 @@ int main(int argc, char **argv)
         case OPT_SCRIPT: script_path = optarg; break;
         case OPT_RECORD: wo.record = optarg; break;
         case OPT_SAVE: S.save = optarg; break;
-        case OPT_EXTERNAL: wo.so.allow_external_uris = 1; break;
-        case OPT_STATS:
-            if (!(stats = lie_parse_stats(optarg)))
-                return usage_error("--stats: expected --stats or --stats=json, got '%s'", optarg);
-            break;
-        case 'q': S.quiet = 1; break;
-        case 'h': usage(stdout); return 0;
-        case OPT_VERSION: { char vr[512]; lie_version_report(prog, vr, sizeof vr); fputs(vr, stdout); return 0; }
-        case ':': return usage_error("%s: missing value", argv[optind - 1]);
-        default: return usage_error("unknown option '%s'", argv[optind - 1]);
         }
     }
-    if (optind >= argc)
-        return usage_error("%s", "missing input cache or scene");
-    if (optind + 1 < argc)
-        return usage_error("unexpected argument '%s'", argv[optind + 1]);
-    const char *input = argv[optind];
+    if (c == LIE_CLI_EXIT)
+        return cli.status;
+    wo.so.allow_external_uris = cli.external;
+    S.quiet = cli.quiet;
+    const char *input = cli.operand;
     lie_error err;
     lie_error_clear(&err);
     script_run R;
@@ -866,8 +852,8 @@ int main(int argc, char **argv)
         rc = fail_line(&err);
     if (rc == 0 && S.save && view_world_save(S.w, S.save, &err) != LIE_OK)
         rc = fail_line(&err);
-    if (rc == 0 && stats)
-        print_stats(&S, stats == 2);
+    if (rc == 0 && cli.stats)
+        print_stats(&S, cli.stats == 2);
     free(image);
     free(shown);
     free(S.first_ms);

@@ -47,7 +47,7 @@ static void usage(FILE *fp)
 
 static int fail(const lie_error *err) { return lie_report_error(prog, err, 1); }
 
-enum { OPT_FULL = 256, OPT_THREADS, OPT_STATS, OPT_VERSION, OPT_EXTERNAL, OPT_WRITE_SCENE, OPT_FORCE };
+enum { OPT_FULL = 256, OPT_THREADS, OPT_WRITE_SCENE, OPT_FORCE };
 
 static const struct option long_opts[] = {
     {"output", required_argument, NULL, 'o'},
@@ -55,13 +55,10 @@ static const struct option long_opts[] = {
     {"write-scene", required_argument, NULL, OPT_WRITE_SCENE},
     {"force", no_argument, NULL, OPT_FORCE},
     {"threads", required_argument, NULL, OPT_THREADS},
-    {"allow-external-uris", no_argument, NULL, OPT_EXTERNAL},
-    {"stats", optional_argument, NULL, OPT_STATS},
-    {"quiet", no_argument, NULL, 'q'},
-    {"verbose", no_argument, NULL, 'v'},
-    {"help", no_argument, NULL, 'h'},
-    {"version", no_argument, NULL, OPT_VERSION},
-    {NULL, 0, NULL, 0},
+    LIE_OPT_ENTRY_EXTERNAL,
+    LIE_OPT_ENTRY_STATS,
+    LIE_OPT_ENTRY_VERBOSE,
+    LIE_OPT_ENTRIES_END,
 };
 
 /* --write-scene names a .gltf or a .glb (lie_gltf_export_group). */
@@ -110,7 +107,8 @@ static void print_stats(const char *input, const lie_scene *s, const lie_update_
                 "\"nodes_recomputed\":%llu,\"rst_regions\":%llu,\"rst_fallback\":%llu,\"rst_tree_nodes\":%llu,"
                 "\"rst_bytes\":%zu,\"seconds_load\":%.6f,\"seconds_rst\":%.6f,\"seconds_edit\":%.6f,"
                 "\"seconds_query\":%.6f,\"seconds_bvh\":%.6f,\"seconds_views\":%.6f,\"seconds_update\":%.6f,"
-                "\"seconds_write\":%.6f,\"bytes\":%zu}\n",
+                "\"seconds_write\":%.6f,\"bytes\":%zu,\"seconds_cpu\":%.6f,\"seconds_cpu_workers\":%.6f,"
+                "\"seconds_cpu_worker_max\":%.6f,\"seconds_tail\":%.6f}\n",
                 st->edits, (unsigned long long)st->units, (unsigned long long)st->units_rebuilt,
                 (unsigned long long)st->units_views,
                 (unsigned long long)st->units_flagged, (unsigned long long)st->units_changed, precision,
@@ -118,7 +116,8 @@ static void print_stats(const char *input, const lie_scene *s, const lie_update_
                 (unsigned long long)st->nodes_recomputed, (unsigned long long)rs->regions,
                 (unsigned long long)rs->fallback, (unsigned long long)rs->tree_nodes, rs->bytes, t_load,
                 st->seconds_rst, st->seconds_edit, st->seconds_query, st->seconds_bvh, st->seconds_views,
-                st->seconds_update, t_write, bytes);
+                st->seconds_update, t_write, bytes, lie_cpu_time(), st->seconds_cpu_workers, st->seconds_cpu_worker_max,
+                st->seconds_tail);
         return;
     }
     fprintf(stderr,
@@ -137,6 +136,8 @@ static void print_stats(const char *input, const lie_scene *s, const lie_update_
             (unsigned long long)st->nodes_flagged_5d, (unsigned long long)st->nodes_flagged,
             (unsigned long long)st->nodes_recomputed, t_load, st->seconds_rst, st->seconds_edit, st->seconds_query,
             st->seconds_bvh, st->seconds_update, t_write);
+    fprintf(stderr, "  cpu: %.3f s in all; the recomputation's workers %.3f s, the busiest %.3f s, cores idle %.3f s\n",
+            lie_cpu_time(), st->seconds_cpu_workers, st->seconds_cpu_worker_max, st->seconds_tail);
 }
 
 /* Read the cache and its scene, update them (lib/update), write the cache. */
@@ -211,8 +212,8 @@ int main(int argc, char **argv)
     run_opts ro = {NULL, NULL, lie_gltf_export_options_default(), 0, 0, 0};
     long v;
     int c;
-    opterr = 0;
-    while ((c = getopt_long(argc, argv, ":o:qvh", long_opts, NULL)) != -1) {
+    lie_cli cli = {.tool = prog, .usage = usage};
+    while ((c = lie_cli_next(&cli, argc, argv, ":o:qvh", long_opts)) > 0) {
         switch (c) {
         case 'o': ro.output = optarg; break;
         case OPT_FULL: uo.full = 1; break;
@@ -223,19 +224,14 @@ int main(int argc, char **argv)
                 return usage_error("--threads: expected an integer in 0..4096, got '%s'", optarg);
             uo.threads = (int)v;
             break;
-        case OPT_EXTERNAL: uo.scene.allow_external_uris = 1; break;
-        case OPT_STATS:
-            if (!(ro.stats = lie_parse_stats(optarg)))
-                return usage_error("--stats: expected --stats or --stats=json, got '%s'", optarg);
-            break;
-        case 'q': ro.quiet = 1; break;
-        case 'v': ro.verbose = 1; break;
-        case 'h': usage(stdout); return 0;
-        case OPT_VERSION: { char vr[512]; lie_version_report(prog, vr, sizeof vr); fputs(vr, stdout); return 0; }
-        case ':': return usage_error("%s: missing value", argv[optind - 1]);
-        default: return usage_error("unknown option '%s'", argv[optind - 1]);
         }
     }
+    if (c == LIE_CLI_EXIT)
+        return cli.status;
+    uo.scene.allow_external_uris = cli.external;
+    ro.stats = cli.stats;
+    ro.quiet = cli.quiet;
+    ro.verbose = cli.verbose;
     if (optind >= argc)
         return usage_error("%s", "missing input cache");
     if (optind + 1 >= argc)
