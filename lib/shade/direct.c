@@ -438,9 +438,22 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
          * (bitmask.h) where asked, or where cheaper than testing them one by
          * one (the exact shadow is weighed against both below). */
         const lie_bitmask *bm = cls == LIE_VISCLASS_BLOCKERS && c->bits ? c->bits[e] : NULL;
-        const double bits_cost = bm ? lie_render_bitmask_cost(opt->light_samples, n_blockers, !(pl && sf->lambert && bm->ls.uniform)) : 0.0;
-        const int use_bits =
-            bm && (opt->bitmask == LIE_BITMASK_ONLY || bits_cost < lie_render_samples_cost(opt->light_samples, n_blockers));
+        const int ns = opt->light_samples;
+        const double bits_cost = bm ? lie_render_bitmask_cost(ns, n_blockers, !(pl && sf->lambert && bm->ls.uniform)) : 0.0;
+        int use_bits = bm && (opt->bitmask == LIE_BITMASK_ONLY || bits_cost < lie_render_samples_cost(ns, n_blockers));
+        if (cls == LIE_VISCLASS_BLOCKERS && opt->exact == LIE_EXACT_AUTO && opt->bitmask == LIE_BITMASK_AUTO &&
+            !lie_emitter_is_delta(em)) {
+            /* a list so long that its cheapest answer costs more than
+             * Embree's rays (item 8 of issue 12: never slower than full) */
+            double best = use_bits ? bits_cost : lie_render_samples_cost(ns, n_blockers);
+            if (pl && c->exact && lie_render_exact_cost(n_blockers) < best)
+                best = lie_render_exact_cost(n_blockers);
+            if (lie_render_embree_cost(ns) < best) {
+                cls = LIE_VISCLASS_TEST_ALL;
+                bm = NULL;
+                use_bits = 0;
+            }
+        }
         double omega = 0.0;
         float kc[3] = {0.0f, 0.0f, 0.0f}, kl[3] = {0.0f, 0.0f, 0.0f};
         if (pl) {
