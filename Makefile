@@ -129,6 +129,10 @@ $(GEN): $(BUILD)/tests/scenes/gen/gen_scenes.o $(BUILD)/tests/scenes/gen/gen_glt
 	$(CC) $(LDFLAGS) $^ -lpng -lz -lm -o $@
 scenes: $(GEN)
 	$(GEN) tests/scenes
+# the bench's 250k-triangle atrium (bench/atrium.c), generated under out/, never committed
+ATRIUM_GEN := $(BUILD)/atrium-gen
+$(ATRIUM_GEN): $(BUILD)/bench/atrium.o $(BUILD)/tests/scenes/gen/gen_gltf.o
+	$(CC) $(LDFLAGS) $^ -lpng -lz -lm -o $@
 
 # ---- LTC tables (lib/shade/ltc.h): fitted by scripts/ltc-fit.c, the output committed ----
 LTC_FIT := $(BUILD)/ltc-fit

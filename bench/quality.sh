@@ -6,9 +6,11 @@
 # time each method needs to reach p99 <= 2% and the ratio.  All runs of a
 # scene are measured side by side in this one run (one render each).
 # Methods: full visibility (Embree streams) at LADDER samples; the LIE path
-# with shadows from the samples (--exact off) and as chosen per pair
-# (--exact auto, the default) at LADDER samples; and exact shadows
-# (--light-samples exact).  The bundled scenes' caches are conservative
+# with shadows from the samples (--exact off), with all samples at once as
+# bitmasks (--bitmask only, lib/shade/bitmask.h) and as chosen per pair by
+# the cost model (the default) at LADDER samples; and exact shadows
+# (--light-samples exact).  Each scene also gets its eye-rays-only frame,
+# and the best LIE setting's time against it.  The bundled scenes' caches are conservative
 # (complete lists); the third-party scenes' are sampled with coarse patches
 # (--min-patch 1e-2), built for the bench's view.  Writes
 # out/bench-quality.json.
@@ -70,13 +72,15 @@ echo "$SCENES" | while IFS='|' read -r name scene cam size build; do
     printf '\n  %s (%s)\n  %-26s %6s %9s %8s %8s %8s\n' "$name" "$QSIZE" "method" "N" "seconds" "rmse" "p99" ">2%"
     rows=""
     best_full=""; best_lie=""; best_lie_what=""; full1024=""; auto1024=""
-    for method in full lie-sampled lie-auto lie-exact; do
+    t_eye=$(one "$scene" --light-samples 0 "$@"); t_eye=${t_eye%% *}
+    for method in ${METHODS:-full lie-sampled lie-bitmask lie-auto lie-exact}; do
         list=$LADDER
         [ "$method" = lie-exact ] && list=exact
         for n in $list; do
             case $method in
             full) r=$(one "$scene" --visibility=full --light-samples "$n" "$@") ;;
             lie-sampled) r=$(one "$TMP/c.lie" --exact off --light-samples "$n" "$@") ;;
+            lie-bitmask) r=$(one "$TMP/c.lie" --bitmask only --light-samples "$n" "$@") ;;
             lie-auto) r=$(one "$TMP/c.lie" --light-samples "$n" "$@") ;;
             lie-exact) r=$(one "$TMP/c.lie" --light-samples exact "$@") ;;
             esac
@@ -84,7 +88,7 @@ echo "$SCENES" | while IFS='|' read -r name scene cam size build; do
             printf '  %-26s %6s %9.3f %7.2f%% %7.2f%% %7.2f%%\n' "$method" "$n" "$t" \
                 "$(awk -v x="$rmse" 'BEGIN{print 100 * x}')" "$(awk -v x="$p99" 'BEGIN{print 100 * x}')" \
                 "$(awk -v x="$over" 'BEGIN{print 100 * x}')"
-            rows="$rows${rows:+,}{\"method\":\"$method\",\"samples\":\"$n\",\"seconds\":$t,\"rmse\":$rmse,\"p99\":$p99,\"over2\":$over,\"pairs_exact\":$(field pairs_exact <"$TMP/last.json"),\"pairs_blockers\":$(field pairs_blockers <"$TMP/last.json"),\"pairs_embree\":$(field pairs_embree <"$TMP/last.json")}"
+            rows="$rows${rows:+,}{\"method\":\"$method\",\"samples\":\"$n\",\"seconds\":$t,\"rmse\":$rmse,\"p99\":$p99,\"over2\":$over,\"pairs_exact\":$(field pairs_exact <"$TMP/last.json"),\"pairs_blockers\":$(field pairs_blockers <"$TMP/last.json"),\"pairs_embree\":$(field pairs_embree <"$TMP/last.json"),\"pairs_bitmask\":$(field pairs_bitmask <"$TMP/last.json")}"
             if awk -v p="$p99" 'BEGIN { exit !(p <= 0.02) }'; then
                 if [ "$method" = full ]; then
                     if [ -z "$best_full" ] || awk -v a="$best_full" -v b="$t" 'BEGIN { exit !(b < a) }'; then
@@ -101,8 +105,9 @@ echo "$SCENES" | while IFS='|' read -r name scene cam size build; do
         done
     done
     if [ -n "$best_full" ] && [ -n "$best_lie" ]; then
-        printf '  time to p99 <= 2%%: full %.3f s, LIE %.3f s (%s): %sx\n' "$best_full" "$best_lie" "$best_lie_what" \
-            "$(ratio "$best_full" "$best_lie")"
+        printf '  time to p99 <= 2%%: full %.3f s, LIE %.3f s (%s): %sx; eye rays alone %.3f s, LIE/eye %s\n' \
+            "$best_full" "$best_lie" "$best_lie_what" "$(ratio "$best_full" "$best_lie")" "$t_eye" \
+            "$(ratio "$best_lie" "$t_eye")"
     else
         printf '  time to p99 <= 2%%: full %s, LIE %s\n' "${best_full:-not reached}" "${best_lie:-not reached}"
     fi
@@ -117,14 +122,22 @@ echo "$SCENES" | while IFS='|' read -r name scene cam size build; do
         "$(field cpu_seconds_analytic <"$TMP/t.json")" "$(field cpu_seconds_exact <"$TMP/t.json")" \
         "$(field cpu_seconds_blockers <"$TMP/t.json")" "$(field cpu_seconds_embree <"$TMP/t.json")" \
         "$(field cpu_seconds_sampled_shading <"$TMP/t.json")"
+    bin/lie-render "$TMP/c.lie" --size "$QSIZE" --threads "$THREADS" -q --stats=json --timers -o "$TMP/f.exr" \
+        --light-samples 1024 "$@" 2>"$TMP/a.json"
+    printf '  auto frame at 1024 samples, worker seconds: closed form %s, exact shadows %s, bitmasks %s, blocker samples %s, Embree %s, sampled shading %s\n' \
+        "$(field cpu_seconds_analytic <"$TMP/a.json")" "$(field cpu_seconds_exact <"$TMP/a.json")" \
+        "$(field cpu_seconds_bitmask <"$TMP/a.json")" "$(field cpu_seconds_blockers <"$TMP/a.json")" \
+        "$(field cpu_seconds_embree <"$TMP/a.json")" "$(field cpu_seconds_sampled_shading <"$TMP/a.json")"
+    printf '  its pairs: %s exact, %s bitmask, %s blocker samples, %s Embree\n' "$(field pairs_exact <"$TMP/a.json")" \
+        "$(field pairs_bitmask <"$TMP/a.json")" "$(field pairs_blockers <"$TMP/a.json")" "$(field pairs_embree <"$TMP/a.json")"
     printf '  pairs: %s occluded, %s closed form, %s exact, %s blocker samples, %s Embree, %s seen whole and sampled\n' \
         "$(field pairs_occluded <"$TMP/t.json")" "$(field pairs_analytic <"$TMP/t.json")" \
         "$(field pairs_exact <"$TMP/t.json")" "$(field pairs_blockers <"$TMP/t.json")" \
         "$(field pairs_embree <"$TMP/t.json")" "$(field pairs_unshadowed <"$TMP/t.json")"
     [ $first -eq 1 ] || printf ',' >>"$TMP/scenes.json"
     first=0
-    printf '"%s":{"size":"'"$QSIZE"'","rows":[%s],"p99_2pct":{"full":%s,"lie":%s}}' "$name" "$rows" "${best_full:-null}" \
-        "${best_lie:-null}" >>"$TMP/scenes.json"
+    printf '"%s":{"size":"'"$QSIZE"'","eye_only":%s,"rows":[%s],"p99_2pct":{"full":%s,"lie":%s}}' "$name" "$t_eye" "$rows" \
+        "${best_full:-null}" "${best_lie:-null}" >>"$TMP/scenes.json"
     cp "$TMP/scenes.json" "$TMP/scenes.keep"
 done
 echo "$json$(cat "$TMP/scenes.keep" 2>/dev/null)}}" >out/bench-quality.json

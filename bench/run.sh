@@ -80,12 +80,12 @@ bin/lie-render "$CACHE" --size "$SIZE" --threads "$THREADS" -q --stats=json --ti
 tw() { field "cpu_seconds_$1" <"$TMP/timers.json"; }
 printf '    where a LIE frame goes (%s s; eye rays alone %s s, shading without visibility %s s), worker seconds:\n' \
     "$(num "$t100_l")" "$(num "$t_eye")" "$(num "$t_none")"
-printf '      closed-form shading %s, exact shadows %s, blocker tests %s, Embree fallback %s (%s rays), sampled shading %s\n' \
-    "$(num "$(tw analytic)")" "$(num "$(tw exact)")" "$(num "$(tw blockers)")" "$(num "$(tw embree)")" "$emb" \
-    "$(num "$(tw sampled_shading)")"
+printf '      closed-form shading %s, exact shadows %s, bitmasks %s, blocker tests %s, Embree fallback %s (%s rays), sampled shading %s\n' \
+    "$(num "$(tw analytic)")" "$(num "$(tw exact)")" "$(num "$(tw bitmask)")" "$(num "$(tw blockers)")" "$(num "$(tw embree)")" \
+    "$emb" "$(num "$(tw sampled_shading)")"
 printf '    full visibility: %s M shadow rays/s (visibility time), %s rays\n' "$mr" "$rays_full"
 json="$json,\"shading_no_visibility_seconds\":$t_none,\"lie_embree_fallback_rays\":$emb,\"full_mrays_per_s\":$mr"
-json="$json,\"lie_breakdown_worker_seconds\":{\"analytic\":$(tw analytic),\"exact\":$(tw exact),\"blocker_tests\":$(tw blockers),\"embree_fallback\":$(tw embree),\"sampled_shading\":$(tw sampled_shading)}"
+json="$json,\"lie_breakdown_worker_seconds\":{\"analytic\":$(tw analytic),\"exact\":$(tw exact),\"bitmask\":$(tw bitmask),\"blocker_tests\":$(tw blockers),\"embree_fallback\":$(tw embree),\"sampled_shading\":$(tw sampled_shading)}"
 
 printf '\n  Table 2: min patch size, %s (build, then a 100-sample frame)\n' "$(basename "$SCENE")"
 printf '  %-9s %8s %9s %9s %9s %9s %9s %6s %9s %8s %8s %8s\n' "min patch" patches visible occluded partial complex unlit "mean" "cache B" "build s" "LIE s" "build/frame"

@@ -146,7 +146,7 @@ static lie_status encode(const lie_cache *c, const char *name, unsigned char **d
     memcpy(buf, LIE_CACHE_MAGIC, 8);
     lie_cache_put_u32(buf + 8, LIE_CACHE_VERSION);
     lie_cache_put_u32(buf + 12, 0); /* required flags */
-    lie_cache_put_u32(buf + 16, 0); /* optional flags */
+    lie_cache_put_u32(buf + 16, env->partial ? LIE_CACHE_OPT_PARTIAL : 0u); /* optional flags */
     lie_cache_put_u32(buf + 20, (uint32_t)n_sections);
     lie_cache_put_u64(buf + 24, total);
 

@@ -17,6 +17,10 @@ extern "C" {
 #endif
 
 #define LIE_CACHE_VERSION 3u
+/* optional_flags bit: an interrupted lie-build (env->partial); a reader
+ * that ignores it still renders correctly, as the unbuilt units are class
+ * none (formats/lie-cache.md) */
+#define LIE_CACHE_OPT_PARTIAL 1u
 
 /* What the cache knows of each emitter, to check it against a scene. */
 typedef struct lie_cache_emitter {

@@ -367,6 +367,7 @@ lie_status lie_cache_decode(const unsigned char *data, size_t size, const char *
         return st;
     }
     env->scene_hash = c->state_hash;
+    env->partial = (lie_cache_get_u32(data + 16) & LIE_CACHE_OPT_PARTIAL) != 0;
     *out = c;
     return LIE_OK;
 }

@@ -203,10 +203,24 @@ lie_status lie_parallel_for(size_t n, int threads, lie_parallel_fn fn, void *ctx
  * progress gets the summed weight of the items finished and the total. */
 lie_status lie_parallel_for_weighted(size_t n, int threads, lie_parallel_fn fn, void *ctx,
                                      const uint32_t *weight, lie_progress_fn progress, void *pctx);
+/* What a parallel-for spent: per-worker CPU seconds (the thread's own clock,
+ * so other processes on the machine do not count) summed and at most, and
+ * the wall seconds from the first worker out of items to the end (the tail
+ * of the schedule, where cores idle). */
+typedef struct lie_parallel_report {
+    int workers;
+    double wall, cpu_sum, cpu_max, tail;
+} lie_parallel_report;
+/* The same, handing out item order[k] k-th (a permutation of [0, n); NULL:
+ * in order), for example the costliest first; report may be NULL. */
+lie_status lie_parallel_for_ordered(size_t n, int threads, lie_parallel_fn fn, void *ctx, const uint32_t *order,
+                                    const uint32_t *weight, lie_progress_fn progress, void *pctx,
+                                    lie_parallel_report *report);
 
 /* ---- time and progress ------------------------------------------------ */
 
 double lie_time_now(void); /* seconds, monotonic */
+double lie_cpu_time(void); /* the process's CPU seconds, user and system, over all threads */
 
 /* A progress bar on `stream` if it is a terminal and `enabled`, redrawn at
  * most a few times a second, with the elapsed time, the rate (in `unit`s

@@ -1,11 +1,14 @@
-/* A parallel-for over POSIX threads.  Items are handed out in order from an
- * atomic counter; callers write only to per-item slots, so results never
- * depend on the schedule (CONTRIBUTING.md, Determinism). */
+/* A parallel-for over POSIX threads.  Items are handed out in order (or in
+ * a caller's order: the costliest first, so that no long item starts last
+ * and leaves the other workers idle) from an atomic counter; callers write
+ * only to per-item slots, so results never depend on the schedule
+ * (CONTRIBUTING.md, Determinism). */
 #include "core/core.h"
 
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -22,10 +25,19 @@ double lie_time_now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+double lie_cpu_time(void)
+{
+    struct timespec ts;
+    if (clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts) != 0)
+        return 0.0;
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
 typedef struct job {
     size_t n, total; /* items; their summed weight */
     atomic_size_t next, done;
     const uint32_t *weight;
+    const uint32_t *order; /* the k-th item handed out is order[k] (NULL: k) */
     atomic_flag reporting; /* one progress call at a time */
     lie_parallel_fn fn;
     void *ctx;
@@ -36,16 +48,27 @@ typedef struct job {
 typedef struct worker_arg {
     job *j;
     int id;
+    double cpu, end; /* the worker's CPU seconds in the loop; when it ran out of items */
 } worker_arg;
+
+static double thread_cpu_now(void)
+{
+    struct timespec ts;
+    if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts) != 0)
+        return 0.0;
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
 
 static void *worker_main(void *p)
 {
     worker_arg *w = p;
     job *j = w->j;
+    double cpu0 = thread_cpu_now();
     for (;;) {
-        size_t i = atomic_fetch_add(&j->next, 1);
-        if (i >= j->n)
+        size_t k = atomic_fetch_add(&j->next, 1);
+        if (k >= j->n)
             break;
+        size_t i = j->order ? j->order[k] : k;
         j->fn(j->ctx, i, w->id);
         size_t wi = j->weight ? j->weight[i] : 1;
         size_t d = atomic_fetch_add(&j->done, wi) + wi;
@@ -56,6 +79,8 @@ static void *worker_main(void *p)
             atomic_flag_clear(&j->reporting);
         }
     }
+    w->cpu = thread_cpu_now() - cpu0;
+    w->end = lie_time_now();
     return NULL;
 }
 
@@ -68,6 +93,14 @@ lie_status lie_parallel_for(size_t n, int threads, lie_parallel_fn fn, void *ctx
 lie_status lie_parallel_for_weighted(size_t n, int threads, lie_parallel_fn fn, void *ctx,
                                      const uint32_t *weight, lie_progress_fn progress, void *pctx)
 {
+    return lie_parallel_for_ordered(n, threads, fn, ctx, NULL, weight, progress, pctx, NULL);
+}
+
+lie_status lie_parallel_for_ordered(size_t n, int threads, lie_parallel_fn fn, void *ctx, const uint32_t *order,
+                                    const uint32_t *weight, lie_progress_fn progress, void *pctx,
+                                    lie_parallel_report *report)
+{
+    double t_start = lie_time_now();
     if (threads <= 0)
         threads = lie_cpu_count();
     if ((size_t)threads > n)
@@ -75,6 +108,7 @@ lie_status lie_parallel_for_weighted(size_t n, int threads, lie_parallel_fn fn, 
     job j;
     j.n = n;
     j.weight = weight;
+    j.order = order;
     j.total = n;
     if (weight) {
         j.total = 0;
@@ -112,6 +146,20 @@ lie_status lie_parallel_for_weighted(size_t n, int threads, lie_parallel_fn fn, 
         pthread_join(tids[t], NULL);
     if (progress && n > 0)
         progress(pctx, j.total, j.total); /* the end, which a skipped call may have missed */
+    if (report) {
+        memset(report, 0, sizeof *report);
+        report->workers = started;
+        report->wall = lie_time_now() - t_start;
+        double first_idle = 0.0;
+        for (int t = 0; t < started; t++) {
+            report->cpu_sum += args[t].cpu;
+            if (args[t].cpu > report->cpu_max)
+                report->cpu_max = args[t].cpu;
+            if (t == 0 || args[t].end < first_idle)
+                first_idle = args[t].end;
+        }
+        report->tail = started > 1 ? lie_time_now() - first_idle : 0.0;
+    }
     free(args);
     free(tids);
     return LIE_OK;

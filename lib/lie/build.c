@@ -21,9 +21,6 @@
 
 static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32_t n_tris, int n_emitters,
                            const int32_t *old_unit, uint64_t unit_lo, uint64_t unit_hi);
-static lie_status build_env(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
-                            const uint8_t *tri_mask, const lie_pixels *px, lie_progress *progress, lie_env **out,
-                            lie_build_stats *stats, lie_error *err);
 static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
                               const uint8_t *tri_mask, const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
                               lie_env_part *out, lie_build_stats *stats, lie_error *err);
@@ -39,16 +36,18 @@ static void workers_free(worker *ws, int n)
     free(ws);
 }
 
-/* Each triangle's expected share of the build, for the progress bar only:
- * its pairs to build times the leaves along a shadow boundary its
- * subdivision can reach (§3.2: a patch splits in four until min_patch, so a
- * boundary crosses about sqrt(area / min_area) of the smallest patches).
- * Pairs outside the views' mask cost next to nothing. */
+/* Each triangle's expected share of the build: the progress bar's weight,
+ * and the order workers take triangles in (the costliest first, so that no
+ * long one starts last while the other workers idle).  Its pairs to build
+ * times the leaves along a shadow boundary its subdivision can reach (§3.2:
+ * a patch splits in four until min_patch, so a boundary crosses about
+ * sqrt(area / min_area) of the smallest patches).  Pairs outside the views'
+ * mask, or copied from an old env, cost next to nothing. */
 static uint32_t *build_weights(const build_ctx *c, uint32_t n_items, size_t ne)
 {
     uint32_t *w = malloc(sizeof *w * ((size_t)n_items + 1));
     if (!w)
-        return NULL; /* the bar then counts triangles */
+        return NULL; /* the bar then counts triangles, in order */
     for (uint32_t i = 0; i < n_items; i++) {
         uint32_t tri = c->tri_lo + i;
         size_t u0 = (size_t)tri * ne, u1 = u0 + ne;
@@ -57,21 +56,45 @@ static uint32_t *build_weights(const build_ctx *c, uint32_t n_items, size_t ne)
         if (u1 > c->unit_hi)
             u1 = (size_t)c->unit_hi;
         size_t pairs = c->s->n_emitters == 0 ? 1 : u1 > u0 ? u1 - u0 : 0;
+        if (c->old_unit && !c->node_flags)
+            for (size_t u = u0; u < u1; u++)
+                pairs -= c->old_unit[u] >= 0; /* copied */
         double ratio = c->min_area > 0.0f ? (double)c->s->tri_area[tri] / (double)c->min_area : 1.0;
         double depth = 1.0 + (ratio > 1.0 ? pow(ratio, 0.75) : 0.0);
         if (!lie_subdiv_seen(c, tri))
             depth = 0.05;
-        double v = (double)pairs * depth * 4.0;
+        double v = (double)(pairs ? pairs : 1) * (pairs ? depth : 0.05) * 4.0;
         w[i] = v < 1.0 ? 1u : v > 1e9 ? 1000000000u : (uint32_t)v;
     }
     return w;
 }
 
+/* The items by decreasing weight, ties in item order (a permutation). */
+static uint32_t *heaviest_first(const uint32_t *w, uint32_t n)
+{
+    uint64_t *key = malloc(sizeof *key * ((size_t)n + 1));
+    uint32_t *order = malloc(sizeof *order * ((size_t)n + 1));
+    if (!key || !order) {
+        free(key);
+        free(order);
+        return NULL; /* in item order: only slower */
+    }
+    for (uint32_t i = 0; i < n; i++)
+        key[i] = ((uint64_t)(UINT32_MAX - w[i]) << 32) | i;
+    lie_sort_u64(key, n);
+    for (uint32_t i = 0; i < n; i++)
+        order[i] = (uint32_t)key[i];
+    free(key);
+    return order;
+}
+
 /* Build (or, with a mask, rebuild some units of) every triangle, then
- * concatenate the per-triangle buffers in unit order. */
+ * concatenate the per-triangle buffers in unit order.  `stop` (may be
+ * NULL) interrupts it: env->partial says whether a unit was left out. */
 static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, const int32_t *old_unit,
                            const uint8_t *node_flags, const uint8_t *tri_mask, const lie_pixels *px,
                            uint64_t unit_lo, uint64_t unit_hi, int threads, int memo, lie_progress *progress,
+                           const volatile sig_atomic_t *stop,
                            lie_build_stats *stats)
 {
     build_ctx c;
@@ -86,6 +109,7 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     c.node_flags = node_flags;
     c.tri_mask = tri_mask;
     c.pix = px;
+    c.stop = stop;
     /* the triangles holding units [unit_lo, unit_hi) */
     size_t ne = s->n_emitters > 0 ? (size_t)s->n_emitters : 1;
     c.unit_lo = unit_lo;
@@ -109,20 +133,35 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     size_t n_memo = 0;
     if (st == LIE_OK && memo && node_flags && old_unit && c.p->mode == LIE_BLOCKERS_SAMPLED)
         st = lie_memo_precompute(&c, threads, &n_memo);
-    uint32_t *weight = st == LIE_OK && progress && progress->active ? build_weights(&c, n_items, ne) : NULL;
+    uint32_t *weight = st == LIE_OK ? build_weights(&c, n_items, ne) : NULL;
+    uint32_t *order = weight && threads > 1 ? heaviest_first(weight, n_items) : NULL;
+    lie_parallel_report rep;
+    memset(&rep, 0, sizeof rep);
     if (st == LIE_OK)
-        st = lie_parallel_for_weighted(n_items, threads, lie_subdiv_triangle, &c, weight,
-                                       progress ? lie_progress_cb : NULL, progress);
+        st = lie_parallel_for_ordered(n_items, threads, lie_subdiv_triangle, &c, order,
+                                      progress && progress->active ? weight : NULL,
+                                      progress ? lie_progress_cb : NULL, progress, &rep);
+    free(order);
     free(weight);
     lie_memo_free(&c, n_memo);
+    uint64_t interrupted = 0;
     for (int i = 0; c.workers && i < threads; i++) {
         if (c.workers[i].nomem && st != LIE_ERR_LIMIT)
             st = c.workers[i].over ? LIE_ERR_LIMIT : LIE_ERR_NOMEM;
+        interrupted += c.workers[i].st.units_interrupted;
         if (stats)
             lie_stats_merge(stats, &c.workers[i].st);
     }
+    if (stats) {
+        stats->workers = rep.workers;
+        stats->seconds_cpu_sum += c.par_cpu_sum + rep.cpu_sum;
+        stats->seconds_cpu_max += c.par_cpu_max + rep.cpu_max;
+        stats->seconds_tail += c.par_tail + rep.tail;
+    }
     if (st == LIE_OK)
         st = assemble(env, c.out, c.tri_lo, n_items, s->n_emitters, old_unit, unit_lo, unit_hi);
+    if (st == LIE_OK && interrupted)
+        env->partial = 1;
     for (uint32_t t = 0; c.out && t < n_items; t++) {
         free(c.out[t].roots);
         free(c.out[t].nodes);
@@ -252,27 +291,77 @@ lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_
                                 const uint8_t *tri_mask, lie_progress *progress, lie_env **out,
                                 lie_build_stats *stats, lie_error *err)
 {
-    return build_env(s, rt, p, tri_mask, NULL, progress, out, stats, err);
+    lie_build_control ctl;
+    memset(&ctl, 0, sizeof ctl);
+    ctl.tri_mask = tri_mask;
+    ctl.progress = progress;
+    return lie_env_build_with(s, rt, p, &ctl, out, stats, err);
 }
 
 lie_status lie_env_build_views(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
                                const lie_pixels *px, lie_progress *progress, lie_env **out,
                                lie_build_stats *stats, lie_error *err)
 {
-    if (px && px->n_tris != s->n_tris)
-        return lie_error_set(err, LIE_ERR_ARG, s->path, "pixels for %u triangles, not %u", px->n_tris, s->n_tris);
-    return build_env(s, rt, p, NULL, px, progress, out, stats, err);
+    lie_build_control ctl;
+    memset(&ctl, 0, sizeof ctl);
+    ctl.pixels = px;
+    ctl.progress = progress;
+    return lie_env_build_with(s, rt, p, &ctl, out, stats, err);
 }
 
-static lie_status build_env(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
-                            const uint8_t *tri_mask, const lie_pixels *px, lie_progress *progress, lie_env **out,
-                            lie_build_stats *stats, lie_error *err)
+/* A resumed env must be the interrupted build of this very build: the same
+ * scene and every parameter a cache stores. */
+static lie_status resume_check(const lie_env *r, const lie_scene *s, const lie_build_params *p, lie_error *err)
+{
+    if (r->n_tris != s->n_tris || r->n_emitters != s->n_emitters || r->scene_hash != s->hash)
+        return lie_error_set(err, LIE_ERR_ARG, s->path, "the partial build to resume was made for another scene");
+    const lie_build_params *q = &r->params;
+    if (q->samples != p->samples || q->max_samples != p->max_samples || q->max_blockers != p->max_blockers ||
+        q->complex_cap != p->complex_cap || q->min_patch != p->min_patch || q->split_gain != p->split_gain ||
+        q->mode != p->mode)
+        return lie_error_set(err, LIE_ERR_ARG, s->path,
+                             "the partial build to resume was made with other build parameters");
+    return LIE_OK;
+}
+
+lie_status lie_env_build_with(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                              const lie_build_control *ctl, lie_env **out, lie_build_stats *stats, lie_error *err)
 {
     *out = NULL;
     if (lie_build_params_check(p, err) != LIE_OK)
         return LIE_ERR_ARG;
+    if (ctl->pixels && ctl->pixels->n_tris != s->n_tris)
+        return lie_error_set(err, LIE_ERR_ARG, s->path, "pixels for %u triangles, not %u", ctl->pixels->n_tris,
+                             s->n_tris);
+    if (ctl->resume && resume_check(ctl->resume, s, p, err) != LIE_OK)
+        return LIE_ERR_ARG;
     double t0 = lie_time_now();
     lie_env *env = calloc(1, sizeof *env);
+    uint64_t n_units = (uint64_t)s->n_tris * (uint64_t)s->n_emitters;
+    int32_t *old_unit = NULL;
+    if (env && ctl->resume) {
+        /* a resume is an update that copies every unit the interrupted
+         * build finished (copy_node lays it out as a build does) and builds
+         * the others afresh: lie_env_update's old_unit, without flags */
+        const lie_env *r = ctl->resume;
+        old_unit = n_units < INT32_MAX ? malloc(sizeof *old_unit * ((size_t)n_units + 1)) : NULL;
+        env->root = malloc(sizeof *env->root * ((size_t)n_units + 1));
+        env->nodes = malloc(sizeof *env->nodes * ((size_t)r->n_nodes + 1));
+        env->pool = malloc(sizeof *env->pool * ((size_t)r->n_pool + 1));
+        if (!old_unit || !env->root || !env->nodes || !env->pool) {
+            free(old_unit);
+            lie_env_destroy(env);
+            env = NULL;
+        } else {
+            memcpy(env->root, r->root, sizeof *env->root * (size_t)n_units);
+            memcpy(env->nodes, r->nodes, sizeof *env->nodes * (size_t)r->n_nodes);
+            memcpy(env->pool, r->pool, sizeof *env->pool * (size_t)r->n_pool);
+            env->n_nodes = r->n_nodes;
+            env->n_pool = r->n_pool;
+            for (uint64_t u = 0; u < n_units; u++)
+                old_unit[u] = r->nodes[r->root[u]].cls == LIE_CLASS_NONE ? -1 : (int32_t)u;
+        }
+    }
     if (!env)
         return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
     env->n_tris = s->n_tris;
@@ -282,8 +371,9 @@ static lie_status build_env(const lie_scene *s, const lie_rt *rt, const lie_buil
     env->scene_hash = s->hash;
     if (stats)
         memset(stats, 0, sizeof *stats);
-    uint64_t n_units = (uint64_t)s->n_tris * (uint64_t)s->n_emitters;
-    lie_status st = run_build(env, s, rt, NULL, NULL, tri_mask, px, 0, n_units, p->threads, 0, progress, stats);
+    lie_status st = run_build(env, s, rt, old_unit, NULL, ctl->tri_mask, ctl->pixels, 0, n_units, p->threads, 0,
+                              ctl->progress, ctl->stop, stats);
+    free(old_unit);
     if (st != LIE_OK) {
         lie_env_destroy(env);
         if (st == LIE_ERR_LIMIT)
@@ -334,7 +424,7 @@ static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_bu
         memset(stats, 0, sizeof *stats);
     lie_status st = LIE_OK;
     if (n_units)
-        st = run_build(&part, s, rt, NULL, NULL, tri_mask, px, first_unit, first_unit + n_units, p->threads, 0,
+        st = run_build(&part, s, rt, NULL, NULL, tri_mask, px, first_unit, first_unit + n_units, p->threads, 0, NULL,
                        NULL, stats);
     if (st != LIE_OK) {
         free(part.root);
@@ -399,7 +489,7 @@ lie_status lie_build_update(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     if (stats)
         memset(stats, 0, sizeof *stats);
     lie_status st = run_build(env, s, rt, old_unit, node_flags, NULL, px, 0,
-                              (uint64_t)s->n_tris * (uint64_t)s->n_emitters, threads, memo, NULL, stats);
+                              (uint64_t)s->n_tris * (uint64_t)s->n_emitters, threads, memo, NULL, NULL, stats);
     if (stats)
         stats->seconds = lie_time_now() - t0;
     if (st == LIE_ERR_LIMIT)

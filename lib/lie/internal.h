@@ -32,6 +32,7 @@ typedef struct worker {
     size_t cap_hull;
     lie_build_stats st;
     int nomem;
+    int stopped;              /* the build's stop flag was seen inside a unit: drop it */
     int over;                 /* the node budget ran out (nomem is set too, to stop) */
     atomic_uint_least64_t *nodes_made; /* shared by all workers */
     uint64_t max_nodes;
@@ -60,12 +61,18 @@ typedef struct build_ctx {
     struct memo_entry *memo;
     int32_t *memo_new;    /* open-addressing table of the memo entries of new nodes */
     size_t memo_new_mask;
+    const volatile sig_atomic_t *stop; /* lie_build_control.stop, or NULL */
+    /* the parallel loops' CPU seconds so far (lie_parallel_report): summed
+     * over workers, the busiest worker's per loop summed, idle tails */
+    double par_cpu_sum, par_cpu_max, par_tail;
     double *halton;       /* radical inverses in bases 2, 3, 5, 7 of 0..n_halton-1 */
     uint32_t n_halton;
 } build_ctx;
 
 /* Sort v[0..n) and drop repeats; returns the new length. */
 size_t lie_sort_unique(uint32_t *v, size_t n);
+/* Sort v[0..n) ascending. */
+void lie_sort_u64(uint64_t *v, size_t n);
 
 /* Count a partial list of n blockers in the list-length histogram. */
 void lie_stats_hist_add(lie_build_stats *st, uint32_t n);

@@ -18,6 +18,8 @@
 #include "rt/rt.h"
 #include "scene/scene.h"
 
+#include <signal.h>
+
 #pragma GCC visibility push(default) /* the public API: exported from liblie.so */
 
 #ifdef __cplusplus
@@ -111,6 +113,8 @@ typedef struct lie_env {
     uint32_t n_pool;
     lie_build_params params;
     uint64_t scene_hash;
+    int partial;          /* an interrupted build: some units left LIE_CLASS_NONE were not built yet
+                             (lie_env_build_with's stop; lie-build --resume completes it) */
 } lie_env;
 
 typedef struct lie_build_stats {
@@ -120,6 +124,8 @@ typedef struct lie_build_stats {
     uint64_t segments;                 /* shadow segments cast */
     uint64_t blocker_total;            /* sum of partial list lengths */
     uint64_t splits_undone;            /* splits classified but not kept: they did not pay */
+    uint64_t units_copied;             /* units copied whole from an old or resumed env */
+    uint64_t units_interrupted;        /* units a stop left unbuilt (LIE_CLASS_NONE) */
     uint64_t splits_pixels;            /* splits not tried: too few pixels see the patch (views) */
     uint64_t splits_kept;              /* splits made */
     /* the model against the build, over the splits made: the render time
@@ -128,6 +134,11 @@ typedef struct lie_build_stats {
     double split_saving_predicted_ns;
     double split_saving_measured_ns;
     double seconds;
+    /* the parallel phase: workers, their summed and largest CPU seconds (each
+     * thread's own clock, so other processes do not count), and the wall
+     * seconds from the first worker out of work to the end (idle cores) */
+    int workers;
+    double seconds_cpu_sum, seconds_cpu_max, seconds_tail;
 } lie_build_stats;
 
 /* Build every unit of the scene.  Deterministic: the same scene and
@@ -141,6 +152,26 @@ lie_status lie_env_build(const lie_scene *s, const lie_rt *rt, const lie_build_p
 lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
                                 const uint8_t *tri_mask, lie_progress *progress, lie_env **out,
                                 lie_build_stats *stats, lie_error *err);
+
+/* How a build runs, beyond its parameters; zeroed means lie_env_build. */
+struct lie_pixels;
+typedef struct lie_build_control {
+    const uint8_t *tri_mask;   /* build only these triangles (NULL: all), as lie_env_build_masked */
+    const struct lie_pixels *pixels; /* or build for these views, as lie_env_build_views (NULL: none) */
+    lie_progress *progress;    /* may be NULL */
+    /* An interrupted build of the same scene, parameters and tri_mask or
+     * pixels (its
+     * partial flag set, or not): its built units are copied, its unbuilt
+     * ones built, so the result is exactly the uninterrupted build's. */
+    const lie_env *resume;
+    /* Polled by the workers (a signal handler sets it): once nonzero, no
+     * further unit is built, a unit in progress is dropped, and the build
+     * returns LIE_OK with what it finished, the rest LIE_CLASS_NONE and
+     * env->partial set (unless every unit was done). */
+    const volatile sig_atomic_t *stop;
+} lie_build_control;
+lie_status lie_env_build_with(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                              const lie_build_control *ctl, lie_env **out, lie_build_stats *stats, lie_error *err);
 
 /* Part of an env, for builds shared out among processes (lie-build under
  * mpirun): units [first_unit, first_unit + n_units), root[i] the root of

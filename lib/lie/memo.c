@@ -122,6 +122,33 @@ void lie_memo_free(build_ctx *c, size_t n)
     c->memo_new = NULL;
 }
 
+/* Entries [first, n) by decreasing patch area, ties in entry order, as
+ * offsets from first; NULL (entry order) when out of memory. */
+static uint32_t *largest_first(const build_ctx *c, size_t first, size_t n)
+{
+    size_t m = n - first;
+    uint64_t *key = malloc(sizeof *key * (m + 1));
+    uint32_t *order = malloc(sizeof *order * (m + 1));
+    if (!key || !order || m > UINT32_MAX) {
+        free(key);
+        free(order);
+        return NULL;
+    }
+    for (size_t i = 0; i < m; i++) {
+        const memo_entry *e = &c->memo[first + i];
+        int d = e->path.depth < 15 ? e->path.depth : 15;
+        float area = c->s->tri_area[e->tri] / (float)(1u << (2 * d));
+        uint32_t bits;
+        memcpy(&bits, &area, sizeof bits); /* a non-negative float's bits order as the float */
+        key[i] = ((uint64_t)(~bits) << 32) | (uint32_t)i;
+    }
+    lie_sort_u64(key, m);
+    for (size_t i = 0; i < m; i++)
+        order[i] = (uint32_t)key[i];
+    free(key);
+    return order;
+}
+
 lie_status lie_memo_precompute(build_ctx *c, int threads, size_t *n_memo)
 {
     const lie_env *old = c->old;
@@ -149,7 +176,15 @@ lie_status lie_memo_precompute(build_ctx *c, int threads, size_t *n_memo)
     lie_status st = LIE_OK;
     while (st == LIE_OK && first < n) {
         memo_state ms = {c, first, n - first};
-        st = lie_parallel_for(ms.n, threads, memo_compute, &ms, NULL, NULL);
+        /* a level ends when its last node is done: the largest patches
+         * (most segments and candidates) first, so none starts last */
+        uint32_t *order = threads != 1 ? largest_first(c, first, n) : NULL;
+        lie_parallel_report rep;
+        st = lie_parallel_for_ordered(ms.n, threads, memo_compute, &ms, order, NULL, NULL, NULL, &rep);
+        free(order);
+        c->par_cpu_sum += rep.cpu_sum;
+        c->par_cpu_max += rep.cpu_max;
+        c->par_tail += rep.tail;
         for (int i = 0; i < threads; i++)
             if (c->workers[i].nomem)
                 st = LIE_ERR_NOMEM;

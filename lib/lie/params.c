@@ -73,6 +73,8 @@ void lie_stats_merge(lie_build_stats *dst, const lie_build_stats *src)
     dst->segments += src->segments;
     dst->blocker_total += src->blocker_total;
     dst->splits_undone += src->splits_undone;
+    dst->units_copied += src->units_copied;
+    dst->units_interrupted += src->units_interrupted;
     dst->splits_pixels += src->splits_pixels;
     dst->splits_kept += src->splits_kept;
     dst->split_saving_predicted_ns += src->split_saving_predicted_ns;

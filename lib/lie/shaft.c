@@ -287,7 +287,10 @@ void lie_sat_init(lie_sat *sat, const lie_vec3 *hull, int n_hull, int n_patch, l
 
 int lie_sat_rejects(const lie_sat *sat, const lie_vec3 tri[3])
 {
-    for (int k = 0; k < sat->n; k++) {
+    /* The hull's faces (added last) separate most often: testing them
+     * first, a rejected candidate costs 5.5 axes instead of 13.8 on
+     * museum1 (counted; any order gives the same answer). */
+    for (int k = sat->n - 1; k >= 0; k--) {
         lie_vec3 d = sat->d[k];
         float a = lie_v3_dot(d, tri[0]), b = lie_v3_dot(d, tri[1]), c = lie_v3_dot(d, tri[2]);
         float lo = a < b ? a : b, hi = a > b ? a : b;

@@ -265,6 +265,10 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
         copy_node(c->old, (uint32_t)old, w, u, idx); /* no edit reached this patch's shaft */
         return;
     }
+    if (c->stop && *c->stop) {
+        w->stopped = 1; /* interrupted: lie_subdiv_triangle drops the unit */
+        return;
+    }
     const lie_scene *s = c->s;
     node_class nc;
     if (pre) {
@@ -500,8 +504,10 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
     unit_buf *u = &c->out[item];
     const lie_scene *s = c->s;
     size_t ne = (size_t)s->n_emitters;
-    if (copied_whole(c, tri, u))
+    if (copied_whole(c, tri, u)) {
+        w->st.units_copied += ne;
         return;
+    }
     u->roots = malloc(sizeof *u->roots * (ne + 1));
     if (!u->roots) {
         w->nomem = 1;
@@ -522,6 +528,30 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
             w->st.pairs[LIE_CLASS_NONE]++;
             continue;
         }
+        int copy = old >= 0 && !(c->node_flags && c->node_flags[old]);
+        w->st.units_copied += (uint64_t)copy;
+        if (!c->stop || copy) {
+            build_node(c, w, u, (uint32_t)root, tri, lie_patch_root(), (int)e, two_sided, NULL, 0, old, NULL);
+            continue;
+        }
+        /* A build that may be interrupted: a unit the stop reaches is
+         * dropped whole (nodes, lists, statistics), so what the partial env
+         * holds are complete units, each exactly as an uninterrupted build
+         * makes it. */
+        lie_build_stats saved = w->st;
+        uint32_t n_pool0 = u->n_pool;
+        w->stopped = 0;
         build_node(c, w, u, (uint32_t)root, tri, lie_patch_root(), (int)e, two_sided, NULL, 0, old, NULL);
+        if (!w->stopped || w->nomem)
+            continue;
+        w->stopped = 0;
+        atomic_fetch_sub_explicit(w->nodes_made, u->n_nodes - (uint32_t)root - 1, memory_order_relaxed);
+        w->st = saved;
+        u->n_nodes = (uint32_t)root + 1;
+        u->n_pool = n_pool0;
+        memset(&u->nodes[root], 0, sizeof *u->nodes);
+        u->nodes[root].cls = LIE_CLASS_NONE;
+        w->st.pairs[LIE_CLASS_NONE]++;
+        w->st.units_interrupted++;
     }
 }

@@ -31,6 +31,8 @@ typedef struct tree {
     float A0, A1;
     tnode *nodes;
     uint32_t n_nodes, cap_nodes;
+    uint64_t stored;     /* region copies held in this tree's leaves */
+    int nomem;
 } tree;
 
 typedef struct fb_region {
@@ -42,7 +44,7 @@ struct lie_rst {
     tree t[3];
     fb_region *fb;
     uint32_t n_fb, cap_fb;
-    uint64_t stored;
+    uint64_t stored;     /* the trees' stored, summed once built */
     int nomem;
 };
 
@@ -142,9 +144,9 @@ static entry clip(const entry *e, const box5 *cell)
     return r;
 }
 
-static void insert(lie_rst *r, tree *t, uint32_t ni, const entry *e, int depth);
+static void insert(tree *t, uint32_t ni, const entry *e, int depth);
 
-static void split(lie_rst *r, tree *t, uint32_t ni, int depth)
+static void split(tree *t, uint32_t ni, int depth)
 {
     box5 cell = t->nodes[ni].cell;
     int first = -1;
@@ -157,7 +159,7 @@ static void split(lie_rst *r, tree *t, uint32_t ni, int depth)
         }
         int idx = tree_push_node(t, &c);
         if (idx < 0) {
-            r->nomem = 1;
+            t->nomem = 1;
             return;
         }
         if (k == 0)
@@ -169,13 +171,13 @@ static void split(lie_rst *r, tree *t, uint32_t ni, int depth)
     n->e = NULL;
     n->n = n->cap = 0;
     n->child = first;
-    r->stored -= count;
+    t->stored -= count;
     for (uint32_t i = 0; i < count; i++)
-        insert(r, t, ni, &old[i], depth);
+        insert(t, ni, &old[i], depth);
     free(old);
 }
 
-static void insert(lie_rst *r, tree *t, uint32_t ni, const entry *e, int depth)
+static void insert(tree *t, uint32_t ni, const entry *e, int depth)
 {
     tnode *n = &t->nodes[ni];
     if (n->child >= 0) {
@@ -187,27 +189,27 @@ static void insert(lie_rst *r, tree *t, uint32_t ni, const entry *e, int depth)
             /* a wide region: copying it into most children would multiply
              * memory; it stays here and queries test it on the way down */
             if (!leaf_add(n, e))
-                r->nomem = 1;
+                t->nomem = 1;
             else
-                r->stored++;
+                t->stored++;
             return;
         }
         for (int k = 0; k < 32; k++) {
             const box5 *cell = &t->nodes[first + k].cell;
             if (box5_overlap(&e->b, cell)) {
                 entry c = clip(e, cell);
-                insert(r, t, (uint32_t)(first + k), &c, depth + 1);
+                insert(t, (uint32_t)(first + k), &c, depth + 1);
             }
         }
         return;
     }
     if (!leaf_add(n, e)) {
-        r->nomem = 1;
+        t->nomem = 1;
         return;
     }
-    r->stored++;
+    t->stored++;
     if (n->n > LEAF_MAX && depth < MAX_DEPTH)
-        split(r, t, ni, depth);
+        split(t, ni, depth);
 }
 
 /* The region of a pair for the tree of axis a, from its hull points:
@@ -316,6 +318,22 @@ static void compute_region(build_state *bs, const region_item *it, lie_vec3 *hul
     out->world = lie_box3_empty();
     for (int i = 0; i < n; i++)
         lie_box3_grow(&out->world, hull[i]);
+}
+
+/* lie_parallel_for body: insert the regions of tree `axis`, in item order. */
+static void insert_axis(void *ctx, size_t axis, int worker)
+{
+    build_state *bs = ctx;
+    tree *t = &bs->r->t[axis];
+    for (size_t i = 0; i < bs->n_items && !t->nomem; i++) {
+        const region_out *o = &bs->outs[i];
+        if (o->axis != (int)axis)
+            continue;
+        entry en;
+        en.node = bs->items[i].node;
+        en.b = o->b;
+        insert(t, 0, &en, 0);
+    }
 }
 
 static void compute_chunk(void *ctx, size_t chunk, int worker)
@@ -433,15 +451,17 @@ lie_status lie_rst_build(const lie_scene *s, const lie_env *env, int threads, li
     if (bs.hull && bs.outs && !bs.nomem)
         st = lie_parallel_for((bs.n_items + REGION_CHUNK - 1) / REGION_CHUNK, workers, compute_chunk, &bs, NULL,
                               NULL);
+    /* the three trees take their regions at once, each in item order */
+    if (st == LIE_OK)
+        st = lie_parallel_for(3, workers, insert_axis, &bs, NULL, NULL);
     uint64_t fallback = 0;
+    for (int a = 0; a < 3; a++) {
+        r->stored += r->t[a].stored;
+        r->nomem |= r->t[a].nomem;
+    }
     for (size_t i = 0; st == LIE_OK && i < bs.n_items && !r->nomem; i++) {
         const region_out *o = &bs.outs[i];
-        if (o->axis >= 0) {
-            entry en;
-            en.node = bs.items[i].node;
-            en.b = o->b;
-            insert(r, &r->t[o->axis], 0, &en, 0);
-        } else {
+        if (o->axis < 0) {
             add_fallback(r, bs.items[i].node, o->world);
             fallback++;
         }

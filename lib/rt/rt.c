@@ -1,7 +1,10 @@
 /* Embree 3 device and scene, and the queries the renderer and lie-build ask. */
 #include "rt/rt.h"
+#include "rt/boxq.h"
 
 #include <embree3/rtcore.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
@@ -14,6 +17,11 @@ struct lie_rt {
     uint8_t *tri_masked;    /* per triangle: alphaMode MASK (NULL: none is) */
     float scale;
     lie_error *pending;     /* where the error callback writes during create */
+    /* box queries' hierarchy, built by the first query (the renderer never
+     * asks one): a cache behind a lock, not a change of what rt answers */
+    pthread_mutex_t boxq_lock;
+    _Atomic(lie_boxq *) boxq;
+    atomic_int boxq_failed; /* out of memory: Embree's point query answers */
 };
 
 /* Embree reports errors through a callback; we store the first message. */
@@ -126,6 +134,7 @@ lie_status lie_rt_create(const lie_scene *s, lie_rt **out, lie_error *err)
     lie_error_clear(&local);
     rt->pending = &local;
     rt->s = s;
+    pthread_mutex_init(&rt->boxq_lock, NULL);
     rt->device = rtcNewDevice("verbose=0,threads=1");
     if (!rt->device) {
         enum RTCError code = rtcGetDeviceError(NULL);
@@ -207,6 +216,8 @@ void lie_rt_destroy(lie_rt *rt)
         rtcReleaseDevice(rt->device);
     free(rt->tri_two_sided);
     free(rt->tri_masked);
+    lie_boxq_destroy(atomic_load(&rt->boxq));
+    pthread_mutex_destroy(&rt->boxq_lock);
     free(rt);
 }
 
@@ -425,8 +436,32 @@ static bool on_point_query(struct RTCPointQueryFunctionArguments *args)
     return false; /* the query radius never shrinks */
 }
 
+/* The hierarchy, built on first use by whichever worker asks first. */
+static const lie_boxq *boxq_get(const lie_rt *crt)
+{
+    lie_rt *rt = (lie_rt *)crt; /* only the cache members change */
+    lie_boxq *q = atomic_load_explicit(&rt->boxq, memory_order_acquire);
+    if (q || atomic_load(&rt->boxq_failed))
+        return q;
+    pthread_mutex_lock(&rt->boxq_lock);
+    q = atomic_load(&rt->boxq);
+    if (!q && !atomic_load(&rt->boxq_failed)) {
+        if (lie_boxq_build(rt->s->tri_p, rt->s->n_tris, &q) == LIE_OK)
+            atomic_store_explicit(&rt->boxq, q, memory_order_release);
+        else
+            atomic_store(&rt->boxq_failed, 1);
+    }
+    pthread_mutex_unlock(&rt->boxq_lock);
+    return q;
+}
+
 void lie_rt_box_query(const lie_rt *rt, lie_box3 box, lie_rt_box_fn fn, void *ctx)
 {
+    const lie_boxq *bq = boxq_get(rt);
+    if (bq) {
+        lie_boxq_query(bq, box, fn, ctx);
+        return;
+    }
     /* Embree's point query visits every primitive whose bounds meet a
      * sphere; the sphere around the box is a superset, the callback keeps
      * the triangles whose bounds meet the box itself. */

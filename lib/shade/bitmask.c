@@ -236,6 +236,17 @@ static void leaf(bm_query *q, int g)
     q->unsure |= unsure;
 }
 
+/* The 64 samples of word w one by one.  Deciding its 8 groups of level 1
+ * by their boxes first cost more than it saved (the bit loops' branches
+ * and one more call): 10-15% slower per blocker, measured at 256 to 4096
+ * samples. */
+static void word(bm_query *q, int w)
+{
+    const int g1 = 8 * w + 8 < q->b->n_groups[1] ? 8 * w + 8 : q->b->n_groups[1];
+    for (int g = 8 * w; g < g1; g++)
+        leaf(q, g);
+}
+
 /* Which of the 8 boxes of level l from group g0 lie wholly inside the
  * blocker (bits of *in) and which wholly outside it (bits of *out; NaN
  * boxes, the padding, are outside).  A form's least and greatest values
@@ -344,7 +355,11 @@ static void visit(bm_query *q, int l, int g0)
     }
     for (unsigned m = rest; m; m &= m - 1) {
         int g = g0 + __builtin_ctz(m);
-        if (!group_full(q, l, g))
+        if (group_full(q, l, g))
+            continue;
+        if (l == 2)
+            word(q, g);
+        else
             visit(q, l - 1, 8 * g);
     }
 }

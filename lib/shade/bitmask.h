@@ -14,9 +14,9 @@
  * samples (a byte of the mask), every 64 (a word) and every 8^k are
  * compact in the plane, with a box each.  A blocker's forms are evaluated
  * on 8 boxes at a time: a box wholly inside sets its bits at once, one
- * wholly outside is skipped, and only the samples of the bytes its edges
+ * wholly outside is skipped, and only the samples of the words its edges
  * cross are tested one by one (8 at a time).  So a blocker costs about
- * its shadow's perimeter in bytes rather than N tests: O(sqrt N).  The
+ * its shadow's perimeter in words rather than N tests: O(sqrt N).  The
  * boxes are decided with a margin that covers rounding, so a sample near
  * an edge is always decided by the per-sample test, the one the
  * sample-by-sample path uses. */

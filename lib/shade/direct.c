@@ -339,6 +339,36 @@ static void closed_ltc(const lie_polylight *pl, const lie_ltc_shading *sh, lie_v
         out[c] = pl->radiance[c] * acc[c];
 }
 
+/* Embree answers the segments (sc->dx, dy, dz from o) of the samples that
+ * would contribute, into sc->occ; returns how many rays it cast. */
+static int embree_occluded(const lie_shade_ctx *c, lie_vec3 o, int n, lie_shade_scratch *sc)
+{
+    lie_ray_batch *b = &sc->batch;
+    int m = 0;
+    for (int i = 0; i < n; i++) {
+        float w = sc->scalar ? sc->wr[i] : sc->wr[i] + sc->wg[i] + sc->wb[i];
+        if (!(w > 0.0f))
+            continue;
+        b->ox[m] = o.x;
+        b->oy[m] = o.y;
+        b->oz[m] = o.z;
+        b->dx[m] = sc->dx[i];
+        b->dy[m] = sc->dy[i];
+        b->dz[m] = sc->dz[i];
+        b->tnear[m] = 0.0f;
+        b->tfar[m] = 1.0f;
+        sc->idx[m] = i;
+        m++;
+    }
+    b->n = m;
+    if (m > 0) {
+        lie_rt_occluded_batch(c->rt, b, c->opt->rays);
+        for (int k = 0; k < m; k++)
+            sc->occ[sc->idx[k]] = b->occluded[k] ? ~0u : 0u;
+    }
+    return m;
+}
+
 static void add_scaled(const float k[3], double omega, float rgb[3])
 {
     float w = (float)omega;
@@ -408,9 +438,22 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
          * (bitmask.h) where asked, or where cheaper than testing them one by
          * one (the exact shadow is weighed against both below). */
         const lie_bitmask *bm = cls == LIE_VISCLASS_BLOCKERS && c->bits ? c->bits[e] : NULL;
-        const double bits_cost = bm ? lie_render_bitmask_cost(opt->light_samples, n_blockers, !(pl && sf->lambert && bm->ls.uniform)) : 0.0;
-        const int use_bits =
-            bm && (opt->bitmask == LIE_BITMASK_ONLY || bits_cost < lie_render_samples_cost(opt->light_samples, n_blockers));
+        const int ns = opt->light_samples;
+        const double bits_cost = bm ? lie_render_bitmask_cost(ns, n_blockers, !(pl && sf->lambert && bm->ls.uniform)) : 0.0;
+        int use_bits = bm && (opt->bitmask == LIE_BITMASK_ONLY || bits_cost < lie_render_samples_cost(ns, n_blockers));
+        if (cls == LIE_VISCLASS_BLOCKERS && opt->exact == LIE_EXACT_AUTO && opt->bitmask == LIE_BITMASK_AUTO &&
+            !lie_emitter_is_delta(em)) {
+            /* a list so long that its cheapest answer costs more than
+             * Embree's rays (item 8 of issue 12: never slower than full) */
+            double best = use_bits ? bits_cost : lie_render_samples_cost(ns, n_blockers);
+            if (pl && c->exact && lie_render_exact_cost(n_blockers) < best)
+                best = lie_render_exact_cost(n_blockers);
+            if (lie_render_embree_cost(ns) < best) {
+                cls = LIE_VISCLASS_TEST_ALL;
+                bm = NULL;
+                use_bits = 0;
+            }
+        }
         double omega = 0.0;
         float kc[3] = {0.0f, 0.0f, 0.0f}, kl[3] = {0.0f, 0.0f, 0.0f};
         if (pl) {
@@ -531,32 +574,8 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                 if (timers)
                     st->t_blockers += lie_time_now() - t0;
             } else {
-                /* Embree: rays only for samples that would contribute */
                 lie_shadow_query_segments(&q);
-                lie_ray_batch *b = &sc->batch;
-                int m = 0;
-                for (int i = 0; i < n; i++) {
-                    float w = sc->scalar ? sc->wr[i] : sc->wr[i] + sc->wg[i] + sc->wb[i];
-                    if (!(w > 0.0f))
-                        continue;
-                    b->ox[m] = o.x;
-                    b->oy[m] = o.y;
-                    b->oz[m] = o.z;
-                    b->dx[m] = sdx[i];
-                    b->dy[m] = sdy[i];
-                    b->dz[m] = sdz[i];
-                    b->tnear[m] = 0.0f;
-                    b->tfar[m] = 1.0f;
-                    sc->idx[m] = i;
-                    m++;
-                }
-                b->n = m;
-                if (m > 0) {
-                    lie_rt_occluded_batch(c->rt, b, opt->rays);
-                    for (int k = 0; k < m; k++)
-                        sc->occ[sc->idx[k]] = b->occluded[k] ? ~0u : 0u;
-                }
-                sc->stats.shadow_rays += (uint64_t)m;
+                sc->stats.shadow_rays += (uint64_t)embree_occluded(c, o, n, sc);
                 st->pairs_embree++;
                 if (timers)
                     st->t_embree += lie_time_now() - t0;

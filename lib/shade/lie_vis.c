@@ -532,6 +532,8 @@ static int occluded_mask(void *ctx, const uint32_t *blockers, int n_blockers, li
             lie_bitmask_cone(bm, f, mask);
         else if (lie_bitmask_cone_depth(bm, f, mask))
             return 0;
+        if (lie_bitmask_all(bm, mask))
+            break; /* every sample blocked: the rest can add nothing (usually one word read) */
     }
     return 1;
 }

@@ -230,6 +230,12 @@ static inline double lie_render_bitmask_cost(int n, int b, int shade_all)
     return 300.0 + (shade_all ? 4.0 * n : 0.0) + (double)b * (420.0 + 9.0 * __builtin_sqrt((double)n));
 }
 static inline double lie_render_samples_cost(int n, int b) { return (double)n * (4.0 + 1.5 * b); }
+/* Embree's rays over the whole scene, in the same units: museum1's shadow
+ * rays and its blocker tests measured side by side with --timers, 160
+ * a ray.  A pair whose list answers cost more (hundreds of blockers) asks
+ * Embree instead, so that no pair is slower than full visibility (with
+ * the default modes; --exact off and --bitmask only keep the lists). */
+static inline double lie_render_embree_cost(int n) { return 160.0 * n; }
 static inline double lie_render_exact_cost(int b) { return 3000.0 + 2000.0 * b; }
 
 typedef struct lie_render_options {

@@ -300,6 +300,9 @@ static lie_status recompute(lie_update *u, const uint8_t *chosen, lie_error *err
     }
     for (int d = 0; d <= LIE_PATCH_MAX_DEPTH; d++)
         u->st.nodes_recomputed += bst.patches_per_depth[d];
+    u->st.seconds_cpu_workers += bst.seconds_cpu_sum;
+    u->st.seconds_cpu_worker_max += bst.seconds_cpu_max;
+    u->st.seconds_tail += bst.seconds_tail;
     /* units are contiguous in unit order, in the work env as in any env
      * lib/lie assembles; an unchosen unit keeps its layout */
     uint8_t *nf = calloc((size_t)w->n_nodes + 1, 1);

@@ -105,6 +105,9 @@ typedef struct lie_update_stats {
     uint64_t units_views;      /* of the rebuilt units: their triangle's pixels in the views changed */
     double seconds_rst, seconds_edit, seconds_query, seconds_bvh, seconds_update;
     double seconds_views;      /* sampling a view-built cache's views, before and after the edits */
+    /* the recomputation's parallel loops (lie_build_stats): CPU seconds of
+     * all workers, of the busiest worker per loop, idle tails */
+    double seconds_cpu_workers, seconds_cpu_worker_max, seconds_tail;
 } lie_update_stats;
 
 typedef struct lie_update lie_update;

@@ -86,13 +86,10 @@ run "$B/lie-render" "$S/museum1.gltf" -q --size 32x32 --aov complexity -o "$TMP/
 expect_rc 2 "complexity layer without a cache"
 
 # Camera paths
-cat >"$TMP/path.yaml" <<'YAML'
-interpolation: smooth
-keys:
-  - {eye: [3.5, 1.6, 2.9], target: [-0.6, 0.45, -0.5], fov: 50, frames: 2}
-  - {eye: [0.0, 2.0, 3.5], target: [0.0, 0.5, 0.0], frames: 2}
-  - {eye: [-3.0, 1.6, 2.5], target: [0.5, 0.4, -0.5]}
-YAML
+# three keys, 2 + 2 + 1 frames
+printf '%s\n' 'interpolation: smooth' 'keys: [{eye: [3.5, 1.6, 2.9], target: [-0.6, 0.45, -0.5], fov: 50, frames: 2},' \
+    '  {eye: [0.0, 2.0, 3.5], target: [0.0, 0.5, 0.0], frames: 2}, {eye: [-3.0, 1.6, 2.5], target: [0.5, 0.4, -0.5]}]' \
+    >"$TMP/path.yaml"
 run "$B/lie-render" "$TMP/museum1-s.lie" -q --size 32x32 --path "$TMP/path.yaml" -o "$TMP/frame_%03d.exr"
 expect_rc 0 "camera path renders"
 n=$(ls "$TMP"/frame_*.exr 2>/dev/null | wc -l)

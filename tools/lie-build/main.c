@@ -6,7 +6,7 @@
 #include "lie.h"
 
 #include <getopt.h>
-#include <time.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -62,6 +62,18 @@ static void usage(FILE *fp)
             "                        ray (default %g,%g,%g; make bench-build measures them)\n"
             "      --threads N       worker threads (default: all cores); the cache is the\n"
             "                        same for any N\n"
+            "      --edit EDIT.yaml  apply these edits (formats/edit.md; repeatable, in order)\n"
+            "                        to the scene first, and log them in the cache: the cache\n"
+            "                        equals lie-build SCENE | rst-update - EDIT.yaml\n"
+            "      --partial         on SIGINT, SIGTERM or SIGHUP, stop building and write what\n"
+            "                        is done as a valid partial cache (units not built are\n"
+            "                        'none': lie-render answers them from the whole scene), then\n"
+            "                        exit 128+signal; a second signal aborts at once, writing\n"
+            "                        nothing.  Without it a signal aborts and writes nothing\n"
+            "      --resume PARTIAL  continue an interrupted build: copy the units PARTIAL holds\n"
+            "                        and build the rest; give the same scene, --edit, --view\n"
+            "                        and --path.  The parameters are PARTIAL's; the cache\n"
+            "                        equals an uninterrupted build's, byte for byte\n"
             "      --allow-external-uris  let the glTF reference files outside its folder\n"
             "      --stats[=json]    print statistics to stderr\n"
             "  -q, --quiet           no progress bar\n"
@@ -84,7 +96,7 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 enum {
     OPT_SAMPLES = 256, OPT_MAX_SAMPLES, OPT_MAX_BLOCKERS, OPT_MIN_PATCH, OPT_SPLIT_GAIN, OPT_COMPLEX_CAP, OPT_BLOCKERS,
     OPT_THREADS, OPT_VIEW, OPT_VIEW_SIZE, OPT_PATH, OPT_MAX_NODES,
-    OPT_INTO, OPT_FRAMES, OPT_LIGHT_SAMPLES, OPT_COST
+    OPT_INTO, OPT_FRAMES, OPT_LIGHT_SAMPLES, OPT_COST, OPT_PARTIAL, OPT_RESUME, OPT_EDIT
 };
 
 static const struct option long_opts[] = {
@@ -101,6 +113,9 @@ static const struct option long_opts[] = {
     {"view-size", required_argument, NULL, OPT_VIEW_SIZE},
     {"path", required_argument, NULL, OPT_PATH},
     {"into", required_argument, NULL, OPT_INTO},
+    {"partial", no_argument, NULL, OPT_PARTIAL},
+    {"resume", required_argument, NULL, OPT_RESUME},
+    {"edit", required_argument, NULL, OPT_EDIT},
     {"frames", required_argument, NULL, OPT_FRAMES},
     {"light-samples", required_argument, NULL, OPT_LIGHT_SAMPLES},
     {"cost", required_argument, NULL, OPT_COST},
@@ -110,6 +125,103 @@ static const struct option long_opts[] = {
     LIE_OPT_ENTRY_VERBOSE,
     LIE_OPT_ENTRIES_END,
 };
+
+/* --partial: the first SIGINT, SIGTERM or SIGHUP asks the build to stop
+ * (lie_build_control.stop); a second one aborts at once, as without
+ * --partial.  The write that follows is the library's: its handler removes
+ * the temporary and re-raises (lib/core/file.c), so the cache on disk is
+ * the whole partial cache or nothing. */
+static volatile sig_atomic_t stop_signal;
+static const int stop_signals[3] = {SIGINT, SIGTERM, SIGHUP};
+
+static void on_stop(int sig)
+{
+    if (stop_signal) {
+        signal(sig, SIG_DFL);
+        raise(sig); /* delivered with the default action once the handler returns */
+        return;
+    }
+    stop_signal = sig;
+}
+
+/* Install on_stop where a signal has its default action (a signal the
+ * caller ignores, as nohup does SIGHUP, stays ignored), or put the default
+ * back. */
+static void stop_handlers(int on, int installed[3])
+{
+    for (int i = 0; i < 3; i++) {
+        struct sigaction old, sa;
+        memset(&sa, 0, sizeof sa);
+        sigemptyset(&sa.sa_mask);
+        if (on) {
+            installed[i] = sigaction(stop_signals[i], NULL, &old) == 0 && old.sa_handler == SIG_DFL &&
+                           !(old.sa_flags & SA_SIGINFO);
+            if (!installed[i])
+                continue;
+            sa.sa_handler = on_stop;
+            for (int j = 0; j < 3; j++)
+                sigaddset(&sa.sa_mask, stop_signals[j]);
+        } else {
+            if (!installed[i])
+                continue;
+            sa.sa_handler = SIG_DFL;
+        }
+        sigaction(stop_signals[i], &sa, NULL);
+    }
+}
+
+static const char *signal_name(int sig)
+{
+    return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : sig == SIGHUP ? "SIGHUP" : "a signal";
+}
+
+/* --edit: read, parse and apply each edit file in order (a resumed build's
+ * log must hold the same texts); edit_log[i].name is set, text and size
+ * are filled. */
+static lie_status apply_edits(lie_scene *scene, const lie_scene_options *so, lie_cache_edit *edit_log, int n,
+                              const lie_cache *resume, lie_error *err)
+{
+    for (int i = 0; i < n; i++)
+        edit_log[i].text = NULL;
+    if (resume && resume->n_edits != n)
+        return lie_error_set(err, LIE_ERR_ARG, scene->path, "the partial cache was built with %d edit files, not %d",
+                             resume->n_edits, n);
+    for (int i = 0; i < n; i++) {
+        lie_cache_edit *ed = &edit_log[i];
+        lie_edit *e = NULL;
+        if (lie_read_file_max(ed->name, LIE_READ_MAX_TEXT, &ed->text, &ed->size, err) != LIE_OK ||
+            lie_edit_parse(ed->text, ed->size, ed->name, &e, err) != LIE_OK ||
+            lie_edit_apply(scene, e, so, NULL, err) != LIE_OK) {
+            lie_edit_destroy(e);
+            return err->status;
+        }
+        lie_edit_destroy(e);
+        if (resume && (resume->edits[i].size != ed->size || memcmp(resume->edits[i].text, ed->text, ed->size)))
+            return lie_error_set(err, LIE_ERR_ARG, ed->name, "differs from edit %d of the partial cache", i);
+    }
+    return LIE_OK;
+}
+
+static void free_edits(lie_cache_edit *edit_log, int n)
+{
+    for (int i = 0; i < n; i++)
+        free(edit_log[i].text);
+}
+
+/* A resumed build's views must be the partial cache's. */
+static int same_views(const lie_cache_views *a, const lie_cache_views *b)
+{
+    if (a->n_cams != b->n_cams || (a->n_cams && (a->width != b->width || a->height != b->height ||
+                                                 a->max_depth != b->max_depth)))
+        return 0;
+    for (int i = 0; i < a->n_cams; i++) {
+        lie_camera x = a->cams[i], y = b->cams[i];
+        x.name = y.name = NULL;
+        if (memcmp(&x, &y, sizeof x) != 0)
+            return 0;
+    }
+    return 1;
+}
 
 static void print_stats(const char *input, const lie_scene *s, const lie_env *env, const lie_build_stats *st,
                         const lie_add_stats *as, const lie_prediction *pred, double cpu_build, double t_load,
@@ -166,6 +278,12 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
                     sp, sm, pred->pixels, 1e-9 * pred->full_ns, 1e-9 * pred->lie_ns, pred->full_rays,
                     pred->list_entries, pred->env_rays);
         fprintf(stderr, "}");
+        fprintf(stderr,
+                ",\"partial\":%s,\"units_copied\":%llu,\"units_interrupted\":%llu,\"workers\":%d,\"seconds_cpu\":%.6f,"
+                "\"seconds_cpu_workers\":%.6f,\"seconds_cpu_worker_max\":%.6f,\"seconds_tail\":%.6f",
+                env->partial ? "true" : "false", (unsigned long long)st->units_copied,
+                (unsigned long long)st->units_interrupted, st->workers, lie_cpu_time(), st->seconds_cpu_sum,
+                st->seconds_cpu_max, st->seconds_tail);
         if (as)
             fprintf(stderr, ",\"into\":{\"units_kept\":%llu,\"units_refined\":%llu,\"units_new\":%llu,"
                             "\"nodes_recomputed\":%llu}",
@@ -202,6 +320,13 @@ static void print_stats(const char *input, const lie_scene *s, const lie_env *en
             bytes);
     fprintf(stderr, "  time: load %.3f s, bvh %.3f s, build %.3f s, write %.3f s\n", t_load, t_bvh, t_build,
             t_write);
+    fprintf(stderr, "  cpu: %.3f s in all; the build's %d workers %.3f s, the busiest %.3f s, cores idle for the "
+                    "last %.3f s\n", lie_cpu_time(), st->workers, st->seconds_cpu_sum, st->seconds_cpu_max,
+            st->seconds_tail);
+    if (st->units_copied || st->units_interrupted || env->partial)
+        fprintf(stderr, "  units: %llu copied from the resumed cache, %llu left unbuilt by an interruption%s\n",
+                (unsigned long long)st->units_copied, (unsigned long long)st->units_interrupted,
+                env->partial ? " (the cache is partial)" : "");
     fprintf(stderr, "  model: build %.3f CPU s predicted, %.3f measured", model_build, cpu_build);
     if (pred)
         fprintf(stderr, "; splits save %.4f s a frame predicted, %.4f by their lists; a frame of the views "
@@ -242,20 +367,16 @@ static lie_status gather_views(const lie_scene *scene, const char *input, const 
     return st;
 }
 
-static double cpu_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 int main(int argc, char **argv)
 {
     lie_build_params bp = lie_build_params_default();
     lie_scene_options so = lie_scene_options_default();
     const char *output = NULL, *into = NULL;
-    int params_given = 0, size_given = 0;
-    const char *views[64], *path_file = NULL;
+    int params_given = 0, size_given = 0, partial = 0;
+    const char *views[64], *path_file = NULL, *resume_file = NULL;
+    lie_cache_edit edit_log[64];
+    int n_edits = 0;
     int n_views = 0, view_w = 512, view_h = 512;
     long v;
     float f;
@@ -348,6 +469,14 @@ int main(int argc, char **argv)
             break;
         case OPT_PATH: path_file = optarg; break;
         case OPT_INTO: into = optarg; break;
+        case OPT_PARTIAL: partial = 1; break;
+        case OPT_RESUME: resume_file = optarg; break;
+        case OPT_EDIT:
+            if (n_edits == 64)
+                return usage_error("--edit: at most 64 edit files, got another: '%s'", optarg);
+            edit_log[n_edits].name = optarg;
+            edit_log[n_edits++].text = NULL;
+            break;
         case OPT_VIEW_SIZE:
             if (!lie_parse_size(optarg, 16384, &view_w, &view_h))
                 return usage_error("--view-size: expected WxH, got '%s'", optarg);
@@ -358,6 +487,10 @@ int main(int argc, char **argv)
     if (c == LIE_CLI_EXIT)
         return cli.status;
     so.allow_external_uris = cli.external;
+    if (into && (resume_file || n_edits))
+        return usage_error("%s", "--into: give no --resume or --edit (rst-update edits a cache)");
+    if (resume_file && params_given)
+        return usage_error("%s", "--resume: the partial cache's build parameters are used; give none");
     if (into) {
         if (optind + 1 < argc)
             return usage_error("unexpected argument '%s'", argv[optind + 1]);
@@ -383,17 +516,27 @@ int main(int argc, char **argv)
         cli.quiet = 1; /* rank 0 prints the statistics */
         if (lie_dist_rank() != 0)
             cli.stats = 0;
-        if (into) {
+        if (into || partial || resume_file || n_edits) {
             lie_error e;
-            lie_error_set(&e, LIE_ERR_ARG, into, "--into runs in one process, not under mpirun");
+            lie_error_set(&e, LIE_ERR_ARG, into ? into : input,
+                          "--into, --edit, --partial and --resume run in one process, not under mpirun");
             return fail(&e);
         }
     }
     lie_error err;
     lie_error_clear(&err);
-    double t0 = lie_time_now(), cpu0 = cpu_seconds();
+    double t0 = lie_time_now(), cpu0 = lie_cpu_time();
     lie_scene *scene = NULL;
-    lie_cache *old = NULL;
+    lie_cache *old = NULL, *resume = NULL;
+    if (resume_file) {
+        if (lie_cache_read(resume_file, &resume, &err) != LIE_OK)
+            return fail(&err);
+        int threads = bp.threads;
+        uint64_t max_nodes = bp.max_nodes;
+        bp = resume->env->params;
+        bp.threads = threads;
+        bp.max_nodes = max_nodes;
+    }
     lie_camera_path *cpath = NULL; /* --path */
     lie_cache_views cv = {NULL, 0, view_w, view_h, LIE_MAX_DEPTH_DEFAULT};
     if (into) {
@@ -424,11 +567,20 @@ int main(int argc, char **argv)
     } else if (build_load_inputs(input, path_file, &so, &scene, &cpath, &err) != LIE_OK) {
         lie_camera_path_destroy(cpath);
         lie_scene_destroy(scene);
+        lie_cache_destroy(resume);
+        return fail(&err);
+    }
+    uint64_t loaded_hash = scene->hash;
+    if (apply_edits(scene, &so, edit_log, n_edits, resume, &err) != LIE_OK) {
+        free_edits(edit_log, n_edits);
+        lie_camera_path_destroy(cpath);
+        lie_cache_destroy(resume);
+        lie_scene_destroy(scene);
         return fail(&err);
     }
     if (!cli.quiet)
         lie_print_scene_warnings(prog, scene, input);
-    if (scene->n_emitters == 0 && !cli.quiet)
+    if (scene->n_emitters == 0 && !cli.quiet) /* after --edit, which may add some */
         fprintf(stderr, "%s: %s: warning: no emitters (no emissive material, no KHR_lights_punctual light): "
                         "the cache holds no environments\n", prog, input);
     double t1 = lie_phase(prog, cli.verbose, "load", t0);
@@ -467,9 +619,13 @@ int main(int argc, char **argv)
         }
     }
     lie_camera_path_destroy(cpath);
+    if (rc == LIE_OK && resume && !same_views(&resume->views, &cv))
+        rc = lie_error_set(&err, LIE_ERR_ARG, resume_file, "was built for other views (--view, --path, --view-size)");
     if (rc == LIE_OK)
         rc = lie_dist_check(scene->hash, scene->hash, &err);
     if (rc != LIE_OK) {
+        free_edits(edit_log, n_edits);
+        lie_cache_destroy(resume);
         lie_pixels_destroy(px);
         lie_pixels_destroy(old_px);
         free(cv.cams);
@@ -482,7 +638,7 @@ int main(int argc, char **argv)
         t2 = lie_phase(prog, cli.verbose, "views", t2);
     lie_progress prog_bar;
     lie_progress_begin(&prog_bar, stderr, "lie-build", !cli.quiet);
-    cpu0 = cpu_seconds();
+    cpu0 = lie_cpu_time();
     lie_env *env = NULL;
     lie_build_stats st;
     lie_add_stats as;
@@ -495,11 +651,24 @@ int main(int argc, char **argv)
     } else if (lie_dist_size() > 1) {
         rc = build_dist(scene, rt, &bp, px, &env, &st, &err);
     } else {
-        rc = lie_env_build_views(scene, rt, &bp, px, &prog_bar, &env, &st, &err);
+        lie_build_control ctl;
+        memset(&ctl, 0, sizeof ctl);
+        ctl.pixels = px;
+        ctl.progress = &prog_bar;
+        ctl.resume = resume ? resume->env : NULL;
+        ctl.stop = partial ? &stop_signal : NULL;
+        int handlers[3] = {0, 0, 0};
+        if (partial)
+            stop_handlers(1, handlers);
+        rc = lie_env_build_with(scene, rt, &bp, &ctl, &env, &st, &err);
+        if (partial)
+            stop_handlers(0, handlers); /* from here a signal aborts; the write's handler cleans up */
     }
+    lie_cache_destroy(resume);
     lie_pixels_destroy(old_px);
     lie_progress_end(&prog_bar);
     if (rc != LIE_OK || !env) { /* !env: another rank than 0 under mpirun: rank 0 writes */
+        free_edits(edit_log, n_edits);
         lie_env_destroy(env);
         lie_pixels_destroy(px);
         free(cv.cams);
@@ -508,14 +677,17 @@ int main(int argc, char **argv)
         lie_scene_destroy(scene);
         return rc != LIE_OK ? fail(&err) : 0;
     }
-    double t3 = lie_phase(prog, cli.verbose, "build", t2), cpu_build = cpu_seconds() - cpu0;
+    double t3 = lie_phase(prog, cli.verbose, "build", t2), cpu_build = lie_cpu_time() - cpu0;
     lie_cache cache;
     memset(&cache, 0, sizeof cache);
     cache.scene_path = (char *)input;
-    cache.scene_hash = old ? old->scene_hash : scene->hash;
+    cache.scene_hash = old ? old->scene_hash : loaded_hash;
     if (old) { /* the edit log goes on */
         cache.edits = old->edits;
         cache.n_edits = old->n_edits;
+    } else {
+        cache.edits = edit_log;
+        cache.n_edits = n_edits;
     }
     rc = lie_cache_set_state(&cache, scene, &err);
     cache.env = env;
@@ -532,12 +704,26 @@ int main(int argc, char **argv)
     }
     free(cache.emitters);
     free(cv.cams);
+    free_edits(edit_log, n_edits);
     lie_pixels_destroy(px);
+    int partial_done = env->partial;
+    uint64_t unbuilt = st.units_interrupted;
     lie_env_destroy(env);
     lie_cache_destroy(old);
     lie_rt_destroy(rt);
     lie_scene_destroy(scene);
     if (rc != LIE_OK)
         return fail(&err);
+    if (stop_signal) {
+        /* one line, and the shell's status for a signal: the caller sees it stopped */
+        if (partial_done)
+            fprintf(stderr, "%s: %s: interrupted by %s: wrote a partial cache, %llu units not built "
+                            "(lie-build --resume %s completes it)\n", prog, output, signal_name(stop_signal),
+                    (unsigned long long)unbuilt, strcmp(output, "-") == 0 ? "CACHE" : output);
+        else
+            fprintf(stderr, "%s: %s: interrupted by %s after the last unit: the cache is complete\n", prog, output,
+                    signal_name(stop_signal));
+        return 128 + stop_signal;
+    }
     return 0;
 }

@@ -74,6 +74,16 @@ int inspect_verify(const char *path, const inspect_options *o)
 
 /* ---- summary ---------------------------------------------------------------- */
 
+/* Units whose root is class none: outside lie-build's views, or not built
+ * yet by an interrupted build (env->partial). */
+static uint64_t units_none(const lie_env *env)
+{
+    uint64_t n = 0, units = (uint64_t)env->n_tris * (uint64_t)env->n_emitters;
+    for (uint64_t u = 0; u < units; u++)
+        n += env->nodes[env->root[u]].cls == LIE_CLASS_NONE;
+    return n;
+}
+
 static void summary_text(const char *path, const inspect_cache *l, const lie_build_stats *st,
                          const lie_cache_section *sec, int n_sec)
 {
@@ -106,6 +116,10 @@ static void summary_text(const char *path, const inspect_cache *l, const lie_bui
     printf("emitters        %d (%d area, %d point, %d directional)\n", c->n_emitters, by_type[0], by_type[1],
            by_type[2]);
     printf("units           %llu\n", (unsigned long long)((uint64_t)c->n_tris * (uint64_t)c->n_emitters));
+    if (env->partial)
+        printf("partial         yes: an interrupted lie-build, %llu units not built yet (lie-build --resume "
+               "completes it; until then lie-render answers them from the whole scene)\n",
+               (unsigned long long)units_none(env));
     printf("nodes           %u (%llu leaves)\n", env->n_nodes, (unsigned long long)leaves);
     printf("pool entries    %u\n", env->n_pool);
     printf("pairs by class (leaves):\n");
@@ -166,6 +180,8 @@ static void summary_json(const char *path, const inspect_cache *l, const lie_bui
     printf(",\"triangles\":%u,\"emitters\":%d,\"units\":%llu,\"nodes\":%u,\"leaves\":%llu,\"pool_entries\":%u",
            c->n_tris, c->n_emitters, (unsigned long long)((uint64_t)c->n_tris * (uint64_t)c->n_emitters),
            env->n_nodes, (unsigned long long)leaves, env->n_pool);
+    printf(",\"partial\":%s,\"units_none\":%llu", env->partial ? "true" : "false",
+           (unsigned long long)units_none(env));
     printf(",\"emitter_types\":{");
     for (uint32_t t = 0; t < 3; t++) {
         int n = 0;

@@ -107,7 +107,8 @@ static void print_stats(const char *input, const lie_scene *s, const lie_update_
                 "\"nodes_recomputed\":%llu,\"rst_regions\":%llu,\"rst_fallback\":%llu,\"rst_tree_nodes\":%llu,"
                 "\"rst_bytes\":%zu,\"seconds_load\":%.6f,\"seconds_rst\":%.6f,\"seconds_edit\":%.6f,"
                 "\"seconds_query\":%.6f,\"seconds_bvh\":%.6f,\"seconds_views\":%.6f,\"seconds_update\":%.6f,"
-                "\"seconds_write\":%.6f,\"bytes\":%zu}\n",
+                "\"seconds_write\":%.6f,\"bytes\":%zu,\"seconds_cpu\":%.6f,\"seconds_cpu_workers\":%.6f,"
+                "\"seconds_cpu_worker_max\":%.6f,\"seconds_tail\":%.6f}\n",
                 st->edits, (unsigned long long)st->units, (unsigned long long)st->units_rebuilt,
                 (unsigned long long)st->units_views,
                 (unsigned long long)st->units_flagged, (unsigned long long)st->units_changed, precision,
@@ -115,7 +116,8 @@ static void print_stats(const char *input, const lie_scene *s, const lie_update_
                 (unsigned long long)st->nodes_recomputed, (unsigned long long)rs->regions,
                 (unsigned long long)rs->fallback, (unsigned long long)rs->tree_nodes, rs->bytes, t_load,
                 st->seconds_rst, st->seconds_edit, st->seconds_query, st->seconds_bvh, st->seconds_views,
-                st->seconds_update, t_write, bytes);
+                st->seconds_update, t_write, bytes, lie_cpu_time(), st->seconds_cpu_workers, st->seconds_cpu_worker_max,
+                st->seconds_tail);
         return;
     }
     fprintf(stderr,
@@ -134,6 +136,8 @@ static void print_stats(const char *input, const lie_scene *s, const lie_update_
             (unsigned long long)st->nodes_flagged_5d, (unsigned long long)st->nodes_flagged,
             (unsigned long long)st->nodes_recomputed, t_load, st->seconds_rst, st->seconds_edit, st->seconds_query,
             st->seconds_bvh, st->seconds_update, t_write);
+    fprintf(stderr, "  cpu: %.3f s in all; the recomputation's workers %.3f s, the busiest %.3f s, cores idle %.3f s\n",
+            lie_cpu_time(), st->seconds_cpu_workers, st->seconds_cpu_worker_max, st->seconds_tail);
 }
 
 /* Read the cache and its scene, update them (lib/update), write the cache. */
