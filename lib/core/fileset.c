@@ -199,6 +199,11 @@ lie_status lie_file_set_unpack(const unsigned char *data, size_t size, lie_file_
                                (unsigned long long)i);
             break;
         }
+        if (memchr(data + at, 0, len)) { /* a path is a C string: it would be cut short */
+            st = lie_error_set(err, LIE_ERR_FORMAT, NULL, "packed file set: the path of file %llu holds a NUL byte",
+                               (unsigned long long)i);
+            break;
+        }
         char *path = malloc(len + 1);
         unsigned char *d = malloc(n + 1);
         if (!path || !d) {

@@ -54,6 +54,13 @@ static void test_fileset_pack_unpack_round_trip(void **state)
     lie_file_set *c = NULL;
     assert_int_equal(lie_file_set_unpack(longer, n + 1, &c, &err), LIE_ERR_FORMAT);
     free(longer);
+    /* a NUL inside a path (found by tests/fuzz/fuzz_fileset.c): refused, not cut short */
+    unsigned char nul[16 + 16 + 3] = {'L', 'I', 'E', 'F', 'I', 'L', 'E', 'S', 1};
+    nul[16] = 3;
+    memcpy(nul + 32, "a\0b", 3);
+    assert_int_equal(lie_file_set_unpack(nul, sizeof nul, &c, &err), LIE_ERR_FORMAT);
+    assert_non_null(strstr(err.msg, "NUL"));
+    assert_null(c);
     free(d);
     lie_file_set_destroy(b);
     lie_file_set_destroy(a);
