@@ -8,6 +8,7 @@
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 int lie_parse_long(const char *s, long min, long max, long *out)
 {
@@ -123,8 +124,15 @@ static int first_rank(void)
 
 int lie_usage_error(const char *prog, const char *fmt, ...)
 {
-    if (!first_rank())
+    if (!first_rank()) {
+        /* mpirun kills the other ranks as soon as one exits non-zero: were
+         * this rank to exit first, rank 0 could be killed before its line
+         * is out.  Rank 0's exit ends this wait (mpirun's SIGTERM); the
+         * timeout only bounds a run whose rank 0 met no usage error. */
+        for (int i = 0; i < 100; i++)
+            usleep(100000);
         return 2;
+    }
     /* one write: under mpirun stderr is forwarded in chunks that other
      * output may otherwise split */
     char msg[1024];
