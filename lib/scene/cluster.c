@@ -26,10 +26,11 @@
  * scene's, into at most CLUSTER_SPLIT_MAX parts.  1: no spatial split, as
  * measured (the closing note of issue 14): every cluster repeats the
  * per-unit sampling of the build, and splitting the lit part of
- * bedroom_corner's emitter into 4 cost 16x the build and 5x the frame; and
- * with tests/data/gltf/light_strip.gltf's strip split in 2, an update that
- * removes its beam differed from the rebuild in one unit, not yet
- * understood. */
+ * bedroom_corner's emitter into 4 cost 16x the build and 5x the frame.
+ * (With the split on, tests/data/gltf/light_strip.gltf's strip in 2
+ * clusters updates as it rebuilds for moves, rotations and removals; an
+ * update removing its beam differed from the rebuild in one unit on a tree
+ * before the merges of c48d079, and no longer does.) */
 /* 0: only an emitter dark as a whole becomes a dark cluster.  Measured
  * (the closing note of issue 14), splitting the dark triangles off a
  * partly lit emitter cost more than it saved: the lit cluster's segments,
