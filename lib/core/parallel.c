@@ -71,11 +71,13 @@ static void *worker_main(void *p)
         size_t i = j->order ? j->order[k] : k;
         j->fn(j->ctx, i, w->id);
         size_t wi = j->weight ? j->weight[i] : 1;
-        size_t d = atomic_fetch_add(&j->done, wi) + wi;
+        atomic_fetch_add(&j->done, wi);
         /* any worker reports, so a long item on one worker does not stall
-         * the bar; done is summed over all of them */
+         * the bar; done is summed over all of them, and read inside the
+         * flag: a count taken before it could be older than the one the
+         * previous holder reported, and the bar would go back */
         if (j->progress && !atomic_flag_test_and_set(&j->reporting)) {
-            j->progress(j->pctx, d, j->total);
+            j->progress(j->pctx, atomic_load(&j->done), j->total);
             atomic_flag_clear(&j->reporting);
         }
     }
