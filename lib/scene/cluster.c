@@ -221,7 +221,7 @@ lie_status lie_scene_cluster(lie_scene *s)
             np = 1;
         }
         if (n_lit > 0)
-            np += split_emitter(s, scratch + n_dark, n_lit, kx, parts + np, tex ? 1 : CLUSTER_SPLIT_MAX);
+            np += split_emitter(s, scratch + n_dark, n_lit, kx, parts + np, tex ? 1 : s->cluster_max > 0 ? s->cluster_max : CLUSTER_SPLIT_MAX);
         for (int i = n_dark > 0; i < np; i++)
             parts[i].lo += n_dark;
         /* canonical: each part's triangles ascending; the dark part first,

@@ -138,6 +138,12 @@ lie_status lie_scene_load(const char *path, const lie_scene_options *opt, lie_sc
         free(s);
         return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
     }
+    s->cluster_max = opt->emitter_clusters;
+    if (s->cluster_max < 0 || s->cluster_max > LIE_CLUSTER_MAX) {
+        lie_scene_destroy(s);
+        return lie_error_set(err, LIE_ERR_ARG, path, "emitter clusters %d: expected 0 to %d", opt->emitter_clusters,
+                             LIE_CLUSTER_MAX);
+    }
     lie_status st = lie_gltf_import(s, path, opt, err);
     if (st == LIE_OK)
         st = lie_scene_flatten(s, err);

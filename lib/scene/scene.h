@@ -311,6 +311,7 @@ typedef struct lie_scene {
     uint32_t *cluster_tris;   /* every cluster's triangles (see lie_cluster) */
     float *cluster_cdf;       /* beside cluster_tris: cumulative area within its cluster */
     int32_t *tri_cluster;     /* cluster of each emitter triangle, or -1 */
+    int cluster_max;          /* lie_scene_options.emitter_clusters, resolved (0: 1) */
     lie_camera *cameras;      int n_cameras;
     lie_box3 bounds;
     float max_tri_area;
@@ -331,6 +332,12 @@ typedef struct lie_scene_options {
      * it references are taken from this set when it holds them (lib/core,
      * lie_file_set); the URI policy applies the same either way. */
     lie_file_set *files;
+    /* Clusters an untextured area emitter's lit triangles may be split into
+     * in space (lib/scene/cluster.c), 1..LIE_CLUSTER_MAX; 0 means the
+     * default, 1: measured, a spatial split costs more than it saves
+     * (README, "Clusters").  No tool sets it: caches do not record it, so
+     * a cache built with another value is refused by its partition digest. */
+    int emitter_clusters;
 } lie_scene_options;
 #define LIE_SCENE_MAX_TRIANGLES_DEFAULT 50000000u
 lie_scene_options lie_scene_options_default(void);
