@@ -7,7 +7,8 @@
  * largest extent is cut at the median of its triangles' centroids along
  * its longest axis, while it is larger than CLUSTER_EXTENT_SHARE of the
  * scene's extent, holds at least 2 LIE_CLUSTER_MIN_TRIS triangles, and the
- * emitter has fewer than CLUSTER_SPLIT_MAX clusters.  A function of the
+ * emitter has fewer than lie_scene_options.emitter_clusters clusters
+ * (default CLUSTER_SPLIT_MAX).  A function of the
  * emitter's triangles and the scene's bounds, deterministic (ties are
  * broken by triangle index); lib/update compares partitions by digest and
  * rebuilds an emitter's units when its partition changed.
