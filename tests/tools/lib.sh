@@ -38,3 +38,25 @@ expect_no_temp() {
 expect_same() { if cmp -s "$1" "$2"; then ok "$3"; else not_ok "$3: $1 and $2 differ"; fi; }
 
 finish() { [ "$failures" -eq 0 ]; exit $?; }
+
+# a number member of one-line JSON on stdin: field NAME
+field() { sed -n "s/.*\"$1\":\([0-9.e+-]*\).*/\1/p"; }
+
+# expect_converges WHAT SCENE IMAGE: IMAGE (32x32, of tests/scenes/SCENE)
+# against full visibility at 1k and 16k rotated samples: the RMSE must at
+# least halve (the difference shrinks like the reference's noise) and the
+# p99 error at 16k be <= 2%.
+expect_converges() {
+    for ns in 1024 16384; do
+        "$B/lie-render" "$S/$2.gltf" -q --size 32x32 --visibility=full --pattern rotated \
+            --light-samples $ns -o "$TMP/$2-f$ns.exr"
+        "$H/exr-compare" --error "$TMP/$2-f$ns.exr" "$3" >"$TMP/$2-e$ns.json"
+    done
+    e1=$(field rmse <"$TMP/$2-e1024.json"); e16=$(field rmse <"$TMP/$2-e16384.json")
+    p16=$(field p99 <"$TMP/$2-e16384.json")
+    if awk -v a="$e1" -v b="$e16" 'BEGIN { exit !(b <= a / 2) }'; then
+        ok "$2: $1 vs full, rmse $e1 at 1k samples, $e16 at 16k (shrinks with the reference's noise)"
+    else not_ok "$2: $1 vs full did not converge: rmse $e1 at 1k samples, $e16 at 16k"; fi
+    if awk -v p="$p16" 'BEGIN { exit !(p <= 0.02) }'; then ok "$2: p99 error against full at 16k is $p16 (<= 2%)"
+    else not_ok "$2: p99 error against full at 16k is $p16 (> 2%)"; fi
+}

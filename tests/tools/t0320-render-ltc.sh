@@ -11,7 +11,6 @@
 # exact shadows, and thread-count determinism.
 . "$ROOT/tests/tools/lib.sh"
 
-field() { sed -n "s/.*\"$1\":\([0-9.e+-]*\).*/\1/p"; }
 
 cat >"$TMP/ggx.yaml" <<'EOF'
 - set-material: {node: Floor, metallic: 0, roughness: 0.35}
