@@ -287,6 +287,7 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
         return;
     w->st.patches_per_depth[path.depth]++;
     size_t n_list = nc.n_list;
+    int exact_done = 0; /* w->hits holds the leaf's exact list */
     int splits = lie_subdiv_splits(c, tri, path, e, nc.cls, w->hits, n_list);
     if (splits && c->pix && !lie_subdiv_pixels_pay(c, tri, path, nc.cls, n_list, nc.quality)) {
         /* too few pixels see the patch for a split to pay: a leaf, with the
@@ -301,6 +302,7 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
             nc.cls = LIE_CLASS_COMPLEX;
         } else if (c->p->mode == LIE_BLOCKERS_SAMPLED) {
             n_list = exact_leaf_list(c, w, tri, path, e, two_sided, cap);
+            exact_done = 1;
             if (w->nomem)
                 return;
             /* the exact list holds the sampled one, longer than
@@ -400,6 +402,7 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
         }
         if (c->p->mode == LIE_BLOCKERS_SAMPLED && n_list <= c->p->complex_cap) {
             n_list = n_leaf; /* the exact list, in w->hits */
+            exact_done = 1;
             if (!n_list)
                 nc.cls = LIE_CLASS_VISIBLE;
         } else {
@@ -414,6 +417,17 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
         if (w->nomem)
             return;
         w->st.splits_undone++;
+    }
+    if (exact_done == 0 && nc.cls == LIE_CLASS_PARTIAL && c->p->mode == LIE_BLOCKERS_SAMPLED &&
+        s->emitters[s->clusters[e].emitter].n_clusters > 1 && n_list <= c->p->complex_cap) {
+        /* A cluster of a shared sampling (lib/lie/sample.c) saw only its
+         * share of the emitter's segments: its leaf gets the exact list of
+         * its own, narrow hull (§4.1.2), as a leaf kept whole does. */
+        n_list = exact_leaf_list(c, w, tri, path, e, two_sided, c->p->complex_cap);
+        if (w->nomem)
+            return;
+        if (n_list == 0)
+            nc.cls = LIE_CLASS_VISIBLE;
     }
     lie_pnode *nd = &u->nodes[idx];
     nd->quality = nc.quality;

@@ -358,8 +358,10 @@ static void test_split_strip_builds_and_renders_as_full(void **state)
     lie_scene_destroy(s);
 }
 
-/* A cache of the split strip records its partition; read against the
- * strip in one cluster, it is refused by name. */
+/* A cache of the split strip records its partition: loaded with the
+ * default options, its scene is split the same way (the cache's cluster
+ * count, lib/cache/scene.c); read against the strip in one cluster, it is
+ * refused by name. */
 static void test_cache_of_another_partition_is_refused(void **state)
 {
     (void)state;
@@ -374,8 +376,15 @@ static void test_cache_of_another_partition_is_refused(void **state)
     lie_cache *d = NULL;
     assert_int_equal(lie_cache_decode(data, size, "strip.lie", &d, &err), LIE_OK);
     assert_env_equal(c->env, d->env);
+    lie_scene *same = NULL;
+    assert_int_equal(lie_cache_load_scene(d, "strip.lie", NULL, NULL, &same, &err), LIE_OK);
+    assert_int_equal(same->emitters[0].n_clusters, s->emitters[0].n_clusters);
+    assert_int_equal(lie_scene_cluster_digest(same, 0), lie_scene_cluster_digest(s, 0));
+    lie_scene_destroy(same);
+    lie_scene_options o1 = lie_scene_options_default();
+    o1.emitter_clusters = 1;
     lie_scene *one = NULL;
-    assert_int_equal(lie_cache_load_scene(d, "strip.lie", NULL, NULL, &one, &err), LIE_ERR_FORMAT);
+    assert_int_equal(lie_cache_load_scene(d, "strip.lie", NULL, &o1, &one, &err), LIE_ERR_FORMAT);
     assert_null(one);
     assert_non_null(strstr(err.msg, "clusters"));
     lie_cache_destroy(d);

@@ -60,6 +60,8 @@ static void usage(FILE *fp)
             "      --light-samples N shadow rays per pixel and emitter in them (default %u)\n"
             "      --cost S,B,R      ns per build segment, per blocker test, per Embree shadow\n"
             "                        ray (default %g,%g,%g; make bench-build measures them)\n"
+            "      --emitter-clusters K  split each large area emitter into up to K clusters\n"
+            "                        in space (default 1; README, \"Emitters of many triangles\")\n"
             "      --threads N       worker threads (default: all cores); the cache is the\n"
             "                        same for any N\n"
             "      --edit EDIT.yaml  apply these edits (formats/edit.md; repeatable, in order)\n"
@@ -96,7 +98,7 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 enum {
     OPT_SAMPLES = 256, OPT_MAX_SAMPLES, OPT_MAX_BLOCKERS, OPT_MIN_PATCH, OPT_SPLIT_GAIN, OPT_COMPLEX_CAP, OPT_BLOCKERS,
     OPT_THREADS, OPT_VIEW, OPT_VIEW_SIZE, OPT_PATH, OPT_MAX_NODES,
-    OPT_INTO, OPT_FRAMES, OPT_LIGHT_SAMPLES, OPT_COST, OPT_PARTIAL, OPT_RESUME, OPT_EDIT
+    OPT_INTO, OPT_FRAMES, OPT_LIGHT_SAMPLES, OPT_COST, OPT_PARTIAL, OPT_RESUME, OPT_EDIT, OPT_CLUSTERS
 };
 
 static const struct option long_opts[] = {
@@ -120,6 +122,7 @@ static const struct option long_opts[] = {
     {"light-samples", required_argument, NULL, OPT_LIGHT_SAMPLES},
     {"cost", required_argument, NULL, OPT_COST},
     {"threads", required_argument, NULL, OPT_THREADS},
+    {"emitter-clusters", required_argument, NULL, OPT_CLUSTERS},
     LIE_OPT_ENTRY_EXTERNAL,
     LIE_OPT_ENTRY_STATS,
     LIE_OPT_ENTRY_VERBOSE,
@@ -402,6 +405,11 @@ int main(int argc, char **argv)
                 return usage_error("--max-blockers: expected an integer in 0..1048576, got '%s'", optarg);
             bp.max_blockers = (uint32_t)v;
             params_given = 1;
+            break;
+        case OPT_CLUSTERS:
+            if (!lie_parse_long(optarg, 1, LIE_CLUSTER_MAX, &v))
+                return usage_error("--emitter-clusters: expected an integer in 1..%d, got '%s'", LIE_CLUSTER_MAX, optarg);
+            so.emitter_clusters = (int)v;
             break;
         case OPT_COMPLEX_CAP:
             if (!lie_parse_long(optarg, 0, 1 << 24, &v))
