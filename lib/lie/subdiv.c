@@ -510,6 +510,27 @@ static int copied_whole(const build_ctx *c, uint32_t tri, unit_buf *u)
     return 1;
 }
 
+/* §4.3.3 with the cost model, for a whole unit: whether the unit (tri, e)
+ * can pay for itself over the frames the cache serves.  At best it saves
+ * every shadow ray of every pixel that sees the triangle (one a pixel for
+ * a punctual light, light_samples for an area light); at least it costs
+ * its root's first round of segments.  A unit that cannot pay is left
+ * unbuilt (none), and lie-render answers it with Embree, as it does units
+ * outside the views: punctual lights on triangles a few pixels cover.  A
+ * function of the unit's pixels and the parameters only, growing with the
+ * pixels, so that adding views (lib/lie/views.c) and updates find the
+ * units a build for the same views builds. */
+int lie_subdiv_unit_pays(const lie_build_params *p, const lie_scene *s, const lie_pixels *px, uint32_t tri, int e)
+{
+    if (!px || p->frames == 0)
+        return 1;
+    const lie_emitter *em = &s->emitters[s->clusters[e].emitter];
+    double pixels = (double)lie_pixels_hits(px, tri, lie_patch_root()) / (double)px->rays_per_pixel;
+    double saving = (double)p->frames * pixels * (double)lie_emitter_sample_count(em, (int)p->light_samples) *
+                    (double)p->ns_ray;
+    return saving >= (double)p->samples * (double)p->ns_segment;
+}
+
 void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
 {
     build_ctx *c = ctx;
@@ -537,8 +558,8 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
             return;
         u->roots[e] = (uint32_t)root;
         int64_t old = c->old_unit && c->old_unit[unit] >= 0 ? (int64_t)c->old->root[c->old_unit[unit]] : -1;
-        if (!lie_subdiv_seen(c, tri)) {
-            u->nodes[root].cls = LIE_CLASS_NONE; /* outside the views: not built */
+        if (!lie_subdiv_seen(c, tri) || !lie_subdiv_unit_pays(c->p, s, c->pix, tri, (int)e)) {
+            u->nodes[root].cls = LIE_CLASS_NONE; /* outside the views, or too few pixels: not built */
             w->st.pairs[LIE_CLASS_NONE]++;
             continue;
         }
