@@ -275,6 +275,49 @@ static void test_lie_quad_between_floor_and_light_is_the_only_blocker(void **sta
     lie_scene_destroy(s);
 }
 
+/* A floor under a light with nothing between (triangles 0-1 and 2-3). */
+static lie_scene *open_scene(void)
+{
+    int mw, ml;
+    lie_scene *s = floor_scene("open", &mw, &ml);
+    uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
+    float li[12] = {-0.5f, 2, -0.5f, 0.5f, 2, -0.5f, 0.5f, 2, 0.5f, -0.5f, 2, 0.5f};
+    lie_scene_add_node(s, "Light", -1, NULL, lie_scene_add_mesh(s, "Light", li, NULL, NULL, 4, idx, 2, ml), -1, -1);
+    lie_error err;
+    assert_int_equal(lie_scene_flatten(s, &err), LIE_OK);
+    return s;
+}
+
+/* A pair whose shaft no triangle enters is visible after a probe of a few
+ * segments (lib/lie/sample.c, SHAFT_PROBE), not a whole first round, and
+ * is stored as that round would have left it (quality = samples). */
+static void test_lie_empty_shaft_is_visible_after_a_probe(void **state)
+{
+    (void)state;
+    lie_scene *s = open_scene();
+    lie_rt *rt = NULL;
+    lie_error err;
+    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
+    lie_build_params p = lie_build_params_default();
+    lie_env *env = NULL;
+    lie_build_stats st;
+    memset(&st, 0, sizeof st);
+    assert_int_equal(lie_env_build(s, rt, &p, NULL, &env, &st, &err), LIE_OK);
+    for (uint32_t t = 0; t < 2; t++) {
+        const lie_pnode *n = &env->nodes[env->root[t]];
+        assert_int_equal(n->cls, LIE_CLASS_VISIBLE);
+        assert_int_equal(n->child, 0);
+        assert_int_equal(n->quality, p.samples);
+    }
+    assert_int_equal(env->nodes[env->root[2]].cls, LIE_CLASS_UNLIT);
+    assert_int_equal(env->nodes[env->root[3]].cls, LIE_CLASS_UNLIT);
+    assert_true(st.segments > 0);
+    assert_true(st.segments <= 2 * (uint64_t)p.samples / 4); /* two floor pairs, an eighth of a round each */
+    lie_env_destroy(env);
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+}
+
 typedef struct size_check {
     const lie_scene *s;
     const lie_build_params *p;
@@ -674,6 +717,7 @@ int main(void)
         cmocka_unit_test(test_lie_many_triangle_emitter_uses_a_flat_oriented_box),
         cmocka_unit_test(test_lie_self_occluding_emitter_is_complex_without_splitting),
         cmocka_unit_test(test_lie_spot_cone_and_range_cull_exactly_the_dark_patches),
+        cmocka_unit_test(test_lie_empty_shaft_is_visible_after_a_probe),
     };
     return cmocka_run_group_tests_name("lie", tests, NULL, NULL);
 }
