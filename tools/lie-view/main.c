@@ -61,7 +61,7 @@ static void usage(FILE *fp)
 #define usage_error(...) lie_usage_error(prog, __VA_ARGS__)
 
 enum {
-    OPT_LIGHT_SAMPLES = 256, OPT_MAX_DEPTH, OPT_CAMERA, OPT_THREADS, OPT_CTOR_THREADS, OPT_SCRIPT, OPT_RECORD,
+    OPT_LIGHT_SAMPLES = 256, OPT_MAX_DEPTH, OPT_CAMERA, OPT_CTOR_THREADS, OPT_SCRIPT, OPT_RECORD,
     OPT_SAVE
 };
 
@@ -70,14 +70,11 @@ static const struct option long_opts[] = {
     {"light-samples", required_argument, NULL, OPT_LIGHT_SAMPLES},
     {"max-depth", required_argument, NULL, OPT_MAX_DEPTH},
     {"camera", required_argument, NULL, OPT_CAMERA},
-    {"threads", required_argument, NULL, OPT_THREADS},
     {"constructor-threads", required_argument, NULL, OPT_CTOR_THREADS},
     {"script", required_argument, NULL, OPT_SCRIPT},
     {"record", required_argument, NULL, OPT_RECORD},
     {"save", required_argument, NULL, OPT_SAVE},
-    LIE_OPT_ENTRY_EXTERNAL,
-    LIE_OPT_ENTRY_STATS,
-    LIE_OPT_ENTRIES_END,
+    {NULL, 0, NULL, 0},
 };
 
 /* ---- the session ------------------------------------------------------- */
@@ -599,8 +596,9 @@ int main(int argc, char **argv)
     const char *camera = NULL, *script_path = NULL;
     long v;
     int c;
-    lie_cli cli = {.tool = prog, .usage = usage, .missing = "missing input cache or scene"};
-    while ((c = lie_cli_next(&cli, argc, argv, ":s:qh", long_opts)) > 0) {
+    lie_cli cli = {.tool = prog, .usage = usage, .missing = "missing input cache or scene",
+                   .takes = LIE_CLI_THREADS | LIE_CLI_EXTERNAL | LIE_CLI_STATS};
+    while ((c = lie_cli_next(&cli, argc, argv, "s:", long_opts)) > 0) {
         switch (c) {
         case 's':
             if (!lie_parse_size(optarg, 16384, &S.ro.width, &S.ro.height))
@@ -616,11 +614,6 @@ int main(int argc, char **argv)
                 return usage_error("--max-depth: expected an integer in 0..64, got '%s'", optarg);
             S.ro.max_depth = (int)v;
             break;
-        case OPT_THREADS:
-            if (!lie_parse_long(optarg, 0, 4096, &v))
-                return usage_error("--threads: expected an integer in 0..4096, got '%s'", optarg);
-            S.ro.threads = (int)v;
-            break;
         case OPT_CTOR_THREADS:
             if (!lie_parse_long(optarg, 1, 4096, &v))
                 return usage_error("--constructor-threads: expected an integer in 1..4096, got '%s'", optarg);
@@ -635,6 +628,7 @@ int main(int argc, char **argv)
     if (c == LIE_CLI_EXIT)
         return cli.status;
     wo.so.allow_external_uris = cli.external;
+    S.ro.threads = cli.threads;
     S.quiet = cli.quiet;
     const char *input = cli.operand;
     lie_error err;
