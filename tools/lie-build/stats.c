@@ -4,88 +4,103 @@
 
 #include <stdio.h>
 
-void job_print_stats(const char *prog, const build_job *j, double cpu_build, const double t[4], int json)
-{
-    const char *input = j->input;
-    const lie_scene *s = j->scene;
-    const lie_env *env = j->env;
-    const lie_build_stats *st = &j->st;
-    const lie_add_stats *as = j->into ? &j->as : NULL;
-    lie_prediction prediction;
-    const lie_prediction *pred = NULL;
-    if (j->px) {
-        lie_env_predict(env, j->px, &prediction);
-        pred = &prediction;
-    }
-    double t_load = t[0], t_bvh = t[1], t_build = t[2], t_write = t[3];
-    size_t bytes = j->bytes;
-
-    uint64_t leaves = 0, patches = 0;
-    for (int k = 0; k < LIE_CLASS_COUNT; k++)
-        leaves += st->pairs[k];
-    for (int d = 0; d <= LIE_PATCH_MAX_DEPTH; d++)
-        patches += st->patches_per_depth[d];
-    double mean = st->pairs[LIE_CLASS_PARTIAL] ? (double)st->blocker_total / (double)st->pairs[LIE_CLASS_PARTIAL] : 0.0;
+/* What both forms print, gathered once. */
+typedef struct summary {
+    const char *input;
+    const lie_scene *s;
+    const lie_env *env;
+    const lie_build_stats *st;
+    const lie_add_stats *as;      /* --into's, or NULL */
+    const lie_prediction *pred;   /* with views, or NULL */
+    double t[4], cpu_build;       /* load, bvh, build, write; the build's CPU time */
+    uint64_t leaves, patches;
+    double mean;                  /* mean list length */
     /* the model against the build: its build time (segments only) against
      * the CPU time the build took; the render time the splits save per
      * frame, predicted before each lookahead and as the children's lists
      * gave it; and one frame of the views, with full visibility and with
      * this cache (CPU seconds over all threads; bench/build.sh renders them) */
-    const lie_build_params *p = &env->params;
-    double model_build = 1e-9 * (double)st->segments * (double)p->ns_segment;
-    double sp = 1e-9 * st->split_saving_predicted_ns, sm = 1e-9 * st->split_saving_measured_ns;
-    if (json) {
-        fprintf(stderr, "{\"tool\":\"lie-build\",\"triangles\":%u,\"emitters\":%d,\"clusters\":%d,\"units\":%llu,"
-                        "\"patches\":%llu,\"leaf_pairs\":%llu,\"pairs\":{",
-                s->n_tris, s->n_emitters, s->n_clusters, (unsigned long long)s->n_tris * (unsigned long long)s->n_clusters,
-                (unsigned long long)patches, (unsigned long long)leaves);
-        for (int k = 0; k < LIE_CLASS_COUNT; k++)
-            if (k != LIE_CLASS_SPLIT)
-                fprintf(stderr, "%s\"%s\":%llu", k ? "," : "", lie_class_name((lie_class)k),
-                        (unsigned long long)st->pairs[k]);
-        fprintf(stderr, "},\"patches_per_depth\":[");
-        int maxd = 0;
-        for (int d = 0; d <= LIE_PATCH_MAX_DEPTH; d++)
-            if (st->patches_per_depth[d])
-                maxd = d;
-        for (int d = 0; d <= maxd; d++)
-            fprintf(stderr, "%s%llu", d ? "," : "", (unsigned long long)st->patches_per_depth[d]);
-        fprintf(stderr, "],\"list_histogram\":[");
-        for (int b = 0; b < 18; b++)
-            fprintf(stderr, "%s%llu", b ? "," : "", (unsigned long long)st->list_hist[b]);
+    double model_build, sp, sm;
+    size_t bytes;
+} summary;
+
+static void print_json(const summary *m)
+{
+    const char *input = m->input;
+    const lie_scene *s = m->s;
+    const lie_env *env = m->env;
+    const lie_build_stats *st = m->st;
+    const lie_add_stats *as = m->as;
+    const lie_prediction *pred = m->pred;
+    double t_load = m->t[0], t_bvh = m->t[1], t_build = m->t[2], t_write = m->t[3];
+    double cpu_build = m->cpu_build, model_build = m->model_build, sp = m->sp, sm = m->sm, mean = m->mean;
+    uint64_t leaves = m->leaves, patches = m->patches;
+    size_t bytes = m->bytes;
+    (void)input;
+    fprintf(stderr, "{\"tool\":\"lie-build\",\"triangles\":%u,\"emitters\":%d,\"clusters\":%d,\"units\":%llu,"
+                    "\"patches\":%llu,\"leaf_pairs\":%llu,\"pairs\":{",
+            s->n_tris, s->n_emitters, s->n_clusters, (unsigned long long)s->n_tris * (unsigned long long)s->n_clusters,
+            (unsigned long long)patches, (unsigned long long)leaves);
+    for (int k = 0; k < LIE_CLASS_COUNT; k++)
+        if (k != LIE_CLASS_SPLIT)
+            fprintf(stderr, "%s\"%s\":%llu", k ? "," : "", lie_class_name((lie_class)k),
+                    (unsigned long long)st->pairs[k]);
+    fprintf(stderr, "},\"patches_per_depth\":[");
+    int maxd = 0;
+    for (int d = 0; d <= LIE_PATCH_MAX_DEPTH; d++)
+        if (st->patches_per_depth[d])
+            maxd = d;
+    for (int d = 0; d <= maxd; d++)
+        fprintf(stderr, "%s%llu", d ? "," : "", (unsigned long long)st->patches_per_depth[d]);
+    fprintf(stderr, "],\"list_histogram\":[");
+    for (int b = 0; b < 18; b++)
+        fprintf(stderr, "%s%llu", b ? "," : "", (unsigned long long)st->list_hist[b]);
+    fprintf(stderr,
+            "],\"mean_list_length\":%.3f,\"segments\":%llu,\"splits_undone\":%llu,\"splits_kept\":%llu,"
+            "\"splits_pixels\":%llu,\"nodes\":%u,\"pool\":%u,"
+            "\"seconds_load\":%.6f,\"seconds_bvh\":%.6f,\"seconds_build\":%.6f,\"seconds_write\":%.6f,"
+            "\"bytes\":%zu",
+            mean, (unsigned long long)st->segments, (unsigned long long)st->splits_undone,
+            (unsigned long long)st->splits_kept, (unsigned long long)st->splits_pixels,
+            env->n_nodes, env->n_pool, t_load, t_bvh, t_build, t_write, bytes);
+    fprintf(stderr, ",\"model\":{\"build_cpu_s_predicted\":%.6f,\"build_cpu_s_measured\":%.6f", model_build,
+            cpu_build);
+    if (pred)
         fprintf(stderr,
-                "],\"mean_list_length\":%.3f,\"segments\":%llu,\"splits_undone\":%llu,\"splits_kept\":%llu,"
-                "\"splits_pixels\":%llu,\"nodes\":%u,\"pool\":%u,"
-                "\"seconds_load\":%.6f,\"seconds_bvh\":%.6f,\"seconds_build\":%.6f,\"seconds_write\":%.6f,"
-                "\"bytes\":%zu",
-                mean, (unsigned long long)st->segments, (unsigned long long)st->splits_undone,
-                (unsigned long long)st->splits_kept, (unsigned long long)st->splits_pixels,
-                env->n_nodes, env->n_pool, t_load, t_bvh, t_build, t_write, bytes);
-        fprintf(stderr, ",\"model\":{\"build_cpu_s_predicted\":%.6f,\"build_cpu_s_measured\":%.6f", model_build,
-                cpu_build);
-        if (pred)
-            fprintf(stderr,
-                    ",\"split_saving_s_predicted\":%.6f,\"split_saving_s_measured\":%.6f,\"view_pixels\":%.0f,"
-                    "\"frame_shadow_cpu_s_full\":%.6f,\"frame_shadow_cpu_s_lie\":%.6f,\"frame_full_rays\":%.0f,"
-                    "\"frame_list_entries\":%.0f,\"frame_lie_rays\":%.0f",
-                    sp, sm, pred->pixels, 1e-9 * pred->full_ns, 1e-9 * pred->lie_ns, pred->full_rays,
-                    pred->list_entries, pred->env_rays);
-        fprintf(stderr, "}");
-        fprintf(stderr,
-                ",\"partial\":%s,\"units_copied\":%llu,\"units_interrupted\":%llu,\"workers\":%d,\"seconds_cpu\":%.6f,"
-                "\"seconds_cpu_workers\":%.6f,\"seconds_cpu_worker_max\":%.6f,\"seconds_tail\":%.6f",
-                env->partial ? "true" : "false", (unsigned long long)st->units_copied,
-                (unsigned long long)st->units_interrupted, st->workers, lie_cpu_time(), st->seconds_cpu_sum,
-                st->seconds_cpu_max, st->seconds_tail);
-        if (as)
-            fprintf(stderr, ",\"into\":{\"units_kept\":%llu,\"units_refined\":%llu,\"units_new\":%llu,"
-                            "\"nodes_recomputed\":%llu}",
-                    (unsigned long long)as->units_kept, (unsigned long long)as->units_refined,
-                    (unsigned long long)as->units_new, (unsigned long long)as->nodes_flagged);
-        lie_dist_stats_print(stderr, "units", 1);
-        fprintf(stderr, "}\n");
-        return;
-    }
+                ",\"split_saving_s_predicted\":%.6f,\"split_saving_s_measured\":%.6f,\"view_pixels\":%.0f,"
+                "\"frame_shadow_cpu_s_full\":%.6f,\"frame_shadow_cpu_s_lie\":%.6f,\"frame_full_rays\":%.0f,"
+                "\"frame_list_entries\":%.0f,\"frame_lie_rays\":%.0f",
+                sp, sm, pred->pixels, 1e-9 * pred->full_ns, 1e-9 * pred->lie_ns, pred->full_rays,
+                pred->list_entries, pred->env_rays);
+    fprintf(stderr, "}");
+    fprintf(stderr,
+            ",\"partial\":%s,\"units_copied\":%llu,\"units_interrupted\":%llu,\"workers\":%d,\"seconds_cpu\":%.6f,"
+            "\"seconds_cpu_workers\":%.6f,\"seconds_cpu_worker_max\":%.6f,\"seconds_tail\":%.6f",
+            env->partial ? "true" : "false", (unsigned long long)st->units_copied,
+            (unsigned long long)st->units_interrupted, st->workers, lie_cpu_time(), st->seconds_cpu_sum,
+            st->seconds_cpu_max, st->seconds_tail);
+    if (as)
+        fprintf(stderr, ",\"into\":{\"units_kept\":%llu,\"units_refined\":%llu,\"units_new\":%llu,"
+                        "\"nodes_recomputed\":%llu}",
+                (unsigned long long)as->units_kept, (unsigned long long)as->units_refined,
+                (unsigned long long)as->units_new, (unsigned long long)as->nodes_flagged);
+    lie_dist_stats_print(stderr, "units", 1);
+    fprintf(stderr, "}\n");
+}
+
+static void print_text(const char *prog, const summary *m)
+{
+    const char *input = m->input;
+    const lie_scene *s = m->s;
+    const lie_env *env = m->env;
+    const lie_build_stats *st = m->st;
+    const lie_add_stats *as = m->as;
+    const lie_prediction *pred = m->pred;
+    double t_load = m->t[0], t_bvh = m->t[1], t_build = m->t[2], t_write = m->t[3];
+    double cpu_build = m->cpu_build, model_build = m->model_build, sp = m->sp, sm = m->sm, mean = m->mean;
+    uint64_t leaves = m->leaves, patches = m->patches;
+    size_t bytes = m->bytes;
+    (void)patches;
     fprintf(stderr, "%s: %s: %u triangles, %d emitters in %d clusters, %llu units\n", prog, input, s->n_tris,
             s->n_emitters, s->n_clusters, (unsigned long long)s->n_tris * (unsigned long long)s->n_clusters);
     fprintf(stderr, "  pairs:");
@@ -131,4 +146,28 @@ void job_print_stats(const char *prog, const build_job *j, double cpu_build, con
                 (unsigned long long)as->units_kept, (unsigned long long)as->units_refined,
                 (unsigned long long)as->units_new, (unsigned long long)as->nodes_flagged);
     lie_dist_stats_print(stderr, "units", 0);
+}
+
+void job_print_stats(const char *prog, const build_job *j, double cpu_build, const double t[4], int json)
+{
+    const lie_build_stats *st = &j->st;
+    lie_prediction prediction;
+    summary m = {.input = j->input, .s = j->scene, .env = j->env, .st = st, .as = j->into ? &j->as : NULL,
+                 .t = {t[0], t[1], t[2], t[3]}, .cpu_build = cpu_build, .bytes = j->bytes};
+    if (j->px) {
+        lie_env_predict(j->env, j->px, &prediction);
+        m.pred = &prediction;
+    }
+    for (int k = 0; k < LIE_CLASS_COUNT; k++)
+        m.leaves += st->pairs[k];
+    for (int d = 0; d <= LIE_PATCH_MAX_DEPTH; d++)
+        m.patches += st->patches_per_depth[d];
+    m.mean = st->pairs[LIE_CLASS_PARTIAL] ? (double)st->blocker_total / (double)st->pairs[LIE_CLASS_PARTIAL] : 0.0;
+    m.model_build = 1e-9 * (double)st->segments * (double)j->env->params.ns_segment;
+    m.sp = 1e-9 * st->split_saving_predicted_ns;
+    m.sm = 1e-9 * st->split_saving_measured_ns;
+    if (json)
+        print_json(&m);
+    else
+        print_text(prog, &m);
 }
