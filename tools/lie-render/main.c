@@ -263,18 +263,21 @@ typedef struct args {
  * took it, 0 when c is not one, -1 after its usage error (cli->status). */
 static int render_option(lie_cli *cli, int c, lie_render_options *ro)
 {
+    static const lie_cli_int ints[] = {
+        {OPT_SPP, 1, 65536, offsetof(lie_render_options, spp)},
+        {OPT_MAX_DEPTH, 0, 64, offsetof(lie_render_options, max_depth)},
+    };
+    _Static_assert(sizeof ro->spp == 4 && sizeof ro->max_depth == 4, "32-bit fields");
     long v;
+    int taken = lie_cli_set_int(cli, c, ints, sizeof ints / sizeof ints[0], ro);
+    if (taken)
+        return taken;
     switch (c) {
     case OPT_SIZE:
         if (lie_parse_size(optarg, 65536, &ro->width, &ro->height))
             return 1;
         cli->status = usage_error("--size: expected WxH, got '%s'", optarg);
         return -1;
-    case OPT_SPP:
-        if (!lie_cli_long(cli, 1, 65536, &v))
-            return -1;
-        ro->spp = (int)v;
-        return 1;
     case OPT_LIGHT_SAMPLES:
         if (strcmp(optarg, "exact") == 0) {
             ro->exact = LIE_EXACT_ONLY;
@@ -290,11 +293,6 @@ static int render_option(lie_cli *cli, int c, lie_render_options *ro)
             ro->exact = LIE_EXACT_AUTO;
         return 1;
     case OPT_TIMERS: ro->timers = 1; return 1;
-    case OPT_MAX_DEPTH:
-        if (!lie_cli_long(cli, 0, 64, &v))
-            return -1;
-        ro->max_depth = (int)v;
-        return 1;
     case OPT_AOV:
         if (parse_aovs(optarg, &ro->aovs))
             return 1;
