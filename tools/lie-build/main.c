@@ -144,12 +144,7 @@ static int build_param(lie_cli *cli, int c, lie_build_params *bp)
 {
     static const lie_cli_choice modes[] = {
         {"sampled", LIE_BLOCKERS_SAMPLED}, {"conservative", LIE_BLOCKERS_CONSERVATIVE}, {NULL, 0}};
-    /* the integer parameters: option, range, field */
-    static const struct {
-        int code;
-        long min, max;
-        size_t offset;
-    } ints[] = {
+    static const lie_cli_int ints[] = {
         {OPT_SAMPLES, 1, 1 << 20, offsetof(lie_build_params, samples)},
         {OPT_MAX_SAMPLES, 1, 1 << 24, offsetof(lie_build_params, max_samples)},
         {OPT_MAX_BLOCKERS, 0, 1 << 20, offsetof(lie_build_params, max_blockers)},
@@ -157,15 +152,9 @@ static int build_param(lie_cli *cli, int c, lie_build_params *bp)
         {OPT_FRAMES, 0, 1 << 24, offsetof(lie_build_params, frames)},
         {OPT_LIGHT_SAMPLES, 1, 1 << 24, offsetof(lie_build_params, light_samples)},
     };
-    long v;
-    int mode;
-    for (size_t i = 0; i < sizeof ints / sizeof ints[0]; i++)
-        if (ints[i].code == c) {
-            if (!lie_cli_long(cli, ints[i].min, ints[i].max, &v))
-                return -1;
-            *(uint32_t *)((char *)bp + ints[i].offset) = (uint32_t)v;
-            return 1;
-        }
+    int mode, taken = lie_cli_set_int(cli, c, ints, sizeof ints / sizeof ints[0], bp);
+    if (taken)
+        return taken;
     switch (c) {
     case OPT_MIN_PATCH:
         if (lie_parse_float(optarg, LIE_MIN_PATCH_MIN, 1.0f, &bp->min_patch))
