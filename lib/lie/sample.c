@@ -117,19 +117,27 @@ static int pair_segment(const pair_sampler *ps, uint32_t i, lie_vec3 *org, lie_v
  * multiple of it. */
 #define SEGMENT_PACKET 8u
 
+/* A cluster of a shared sampling keeps only its share of the segments;
+ * before it is called occluded it probes as many of its own as an unsplit
+ * emitter would (max_samples), over at most this many times the indices. */
+#define SHARED_PROBE_SPAN 64u
+
 /* After the first round found every segment blocked: are all the segments
- * up to max_samples blocked too?  Any-hit queries, stopping at the first
- * segment that is not. */
-static int all_blocked_to_max(const pair_sampler *ps, uint32_t from, worker *w)
+ * up to max_samples blocked too (shared: done of the cluster's so far)?
+ * Any-hit queries, stopping at the first segment that is not. */
+static int all_blocked_to_max(const pair_sampler *ps, uint32_t from, uint64_t done, worker *w)
 {
     const build_ctx *c = ps->c;
-    for (uint32_t i = from; i < c->p->max_samples; i++) {
+    const uint64_t end = ps->shared ? (uint64_t)c->p->max_samples * SHARED_PROBE_SPAN : c->p->max_samples;
+    uint64_t kept = done; /* shared: the cluster's segments so far */
+    for (uint64_t i = from; i < end && (!ps->shared || kept < c->p->max_samples); i++) {
         lie_vec3 org, dir;
         float tnear, tfar;
         uint32_t ex[2];
         int n_ex;
-        if (!pair_segment(ps, i, &org, &dir, &tnear, &tfar, ex, &n_ex))
+        if (!pair_segment(ps, (uint32_t)i, &org, &dir, &tnear, &tfar, ex, &n_ex))
             continue;
+        kept++;
         w->st.segments++;
         if (!lie_rt_any_hit(c->rt, org, dir, tnear, tfar, ex, n_ex))
             return 0;
@@ -268,7 +276,7 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
             *n_list = w->n_hits;
             return LIE_CLASS_PARTIAL;
         }
-        if (total == c->p->samples && valid > 0 && blocked == valid && all_blocked_to_max(&ps, total, w)) {
+        if (total == c->p->samples && valid > 0 && blocked == valid && all_blocked_to_max(&ps, total, valid, w)) {
             *quality = c->p->max_samples;
             *n_list = w->n_hits;
             return LIE_CLASS_OCCLUDED;
@@ -302,10 +310,16 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
         if (total + round_n > c->p->max_samples)
             round_n = c->p->max_samples - total;
     }
-    if (shared && forced && blocked == 0 && n_forced <= c->p->complex_cap) {
+    if (shared && valid > 0 && blocked == valid && !all_blocked_to_max(&ps, total, valid, w)) {
+        /* a cluster's share called it occluded, its own probes do not */
+        *quality = total;
+        *n_list = w->n_hits;
+        return LIE_CLASS_PARTIAL;
+    }
+    if (shared && forced && blocked == 0) {
         /* a cluster's share of the segments found nothing in a shaft of
          * many triangles: they are its list, which lie_subdiv narrows to
-         * the exact one at the leaf */
+         * the exact one at a leaf (past complex_cap: complex, or split) */
         if (!LIE_GROW(w->hits, w->cap_hits, n_forced)) {
             w->nomem = 1;
             return LIE_CLASS_VISIBLE;
