@@ -29,7 +29,7 @@
  * 1: no spatial split by default, as measured (README, "Emitters of many
  * triangles"): with the sampling shared between an emitter's clusters
  * (lib/lie/sample.c) bedroom_corner's emitter in 8 clusters still builds
- * 6x slower than whole, for no faster frame.
+ * 19x slower than whole, for a slower frame.
  * (With the split on, tests/data/gltf/light_strip.gltf's strip in 2
  * clusters updates as it rebuilds for moves, rotations and removals; an
  * update removing its beam differed from the rebuild in one unit on a tree
