@@ -117,6 +117,9 @@ typedef struct lie_shadow_query {
     float *work;
     uint32_t *kind;
     size_t work_stride;
+    /* silhouette counting's workspace (lib/shade/silhouette.h), for
+     * occluded_sil; NULL: that answer is the bitmask's */
+    struct lie_sil_work *sil;
 } lie_shadow_query;
 #define LIE_BLOCKER_WORK 15
 void lie_shadow_query_segments(lie_shadow_query *q);
@@ -141,6 +144,10 @@ typedef struct lie_vis_oracle {
      * answer (then occluded() does). */
     int (*occluded_mask)(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
                          const lie_bitmask *bm, uint64_t *mask);
+    /* Optional: the same mask through silhouette counting
+     * (lib/shade/silhouette.h), bit for bit; q->sil its workspace. */
+    int (*occluded_sil)(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
+                        const lie_bitmask *bm, uint64_t *mask);
     /* For AOVs: the pair's class (lie_class), list length and a patch id. */
     void (*describe)(void *ctx, const lie_surface *sf, int emitter, int *cls, uint32_t *count,
                      uint64_t *patch_id);
@@ -231,6 +238,20 @@ static inline double lie_render_bitmask_cost(int n, int b, int shade_all)
     return 300.0 + (shade_all ? 4.0 * n : 0.0) + (double)b * (420.0 + 9.0 * __builtin_sqrt((double)n));
 }
 static inline double lie_render_samples_cost(int n, int b) { return (double)n * (4.0 + 1.5 * b); }
+/* Partial pairs answered as bitmasks may count their blockers through
+ * silhouette edges instead (lib/shade/silhouette.h): LIE_SILHOUETTE_AUTO
+ * where lie_render_silhouette_pays says so, ONLY for every bitmask pair,
+ * OFF never. */
+typedef enum lie_silhouette_mode {
+    LIE_SILHOUETTE_AUTO = 0,
+    LIE_SILHOUETTE_OFF = 1,
+    LIE_SILHOUETTE_ONLY = 2
+} lie_silhouette_mode;
+static inline int lie_render_silhouette_pays(int n, int b)
+{
+    (void)n;
+    return b >= 1 << 30; /* set from measurements below */
+}
 /* Embree's rays over the whole scene, in the same units: museum1's shadow
  * rays and its blocker tests measured side by side with --timers, 160
  * a ray.  A pair whose list answers cost more (hundreds of blockers) asks
@@ -258,6 +279,7 @@ typedef struct lie_render_options {
     lie_exact_mode exact;  /* closed-form shading and exact visibility (polylight.h) */
     int timers;            /* per-worker timers of each path into the stats (costs a clock read per pair) */
     lie_bitmask_mode bitmask; /* all samples at once for partial pairs (bitmask.h) */
+    lie_silhouette_mode silhouette; /* bitmasks through silhouette edges (silhouette.h) */
 } lie_render_options;
 
 /* Benchmark ablations of --visibility=lie: answer partial pairs (their
@@ -283,11 +305,12 @@ typedef struct lie_render_stats {
     uint64_t pairs_embree;    /* samples against the whole scene */
     uint64_t pairs_unshadowed; /* seen whole, sampled shading */
     uint64_t pairs_bitmask;   /* partial, all samples at once as a bitmask (bitmask.h) */
+    uint64_t pairs_silhouette; /* partial, the same bitmask through silhouette edges (silhouette.h) */
     uint64_t exact_overflows; /* exact pairs that fell back to samples */
     uint64_t pairs_unbuilt;   /* of pairs_embree: units lie-build left out (--view, --path) */
     uint64_t points_unbuilt;  /* shading points with such a pair: pixels, at 1 spp without mirrors */
     /* with lie_render_options.timers: seconds summed over workers */
-    double t_analytic, t_exact, t_blockers, t_embree, t_sampled_shading, t_bitmask;
+    double t_analytic, t_exact, t_blockers, t_embree, t_sampled_shading, t_bitmask, t_silhouette;
     double seconds;
 } lie_render_stats;
 /* acc += w, field by field */

@@ -118,4 +118,49 @@ static inline lie_scene *square_light_and_blockers(float a, float h, int two_sid
     return s;
 }
 
+#ifdef LIE_SHADE_BITMASK_H
+/* The LIE oracle over scene s (built with patches of 0.5: lists that
+ * hold every blocker), and emitter 0's fixed pattern of n samples as a
+ * bitmask, for tests that ask the oracle directly (test_bitmask,
+ * test_silhouette).  oracle_fixture_free destroys the scene too. */
+typedef struct oracle_fixture {
+    lie_scene *s;
+    lie_rt *rt;
+    lie_env *env;
+    lie_lie_vis *lv;
+    const lie_vis_oracle *orc;
+    lie_light_samples ls;
+    lie_bitmask *bm;
+} oracle_fixture;
+
+static inline void oracle_fixture_init(oracle_fixture *f, lie_scene *s, int n)
+{
+    lie_error err;
+    memset(f, 0, sizeof *f);
+    f->s = s;
+    assert_int_equal(lie_rt_create(s, &f->rt, &err), LIE_OK);
+    lie_build_params bp = lie_build_params_default();
+    bp.min_patch = 0.5f;
+    lie_build_stats bst;
+    assert_int_equal(lie_env_build(s, f->rt, &bp, NULL, &f->env, &bst, &err), LIE_OK);
+    assert_int_equal(lie_lie_vis_create(s, f->env, &f->lv, &err), LIE_OK);
+    f->orc = lie_lie_vis_oracle(f->lv);
+    assert_non_null(f->orc->occluded_mask);
+    assert_int_equal(lie_light_samples_alloc(&f->ls, n), LIE_OK);
+    lie_light_samples_generate(s, 0, n, 0.37f, 0.71f, &f->ls);
+    assert_int_equal(lie_bitmask_create(&f->ls, &f->bm), LIE_OK);
+    assert_non_null(f->bm);
+}
+
+static inline void oracle_fixture_free(oracle_fixture *f)
+{
+    lie_bitmask_destroy(f->bm);
+    lie_light_samples_free(&f->ls);
+    lie_lie_vis_destroy(f->lv);
+    lie_env_destroy(f->env);
+    lie_rt_destroy(f->rt);
+    lie_scene_destroy(f->s);
+}
+#endif
+
 #endif

@@ -54,6 +54,8 @@ static void usage(FILE *fp)
             "      --bitmask MODE      partial pairs toward planar emitters with all samples at\n"
             "                          once: auto (default: where cheaper, not under --exact\n"
             "                          off) | off | only (the same image, samples in another order)\n"
+            "      --silhouette MODE   bitmasks counted through the blockers' silhouette edges:\n"
+            "                          auto (default: where cheaper) | off | only (the same image)\n"
             "      --timers            --stats also reports per-path times (benchmarks)\n"
             "      --pattern P         fixed (default: the same emitter samples everywhere)\n"
             "                          | rotated (a per-pixel rotation of the pattern)\n"
@@ -100,7 +102,8 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 enum {
     OPT_CAMERA = 256, OPT_SIZE, OPT_SPP, OPT_LIGHT_SAMPLES, OPT_PATTERN, OPT_VISIBILITY, OPT_RAYS, OPT_LIE_SKIP,
     OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_THREADS, OPT_SCENE,
-    OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS, OPT_FRAMES, OPT_SKIP_EXISTING, OPT_FORMAT, OPT_HALF, OPT_BITMASK
+    OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS, OPT_FRAMES, OPT_SKIP_EXISTING, OPT_FORMAT, OPT_HALF, OPT_BITMASK,
+    OPT_SILHOUETTE
 };
 
 static const struct option long_opts[] = {
@@ -118,6 +121,7 @@ static const struct option long_opts[] = {
     {"exact", required_argument, NULL, OPT_EXACT},
     {"timers", no_argument, NULL, OPT_TIMERS},
     {"bitmask", required_argument, NULL, OPT_BITMASK},
+    {"silhouette", required_argument, NULL, OPT_SILHOUETTE},
     {"visibility", required_argument, NULL, OPT_VISIBILITY},
     {"rays", required_argument, NULL, OPT_RAYS},
     {"lie-skip", required_argument, NULL, OPT_LIE_SKIP},
@@ -323,11 +327,13 @@ static void print_stats(int json, const run_stats *r, const lie_scene *scene, co
                 "\"exact_overflows\":%llu,\"pairs_unbuilt\":%llu,\"points_unbuilt\":%llu,"
                 "\"timers\":%s,\"cpu_seconds_analytic\":%.6f,"
                 "\"cpu_seconds_exact\":%.6f,\"cpu_seconds_blockers\":%.6f,\"cpu_seconds_embree\":%.6f,"
-                "\"cpu_seconds_sampled_shading\":%.6f,\"pairs_bitmask\":%llu,\"cpu_seconds_bitmask\":%.6f",
+                "\"cpu_seconds_sampled_shading\":%.6f,\"pairs_bitmask\":%llu,\"cpu_seconds_bitmask\":%.6f,"
+                "\"pairs_silhouette\":%llu,\"cpu_seconds_silhouette\":%.6f",
                 exact_name(ro), pairs[0], pairs[1], pairs[2], pairs[3], pairs[4], pairs[5], pairs[6],
                 (unsigned long long)rs->pairs_unbuilt, (unsigned long long)rs->points_unbuilt,
                 ro->timers ? "true" : "false", rs->t_analytic,
-                rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, pairs[7], rs->t_bitmask);
+                rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, pairs[7], rs->t_bitmask,
+                (unsigned long long)rs->pairs_silhouette, rs->t_silhouette);
         render_dist_stats(stderr, 1);
         fprintf(stderr, "}\n");
     } else {
@@ -347,8 +353,10 @@ static void print_stats(int json, const run_stats *r, const lie_scene *scene, co
         fprintf(stderr,
                 "  pairs (exact %s): %llu occluded, %llu seen whole in closed form, %llu partial exact,\n"
                 "    %llu partial sampled against blockers, %llu sampled against the scene (Embree),\n"
-                "    %llu seen whole and sampled, %llu partial as bitmasks; %llu exact pairs fell back to samples\n",
-                exact_name(ro), pairs[0], pairs[1], pairs[2], pairs[3], pairs[4], pairs[5], pairs[7], pairs[6]);
+                "    %llu seen whole and sampled, %llu partial as bitmasks (and %llu through silhouettes);\n"
+                "    %llu exact pairs fell back to samples\n",
+                exact_name(ro), pairs[0], pairs[1], pairs[2], pairs[3], pairs[4], pairs[5], pairs[7],
+                (unsigned long long)rs->pairs_silhouette, pairs[6]);
         if (rs->pairs_unbuilt)
             fprintf(stderr, "  not built in the cache (lie-build --view/--path): %llu pairs at %llu shading points, "
                             "answered by Embree\n",
@@ -356,8 +364,9 @@ static void print_stats(int json, const run_stats *r, const lie_scene *scene, co
         if (ro->timers)
             fprintf(stderr,
                     "  worker seconds: closed form %.3f, exact shadows %.3f, blocker samples %.3f,\n"
-                    "    Embree %.3f, sampled shading %.3f, bitmasks %.3f\n",
-                    rs->t_analytic, rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, rs->t_bitmask);
+                    "    Embree %.3f, sampled shading %.3f, bitmasks %.3f, silhouettes %.3f\n",
+                    rs->t_analytic, rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, rs->t_bitmask,
+                    rs->t_silhouette);
         render_dist_stats(stderr, 0);
     }
 }
@@ -409,6 +418,12 @@ int main(int argc, char **argv)
             else if (strcmp(optarg, "off") == 0) ro.bitmask = LIE_BITMASK_OFF;
             else if (strcmp(optarg, "only") == 0) ro.bitmask = LIE_BITMASK_ONLY;
             else return usage_error("--bitmask: expected auto, off or only, got '%s'", optarg);
+            break;
+        case OPT_SILHOUETTE:
+            if (strcmp(optarg, "auto") == 0) ro.silhouette = LIE_SILHOUETTE_AUTO;
+            else if (strcmp(optarg, "off") == 0) ro.silhouette = LIE_SILHOUETTE_OFF;
+            else if (strcmp(optarg, "only") == 0) ro.silhouette = LIE_SILHOUETTE_ONLY;
+            else return usage_error("--silhouette: expected auto, off or only, got '%s'", optarg);
             break;
         case OPT_TIMERS:
             ro.timers = 1;
