@@ -551,8 +551,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
         int use_bits = bm && (opt->bitmask == LIE_BITMASK_ONLY || bits_cost < lie_render_samples_cost(ns, n_blockers));
         /* and of those, the ones counted through silhouette edges
          * (silhouette.h): the same bits */
-        const int use_sil = bm && opt->oracle && opt->oracle->occluded_sil && opt->silhouette != LIE_SILHOUETTE_OFF &&
-                            (opt->silhouette == LIE_SILHOUETTE_ONLY || lie_render_silhouette_pays(ns, n_blockers));
+        const int use_sil = bm && opt->oracle && opt->oracle->occluded_sil && opt->silhouette == LIE_SILHOUETTE_ONLY;
         if (cls == LIE_VISCLASS_BLOCKERS && opt->exact == LIE_EXACT_AUTO && opt->bitmask == LIE_BITMASK_AUTO &&
             !lie_emitter_is_delta(em)) {
             /* a list so long that its cheapest answer costs more than

@@ -595,6 +595,7 @@ static int occluded_sil(void *ctx, const uint32_t *blockers, int n_blockers, lie
         w->slot[h] = -1;
     w->n_tris = 0;
     w->n_edges = 0;
+    w->counted = 0;
     int32_t *idx = (int32_t *)q->kind; /* reused below: blocker j's triangle index, or -1 */
     uint32_t kind = B_NONE;
     float f[LIE_BLOCKER_WORK] = {0.0f};
@@ -630,6 +631,8 @@ static int occluded_sil(void *ctx, const uint32_t *blockers, int n_blockers, lie
         } else if (lie_bitmask_cone_depth(bm, f, mask)) {
             return 0;
         }
+        if (lie_bitmask_all(bm, mask))
+            return 1; /* as occluded_mask: the rest can add nothing */
     }
     if (w->n_tris == 0 || lie_bitmask_all(bm, mask)) {
         mask[lie_bitmask_words(bm) - 1] &= bm->last;
@@ -668,7 +671,14 @@ static int occluded_sil(void *ctx, const uint32_t *blockers, int n_blockers, lie
             E->sigma = sigma;
         }
     }
-    lie_sil_mask(bm, w, mask);
+    if (lie_sil_pays(w->n_tris, w->n_edges)) {
+        lie_sil_mask(bm, w, mask);
+        w->counted = 1;
+    } else {
+        /* too few interior edges: the triangles one by one */
+        for (int i = 0; i < w->n_tris && !lie_bitmask_all(bm, mask); i++)
+            lie_bitmask_cone(bm, w->forms + 9 * (size_t)i, mask);
+    }
     return 1;
 }
 

@@ -239,19 +239,14 @@ static inline double lie_render_bitmask_cost(int n, int b, int shade_all)
 }
 static inline double lie_render_samples_cost(int n, int b) { return (double)n * (4.0 + 1.5 * b); }
 /* Partial pairs answered as bitmasks may count their blockers through
- * silhouette edges instead (lib/shade/silhouette.h): LIE_SILHOUETTE_AUTO
- * where lie_render_silhouette_pays says so, ONLY for every bitmask pair,
- * OFF never. */
+ * silhouette edges instead (lib/shade/silhouette.h): LIE_SILHOUETTE_ONLY
+ * for every bitmask pair; OFF (the default) never.  Measured, it lost to
+ * the walk of every blocker on museum1, museum3 and cornell (README.md,
+ * "Silhouette counting"), so no cost model chooses it. */
 typedef enum lie_silhouette_mode {
-    LIE_SILHOUETTE_AUTO = 0,
-    LIE_SILHOUETTE_OFF = 1,
-    LIE_SILHOUETTE_ONLY = 2
+    LIE_SILHOUETTE_OFF = 0,
+    LIE_SILHOUETTE_ONLY = 1
 } lie_silhouette_mode;
-static inline int lie_render_silhouette_pays(int n, int b)
-{
-    (void)n;
-    return b >= 1 << 30; /* set from measurements below */
-}
 /* Embree's rays over the whole scene, in the same units: museum1's shadow
  * rays and its blocker tests measured side by side with --timers, 160
  * a ray.  A pair whose list answers cost more (hundreds of blockers) asks

@@ -114,9 +114,8 @@ static void check_scene(const soup *b, int two_sided, int n, tally *tl)
                 const lie_vec3 o = lie_v3(-1.05f + 0.35f * (float)gx, heights[gy], -1.05f + 0.35f * (float)gz);
                 const float eps = 1e-4f;
                 lie_shadow_query qs = {o, eps, &bm->ls, n, 0, dx, dy, dz, work, kind, stride, &sw};
-                sw.n_tris = sw.n_edges = 0;
                 const int ok = orc->occluded_sil(orc->ctx, blockers, nb, &qs, bm, mask);
-                const int counted = sw.n_tris, edges = sw.n_edges;
+                const int counted = sw.counted ? sw.n_tris : 0, edges = sw.counted ? sw.n_edges : 0;
                 lie_shadow_query qm = {o, eps, &bm->ls, n, 0, dx, dy, dz, work, kind, stride, NULL};
                 const int okm = orc->occluded_mask(orc->ctx, blockers, nb, &qm, bm, mref);
                 assert_int_equal(ok, okm); /* both answer, or both leave it to 3D tests */

@@ -54,8 +54,8 @@ static void usage(FILE *fp)
             "      --bitmask MODE      partial pairs toward planar emitters with all samples at\n"
             "                          once: auto (default: where cheaper, not under --exact\n"
             "                          off) | off | only (the same image, samples in another order)\n"
-            "      --silhouette MODE   bitmasks counted through the blockers' silhouette edges:\n"
-            "                          auto (default: where cheaper) | off | only (the same image)\n"
+            "      --silhouette MODE   off (default) | only: bitmasks counted through the\n"
+            "                          blockers' silhouette edges (the same image; measured slower)\n"
             "      --timers            --stats also reports per-path times (benchmarks)\n"
             "      --pattern P         fixed (default: the same emitter samples everywhere)\n"
             "                          | rotated (a per-pixel rotation of the pattern)\n"
@@ -420,10 +420,9 @@ int main(int argc, char **argv)
             else return usage_error("--bitmask: expected auto, off or only, got '%s'", optarg);
             break;
         case OPT_SILHOUETTE:
-            if (strcmp(optarg, "auto") == 0) ro.silhouette = LIE_SILHOUETTE_AUTO;
-            else if (strcmp(optarg, "off") == 0) ro.silhouette = LIE_SILHOUETTE_OFF;
+            if (strcmp(optarg, "off") == 0) ro.silhouette = LIE_SILHOUETTE_OFF;
             else if (strcmp(optarg, "only") == 0) ro.silhouette = LIE_SILHOUETTE_ONLY;
-            else return usage_error("--silhouette: expected auto, off or only, got '%s'", optarg);
+            else return usage_error("--silhouette: expected off or only, got '%s'", optarg);
             break;
         case OPT_TIMERS:
             ro.timers = 1;
