@@ -205,13 +205,18 @@ typedef enum lie_exact_mode {
  * visibility: one or two rays cost less than the leaf lookup and the
  * classes (museum1 at 1 sample: 40 ms against 33 ms). */
 #define LIE_LIE_MIN_SAMPLES 4
-/* The cost model of LIE_EXACT_AUTO, in tenths of a nanosecond, measured on
- * museum1 (256x256, one thread): testing n samples against b selected
- * blockers costs about n (4 + 1.5 b), the exact shadow 3000 + 2000 b.  So
- * exact shadows pay from about 1000 samples on. */
+/* The cost model of LIE_EXACT_AUTO, in tenths of a nanosecond.  Fitted
+ * (least squares on relative error) to --timers of museum1, museum3 and
+ * cornell with conservative caches, 256x256, one thread, 256, 1024 and
+ * 4096 samples, each path forced in turn, best of 2 (2026-12-01, on 2
+ * cores shared with other jobs): testing n samples against b selected
+ * blockers costs about n (4 + 2 b), the exact shadow 1400 + 2700 b.  So
+ * exact shadows pay from about 1350 samples on.  The fits are within a
+ * factor of 1.5 of the measured totals per scene (the cost of a blocker
+ * depends on how early it is culled, which b does not see). */
 static inline int lie_render_exact_pays(int n, int b)
 {
-    return (double)n * (4.0 + 1.5 * b) >= 3000.0 + 2000.0 * b;
+    return (double)n * (4.0 + 2.0 * b) >= 1400.0 + 2700.0 * b;
 }
 /* Partial pairs toward a planar emitter may also be answered with all
  * samples at once (lib/shade/bitmask.h): LIE_BITMASK_AUTO where the cost
@@ -227,17 +232,16 @@ typedef enum lie_bitmask_mode {
     LIE_BITMASK_ONLY = 2
 } lie_bitmask_mode;
 #define LIE_BITMASK_MIN_SAMPLES 64
-/* Its cost in the units of lie_render_exact_pays, measured the same way
- * (museum1, --timers, side by side with the per-sample path): a set-up
- * and the sum over the fewer of the blocked and the visible samples, 300,
- * and per blocker a walk whose cost grows with its shadow's perimeter in
- * groups of 8 samples, 420 + 9 sqrt(n).  A receiver that is not Lambert's
- * still shades every sample (shade_all), 4 n. */
+/* Its cost in the units of lie_render_exact_pays, fitted the same way: a
+ * set-up and the sum over the fewer of the blocked and the visible
+ * samples, 500, and per blocker a walk whose cost grows with its shadow's
+ * perimeter in groups of 8 samples, 600 + 20 sqrt(n).  A receiver that is
+ * not Lambert's still shades every sample (shade_all), 4 n. */
 static inline double lie_render_bitmask_cost(int n, int b, int shade_all)
 {
-    return 300.0 + (shade_all ? 4.0 * n : 0.0) + (double)b * (420.0 + 9.0 * __builtin_sqrt((double)n));
+    return 500.0 + (shade_all ? 4.0 * n : 0.0) + (double)b * (600.0 + 20.0 * __builtin_sqrt((double)n));
 }
-static inline double lie_render_samples_cost(int n, int b) { return (double)n * (4.0 + 1.5 * b); }
+static inline double lie_render_samples_cost(int n, int b) { return (double)n * (4.0 + 2.0 * b); }
 /* Partial pairs answered as bitmasks may count their blockers through
  * silhouette edges instead (lib/shade/silhouette.h): LIE_SILHOUETTE_ONLY
  * for every bitmask pair; OFF (the default) never.  Measured, it lost to
@@ -247,13 +251,16 @@ typedef enum lie_silhouette_mode {
     LIE_SILHOUETTE_OFF = 0,
     LIE_SILHOUETTE_ONLY = 1
 } lie_silhouette_mode;
-/* Embree's rays over the whole scene, in the same units: museum1's shadow
- * rays and its blocker tests measured side by side with --timers, 160
- * a ray.  A pair whose list answers cost more (hundreds of blockers) asks
- * Embree instead, so that no pair is slower than full visibility (with
+/* Embree's rays over the whole scene, in the same units: the complex
+ * pairs' rays of museum1 and museum3 (--timers, fitted as above), 800 a
+ * ray, 70 to 120 ns each on this machine.  (The last fit, 160, sent lists
+ * of more than about 230 blockers to Embree at 1024 samples, where the
+ * lists cost less: museum3 built with --complex-cap 1024 took 0.68 CPU s
+ * a frame at 256 samples with it, 0.49 s with 800.)  A pair whose list
+ * answers cost more (hundreds of blockers) asks Embree instead, so that no pair is slower than full visibility (with
  * the default modes; --exact off and --bitmask only keep the lists). */
-static inline double lie_render_embree_cost(int n) { return 160.0 * n; }
-static inline double lie_render_exact_cost(int b) { return 3000.0 + 2000.0 * b; }
+static inline double lie_render_embree_cost(int n) { return 800.0 * n; }
+static inline double lie_render_exact_cost(int b) { return 1400.0 + 2700.0 * b; }
 
 typedef struct lie_render_options {
     int width, height;
