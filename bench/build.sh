@@ -16,6 +16,8 @@
 # Targets (issue 14): build <= 5 full frames on every scene with a light and
 # <= 2 on museum1; cache <= 16 MB under 50k triangles; LIE frame <= half the
 # full frame; the atrium built in <= 60 s.  Writes out/bench-build.json.
+# Then the views table (out/bench-build-views.json) and the many-lights row
+# (out/bench-build-lights.json).
 set -e
 cd "$(dirname "$0")/.."
 SIZE=${SIZE:-512x512}
@@ -186,3 +188,31 @@ printf '  (units: --view 0 --frames 0, the views choose units; pixels: --view 0 
     "$(bin/lie-build --help | sed -n 's/.*frames the cache will serve (default \([0-9]*\).*/\1/p')"
 printf '   frame cpu: one frame less an eye-rays-only frame, measured / the model (lie-build --stats=json);\n'
 printf '   ns measured: build CPU / segments, full shadow CPU / rays, LIE shadow CPU less its rays / list entries)\n'
+
+# ---- many lights (issue 14: "a build with 20 lights must not cost 20
+# single-light builds"): museum1 with 20 small panels under its ceiling
+# (bench/museum1-20lights.yaml: its light shrunk to 0.6 x 0.3 and copied on
+# a 5 x 4 grid) against the 20 builds of one such panel at each of those
+# points, on 1 thread, CPU seconds and segments side by side; the
+# one-light build of the centre (bench/museum1-1light.yaml) for scale.
+# MANYLIGHTS=0 skips it.
+if [ "${MANYLIGHTS:-1}" = 1 ]; then
+    echo
+    echo "bench-build many lights: museum1, 1 thread, CPU seconds (load $(cut -d' ' -f1 /proc/loadavg))"
+    set -- $(build tests/scenes/museum1.gltf "$TMP/l20.lie" --threads 1 --edit bench/museum1-20lights.yaml)
+    cpu20=$5 seg20=$3 bytes20=$2
+    set -- $(build tests/scenes/museum1.gltf "$TMP/l1.lie" --threads 1 --edit bench/museum1-1light.yaml)
+    cpu1=$5 seg1=$3
+    cpus=0 segs=0
+    sed -n 's/.*\(to\|translation\): \[\([^]]*\)\].*/\2/p' bench/museum1-20lights.yaml >"$TMP/points"
+    while read -r at; do
+        printf -- '- scale: {node: Light, by: [0.3, 1, 0.3]}\n- move: {node: Light, to: [%s]}\n' "$at" >"$TMP/one.yaml"
+        set -- $(build tests/scenes/museum1.gltf "$TMP/one.lie" --threads 1 --edit "$TMP/one.yaml")
+        cpus=$(awk -v a="$cpus" -v b="$5" 'BEGIN { printf "%.3f", a + b }'); segs=$((segs + $3))
+    done <"$TMP/points"
+    printf '  20 lights at once: %s s, %s segments, %s MB; the 20 one-light builds: %s s, %s segments: %s (segments %s)\n' \
+        "$cpu20" "$seg20" "$(mb "$bytes20")" "$cpus" "$segs" "$(ratio "$cpu20" "$cpus")" "$(ratio "$seg20" "$segs")"
+    printf '  (one light at the centre: %s s, %s segments; 20 lights = %s x that)\n' "$cpu1" "$seg1" "$(ratio "$cpu20" "$cpu1")"
+    printf '{"cpu_20_lights_s":"%s","cpu_20_single_builds_s":"%s","segments_20_lights":"%s","segments_20_single_builds":"%s","cpu_1_light_s":"%s","segments_1_light":"%s"}\n' \
+        "$cpu20" "$cpus" "$seg20" "$segs" "$cpu1" "$seg1" >out/bench-build-lights.json
+fi

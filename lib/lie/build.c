@@ -20,7 +20,7 @@
 #include <string.h>
 
 static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32_t n_tris, int n_clusters,
-                           const int32_t *old_unit, uint64_t unit_lo, uint64_t unit_hi);
+                           const int32_t *old_unit, uint64_t unit_lo, uint64_t unit_hi, int threads);
 static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
                               const uint8_t *tri_mask, const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
                               lie_env_part *out, lie_build_stats *stats, lie_error *err);
@@ -159,7 +159,7 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
         stats->seconds_tail += c.par_tail + rep.tail;
     }
     if (st == LIE_OK)
-        st = assemble(env, c.out, c.tri_lo, n_items, s->n_clusters, old_unit, unit_lo, unit_hi);
+        st = assemble(env, c.out, c.tri_lo, n_items, s->n_clusters, old_unit, unit_lo, unit_hi, threads);
     if (st == LIE_OK && interrupted)
         env->partial = 1;
     for (uint32_t t = 0; c.out && t < n_items; t++) {
@@ -210,9 +210,68 @@ static void copy_direct(const lie_env *old, uint32_t from, lie_pnode *nd, uint32
 /* Concatenate per-triangle unit buffers (of triangles tri_lo + t) into
  * env's flat arrays (copied triangles straight from env's old arrays, which
  * are freed last); env->root[unit - unit_lo] for the units in
- * [unit_lo, unit_hi). */
+ * [unit_lo, unit_hi).  Each triangle's place follows from the sizes before
+ * it, so triangles are copied in parallel, in chunks, into disjoint parts
+ * of the arrays: the same bytes for any thread count.  (Serial, it was
+ * about a tenth of an update's serial time on museum3.) */
+typedef struct assembly {
+    const lie_env *old;
+    const unit_buf *bufs;
+    uint32_t tri_lo, n_tris;
+    int n_clusters;
+    const int32_t *old_unit;
+    uint64_t unit_lo, unit_hi;
+    const uint32_t *nb, *pb; /* per triangle: its first node and pool entry */
+    uint32_t *root;
+    lie_pnode *nd;
+    uint32_t *pl;
+} assembly;
+
+#define ASSEMBLE_CHUNK 512u /* triangles per parallel item */
+
+static void assemble_tri(const assembly *a, uint32_t t)
+{
+    const unit_buf *u = &a->bufs[t];
+    uint32_t nb = a->nb[t], pb = a->pb[t];
+    if (u->copied) {
+        uint32_t next_node = nb, next_pool = pb;
+        for (int e = 0; e < a->n_clusters; e++) {
+            size_t unit = (size_t)(a->tri_lo + t) * (size_t)a->n_clusters + (size_t)e;
+            uint32_t idx = next_node++;
+            a->root[unit - a->unit_lo] = idx;
+            copy_direct(a->old, a->old->root[a->old_unit[unit]], a->nd, a->pl, idx, &next_node, &next_pool);
+        }
+        return;
+    }
+    for (int e = 0; e < a->n_clusters; e++) {
+        uint64_t unit = (uint64_t)(a->tri_lo + t) * (uint64_t)a->n_clusters + (uint64_t)e;
+        if (unit >= a->unit_lo && unit < a->unit_hi)
+            a->root[unit - a->unit_lo] = nb + u->roots[e];
+    }
+    for (uint32_t i = 0; i < u->n_nodes; i++) {
+        lie_pnode x = u->nodes[i];
+        if (x.child)
+            x.child += nb;
+        if (x.cls == LIE_CLASS_PARTIAL)
+            x.list += pb;
+        a->nd[nb + i] = x;
+    }
+    if (u->n_pool)
+        memcpy(a->pl + pb, u->pool, sizeof *a->pl * u->n_pool);
+}
+
+static void assemble_chunk(void *ctx, size_t item, int worker_id)
+{
+    (void)worker_id;
+    const assembly *a = ctx;
+    uint32_t t0 = (uint32_t)item * ASSEMBLE_CHUNK;
+    uint32_t t1 = a->n_tris - t0 < ASSEMBLE_CHUNK ? a->n_tris : t0 + ASSEMBLE_CHUNK;
+    for (uint32_t t = t0; t < t1; t++)
+        assemble_tri(a, t);
+}
+
 static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32_t n_tris, int n_clusters,
-                           const int32_t *old_unit, uint64_t unit_lo, uint64_t unit_hi)
+                           const int32_t *old_unit, uint64_t unit_lo, uint64_t unit_hi, int threads)
 {
     uint64_t nodes = 0, pool = 0;
     for (uint32_t t = 0; t < n_tris; t++) {
@@ -224,44 +283,26 @@ static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32
     uint32_t *root = malloc(sizeof *root * ((size_t)(unit_hi - unit_lo) + 1));
     lie_pnode *nd = malloc(sizeof *nd * (size_t)(nodes + 1));
     uint32_t *pl = malloc(sizeof *pl * (size_t)(pool + 1));
-    if (!root || !nd || !pl) {
+    uint32_t *nb = malloc(sizeof *nb * ((size_t)n_tris + 1));
+    uint32_t *pb = malloc(sizeof *pb * ((size_t)n_tris + 1));
+    lie_status st = root && nd && pl && nb && pb ? LIE_OK : LIE_ERR_NOMEM;
+    if (st == LIE_OK) {
+        nb[0] = pb[0] = 0;
+        for (uint32_t t = 0; t < n_tris; t++) {
+            nb[t + 1] = nb[t] + bufs[t].n_nodes;
+            pb[t + 1] = pb[t] + bufs[t].n_pool;
+        }
+        assembly a = {env, bufs, tri_lo, n_tris, n_clusters, old_unit, unit_lo, unit_hi, nb, pb, root, nd, pl};
+        st = lie_parallel_for((n_tris + ASSEMBLE_CHUNK - 1) / ASSEMBLE_CHUNK, threads, assemble_chunk, &a, NULL,
+                              NULL);
+    }
+    if (st != LIE_OK) {
         free(root);
         free(nd);
         free(pl);
-        return LIE_ERR_NOMEM;
-    }
-    uint32_t nb = 0, pb = 0;
-    for (uint32_t t = 0; t < n_tris; t++) {
-        const unit_buf *u = &bufs[t];
-        if (u->copied) {
-            uint32_t next_node = nb, next_pool = pb;
-            for (int e = 0; e < n_clusters; e++) {
-                size_t unit = (size_t)(tri_lo + t) * (size_t)n_clusters + (size_t)e;
-                uint32_t idx = next_node++;
-                root[unit - unit_lo] = idx;
-                copy_direct(env, env->root[old_unit[unit]], nd, pl, idx, &next_node, &next_pool);
-            }
-            nb += u->n_nodes;
-            pb += u->n_pool;
-            continue;
-        }
-        for (int e = 0; e < n_clusters; e++) {
-            uint64_t unit = (uint64_t)(tri_lo + t) * (uint64_t)n_clusters + (uint64_t)e;
-            if (unit >= unit_lo && unit < unit_hi)
-                root[unit - unit_lo] = nb + u->roots[e];
-        }
-        for (uint32_t i = 0; i < u->n_nodes; i++) {
-            lie_pnode x = u->nodes[i];
-            if (x.child)
-                x.child += nb;
-            if (x.cls == LIE_CLASS_PARTIAL)
-                x.list += pb;
-            nd[nb + i] = x;
-        }
-        if (u->n_pool)
-            memcpy(pl + pb, u->pool, sizeof *pl * u->n_pool);
-        nb += u->n_nodes;
-        pb += u->n_pool;
+        free(nb);
+        free(pb);
+        return st;
     }
     free(env->root);
     free(env->nodes);
@@ -269,8 +310,10 @@ static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32
     env->root = root;
     env->nodes = nd;
     env->pool = pl;
-    env->n_nodes = nb;
-    env->n_pool = pb;
+    env->n_nodes = nb[n_tris];
+    env->n_pool = pb[n_tris];
+    free(nb);
+    free(pb);
     return LIE_OK;
 }
 

@@ -108,7 +108,8 @@ static int pair_hull(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3
  * shaft's boundary — a wall meeting the floor at the patch's edge, the
  * floor's neighbouring triangle — are left out: the hull's corners are
  * pulled in by a thousandth and contact does not count. */
-size_t lie_cull_shaft(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e)
+static size_t shaft_upto(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e,
+                         size_t limit)
 {
     const lie_scene *s = c->s;
     lie_vec3 ctr = lie_v3_scale(lie_v3_add(V[0], lie_v3_add(V[1], V[2])), 1.0f / 3.0f);
@@ -130,7 +131,7 @@ size_t lie_cull_shaft(const build_ctx *c, worker *w, uint32_t tri, const lie_vec
     lie_sat sat;
     pair_sat(c, w, nh, tri, two_sided, e, 0.0f, &sat);
     size_t m = 0;
-    for (size_t i = 0; i < w->n_cand; i++) {
+    for (size_t i = 0; i < w->n_cand && m < limit; i++) {
         uint32_t t = w->cand[i];
         if (t == tri || s->tri_emitter[t] == s->clusters[e].emitter || !(s->tri_area[t] > 0.0f))
             continue;
@@ -141,6 +142,16 @@ size_t lie_cull_shaft(const build_ctx *c, worker *w, uint32_t tri, const lie_vec
     }
     w->n_cand = lie_sort_unique(w->cand, m);
     return w->n_cand;
+}
+
+size_t lie_cull_shaft(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e)
+{
+    return shaft_upto(c, w, tri, V, two_sided, e, SIZE_MAX);
+}
+
+int lie_cull_shaft_empty(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e)
+{
+    return shaft_upto(c, w, tri, V, two_sided, e, 1) == 0 && !w->nomem;
 }
 
 /* Sampling finds a blocker's triangles where segments happened to hit it;

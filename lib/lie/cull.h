@@ -10,6 +10,9 @@ void lie_cull_candidates(const build_ctx *c, worker *w, const lie_vec3 *hull, in
 /* The triangles entering the pair's shaft (other than the patch's own and
  * the emitter's) into w->cand, sorted and unique; returns how many. */
 size_t lie_cull_shaft(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e);
+/* Whether no triangle enters the pair's shaft (lie_cull_shaft finds none):
+ * the pair is visible, proven; stops at the first that does. */
+int lie_cull_shaft_empty(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e);
 /* Add to w->hits every triangle meeting the shaft of an instance already
  * there. */
 void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e);

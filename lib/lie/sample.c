@@ -90,6 +90,13 @@ static int pair_segment(const pair_sampler *ps, uint32_t i, lie_vec3 *org, lie_v
     return 1;
 }
 
+/* Segments of a pair's first round after which, none blocked, its shaft is
+ * asked whether any triangle enters it (lie_sample_pair). */
+#define SHAFT_PROBE 16u
+/* Segments traced as one packet (lie_rt_all_hits8); SHAFT_PROBE is a
+ * multiple of it. */
+#define SEGMENT_PACKET 8u
+
 /* After the first round found every segment blocked: are all the segments
  * up to max_samples blocked too?  Any-hit queries, stopping at the first
  * segment that is not. */
@@ -170,21 +177,42 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
     }
     const uint32_t id = w->stamp_id;
     for (;;) {
-        for (uint32_t i = total; i < total + round_n; i++) {
-            lie_vec3 org, dir;
-            float tnear, tfar;
-            uint32_t ex[2];
-            int n_ex;
-            if (!pair_segment(&ps, i, &org, &dir, &tnear, &tfar, ex, &n_ex))
+        /* segments in packets of SEGMENT_PACKET, traced together
+         * (lie_rt_all_hits8): a pair's segments are coherent */
+        for (uint32_t i0 = total; i0 < total + round_n; i0 += SEGMENT_PACKET) {
+            /* A shaft no triangle enters is visible, proven (the test the
+             * first round ends with when it finds nothing, below): when the
+             * first SHAFT_PROBE segments of the pair found nothing, ask the
+             * shaft before paying for the rest of the round.  With many
+             * emitters most lit pairs are such. */
+            if (i0 == SHAFT_PROBE && total == 0 && w->n_hits == 0 && SHAFT_PROBE < round_n) {
+                if (lie_cull_shaft_empty(c, w, tri, V, two_sided, e)) {
+                    w->st.segments += SHAFT_PROBE;
+                    *quality = round_n; /* what the whole round would have said */
+                    *n_list = 0;
+                    return LIE_CLASS_VISIBLE;
+                }
+                if (w->nomem)
+                    return LIE_CLASS_VISIBLE;
+            }
+            uint32_t i1 = total + round_n - i0 < SEGMENT_PACKET ? total + round_n : i0 + SEGMENT_PACKET;
+            lie_vec3 org[SEGMENT_PACKET], dir[SEGMENT_PACKET];
+            float tnear[SEGMENT_PACKET], tfar[SEGMENT_PACKET];
+            uint32_t ex[SEGMENT_PACKET][2];
+            int n_ex[SEGMENT_PACKET], m = 0;
+            for (uint32_t i = i0; i < i1; i++)
+                m += pair_segment(&ps, i, &org[m], &dir[m], &tnear[m], &tfar[m], ex[m], &n_ex[m]);
+            if (m == 0)
                 continue;
             size_t before = w->n_hits;
-            if (lie_rt_all_hits(c->rt, org, dir, tnear, tfar, ex, n_ex, &w->hits, &w->n_hits, &w->cap_hits) !=
-                LIE_OK) {
+            unsigned hit_mask = 0;
+            if (lie_rt_all_hits8(c->rt, org, dir, tnear, tfar, (const uint32_t(*)[2])ex, n_ex, m, &w->hits,
+                                 &w->n_hits, &w->cap_hits, &hit_mask) != LIE_OK) {
                 w->nomem = 1;
                 return LIE_CLASS_VISIBLE;
             }
-            valid++;
-            blocked += w->n_hits > before;
+            valid += (uint64_t)m;
+            blocked += (uint64_t)__builtin_popcount(hit_mask);
             size_t k = before;
             for (size_t j = before; j < w->n_hits; j++) {
                 uint32_t t = w->hits[j];

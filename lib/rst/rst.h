@@ -60,9 +60,11 @@ uint64_t lie_rst_query(const lie_rst *r, lie_box3 b, uint8_t *flags);
  * the nodes whose hull meets a box and whose ancestors' hulls all do are
  * flagged.  s and env are the state the trees were built for.  Returns how
  * many flags were cleared (out of memory, it spreads the flags as
- * lie_rst_spread does instead, which is looser but still safe). */
+ * lie_rst_spread does instead, which is looser but still safe).  On
+ * `threads` workers (0: every core), by triangles: the same flags for any
+ * count. */
 uint64_t lie_rst_refine(const lie_scene *s, const lie_env *env, const lie_box3 *boxes, int n_boxes,
-                        uint8_t *flags);
+                        uint8_t *flags, int threads);
 
 /* Where hulls cannot be tested (lie_rst_refine's scene would not match
  * env's emitters): flag every node below a flagged one. */

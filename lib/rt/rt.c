@@ -35,7 +35,7 @@ static void on_embree_error(void *user, enum RTCError code, const char *str)
 
 /* Query modes carried in an extended intersect context (first member is
  * Embree's, so the filter can cast back). */
-enum { QUERY_CLOSEST = 0, QUERY_CULL = 1, QUERY_ALL = 2, QUERY_ANY = 3 };
+enum { QUERY_CLOSEST = 0, QUERY_CULL = 1, QUERY_ALL = 2, QUERY_ANY = 3, QUERY_ALL8 = 4 };
 
 typedef struct query_ctx {
     struct RTCIntersectContext ctx;
@@ -47,12 +47,16 @@ typedef struct query_ctx {
     size_t *n, *cap;
     int nomem;
     int found;           /* QUERY_ANY: a hit not excluded was accepted */
+    const uint32_t (*exclude8)[2]; /* QUERY_ALL8: per ray (its id), what not to report */
+    const int *n_exclude8;
+    unsigned blocked8;   /* QUERY_ALL8: bit id set when ray id hit something */
 } query_ctx;
 
 /* Embree's RTCRayN/RTCHitN accessors are C++ only; in C the layouts are
  * structures of arrays of N lanes (rtcore_ray.h): ray = org_x, org_y, org_z,
  * tnear, dir_x, dir_y, dir_z, ...; hit = Ng_x, Ng_y, Ng_z, u, v, primID. */
 #define RAYN_DIR(ray, N, i, k) (((const float *)(ray))[(4 + (k)) * (N) + (i)])
+#define RAYN_ID(ray, N, i) (((const unsigned *)(ray))[10 * (N) + (i)])
 #define HITN_PRIM(hit, N, i) (((const unsigned *)(hit))[5 * (N) + (i)])
 #define HITN_U(hit, N, i) (((const float *)(hit))[3 * (N) + (i)])
 #define HITN_V(hit, N, i) (((const float *)(hit))[4 * (N) + (i)])
@@ -103,6 +107,19 @@ static void intersect_filter(const struct RTCFilterFunctionNArguments *args)
             continue;
         }
         int skip = 0;
+        if (q->mode == QUERY_ALL8) {
+            unsigned id = RAYN_ID(args->ray, args->N, i) & 7u;
+            for (int k = 0; k < q->n_exclude8[id]; k++)
+                if (q->exclude8[id][k] == prim)
+                    skip = 1;
+            args->valid[i] = 0; /* record and reject, as QUERY_ALL */
+            if (skip || q->nomem)
+                continue;
+            q->blocked8 |= 1u << id;
+            if (!LIE_PUSH(*q->out, *q->n, *q->cap, prim))
+                q->nomem = 1;
+            continue;
+        }
         for (int k = 0; k < q->n_exclude; k++)
             if (q->exclude[k] == prim)
                 skip = 1;
@@ -264,6 +281,32 @@ int lie_rt_intersect(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, 
     return 1;
 }
 
+/* A packet of n <= 8 rays (lanes past n invalid), ray k with id k, over
+ * [tnear[k], tfar[k]] (NULL: [0, inf)), and no hit yet. */
+static void init_ray8(struct RTCRayHit8 *rh, int valid[8], int n, const lie_vec3 *org, const lie_vec3 *dir,
+                      const float *tnear, const float *tfar)
+{
+    for (int k = 0; k < 8; k++) {
+        int ok = k < n;
+        valid[k] = ok ? -1 : 0;
+        rh->ray.org_x[k] = ok ? org[k].x : 0.0f;
+        rh->ray.org_y[k] = ok ? org[k].y : 0.0f;
+        rh->ray.org_z[k] = ok ? org[k].z : 0.0f;
+        rh->ray.tnear[k] = ok && tnear ? tnear[k] : 0.0f;
+        rh->ray.dir_x[k] = ok ? dir[k].x : 0.0f;
+        rh->ray.dir_y[k] = ok ? dir[k].y : 0.0f;
+        rh->ray.dir_z[k] = ok ? dir[k].z : 1.0f;
+        rh->ray.time[k] = 0.0f;
+        rh->ray.tfar[k] = !tfar ? INFINITY : ok ? tfar[k] : 0.0f;
+        rh->ray.mask[k] = 0xFFFFFFFFu;
+        rh->ray.id[k] = (unsigned)k;
+        rh->ray.flags[k] = 0;
+        rh->hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+        rh->hit.primID[k] = RTC_INVALID_GEOMETRY_ID;
+        rh->hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+    }
+}
+
 void lie_rt_intersect8(const lie_rt *rt, const lie_vec3 *org, const lie_vec3 *dir, int n, int cull_backfaces,
                        lie_hit *hits)
 {
@@ -275,25 +318,7 @@ void lie_rt_intersect8(const lie_rt *rt, const lie_vec3 *org, const lie_vec3 *di
     q.rt = rt;
     struct RTCRayHit8 rh __attribute__((aligned(32)));
     int valid[8] __attribute__((aligned(32)));
-    for (int k = 0; k < 8; k++) {
-        int ok = k < n;
-        valid[k] = ok ? -1 : 0;
-        rh.ray.org_x[k] = ok ? org[k].x : 0.0f;
-        rh.ray.org_y[k] = ok ? org[k].y : 0.0f;
-        rh.ray.org_z[k] = ok ? org[k].z : 0.0f;
-        rh.ray.tnear[k] = 0.0f;
-        rh.ray.dir_x[k] = ok ? dir[k].x : 0.0f;
-        rh.ray.dir_y[k] = ok ? dir[k].y : 0.0f;
-        rh.ray.dir_z[k] = ok ? dir[k].z : 1.0f;
-        rh.ray.time[k] = 0.0f;
-        rh.ray.tfar[k] = INFINITY;
-        rh.ray.mask[k] = 0xFFFFFFFFu;
-        rh.ray.id[k] = (unsigned)k;
-        rh.ray.flags[k] = 0;
-        rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-        rh.hit.primID[k] = RTC_INVALID_GEOMETRY_ID;
-        rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
-    }
+    init_ray8(&rh, valid, n, org, dir, NULL, NULL);
     rtcIntersect8(valid, rt->scene, &q.ctx, &rh);
     for (int k = 0; k < n; k++) {
         if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) {
@@ -401,6 +426,29 @@ lie_status lie_rt_all_hits(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float t
     q.n = n;
     q.cap = cap;
     run_query(rt, &q, org, dir, tnear, tfar);
+    return q.nomem ? LIE_ERR_NOMEM : LIE_OK;
+}
+
+lie_status lie_rt_all_hits8(const lie_rt *rt, const lie_vec3 *org, const lie_vec3 *dir, const float *tnear,
+                            const float *tfar, const uint32_t (*exclude)[2], const int *n_exclude, int n,
+                            uint32_t **out, size_t *n_out, size_t *cap, unsigned *blocked)
+{
+    query_ctx q;
+    memset(&q, 0, sizeof q);
+    rtcInitIntersectContext(&q.ctx);
+    q.ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    q.mode = QUERY_ALL8;
+    q.rt = rt;
+    q.exclude8 = exclude;
+    q.n_exclude8 = n_exclude;
+    q.out = out;
+    q.n = n_out;
+    q.cap = cap;
+    struct RTCRayHit8 rh __attribute__((aligned(32)));
+    int valid[8] __attribute__((aligned(32)));
+    init_ray8(&rh, valid, n, org, dir, tnear, tfar);
+    rtcIntersect8(valid, rt->scene, &q.ctx, &rh);
+    *blocked = q.blocked8;
     return q.nomem ? LIE_ERR_NOMEM : LIE_OK;
 }
 

@@ -72,6 +72,17 @@ lie_status lie_rt_all_hits(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float t
                            const uint32_t *exclude, int n_exclude, uint32_t **out, size_t *n,
                            size_t *cap);
 
+/* lie_rt_all_hits for n <= 8 segments at once, traced as one packet
+ * (Embree's coherent packet traversal: a pair's segments run between one
+ * patch and one emitter): segment k's hits, less exclude[k][0 ..
+ * n_exclude[k]), are appended to *out; bit k of *blocked says whether it
+ * had any.  A function of the segments alone, as lie_rt_all_hits is (the
+ * packet's triangle tests are Embree's for packets, which may round
+ * otherwise than its single-ray ones on an edge). */
+lie_status lie_rt_all_hits8(const lie_rt *rt, const lie_vec3 *org, const lie_vec3 *dir, const float *tnear,
+                            const float *tfar, const uint32_t (*exclude)[2], const int *n_exclude, int n,
+                            uint32_t **out, size_t *n_out, size_t *cap, unsigned *blocked);
+
 /* 1 if some triangle not in `exclude` meets the segment [tnear, tfar]:
  * exactly when lie_rt_all_hits would report one (the same triangle tests
  * and holes), found with far less traversal. */

@@ -144,7 +144,7 @@ static lie_status flag_nodes(lie_update *u)
                         c->emitters[e].n_clusters == (uint32_t)s->emitters[e].n_clusters &&
                         c->emitters[e].partition == lie_scene_cluster_digest(s, e);
     if (u->rst && same_emitters)
-        lie_rst_refine(s, env, u->boxes, u->n_boxes, u->flags);
+        lie_rst_refine(s, env, u->boxes, u->n_boxes, u->flags, u->opt.threads);
     else if (u->rst)
         lie_rst_spread(env, u->flags);
     u->st.nodes_flagged = 0;

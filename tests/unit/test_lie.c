@@ -275,6 +275,126 @@ static void test_lie_quad_between_floor_and_light_is_the_only_blocker(void **sta
     lie_scene_destroy(s);
 }
 
+/* A floor under a light with nothing between (triangles 0-1 and 2-3). */
+static lie_scene *open_scene(void)
+{
+    int mw, ml;
+    lie_scene *s = floor_scene("open", &mw, &ml);
+    uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
+    float li[12] = {-0.5f, 2, -0.5f, 0.5f, 2, -0.5f, 0.5f, 2, 0.5f, -0.5f, 2, 0.5f};
+    lie_scene_add_node(s, "Light", -1, NULL, lie_scene_add_mesh(s, "Light", li, NULL, NULL, 4, idx, 2, ml), -1, -1);
+    lie_error err;
+    assert_int_equal(lie_scene_flatten(s, &err), LIE_OK);
+    return s;
+}
+
+/* A pair whose shaft no triangle enters is visible after a probe of a few
+ * segments (lib/lie/sample.c, SHAFT_PROBE), not a whole first round, and
+ * is stored as that round would have left it (quality = samples). */
+static void test_lie_empty_shaft_is_visible_after_a_probe(void **state)
+{
+    (void)state;
+    lie_scene *s = open_scene();
+    lie_rt *rt = NULL;
+    lie_error err;
+    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
+    lie_build_params p = lie_build_params_default();
+    lie_env *env = NULL;
+    lie_build_stats st;
+    memset(&st, 0, sizeof st);
+    assert_int_equal(lie_env_build(s, rt, &p, NULL, &env, &st, &err), LIE_OK);
+    for (uint32_t t = 0; t < 2; t++) {
+        const lie_pnode *n = &env->nodes[env->root[t]];
+        assert_int_equal(n->cls, LIE_CLASS_VISIBLE);
+        assert_int_equal(n->child, 0);
+        assert_int_equal(n->quality, p.samples);
+    }
+    assert_int_equal(env->nodes[env->root[2]].cls, LIE_CLASS_UNLIT);
+    assert_int_equal(env->nodes[env->root[3]].cls, LIE_CLASS_UNLIT);
+    assert_true(st.segments > 0);
+    assert_true(st.segments <= 2 * (uint64_t)p.samples / 4); /* two floor pairs, an eighth of a round each */
+    lie_env_destroy(env);
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+}
+
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return (x > y) - (x < y);
+}
+
+static size_t sorted_unique(uint32_t *v, size_t n)
+{
+    qsort(v, n, sizeof *v, cmp_u32);
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++)
+        if (m == 0 || v[m - 1] != v[i])
+            v[m++] = v[i];
+    return m;
+}
+
+/* lie_rt_all_hits8 (the build's packets of segments) reports, lane by
+ * lane, what lie_rt_all_hits reports for each segment alone: the union of
+ * the hits, less each lane's exclusions, and which lanes were blocked. */
+static void test_rt_packet_all_hits_equal_single_segments(void **state)
+{
+    (void)state;
+    lie_scene *s = test_scene("cornell.gltf");
+    lie_rt *rt = NULL;
+    lie_error err;
+    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
+    lie_vec3 lo = s->bounds.lo, ext = lie_v3_sub(s->bounds.hi, s->bounds.lo);
+    uint32_t *one = NULL, *all = NULL;
+    size_t n_one = 0, cap_one = 0, n_all = 0, cap_all = 0, blocked_seen = 0;
+    for (uint64_t q = 0; q < 200; q++) {
+        int n = 1 + (int)(q % 8);
+        lie_vec3 org[8], dir[8];
+        float tnear[8], tfar[8];
+        uint32_t ex[8][2];
+        int n_ex[8];
+        unsigned want = 0;
+        n_all = 0;
+        size_t n_union = 0;
+        uint32_t uni[512];
+        for (int k = 0; k < n; k++) {
+            float u[6];
+            for (int d = 0; d < 6; d++)
+                u[d] = lie_hash_to_unit(lie_hash_u64x4(q, (uint64_t)k, (uint64_t)d, 7));
+            lie_vec3 a = lie_v3(lo.x + u[0] * ext.x, lo.y + u[1] * ext.y, lo.z + u[2] * ext.z);
+            lie_vec3 b = lie_v3(lo.x + u[3] * ext.x, lo.y + u[4] * ext.y, lo.z + u[5] * ext.z);
+            org[k] = a;
+            dir[k] = lie_v3_sub(b, a);
+            tnear[k] = 0.0f;
+            tfar[k] = 1.0f;
+            ex[k][0] = (uint32_t)(q + (uint64_t)k) % s->n_tris; /* something to leave out */
+            n_ex[k] = 1;
+            n_one = 0;
+            assert_int_equal(lie_rt_all_hits(rt, org[k], dir[k], 0.0f, 1.0f, ex[k], 1, &one, &n_one, &cap_one), LIE_OK);
+            if (n_one)
+                want |= 1u << k;
+            for (size_t j = 0; j < n_one && n_union < 512; j++)
+                uni[n_union++] = one[j];
+        }
+        unsigned got = 0;
+        assert_int_equal(lie_rt_all_hits8(rt, org, dir, tnear, tfar, (const uint32_t(*)[2])ex, n_ex, n, &all, &n_all,
+                                          &cap_all, &got),
+                         LIE_OK);
+        assert_int_equal(got, want);
+        n_union = sorted_unique(uni, n_union);
+        n_all = sorted_unique(all, n_all);
+        assert_int_equal(n_all, n_union);
+        if (n_all)
+            assert_memory_equal(all, uni, n_all * sizeof *all);
+        blocked_seen += want != 0;
+    }
+    assert_true(blocked_seen > 20); /* the segments did meet the box's walls and blocks */
+    free(one);
+    free(all);
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+}
+
 typedef struct size_check {
     const lie_scene *s;
     const lie_build_params *p;
@@ -674,6 +794,8 @@ int main(void)
         cmocka_unit_test(test_lie_many_triangle_emitter_uses_a_flat_oriented_box),
         cmocka_unit_test(test_lie_self_occluding_emitter_is_complex_without_splitting),
         cmocka_unit_test(test_lie_spot_cone_and_range_cull_exactly_the_dark_patches),
+        cmocka_unit_test(test_lie_empty_shaft_is_visible_after_a_probe),
+        cmocka_unit_test(test_rt_packet_all_hits_equal_single_segments),
     };
     return cmocka_run_group_tests_name("lie", tests, NULL, NULL);
 }

@@ -200,7 +200,7 @@ static void test_rst_refine_equals_brute_force_walk_of_every_patch_tree(void **s
         memset(flags, 0, env->n_nodes);
         memset(brute, 0, env->n_nodes);
         lie_rst_query(f->rst, b, flags);
-        lie_rst_refine(f->s, env, &b, 1, flags);
+        lie_rst_refine(f->s, env, &b, 1, flags, 1 + q % 3); /* 1, 2, 3 workers: the same flags */
         for (uint32_t t = 0; t < env->n_tris; t++)
             for (int e = 0; e < env->n_clusters; e++) {
                 uint32_t r = env->root[(size_t)t * (size_t)env->n_clusters + (size_t)e];

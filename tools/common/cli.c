@@ -173,12 +173,19 @@ void lie_print_scene_warnings(const char *prog, const lie_scene *s, const char *
 /* A shared option: -1 to go on, else the exit status. */
 static int shared_option(lie_cli *cli, int c, const char *arg, char *const argv[])
 {
+    long v;
     switch (c) {
     case LIE_OPT_EXTERNAL: cli->external = 1; return -1;
     case LIE_OPT_STATS:
         if (!(cli->stats = lie_parse_stats(arg)))
             return lie_usage_error(cli->tool, "--stats: expected --stats or --stats=json, got '%s'", arg);
         return -1;
+    case LIE_OPT_THREADS:
+        if (!lie_cli_long(cli, 0, 4096, &v))
+            return cli->status;
+        cli->threads = (int)v;
+        return -1;
+    case 'o': cli->output = arg; return -1;
     case 'q': cli->quiet = 1; return -1;
     case 'v': cli->verbose = 1; return -1;
     case 'h': cli->usage(stdout); return 0;
@@ -193,18 +200,62 @@ static int shared_option(lie_cli *cli, int c, const char *arg, char *const argv[
     }
 }
 
-static int is_shared(int c)
+static int is_shared(const lie_cli *cli, int c)
 {
-    return c == LIE_OPT_EXTERNAL || c == LIE_OPT_STATS || c == LIE_OPT_VERSION || c == 'q' || c == 'v' || c == 'h' ||
-           c == ':' || c == '?';
+    return c == LIE_OPT_EXTERNAL || c == LIE_OPT_STATS || c == LIE_OPT_VERSION || c == LIE_OPT_THREADS ||
+           (c == 'o' && (cli->takes & LIE_CLI_OUTPUT)) || c == 'q' || c == 'v' || c == 'h' || c == ':' || c == '?';
+}
+
+/* The tool's table, then the shared options it takes, -q, -h, --version;
+ * its short options, then the shared ones'.  0 when they do not fit (a
+ * tool's table is fixed: tests/tools/t0520-cli-contract.sh runs them all). */
+static int make_table(lie_cli *cli, const char *shortopts, const struct option *longopts)
+{
+    static const struct {
+        unsigned bit;
+        struct option opt;
+        const char *shortopt;
+    } shared[] = {
+        {LIE_CLI_OUTPUT, {"output", required_argument, NULL, 'o'}, "o:"},
+        {LIE_CLI_THREADS, {"threads", required_argument, NULL, LIE_OPT_THREADS}, ""},
+        {LIE_CLI_EXTERNAL, {"allow-external-uris", no_argument, NULL, LIE_OPT_EXTERNAL}, ""},
+        {LIE_CLI_STATS, {"stats", optional_argument, NULL, LIE_OPT_STATS}, ""},
+        {LIE_CLI_VERBOSE, {"verbose", no_argument, NULL, 'v'}, "v"},
+        {0, {"quiet", no_argument, NULL, 'q'}, "q"},
+        {0, {"help", no_argument, NULL, 'h'}, "h"},
+        {0, {"version", no_argument, NULL, LIE_OPT_VERSION}, ""},
+    };
+    size_t n = 0, ns = 1 + strlen(shortopts);
+    while (longopts[n].name)
+        n++;
+    if (n + sizeof shared / sizeof shared[0] + 1 > LIE_CLI_MAX_OPTIONS || ns + 8 > sizeof cli->shortopts)
+        return 0;
+    memcpy(cli->table, longopts, n * sizeof *longopts);
+    snprintf(cli->shortopts, sizeof cli->shortopts, ":%s", shortopts);
+    for (size_t i = 0; i < sizeof shared / sizeof shared[0]; i++)
+        if (!shared[i].bit || (cli->takes & shared[i].bit)) {
+            cli->table[n++] = shared[i].opt;
+            strcat(cli->shortopts, shared[i].shortopt);
+        }
+    memset(&cli->table[n], 0, sizeof cli->table[n]);
+    return 1;
 }
 
 int lie_cli_next(lie_cli *cli, int argc, char *const argv[], const char *shortopts, const struct option *longopts)
 {
+    if (!cli->table[0].name && !make_table(cli, shortopts, longopts)) {
+        fprintf(stderr, "%s: too many options for tools/common/cli.c\n", cli->tool);
+        cli->status = 2;
+        return LIE_CLI_EXIT;
+    }
     opterr = 0;
     int c;
-    while ((c = getopt_long(argc, argv, shortopts, longopts, NULL)) != -1) {
-        if (!is_shared(c))
+    while ((c = getopt_long(argc, argv, cli->shortopts, cli->table, NULL)) != -1) {
+        cli->name = NULL;
+        for (const struct option *o = cli->table; o->name && !cli->name; o++)
+            if (o->val == c)
+                cli->name = o->name;
+        if (!is_shared(cli, c))
             return c;
         if ((cli->status = shared_option(cli, c, optarg, argv)) >= 0)
             return LIE_CLI_EXIT;
@@ -218,4 +269,31 @@ int lie_cli_next(lie_cli *cli, int argc, char *const argv[], const char *shortop
         cli->operand = argv[optind];
     }
     return -1;
+}
+
+int lie_cli_long(lie_cli *cli, long min, long max, long *out)
+{
+    if (lie_parse_long(optarg, min, max, out))
+        return 1;
+    cli->status = lie_usage_error(cli->tool, "--%s: expected an integer in %ld..%ld, got '%s'", cli->name, min, max,
+                                  optarg);
+    return 0;
+}
+
+int lie_cli_pick(lie_cli *cli, const lie_cli_choice *choices, int *out)
+{
+    char names[256] = "";
+    size_t n = 0;
+    while (choices[n].name)
+        n++;
+    for (size_t i = 0; i < n; i++) {
+        if (strcmp(optarg, choices[i].name) == 0) {
+            *out = choices[i].value;
+            return 1;
+        }
+        size_t len = strlen(names);
+        snprintf(names + len, sizeof names - len, "%s%s", i == 0 ? "" : i + 1 < n ? ", " : " or ", choices[i].name);
+    }
+    cli->status = lie_usage_error(cli->tool, "--%s: expected %s, got '%s'", cli->name, names, optarg);
+    return 0;
 }

@@ -29,16 +29,19 @@ int lie_parse_stats(const char *arg);
 
 /* ---- the options every tool shares (design/CLI.md) -------------------- */
 
+/* The options a tool may share with others, besides -q, -h and --version
+ * that every tool takes: its lie_cli.takes names them, lie_cli_next adds
+ * them to the tool's table and handles them. */
+enum {
+    LIE_CLI_EXTERNAL = 1, /* --allow-external-uris */
+    LIE_CLI_STATS = 2,    /* --stats[=json] */
+    LIE_CLI_VERBOSE = 4,  /* -v, --verbose */
+    LIE_CLI_THREADS = 8,  /* --threads N, 0..4096 (0: all cores) */
+    LIE_CLI_OUTPUT = 16,  /* -o, --output FILE */
+};
 /* getopt_long codes of the shared long options, above any tool's own. */
-enum { LIE_OPT_EXTERNAL = 0x1000, LIE_OPT_STATS, LIE_OPT_VERSION };
-/* Entries for a tool's getopt_long table: the ones it takes, then
- * LIE_OPT_ENTRIES_END (-q, -h, --version and the terminator) last. */
-#define LIE_OPT_ENTRY_EXTERNAL {"allow-external-uris", no_argument, NULL, LIE_OPT_EXTERNAL}
-#define LIE_OPT_ENTRY_STATS {"stats", optional_argument, NULL, LIE_OPT_STATS}
-#define LIE_OPT_ENTRY_VERBOSE {"verbose", no_argument, NULL, 'v'}
-#define LIE_OPT_ENTRIES_END                                                                                           \
-    {"quiet", no_argument, NULL, 'q'}, {"help", no_argument, NULL, 'h'},                                              \
-        {"version", no_argument, NULL, LIE_OPT_VERSION}, { NULL, 0, NULL, 0 }
+enum { LIE_OPT_EXTERNAL = 0x1000, LIE_OPT_STATS, LIE_OPT_VERSION, LIE_OPT_THREADS };
+#define LIE_CLI_MAX_OPTIONS 64
 
 /* A tool's command line: what it says about itself, and what the shared
  * options set. */
@@ -48,20 +51,41 @@ typedef struct lie_cli {
     const char *missing;     /* a tool of one operand: the message when it is missing, and
                               * lie_cli_next checks there is exactly one (operand); NULL: the
                               * tool checks its operands itself */
+    unsigned takes;          /* LIE_CLI_* bits: the shared options it takes */
     const char *operand;     /* that operand */
     int quiet;               /* -q */
     int verbose;             /* -v */
     int stats;               /* --stats: 1, --stats=json: 2 */
     int external;            /* --allow-external-uris */
-    int status;              /* after LIE_CLI_EXIT: the exit status */
+    int threads;             /* --threads */
+    const char *output;      /* -o */
+    int status;              /* after LIE_CLI_EXIT or a failed lie_cli_long/choice: the exit status */
+    /* lie_cli_next's own: the option being handled, the whole table */
+    const char *name;
+    struct option table[LIE_CLI_MAX_OPTIONS];
+    char shortopts[32];
 } lie_cli;
 #define LIE_CLI_EXIT (-2)
-/* getopt_long over the tool's table, handling the shared options, getopt's
- * errors and (with `missing`) the operand: returns the next option of the
- * tool's own, -1 at the end, or LIE_CLI_EXIT when the tool must exit with
- * cli->status: 0 after --help or --version (printed to stdout), 2 after a
- * usage error (its one line printed). */
+/* getopt_long over the tool's table (its own options, ended by a NULL
+ * name; shortopts: its own short options, e.g. "s:") and the shared ones it
+ * takes, handling the shared options, getopt's errors and (with `missing`)
+ * the operand: returns the next option of the tool's own, -1 at the end, or
+ * LIE_CLI_EXIT when the tool must exit with cli->status: 0 after --help or
+ * --version (printed to stdout), 2 after a usage error (its one line
+ * printed). */
 int lie_cli_next(lie_cli *cli, int argc, char *const argv[], const char *shortopts, const struct option *longopts);
+
+/* The value of the option lie_cli_next just returned (optarg), parsed
+ * strictly.  On a bad value the usage error "--NAME: expected ..., got
+ * 'VALUE'" is printed, cli->status is 2 and 0 is returned. */
+/* An integer in [min, max]. */
+int lie_cli_long(lie_cli *cli, long min, long max, long *out);
+/* One of the names of `choices` (ended by a NULL name): its value. */
+typedef struct lie_cli_choice {
+    const char *name;
+    int value;
+} lie_cli_choice;
+int lie_cli_pick(lie_cli *cli, const lie_cli_choice *choices, int *out);
 
 /* ---- tool messages: one line on stderr (CONTRIBUTING.md) -------------- */
 

@@ -45,15 +45,12 @@ static void usage(FILE *fp)
 enum { OPT_FPS = 256, OPT_ANIMATION, OPT_FRAMES, OPT_CAMERA_PATH, OPT_CAMERA };
 
 static const struct option long_opts[] = {
-    {"output", required_argument, NULL, 'o'},
     {"fps", required_argument, NULL, OPT_FPS},
     {"animation", required_argument, NULL, OPT_ANIMATION},
     {"frames", required_argument, NULL, OPT_FRAMES},
     {"camera-path", required_argument, NULL, OPT_CAMERA_PATH},
     {"camera", required_argument, NULL, OPT_CAMERA},
-    LIE_OPT_ENTRY_EXTERNAL,
-    LIE_OPT_ENTRY_STATS,
-    LIE_OPT_ENTRIES_END,
+    {NULL, 0, NULL, 0},
 };
 
 /* A node's name for a YAML comment: printable ASCII only. */
@@ -207,10 +204,10 @@ int main(int argc, char **argv)
     double fps = 0.0;
     long fa = 0, fb = -1;
     int have_frames = 0, c;
-    lie_cli cli = {.tool = prog, .usage = usage, .missing = "missing scene"};
-    while ((c = lie_cli_next(&cli, argc, argv, ":o:qh", long_opts)) > 0) {
+    lie_cli cli = {.tool = prog, .usage = usage, .missing = "missing scene",
+                   .takes = LIE_CLI_OUTPUT | LIE_CLI_EXTERNAL | LIE_CLI_STATS};
+    while ((c = lie_cli_next(&cli, argc, argv, "", long_opts)) > 0) {
         switch (c) {
-        case 'o': output = optarg; break;
         case OPT_FPS: {
             float f;
             if (!lie_parse_float(optarg, 1e-3f, 1e6f, &f))
@@ -231,6 +228,7 @@ int main(int argc, char **argv)
     if (c == LIE_CLI_EXIT)
         return cli.status;
     so.allow_external_uris = cli.external;
+    output = cli.output;
     const char *scene_path = cli.operand;
     if (!output)
         return usage_error("%s", "missing -o EDITS_%%04d.yaml");

@@ -93,10 +93,9 @@ static const struct option long_opts[] = {
     {"emitter", required_argument, NULL, OPT_EMITTER},
     {"size", required_argument, NULL, OPT_SIZE},
     {"threads", required_argument, NULL, OPT_THREADS},
-    LIE_OPT_ENTRY_EXTERNAL,
     {"min-age", required_argument, NULL, OPT_MIN_AGE},
     {"dry-run", no_argument, NULL, OPT_DRY_RUN},
-    LIE_OPT_ENTRIES_END,
+    {NULL, 0, NULL, 0},
 };
 
 /* Which commands take which options (bits of `command`). */
@@ -147,8 +146,8 @@ int main(int argc, char **argv)
     int given[N_USES] = {0};
     long v;
     int c;
-    lie_cli cli = {.tool = inspect_prog, .usage = usage};
-    while ((c = lie_cli_next(&cli, argc, argv, ":o:qh", long_opts)) > 0) {
+    lie_cli cli = {.tool = inspect_prog, .usage = usage, .takes = LIE_CLI_EXTERNAL};
+    while ((c = lie_cli_next(&cli, argc, argv, "o:", long_opts)) > 0) {
         for (size_t i = 0; i < N_USES; i++)
             if (uses[i].code == c)
                 given[i] = 1;
@@ -169,8 +168,8 @@ int main(int argc, char **argv)
                 return usage_error("--size: expected WxH, got '%s'", optarg);
             break;
         case OPT_THREADS:
-            if (!lie_parse_long(optarg, 0, 4096, &v))
-                return usage_error("--threads: expected an integer in 0..4096, got '%s'", optarg);
+            if (!lie_cli_long(&cli, 0, 4096, &v))
+                return cli.status;
             o.threads = (int)v;
             break;
         case OPT_MIN_AGE:

@@ -101,13 +101,12 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 
 enum {
     OPT_CAMERA = 256, OPT_SIZE, OPT_SPP, OPT_LIGHT_SAMPLES, OPT_PATTERN, OPT_VISIBILITY, OPT_RAYS, OPT_LIE_SKIP,
-    OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_THREADS, OPT_SCENE,
+    OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_SCENE,
     OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS, OPT_FRAMES, OPT_SKIP_EXISTING, OPT_FORMAT, OPT_HALF, OPT_BITMASK,
     OPT_SILHOUETTE
 };
 
 static const struct option long_opts[] = {
-    {"output", required_argument, NULL, 'o'},
     {"scene", required_argument, NULL, OPT_SCENE},
     {"path", required_argument, NULL, OPT_PATH},
     {"frames", required_argument, NULL, OPT_FRAMES},
@@ -131,12 +130,25 @@ static const struct option long_opts[] = {
     {"format", required_argument, NULL, OPT_FORMAT},
     {"half", no_argument, NULL, OPT_HALF},
     {"exposure", required_argument, NULL, OPT_EXPOSURE},
-    {"threads", required_argument, NULL, OPT_THREADS},
-    LIE_OPT_ENTRY_EXTERNAL,
-    LIE_OPT_ENTRY_STATS,
-    LIE_OPT_ENTRY_VERBOSE,
-    LIE_OPT_ENTRIES_END,
+    {NULL, 0, NULL, 0},
 };
+
+/* The values of the options that name a mode (each message lists them in
+ * this order). */
+static const lie_cli_choice exact_modes[] = {{"auto", LIE_EXACT_AUTO}, {"off", LIE_EXACT_OFF}, {NULL, 0}};
+static const lie_cli_choice bitmask_modes[] = {
+    {"auto", LIE_BITMASK_AUTO}, {"off", LIE_BITMASK_OFF}, {"only", LIE_BITMASK_ONLY}, {NULL, 0}};
+static const lie_cli_choice silhouette_modes[] = {
+    {"off", LIE_SILHOUETTE_OFF}, {"only", LIE_SILHOUETTE_ONLY}, {NULL, 0}};
+static const lie_cli_choice patterns[] = {{"fixed", LIE_PATTERN_FIXED}, {"rotated", LIE_PATTERN_ROTATED}, {NULL, 0}};
+static const lie_cli_choice lie_skips[] = {{"blockers", LIE_SKIP_BLOCKERS},
+                                           {"fallback", LIE_SKIP_FALLBACK},
+                                           {"both", LIE_SKIP_BLOCKERS | LIE_SKIP_FALLBACK},
+                                           {NULL, 0}};
+static const lie_cli_choice visibilities[] = {
+    {"full", LIE_VIS_FULL}, {"lie", LIE_VIS_LIE}, {"none", LIE_VIS_NONE}, {NULL, 0}};
+static const lie_cli_choice ray_modes[] = {
+    {"stream", LIE_RAYS_STREAM}, {"packet", LIE_RAYS_PACKET}, {"single", LIE_RAYS_SINGLE}, {NULL, 0}};
 
 static int parse_aovs(const char *list, unsigned *bits)
 {
@@ -382,18 +394,19 @@ int main(int argc, char **argv)
     lie_frame_options fopt = {0};
     long v;
     int c;
-    lie_cli cli = {.tool = prog, .usage = usage, .missing = "missing input scene"};
-    while ((c = lie_cli_next(&cli, argc, argv, ":o:qvh", long_opts)) > 0) {
+    lie_cli cli = {.tool = prog, .usage = usage, .missing = "missing input scene",
+                   .takes = LIE_CLI_OUTPUT | LIE_CLI_THREADS | LIE_CLI_EXTERNAL | LIE_CLI_STATS | LIE_CLI_VERBOSE};
+    int choice;
+    while ((c = lie_cli_next(&cli, argc, argv, "", long_opts)) > 0) {
         switch (c) {
-        case 'o': output = optarg; break;
         case OPT_CAMERA: camera = optarg; break;
         case OPT_SIZE:
             if (!lie_parse_size(optarg, 65536, &ro.width, &ro.height))
                 return usage_error("--size: expected WxH, got '%s'", optarg);
             break;
         case OPT_SPP:
-            if (!lie_parse_long(optarg, 1, 65536, &v))
-                return usage_error("--spp: expected an integer in 1..65536, got '%s'", optarg);
+            if (!lie_cli_long(&cli, 1, 65536, &v))
+                return cli.status;
             ro.spp = (int)v;
             break;
         case OPT_LIGHT_SAMPLES:
@@ -409,51 +422,45 @@ int main(int argc, char **argv)
                 ro.exact = LIE_EXACT_AUTO;
             break;
         case OPT_EXACT:
-            if (strcmp(optarg, "auto") == 0) ro.exact = LIE_EXACT_AUTO;
-            else if (strcmp(optarg, "off") == 0) ro.exact = LIE_EXACT_OFF;
-            else return usage_error("--exact: expected auto or off, got '%s'", optarg);
+            if (!lie_cli_pick(&cli, exact_modes, &choice))
+                return cli.status;
+            ro.exact = (lie_exact_mode)choice;
             break;
         case OPT_BITMASK:
-            if (strcmp(optarg, "auto") == 0) ro.bitmask = LIE_BITMASK_AUTO;
-            else if (strcmp(optarg, "off") == 0) ro.bitmask = LIE_BITMASK_OFF;
-            else if (strcmp(optarg, "only") == 0) ro.bitmask = LIE_BITMASK_ONLY;
-            else return usage_error("--bitmask: expected auto, off or only, got '%s'", optarg);
+            if (!lie_cli_pick(&cli, bitmask_modes, &choice))
+                return cli.status;
+            ro.bitmask = (lie_bitmask_mode)choice;
             break;
         case OPT_SILHOUETTE:
-            if (strcmp(optarg, "off") == 0) ro.silhouette = LIE_SILHOUETTE_OFF;
-            else if (strcmp(optarg, "only") == 0) ro.silhouette = LIE_SILHOUETTE_ONLY;
-            else return usage_error("--silhouette: expected off or only, got '%s'", optarg);
+            if (!lie_cli_pick(&cli, silhouette_modes, &choice))
+                return cli.status;
+            ro.silhouette = (lie_silhouette_mode)choice;
             break;
-        case OPT_TIMERS:
-            ro.timers = 1;
-            break;
+        case OPT_TIMERS: ro.timers = 1; break;
         case OPT_PATTERN:
-            if (strcmp(optarg, "fixed") == 0) ro.pattern = LIE_PATTERN_FIXED;
-            else if (strcmp(optarg, "rotated") == 0) ro.pattern = LIE_PATTERN_ROTATED;
-            else return usage_error("--pattern: expected fixed or rotated, got '%s'", optarg);
+            if (!lie_cli_pick(&cli, patterns, &choice))
+                return cli.status;
+            ro.pattern = (lie_pattern)choice;
             break;
         case OPT_LIE_SKIP:
-            if (strcmp(optarg, "blockers") == 0) ro.lie_skip = LIE_SKIP_BLOCKERS;
-            else if (strcmp(optarg, "fallback") == 0) ro.lie_skip = LIE_SKIP_FALLBACK;
-            else if (strcmp(optarg, "both") == 0) ro.lie_skip = LIE_SKIP_BLOCKERS | LIE_SKIP_FALLBACK;
-            else return usage_error("--lie-skip: expected blockers, fallback or both, got '%s'", optarg);
+            if (!lie_cli_pick(&cli, lie_skips, &choice))
+                return cli.status;
+            ro.lie_skip = (unsigned)choice;
             break;
         case OPT_VISIBILITY:
             visibility_set = 1;
-            if (strcmp(optarg, "full") == 0) ro.visibility = LIE_VIS_FULL;
-            else if (strcmp(optarg, "none") == 0) ro.visibility = LIE_VIS_NONE;
-            else if (strcmp(optarg, "lie") == 0) ro.visibility = LIE_VIS_LIE;
-            else return usage_error("--visibility: expected full, lie or none, got '%s'", optarg);
+            if (!lie_cli_pick(&cli, visibilities, &choice))
+                return cli.status;
+            ro.visibility = (lie_visibility_mode)choice;
             break;
         case OPT_RAYS:
-            if (strcmp(optarg, "stream") == 0) ro.rays = LIE_RAYS_STREAM;
-            else if (strcmp(optarg, "packet") == 0) ro.rays = LIE_RAYS_PACKET;
-            else if (strcmp(optarg, "single") == 0) ro.rays = LIE_RAYS_SINGLE;
-            else return usage_error("--rays: expected stream, packet or single, got '%s'", optarg);
+            if (!lie_cli_pick(&cli, ray_modes, &choice))
+                return cli.status;
+            ro.rays = (lie_ray_mode)choice;
             break;
         case OPT_MAX_DEPTH:
-            if (!lie_parse_long(optarg, 0, 64, &v))
-                return usage_error("--max-depth: expected an integer in 0..64, got '%s'", optarg);
+            if (!lie_cli_long(&cli, 0, 64, &v))
+                return cli.status;
             ro.max_depth = (int)v;
             break;
         case OPT_AOV:
@@ -474,12 +481,6 @@ int main(int argc, char **argv)
             if (!lie_parse_float(optarg, -64.0f, 64.0f, &fopt.png.exposure))
                 return usage_error("--exposure: expected a number of stops, got '%s'", optarg);
             break;
-        case OPT_THREADS:
-            if (!lie_parse_long(optarg, 0, 4096, &v))
-                return usage_error("--threads: expected an integer in 0..4096, got '%s'", optarg);
-            ro.threads = (int)v;
-            fopt.exr.threads = ro.threads;
-            break;
         case OPT_SCENE: scene_override = optarg; break;
         case OPT_PATH: path_file = optarg; break;
         case OPT_FRAMES:
@@ -497,6 +498,9 @@ int main(int argc, char **argv)
     if (c == LIE_CLI_EXIT)
         return cli.status;
     so.allow_external_uris = cli.external;
+    ro.threads = cli.threads;
+    fopt.exr.threads = ro.threads;
+    output = cli.output;
     const char *input = cli.operand;
     if (!output)
         return usage_error("%s", "missing -o OUTPUT");

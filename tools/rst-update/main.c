@@ -47,18 +47,13 @@ static void usage(FILE *fp)
 
 static int fail(const lie_error *err) { return lie_report_error(prog, err, 1); }
 
-enum { OPT_FULL = 256, OPT_THREADS, OPT_WRITE_SCENE, OPT_FORCE };
+enum { OPT_FULL = 256, OPT_WRITE_SCENE, OPT_FORCE };
 
 static const struct option long_opts[] = {
-    {"output", required_argument, NULL, 'o'},
     {"full", no_argument, NULL, OPT_FULL},
     {"write-scene", required_argument, NULL, OPT_WRITE_SCENE},
     {"force", no_argument, NULL, OPT_FORCE},
-    {"threads", required_argument, NULL, OPT_THREADS},
-    LIE_OPT_ENTRY_EXTERNAL,
-    LIE_OPT_ENTRY_STATS,
-    LIE_OPT_ENTRY_VERBOSE,
-    LIE_OPT_ENTRIES_END,
+    {NULL, 0, NULL, 0},
 };
 
 /* --write-scene names a .gltf or a .glb (lie_gltf_export_group). */
@@ -210,25 +205,21 @@ int main(int argc, char **argv)
 {
     lie_update_options uo = lie_update_options_default();
     run_opts ro = {NULL, NULL, lie_gltf_export_options_default(), 0, 0, 0};
-    long v;
     int c;
-    lie_cli cli = {.tool = prog, .usage = usage};
-    while ((c = lie_cli_next(&cli, argc, argv, ":o:qvh", long_opts)) > 0) {
+    lie_cli cli = {.tool = prog, .usage = usage,
+                   .takes = LIE_CLI_OUTPUT | LIE_CLI_THREADS | LIE_CLI_EXTERNAL | LIE_CLI_STATS | LIE_CLI_VERBOSE};
+    while ((c = lie_cli_next(&cli, argc, argv, "", long_opts)) > 0) {
         switch (c) {
-        case 'o': ro.output = optarg; break;
         case OPT_FULL: uo.full = 1; break;
         case OPT_WRITE_SCENE: ro.scene_out = optarg; break;
         case OPT_FORCE: ro.scene_opt.force = 1; break;
-        case OPT_THREADS:
-            if (!lie_parse_long(optarg, 0, 4096, &v))
-                return usage_error("--threads: expected an integer in 0..4096, got '%s'", optarg);
-            uo.threads = (int)v;
-            break;
         }
     }
     if (c == LIE_CLI_EXIT)
         return cli.status;
     uo.scene.allow_external_uris = cli.external;
+    uo.threads = cli.threads;
+    ro.output = cli.output;
     ro.stats = cli.stats;
     ro.quiet = cli.quiet;
     ro.verbose = cli.verbose;

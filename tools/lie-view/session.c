@@ -1,0 +1,399 @@
+/* lie-view's session: the camera, the selection, edits from keys, drags
+ * and script lines (tools/lie-view/session.h). */
+#include "session.h"
+
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define prog view_prog
+
+void session_push_ms(double **arr, int *n, double ms)
+{
+    double *a = realloc(*arr, sizeof *a * ((size_t)*n + 1));
+    if (a) {
+        a[(*n)++] = ms;
+        *arr = a;
+    }
+}
+
+/* After an edit that started at t0: wait for its first image and for the
+ * constructor (the benchmark's latencies). */
+static void edited(session *S, double t0)
+{
+    S->await_t0 = t0;
+    S->await_version = view_world_version(S->w);
+    S->last_edit_end = lie_time_now();
+    S->catching_up = 1;
+}
+
+/* Undo the last group of edits, or redo it; *done: whether there was one. */
+static lie_status undo_redo(session *S, int redo, int *done, lie_error *err)
+{
+    double t0 = lie_time_now();
+    lie_status st = redo ? view_world_redo(S->w, done, err) : view_world_undo(S->w, done, err);
+    if (st == LIE_OK && *done)
+        edited(S, t0);
+    return st;
+}
+
+static void say(session *S, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void say(session *S, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(S->message, sizeof S->message, fmt, ap);
+    va_end(ap);
+    S->message_until = lie_time_now() + 3.0;
+    if (!S->quiet)
+        fprintf(stderr, "%s: %s\n", prog, S->message);
+}
+
+void session_camera_update(session *S)
+{
+    char spec[512];
+    view_orbit_spec(&S->orbit, spec, sizeof spec);
+    if (strcmp(spec, S->spec) == 0)
+        return;
+    lie_camera c;
+    lie_error err;
+    view_world_read_lock(S->w);
+    lie_status st = lie_camera_parse(view_world_scene(S->w), spec, &c, &err);
+    view_world_read_unlock(S->w);
+    if (st != LIE_OK)
+        return; /* a degenerate view (eye on target): keep the last camera */
+    snprintf(S->spec, sizeof S->spec, "%s", spec);
+    S->cam = c;
+    if (S->cam_gen == S->shown_cam_gen)
+        S->change_t = lie_time_now();
+    S->cam_gen++;
+    S->refining = 1;
+    S->last_change_t = lie_time_now();
+}
+
+/* A node for an edit file: its name when that names it alone, else '#N'. */
+static void node_ref(session *S, int node, char *buf, size_t size)
+{
+    const lie_scene *s = view_world_scene(S->w);
+    const char *name = s->nodes[node].name;
+    int plain = name && *name;
+    for (const char *p = name; plain && *p; p++)
+        plain = (*p >= 'a' && *p <= 'z') || (*p >= 'A' && *p <= 'Z') || (*p >= '0' && *p <= '9') || *p == '_' ||
+                *p == '-' || *p == '.';
+    int found = -1;
+    lie_error err;
+    if (plain && lie_edit_find_node(s, name, &found, "", 0, 0, &err) == LIE_OK && found == node)
+        snprintf(buf, size, "%s", name);
+    else
+        snprintf(buf, size, "'#%d'", node);
+}
+
+static lie_status edit(session *S, int join, lie_error *err, const char *fmt, ...) __attribute__((format(printf, 4, 5)));
+static lie_status edit(session *S, int join, lie_error *err, const char *fmt, ...)
+{
+    char text[2048];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(text, sizeof text, fmt, ap);
+    va_end(ap);
+    double t0 = lie_time_now();
+    lie_status st = view_world_edit(S->w, text, join, err);
+    if (st == LIE_OK)
+        edited(S, t0);
+    return st;
+}
+
+static lie_status edit_move(session *S, lie_vec3 d, int join, lie_error *err)
+{
+    char ref[64];
+    node_ref(S, S->sel, ref, sizeof ref);
+    return edit(S, join, err, "- move: {node: %s, by: [%.9g, %.9g, %.9g]}\n", ref, d.x, d.y, d.z);
+}
+
+static lie_status edit_rotate(session *S, lie_vec3 axis, float degrees, int join, lie_error *err)
+{
+    char ref[64];
+    node_ref(S, S->sel, ref, sizeof ref);
+    return edit(S, join, err, "- rotate: {node: %s, axis: [%.9g, %.9g, %.9g], degrees: %.9g}\n", ref, axis.x, axis.y,
+                axis.z, degrees);
+}
+
+/* The first material of the selection's subtree, for the keys that step it. */
+static const lie_material *sel_material(session *S, float *strength)
+{
+    const lie_scene *s = view_world_scene(S->w);
+    uint8_t *in = calloc((size_t)s->n_nodes + 1, 1);
+    const lie_material *m = NULL;
+    if (!in)
+        return NULL;
+    view_node_subtree(s, S->sel, in);
+    for (int i = 0; i < s->n_instances && !m; i++)
+        if (in[s->instances[i].node])
+            m = lie_scene_material(s, s->instances[i].material);
+    free(in);
+    if (m && strength)
+        *strength = fmaxf(m->emissive[0], fmaxf(m->emissive[1], m->emissive[2]));
+    return m;
+}
+
+static void report(session *S, lie_status st, const lie_error *err)
+{
+    if (st != LIE_OK)
+        say(S, "%s", err->msg);
+}
+
+void session_select(session *S, int node)
+{
+    S->sel = node;
+    char name[128];
+    view_world_read_lock(S->w);
+    view_node_name(view_world_scene(S->w), node, name, sizeof name);
+    view_world_read_unlock(S->w);
+    if (node >= 0)
+        say(S, "selected %s", name);
+}
+
+/* ---- the window loop ------------------------------------------------------- */
+
+
+lie_vec3 session_view_axis(const lie_camera *c, int which)
+{
+    lie_vec3 f = lie_v3_norm(c->forward);
+    lie_vec3 r = lie_v3_norm(lie_v3_cross(f, c->up));
+    return which == 0 ? r : lie_v3_cross(r, f);
+}
+
+void session_flush_drag(session *S, drag_state *d)
+{
+    lie_error err;
+    lie_status st = LIE_OK;
+    if (d->dragging && S->sel >= 0) {
+        lie_vec3 v = d->pending;
+        if (v.x != 0.0f || v.y != 0.0f || v.z != 0.0f) {
+            if (d->axis >= 0) {
+                float keep[3] = {v.x, v.y, v.z};
+                for (int k = 0; k < 3; k++)
+                    if (k != d->axis)
+                        keep[k] = 0.0f;
+                v = lie_v3(keep[0], keep[1], keep[2]);
+            }
+            st = edit_move(S, v, d->join, &err);
+            d->join = st == LIE_OK;
+        }
+        if (st == LIE_OK && d->pending_yaw != 0.0f) {
+            st = edit_rotate(S, lie_v3(0.0f, 1.0f, 0.0f), d->pending_yaw, d->join, &err);
+            d->join = st == LIE_OK;
+        }
+        if (st == LIE_OK && d->pending_pitch != 0.0f) {
+            st = edit_rotate(S, session_view_axis(&S->cam, 0), d->pending_pitch, d->join, &err);
+            d->join = st == LIE_OK;
+        }
+        report(S, st, &err);
+    }
+    d->pending = lie_v3(0.0f, 0.0f, 0.0f);
+    d->pending_yaw = d->pending_pitch = 0.0f;
+}
+
+void session_key(session *S, const SDL_KeyboardEvent *k, int *quit)
+{
+    SDL_Keycode key = k->keysym.sym;
+    int ctrl = (k->keysym.mod & KMOD_CTRL) != 0, shift = (k->keysym.mod & KMOD_SHIFT) != 0;
+    float step = 0.05f * S->orbit.dist;
+    lie_error err;
+    lie_status st = LIE_OK;
+    if (key == SDLK_q || key == SDLK_ESCAPE) {
+        *quit = 1;
+    } else if (ctrl && (key == SDLK_y || key == SDLK_z)) {
+        int done, redo = key == SDLK_y || shift;
+        st = undo_redo(S, redo, &done, &err);
+        if (st == LIE_OK)
+            say(S, done ? (redo ? "redone" : "undone") : (redo ? "nothing to redo" : "nothing to undo"));
+    } else if (ctrl && key == SDLK_s) {
+        const char *out = S->save ? S->save : "lie-view.lie";
+        st = view_world_save(S->w, out, &err);
+        if (st == LIE_OK)
+            say(S, "wrote %s", out);
+    } else if (key == SDLK_w) {
+        view_orbit_fly(&S->orbit, step, 0.0f, 0.0f);
+    } else if (key == SDLK_s) {
+        view_orbit_fly(&S->orbit, -step, 0.0f, 0.0f);
+    } else if (key == SDLK_a) {
+        view_orbit_fly(&S->orbit, 0.0f, -step, 0.0f);
+    } else if (key == SDLK_d) {
+        view_orbit_fly(&S->orbit, 0.0f, step, 0.0f);
+    } else if (key == SDLK_PAGEUP) {
+        view_orbit_fly(&S->orbit, 0.0f, 0.0f, step);
+    } else if (key == SDLK_PAGEDOWN) {
+        view_orbit_fly(&S->orbit, 0.0f, 0.0f, -step);
+    } else if (key == SDLK_f) {
+        view_world_read_lock(S->w);
+        const lie_scene *s = view_world_scene(S->w);
+        view_orbit_frame(&S->orbit, S->sel >= 0 ? view_node_bounds(s, S->sel) : s->bounds);
+        view_world_read_unlock(S->w);
+    } else if (key == SDLK_c) {
+        view_world_read_lock(S->w);
+        const lie_scene *s = view_world_scene(S->w);
+        if (s->n_cameras > 0) {
+            S->cam_index = (S->cam_index + 1) % s->n_cameras;
+            view_orbit_from_camera(&S->orbit, &s->cameras[S->cam_index], s);
+            say(S, "camera %d: %s", S->cam_index, s->cameras[S->cam_index].name ? s->cameras[S->cam_index].name : "");
+        } else {
+            lie_camera c = lie_scene_default_camera(s);
+            view_orbit_from_camera(&S->orbit, &c, s);
+            say(S, "the scene has no camera: the default view");
+        }
+        view_world_read_unlock(S->w);
+    } else if (key == SDLK_m) {
+        if (!view_world_has_cache(S->w)) {
+            say(S, "complexity and patch views need a cache");
+        } else {
+            S->mode = (S->mode + 1) % 3;
+            say(S, "view: %s", S->mode == 0 ? "shaded" : S->mode == 1 ? "complexity (Figure 10)" : "patches");
+        }
+    } else if (key == SDLK_p) {
+        printf("%s\n", S->spec);
+        fflush(stdout);
+    } else if (key == SDLK_o) {
+        S->overlay = !S->overlay;
+    } else if (S->sel >= 0 && (key == SDLK_DELETE || key == SDLK_BACKSPACE)) {
+        char ref[64];
+        node_ref(S, S->sel, ref, sizeof ref);
+        st = edit(S, 0, &err, "- remove: {node: %s}\n", ref);
+        if (st == LIE_OK)
+            S->sel = -1;
+    } else if (S->sel >= 0 && key == SDLK_b) {
+        static const float palette[6][3] = {{0.8f, 0.1f, 0.1f}, {0.1f, 0.6f, 0.15f}, {0.15f, 0.25f, 0.8f},
+                                            {0.85f, 0.75f, 0.2f}, {0.9f, 0.9f, 0.9f}, {0.1f, 0.1f, 0.1f}};
+        static int next;
+        const float *c = palette[next++ % 6];
+        char ref[64];
+        node_ref(S, S->sel, ref, sizeof ref);
+        st = edit(S, 0, &err, "- set-material: {node: %s, base-color: [%.9g, %.9g, %.9g]}\n", ref, c[0], c[1], c[2]);
+    } else if (S->sel >= 0 && (key == SDLK_LEFTBRACKET || key == SDLK_RIGHTBRACKET)) {
+        const lie_material *m = sel_material(S, NULL);
+        float r = m ? m->roughness : 1.0f;
+        r += key == SDLK_RIGHTBRACKET ? 0.1f : -0.1f;
+        r = r < 0.0f ? 0.0f : r > 1.0f ? 1.0f : r;
+        char ref[64];
+        node_ref(S, S->sel, ref, sizeof ref);
+        st = edit(S, 0, &err, "- set-material: {node: %s, roughness: %.9g}\n", ref, r);
+        if (st == LIE_OK)
+            say(S, "roughness %.2f", r);
+    } else if (S->sel >= 0 && (key == SDLK_MINUS || key == SDLK_EQUALS || key == SDLK_PLUS)) {
+        float strength = 0.0f;
+        sel_material(S, &strength);
+        if (strength <= 0.0f) {
+            say(S, "the selection does not emit");
+        } else {
+            strength *= key == SDLK_MINUS ? 0.5f : 2.0f;
+            char ref[64];
+            node_ref(S, S->sel, ref, sizeof ref);
+            st = edit(S, 0, &err, "- set-emission: {node: %s, strength: %.9g}\n", ref, strength);
+            if (st == LIE_OK)
+                say(S, "emission strength %g", strength);
+        }
+    }
+    report(S, st, &err);
+}
+
+/* ---- scripts ----------------------------------------------------------------- */
+
+
+int session_script_step(session *S, script_run *R, uint64_t images, int idle)
+{
+    if (R->waiting == 1 && images < R->until_images && !idle)
+        return 0;
+    if (R->waiting == 2 && view_world_busy(S->w))
+        return 0;
+    R->waiting = 0;
+    while (R->next < R->sc->n) {
+        const view_cmd *c = &R->sc->cmds[R->next++];
+        lie_status st = LIE_OK;
+        lie_error err;
+        lie_error_clear(&err);
+        char ref[64];
+        switch (c->kind) {
+        case VIEW_CMD_FRAMES:
+            R->waiting = 1;
+            R->until_images = images + (uint64_t)c->v[0];
+            session_camera_update(S);
+            view_render_request(S->r, &S->cam, S->mode, S->sel);
+            return 0;
+        case VIEW_CMD_ORBIT:
+            view_orbit_rotate(&S->orbit, (float)c->v[0], (float)c->v[1]);
+            session_camera_update(S);
+            break;
+        case VIEW_CMD_DOLLY:
+            view_orbit_dolly(&S->orbit, (float)c->v[0]);
+            session_camera_update(S);
+            break;
+        case VIEW_CMD_SELECT: {
+            int node;
+            view_world_read_lock(S->w);
+            st = lie_edit_find_node(view_world_scene(S->w), c->arg, &node, R->path, c->line, 1, &err);
+            view_world_read_unlock(S->w);
+            if (st == LIE_OK)
+                session_select(S, node);
+            break;
+        }
+        case VIEW_CMD_PICK:
+            view_world_read_lock(S->w);
+            S->sel = view_node_under(view_world_scene(S->w), view_world_rt(S->w), &S->cam, S->ro.width,
+                                     S->ro.height, (float)c->v[0] + 0.5f, (float)c->v[1] + 0.5f, NULL);
+            view_world_read_unlock(S->w);
+            session_select(S, S->sel);
+            break;
+        case VIEW_CMD_DRAG:
+        case VIEW_CMD_ROTATE:
+        case VIEW_CMD_SET_MATERIAL:
+        case VIEW_CMD_SET_EMISSION:
+        case VIEW_CMD_REMOVE:
+            if (S->sel < 0) {
+                st = lie_error_set_at(&err, LIE_ERR_ARG, R->path, c->line, 1, "nothing is selected");
+                break;
+            }
+            node_ref(S, S->sel, ref, sizeof ref);
+            if (c->kind == VIEW_CMD_DRAG)
+                st = edit_move(S, lie_v3((float)c->v[0], (float)c->v[1], (float)c->v[2]), 0, &err);
+            else if (c->kind == VIEW_CMD_REMOVE) {
+                st = edit(S, 0, &err, "- remove: {node: %s}\n", ref);
+                if (st == LIE_OK)
+                    S->sel = -1;
+            } else if (c->kind == VIEW_CMD_ROTATE)
+                st = edit(S, 0, &err, "- rotate: {node: %s, axis: [%.17g, %.17g, %.17g], degrees: %.17g}\n", ref,
+                          c->v[0], c->v[1], c->v[2], c->v[3]);
+            else
+                st = edit(S, 0, &err, "- %s: {node: %s, %s}\n",
+                          c->kind == VIEW_CMD_SET_MATERIAL ? "set-material" : "set-emission", ref, c->arg);
+            break;
+        case VIEW_CMD_UNDO:
+        case VIEW_CMD_REDO: {
+            int done;
+            st = undo_redo(S, c->kind == VIEW_CMD_REDO, &done, &err);
+            break;
+        }
+        case VIEW_CMD_WAIT:
+            R->waiting = 2;
+            return 0;
+        case VIEW_CMD_SCREENSHOT:
+            session_camera_update(S);
+            view_render_request(S->r, &S->cam, S->mode, S->sel);
+            st = view_render_screenshot(S->r, c->arg, &err);
+            break;
+        case VIEW_CMD_QUIT:
+            return 1;
+        }
+        if (st != LIE_OK) {
+            R->err = err;
+            if (!R->err.line) {
+                /* name the script line; keep the library's message */
+                char msg[sizeof err.msg];
+                snprintf(msg, sizeof msg, "%s", err.msg);
+                lie_error_set_at(&R->err, st, R->path, c->line, 1, "%s", msg);
+            }
+            R->failed = 1;
+            return 1;
+        }
+    }
+    return 0;
+}
