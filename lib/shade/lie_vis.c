@@ -571,6 +571,26 @@ static int sil_find(const lie_sil_work *w, int n_slots, uint32_t t)
     }
 }
 
+/* A projected vertex into w's vertex hash (its s and t bits): 1 if it
+ * was there already. */
+#define SIL_NO_VERTEX (~0ull)
+static int sil_vertex_seen(lie_sil_work *w, float vs, float vt)
+{
+    uint32_t a, b;
+    memcpy(&a, &vs, 4);
+    memcpy(&b, &vt, 4);
+    const uint64_t key = (uint64_t)a << 32 | b; /* never SIL_NO_VERTEX: that is two NaNs */
+    for (uint32_t h = (uint32_t)((key * 0x9e3779b97f4a7c15ull) >> 40) & (uint32_t)(w->n_vused - 1);;
+         h = (h + 1) & (uint32_t)(w->n_vused - 1)) {
+        if (w->vkey[h] == key)
+            return 1;
+        if (w->vkey[h] == SIL_NO_VERTEX) {
+            w->vkey[h] = key;
+            return 0;
+        }
+    }
+}
+
 /* The same answer as occluded_mask, the blockers wholly in front of o
  * (cones whose vertices all lie at least eps deep) counted through their
  * silhouette edges, the rest walked one by one as there. */
@@ -642,6 +662,12 @@ static int occluded_sil(void *ctx, const uint32_t *blockers, int n_blockers, lie
      * the same form negated (it lies on the other side, so the two add
      * opposite terms everywhere) is dropped; the rest are the silhouette */
     const float s_abs = bm->s_abs, t_abs = bm->t_abs;
+    int n_cand = 0;
+    w->n_vused = 8; /* at least twice the triangles' corners */
+    while (w->n_vused < 6 * w->n_tris)
+        w->n_vused *= 2;
+    for (int h = 0; h < w->n_vused; h++)
+        w->vkey[h] = SIL_NO_VERTEX;
     for (int i = 0; i < w->n_tris; i++) {
         const uint32_t t = (uint32_t)idx[i];
         const float *fi = w->forms + 9 * (size_t)i;
@@ -655,8 +681,15 @@ static int occluded_sil(void *ctx, const uint32_t *blockers, int n_blockers, lie
                 if (o >= 0) {
                     const float *fo = w->forms + 9 * (size_t)o + 3 * (size_t)(nb % 3);
                     const int so = signbit(fo[2]) ? 1 : -1;
-                    if (so != sigma && (float)so * fo[0] == g0 && (float)so * fo[1] == gs && (float)so * fo[2] == gt)
-                        continue; /* interior: opposite terms */
+                    if (so != sigma && (float)so * fo[0] == g0 && (float)so * fo[1] == gs && (float)so * fo[2] == gt) {
+                        /* interior: opposite terms; its ends may be
+                         * interior vertices (once per edge) */
+                        if (i < o) {
+                            w->cand[n_cand++] = 3 * i + k;
+                            w->cand[n_cand++] = 3 * i + (k + 1) % 3;
+                        }
+                        continue;
+                    }
                 }
             }
             lie_sil_edge *E = &w->edges[w->n_edges++];
@@ -669,7 +702,23 @@ static int occluded_sil(void *ctx, const uint32_t *blockers, int n_blockers, lie
             E->g0 = g0, E->gs = gs, E->gt = gt;
             E->tol = lie_sil_tol(g0, gs, gt, s_abs, t_abs);
             E->sigma = sigma;
+            sil_vertex_seen(w, w->ps[3 * (size_t)i + (size_t)k], w->pt[3 * (size_t)i + (size_t)k]);
+            sil_vertex_seen(w, sb, w->pt[3 * (size_t)i + (size_t)(k + 1) % 3]);
         }
+    }
+    /* the interior vertices: ends of interior edges on no silhouette edge */
+    for (int c = 0; c < n_cand; c++) {
+        const float vs = w->ps[w->cand[c]], vt = w->pt[w->cand[c]];
+        if (sil_vertex_seen(w, vs, vt))
+            continue;
+        lie_sil_edge *E = &w->edges[w->n_edges++];
+        const float ds = 1e-5f * (fabsf(vs) + fabsf(wu) + s_abs), dt = 1e-5f * (fabsf(vt) + fabsf(wv) + t_abs);
+        E->a = E->b = vs;
+        E->ae = vs - ds;
+        E->be = vs + ds;
+        E->g0 = -vt, E->gs = 0.0f, E->gt = 1.0f;
+        E->tol = dt;
+        E->sigma = 0;
     }
     if (lie_sil_pays(w->n_tris, w->n_edges)) {
         lie_sil_mask(bm, w, mask);

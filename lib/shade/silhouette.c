@@ -13,7 +13,7 @@ lie_status lie_sil_work_init(lie_sil_work *w, int cap)
     memset(w, 0, sizeof *w);
     if (cap < 1)
         cap = 1;
-    const size_t ne = 3 * (size_t)cap;
+    const size_t ne = 6 * (size_t)cap;
     int ns = 8;
     while (ns < 4 * cap)
         ns *= 2;
@@ -26,7 +26,12 @@ lie_status lie_sil_work_init(lie_sil_work *w, int cap)
     w->slot_tri = malloc(sizeof *w->slot_tri * (size_t)ns);
     w->ps = malloc(sizeof(float) * 3 * (size_t)cap);
     w->pt = malloc(sizeof(float) * 3 * (size_t)cap);
-    if (!w->forms || !w->edges || !w->act || !w->slot || !w->slot_tri || !w->ps || !w->pt) {
+    w->n_vslots = 8;
+    while (w->n_vslots < 16 * cap)
+        w->n_vslots *= 2;
+    w->vkey = malloc(sizeof *w->vkey * (size_t)w->n_vslots);
+    w->cand = malloc(sizeof *w->cand * 6 * (size_t)cap);
+    if (!w->forms || !w->edges || !w->act || !w->slot || !w->slot_tri || !w->ps || !w->pt || !w->vkey || !w->cand) {
         lie_sil_work_free(w);
         return LIE_ERR_NOMEM;
     }
@@ -44,6 +49,8 @@ void lie_sil_work_free(lie_sil_work *w)
     free(w->slot_tri);
     free(w->ps);
     free(w->pt);
+    free(w->vkey);
+    free(w->cand);
     memset(w, 0, sizeof *w);
 }
 
@@ -201,7 +208,7 @@ static void visit(sil_query *q, int l, int g0, const int32_t *act, int nact, int
     lie_sil_work *w = q->w;
     const size_t st = b->box_stride[l];
     const float *S0 = b->box[l] + g0, *S1 = S0 + st, *T0 = S1 + st, *T1 = T0 + st;
-    const size_t ne = 3 * (size_t)w->cap;
+    const size_t ne = 6 * (size_t)w->cap;
     int32_t *list = w->act + (size_t)(l - 1) * 16 * ne; /* per group: active, then in part */
     int c[8], m[8], np[8];
     for (int k = 0; k < 8; k++)
@@ -256,7 +263,7 @@ int lie_sil_mask(const lie_bitmask *b, lie_sil_work *w, uint64_t *mask)
         return 0;
     /* the edges that matter to the pattern's box at all, and the count
      * of those wholly below it */
-    int32_t *top = w->act + (size_t)b->levels * 16 * 3 * (size_t)w->cap;
+    int32_t *top = w->act + (size_t)b->levels * 16 * 6 * (size_t)w->cap;
     const float R[4][8] = {{b->ls.smin}, {b->ls.smax}, {b->ls.tmin}, {b->ls.tmax}};
     int n = 0, base = 0;
     for (int i = 0; i < w->n_edges; i++) {

@@ -45,7 +45,12 @@
 #include "shade/bitmask.h"
 
 /* One edge: the sample x = (s, t) is below it iff g0 + s gs + t gt > 0
- * (fmaf as the per-sample test); it adds sigma there when s is in [a, b). */
+ * (fmaf as the per-sample test); it adds sigma there when s is in [a, b).
+ * A vertex inside the meshes (all its edges interior) is a record too,
+ * with sigma 0, an empty range at its s, and G = t - its t: it adds
+ * nothing, but samples within its margins (s within delta, |G| <= tol) are
+ * decided by the per-sample test, whose edge forms all vanish there and
+ * may leave a crack between the fan's triangles. */
 typedef struct lie_sil_edge {
     float a, b;          /* s range of the edge's projection, half-open */
     float ae, be;        /* the same widened by the rounding margin delta */
@@ -60,12 +65,15 @@ typedef struct lie_sil_work {
     int n_tris, n_edges;
     int counted;         /* the last pair was counted (else walked per triangle) */
     float *forms;        /* 9 per triangle: its three edge forms (the per-sample test) */
-    lie_sil_edge *edges; /* up to 3 cap */
+    lie_sil_edge *edges; /* up to 6 cap: silhouette edges, then interior vertices */
     int32_t *act;        /* active edge lists: per level, per group of 8 two lists of 3 cap */
     int32_t *slot;       /* hash of triangle -> index, 4 cap (power of two) */
     uint32_t *slot_tri;
     int n_slots;
     float *ps, *pt;      /* projected vertices, 3 per triangle */
+    uint64_t *vkey;      /* hash of projected vertices (s, t bits): n_vslots (a power of two) */
+    int n_vslots, n_vused; /* slots allocated, and those the pair uses */
+    int32_t *cand;       /* interior edges' ends, 6 cap: 3 i + corner */
 } lie_sil_work;
 
 lie_status lie_sil_work_init(lie_sil_work *w, int cap);

@@ -200,11 +200,85 @@ static void test_silhouette_folds_boxes_and_degenerate_blockers(void **state)
     free(b.p);
 }
 
+/* Fans of triangles whose shared centre lies exactly on the segment from
+ * the point to a light sample (the midpoint, exact in float): the sample
+ * sees the fan's interior vertex, where the per-sample test's edge forms
+ * all vanish.  Half the fans are flat (the centre interior to the mesh),
+ * half are cones (the centre a tip the silhouette passes near). */
+static void test_silhouette_vertices_through_samples(void **state)
+{
+    (void)state;
+    const int n = 256;
+    lie_scene *probe = square_light_and_blockers(1.0f, 2.0f, 0, NULL, 0);
+    lie_light_samples ls;
+    assert_int_equal(lie_light_samples_alloc(&ls, n), LIE_OK);
+    lie_light_samples_generate(probe, 0, n, 0.37f, 0.71f, &ls);
+    soup b = {0};
+    const float o[3] = {0.0f, 0.5f, 0.0f};
+    for (int f = 0; f < 12; f++) {
+        const int i = (37 * f + 5) % n;
+        const float c[3] = {0.5f * (o[0] + ls.x[i]), 0.5f * (o[1] + ls.y[i]), 0.5f * (o[2] + ls.z[i])};
+        float ring[2][6][3]; /* two rings: the centre and the first ring's points are interior */
+        for (int r = 0; r < 2; r++)
+            for (int k = 0; k < 6; k++) {
+                const float a = 1.0471976f * ((float)k + 0.5f * (float)r);
+                ring[r][k][0] = c[0] + 0.015f * (float)(r + 1) * cosf(a);
+                ring[r][k][1] = c[1] + (f & 1 ? -0.01f * (float)(r + 1) : 0.0f);
+                ring[r][k][2] = c[2] + 0.015f * (float)(r + 1) * sinf(a);
+            }
+        for (int k = 0; k < 6; k++) {
+            tri(&b, c, ring[0][(k + 1) % 6], ring[0][k]);
+            tri(&b, ring[0][k], ring[0][(k + 1) % 6], ring[1][k]);
+            tri(&b, ring[0][(k + 1) % 6], ring[1][(k + 1) % 6], ring[1][k]);
+        }
+    }
+    lie_light_samples_free(&ls);
+    lie_scene_destroy(probe);
+    oracle_fixture fx;
+    oracle_fixture_init(&fx, square_light_and_blockers(1.0f, 2.0f, 0, b.p, b.n), n);
+    const int nb = (int)fx.s->n_tris;
+    uint32_t *blockers = malloc(sizeof *blockers * (size_t)nb);
+    const size_t stride = ((size_t)nb + 16) & ~(size_t)15;
+    float *work = malloc(sizeof(float) * LIE_BLOCKER_WORK * stride);
+    uint32_t *kind = malloc(sizeof *kind * stride), *occ = malloc(sizeof *occ * (size_t)(n + 16));
+    float *dx = malloc(sizeof(float) * 3 * (size_t)(n + 16)), *dy = dx + n + 16, *dz = dy + n + 16;
+    uint64_t mask[8];
+    lie_sil_work sw;
+    assert_int_equal(lie_sil_work_init(&sw, nb), LIE_OK);
+    assert_true(blockers && work && kind && occ && dx);
+    for (int k = 0; k < nb; k++)
+        blockers[k] = (uint32_t)k;
+    long counted = 0, checked = 0;
+    /* the point itself, and the point nudged by an ulp or so */
+    for (int v = 0; v < 3; v++) {
+        const lie_vec3 P = lie_v3(o[0] + (float)v * 1e-7f, o[1], o[2] - (float)v * 1e-7f);
+        lie_shadow_query qs = {P, 1e-4f, &fx.bm->ls, n, 0, dx, dy, dz, work, kind, stride, &sw};
+        const int ok = fx.orc->occluded_sil(fx.orc->ctx, blockers, nb, &qs, fx.bm, mask);
+        assert_true(ok);
+        counted += sw.counted;
+        lie_shadow_query qo = {P, 1e-4f, &fx.bm->ls, n, 0, dx, dy, dz, work, kind, stride, NULL};
+        fx.orc->occluded(fx.orc->ctx, blockers, nb, &qo, occ);
+        for (int i = 0; i < n; i++, checked++)
+            assert_int_equal(bit(mask, i), occ[i] != 0);
+    }
+    print_message("silhouette, fans through samples: %ld of 3 points counted, %ld samples equal\n", counted, checked);
+    assert_true(counted > 0);
+    lie_sil_work_free(&sw);
+    free(blockers);
+    free(work);
+    free(kind);
+    free(occ);
+    free(dx);
+    oracle_fixture_free(&fx);
+    free(b.p);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_silhouette_sphere_matches_every_sample),
         cmocka_unit_test(test_silhouette_folds_boxes_and_degenerate_blockers),
+        cmocka_unit_test(test_silhouette_vertices_through_samples),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
