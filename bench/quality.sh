@@ -21,6 +21,7 @@
 # cache, built with BASE_BUILD if set, else the scene's options).  Full
 # visibility is rendered once, by this tree.  Method lie-silhouette
 # (--bitmask only --silhouette only) is measured when listed in METHODS.
+# REPS=R renders each row R times and keeps the fastest (a loaded machine).
 set -e
 cd "$(dirname "$0")/.."
 QSIZE=${QSIZE:-256x256}
@@ -55,11 +56,20 @@ lights_punctual_lamp|../shared/scenes/lights_punctual_lamp/LightsPunctualLamp.gl
 # one INPUT ARGS...: seconds_render and the error against $truth, as
 # "seconds rmse p99 over2"; the stats JSON is left in $TMP/last.json
 # (RENDER: the lie-render to run, bin/lie-render unless set)
+# (REPS renders, default 1, the fastest kept: images are the same each time)
 one() {
     input=$1; shift
-    ${RENDER:-bin/lie-render} "$input" --size "$QSIZE" --threads "$THREADS" -q --stats=json -o "$TMP/f.exr" "$@" 2>"$TMP/last.json"
+    best=""
+    k=0
+    while [ $k -lt "${REPS:-1}" ]; do
+        ${RENDER:-bin/lie-render} "$input" --size "$QSIZE" --threads "$THREADS" -q --stats=json -o "$TMP/f.exr" "$@" \
+            2>"$TMP/last.json"
+        t=$(field seconds_render <"$TMP/last.json")
+        if [ -z "$best" ] || awk -v a="$best" -v b="$t" 'BEGIN { exit !(b < a) }'; then best=$t; fi
+        k=$((k + 1))
+    done
     "$CMP" --error "$truth" "$TMP/f.exr" >"$TMP/e.json"
-    echo "$(field seconds_render <"$TMP/last.json") $(field rmse <"$TMP/e.json") $(field p99 <"$TMP/e.json") $(field over2 <"$TMP/e.json")"
+    echo "$best $(field rmse <"$TMP/e.json") $(field p99 <"$TMP/e.json") $(field over2 <"$TMP/e.json")"
 }
 
 echo "bench-quality: $QSIZE, $THREADS threads, error against full visibility at $TRUTH rotated samples"
