@@ -39,6 +39,48 @@ static inline lie_build_params test_params(float min_patch)
     return p;
 }
 
+/* The default render options for a w x h image, light_samples shadow rays
+ * and `threads` threads (0: all cores). */
+static inline lie_render_options test_render_options(int w, int h, int light_samples, int threads)
+{
+    lie_render_options o = lie_render_options_default();
+    o.width = w;
+    o.height = h;
+    o.light_samples = light_samples;
+    o.threads = threads;
+    return o;
+}
+
+/* What a test of the LIE oracle needs over a scene: its ray tracer, its
+ * environments built at min_patch, and the oracle over them. */
+typedef struct test_oracle {
+    lie_rt *rt;
+    lie_env *env;
+    lie_lie_vis *lv;
+    const lie_vis_oracle *orc;
+} test_oracle;
+
+static inline void test_oracle_make(const lie_scene *s, float min_patch, test_oracle *t)
+{
+    lie_error err;
+    t->rt = NULL;
+    t->env = NULL;
+    t->lv = NULL;
+    assert_int_equal(lie_rt_create(s, &t->rt, &err), LIE_OK);
+    lie_build_params bp = test_params(min_patch);
+    lie_build_stats bst;
+    assert_int_equal(lie_env_build(s, t->rt, &bp, NULL, &t->env, &bst, &err), LIE_OK);
+    assert_int_equal(lie_lie_vis_create(s, t->env, &t->lv, &err), LIE_OK);
+    t->orc = lie_lie_vis_oracle(t->lv);
+}
+
+static inline void test_oracle_free(test_oracle *t)
+{
+    lie_lie_vis_destroy(t->lv);
+    lie_env_destroy(t->env);
+    lie_rt_destroy(t->rt);
+}
+
 /* Form factor from a point to a parallel rectangle a x b whose corner is
  * straight above it at height h (Howell's catalogue, configuration B-3). */
 static inline double ff_corner(double a, double b, double h)
@@ -125,29 +167,23 @@ static inline lie_scene *square_light_and_blockers(float a, float h, int two_sid
  * test_silhouette).  oracle_fixture_free destroys the scene too. */
 typedef struct oracle_fixture {
     lie_scene *s;
-    lie_rt *rt;
-    lie_env *env;
-    lie_lie_vis *lv;
+    test_oracle t;
     const lie_vis_oracle *orc;
+    lie_rt *rt;
     lie_light_samples ls;
     lie_bitmask *bm;
 } oracle_fixture;
 
 static inline void oracle_fixture_init(oracle_fixture *f, lie_scene *s, int n)
 {
-    lie_error err;
-    memset(f, 0, sizeof *f);
     f->s = s;
-    assert_int_equal(lie_rt_create(s, &f->rt, &err), LIE_OK);
-    lie_build_params bp = lie_build_params_default();
-    bp.min_patch = 0.5f;
-    lie_build_stats bst;
-    assert_int_equal(lie_env_build(s, f->rt, &bp, NULL, &f->env, &bst, &err), LIE_OK);
-    assert_int_equal(lie_lie_vis_create(s, f->env, &f->lv, &err), LIE_OK);
-    f->orc = lie_lie_vis_oracle(f->lv);
+    test_oracle_make(s, 0.5f, &f->t);
+    f->orc = f->t.orc;
+    f->rt = f->t.rt;
     assert_non_null(f->orc->occluded_mask);
     assert_int_equal(lie_light_samples_alloc(&f->ls, n), LIE_OK);
     lie_light_samples_generate(s, 0, n, 0.37f, 0.71f, &f->ls);
+    f->bm = NULL;
     assert_int_equal(lie_bitmask_create(&f->ls, &f->bm), LIE_OK);
     assert_non_null(f->bm);
 }
@@ -156,9 +192,7 @@ static inline void oracle_fixture_free(oracle_fixture *f)
 {
     lie_bitmask_destroy(f->bm);
     lie_light_samples_free(&f->ls);
-    lie_lie_vis_destroy(f->lv);
-    lie_env_destroy(f->env);
-    lie_rt_destroy(f->rt);
+    test_oracle_free(&f->t);
     lie_scene_destroy(f->s);
 }
 #endif
