@@ -31,7 +31,8 @@ LDLIBS   := -lembree3 -lOpenEXRCore-3_1 -lyaml -ltinygltf -lxxhash -lpng -lz -lp
 
 LIB_C    := $(sort $(filter-out lib/dist/%,$(wildcard lib/*/*.c)))
 LIB_CXX  := $(sort $(wildcard lib/*/*.cpp))
-LIB_OBJ  := $(LIB_C:%.c=$(BUILD)/%.o) $(LIB_CXX:%.cpp=$(BUILD)/%.o)
+# lib/shade's LTC tables are data (lib/shade/ltc_table.dat), made C here (scripts/ltc-table.awk)
+LIB_OBJ  := $(LIB_C:%.c=$(BUILD)/%.o) $(LIB_CXX:%.cpp=$(BUILD)/%.o) $(BUILD)/gen/ltc_table.o
 LIB_A    := $(BUILD)/liblie.a
 # The shared library: SONAME liblie.so.MAJOR, only the lie_ symbols of the public headers
 # exported (-fvisibility=hidden, the headers' `visibility push(default)`, lib/liblie.map).
@@ -64,6 +65,13 @@ $(BUILD)/%.o: %.c
 $(BUILD)/%.o: %.cpp
 	@mkdir -p $(dir $@)
 	$(CXX) $(CXXFLAGS) -c $< -o $@
+
+$(BUILD)/gen/ltc_table.c: lib/shade/ltc_table.dat scripts/ltc-table.awk
+	@mkdir -p $(dir $@)
+	awk -f scripts/ltc-table.awk $< > $@.tmp && mv $@.tmp $@
+$(BUILD)/gen/ltc_table.o: $(BUILD)/gen/ltc_table.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) -c $< -o $@
 
 $(LIB_A): $(LIB_OBJ)
 	@rm -f $@
@@ -134,13 +142,13 @@ ATRIUM_GEN := $(BUILD)/atrium-gen
 $(ATRIUM_GEN): $(BUILD)/bench/atrium.o $(BUILD)/tests/scenes/gen/gen_gltf.o
 	$(CC) $(LDFLAGS) $^ -lpng -lz -lm -o $@
 
-# ---- LTC tables (lib/shade/ltc.h): fitted by scripts/ltc-fit.c, the output committed ----
+# ---- LTC tables (lib/shade/ltc.h): fitted by scripts/ltc-fit.c, the data committed ----
 LTC_FIT := $(BUILD)/ltc-fit
 $(LTC_FIT): scripts/ltc-fit.c
 	@mkdir -p $(dir $@)
 	$(CC) -std=c11 -O2 -ffp-contract=off $(WARN) $< -lm -o $@
 ltc-tables: $(LTC_FIT)
-	$(LTC_FIT) -o lib/shade/ltc_table.c.tmp && mv lib/shade/ltc_table.c.tmp lib/shade/ltc_table.c
+	$(LTC_FIT) -o lib/shade/ltc_table.dat.tmp && mv lib/shade/ltc_table.dat.tmp lib/shade/ltc_table.dat
 ltc-bench: $(BUILD)/tests/ltc-bench
 	$(BUILD)/tests/ltc-bench
 

@@ -82,6 +82,19 @@ static uint32_t vtx(gen_geom *m, float x, float y, float z, float nx, float ny, 
     return gen_geom_vertex(m, p, n, NULL);
 }
 
+/* Quad a b c d (in order around it) as two triangles (a, b, c), (a, c, d),
+ * or wound the other way round when flip: (a, d, c), (a, c, b). */
+static void quad(gen_geom *m, uint32_t a, uint32_t b, uint32_t c, uint32_t d, int flip)
+{
+    if (flip) {
+        gen_geom_tri(m, a, d, c);
+        gen_geom_tri(m, a, c, b);
+    } else {
+        gen_geom_tri(m, a, b, c);
+        gen_geom_tri(m, a, c, d);
+    }
+}
+
 /* A quad subdivided into nu x nv cells: corner o, edges eu and ev, normal n. */
 static void grid(gen_geom *m, const float o[3], const float eu[3], const float ev[3], int nu, int nv,
                  const float n[3])
@@ -99,13 +112,7 @@ static void grid(gen_geom *m, const float o[3], const float eu[3], const float e
     for (int j = 0; j < nv; j++)
         for (int i = 0; i < nu; i++) {
             uint32_t a = base + (uint32_t)(j * (nu + 1) + i), b = a + 1, d = a + (uint32_t)(nu + 1), e = d + 1;
-            if (flip) {
-                gen_geom_tri(m, a, d, e);
-                gen_geom_tri(m, a, e, b);
-            } else {
-                gen_geom_tri(m, a, b, e);
-                gen_geom_tri(m, a, e, d);
-            }
+            quad(m, a, b, e, d, flip);
         }
 }
 
@@ -122,21 +129,14 @@ static void arch(gen_geom *m, float x0, float x1, float y, float zc, float depth
         uint32_t q = vtx(m, cx + R * c1, y + R * s1, z0, -c1, -s1, 0);
         uint32_t r = vtx(m, cx + R * c1, y + R * s1, z1, -c1, -s1, 0);
         uint32_t t = vtx(m, cx + R * c0, y + R * s0, z1, -c0, -s0, 0);
-        gen_geom_tri(m, p, t, r);
-        gen_geom_tri(m, p, r, q);
+        quad(m, p, q, r, t, 1);
         for (int side = 0; side < 2; side++) {
             float z = side ? z1 : z0, nz = side ? 1.0f : -1.0f, Ro = R + band;
             uint32_t a = vtx(m, cx + R * c0, y + R * s0, z, 0, 0, nz);
             uint32_t b = vtx(m, cx + R * c1, y + R * s1, z, 0, 0, nz);
             uint32_t c = vtx(m, cx + Ro * c1, y + Ro * s1, z, 0, 0, nz);
             uint32_t d = vtx(m, cx + Ro * c0, y + Ro * s0, z, 0, 0, nz);
-            if (side) {
-                gen_geom_tri(m, a, d, c);
-                gen_geom_tri(m, a, c, b);
-            } else {
-                gen_geom_tri(m, a, b, c);
-                gen_geom_tri(m, a, c, d);
-            }
+            quad(m, a, b, c, d, side);
         }
     }
 }

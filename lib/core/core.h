@@ -183,6 +183,14 @@ int lie_grow(void *arr, size_t *cap, size_t need, size_t size);
 /* Append v to array a of n elements (LIE_GROW); 1, or 0 when out of memory. */
 #define LIE_PUSH(a, n, cap, v) (LIE_GROW(a, cap, (size_t)(n) + 1) ? ((a)[(n)++] = (v), 1) : 0)
 
+/* Release p and reset it to NULL: a struct's array freed so that the
+ * struct can be filled again (or freed again) safely. */
+#define LIE_FREE(p)                                                                                                   \
+    do {                                                                                                              \
+        free(p);                                                                                                      \
+        (p) = NULL;                                                                                                   \
+    } while (0)
+
 /* ---- threads ---------------------------------------------------------- */
 
 /* Number of online CPUs (at least 1). */

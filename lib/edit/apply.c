@@ -38,18 +38,10 @@ lie_status lie_edit_find_node(const lie_scene *s, const char *name, int *node, c
     return LIE_OK;
 }
 
-static lie_mat4 world_of(const lie_scene *s, int node)
-{
-    lie_mat4 w = s->nodes[node].local;
-    for (int p = s->nodes[node].parent, guard = 0; p >= 0 && guard < s->n_nodes; p = s->nodes[p].parent, guard++)
-        w = lie_mat4_mul(&s->nodes[p].local, &w);
-    return w;
-}
-
 static lie_mat4 parent_world(const lie_scene *s, int node)
 {
     int p = s->nodes[node].parent;
-    return p >= 0 ? world_of(s, p) : lie_mat4_identity();
+    return p >= 0 ? lie_node_world_matrix(s, p) : lie_mat4_identity();
 }
 
 /* Set the node's local transform so its world transform becomes W. */
@@ -436,7 +428,7 @@ static lie_status apply_op(lie_scene *s, const lie_edit *e, const lie_edit_op *o
     switch (op->kind) {
     case LIE_EDIT_MOVE_BY:
     case LIE_EDIT_MOVE_TO: {
-        lie_mat4 W = world_of(s, node);
+        lie_mat4 W = lie_node_world_matrix(s, node);
         double by[3] = {op->v[0], op->v[1], op->v[2]};
         if (op->kind == LIE_EDIT_MOVE_TO)
             for (int k = 0; k < 3; k++)
@@ -449,7 +441,7 @@ static lie_status apply_op(lie_scene *s, const lie_edit *e, const lie_edit_op *o
         break;
     }
     case LIE_EDIT_ROTATE: {
-        lie_mat4 W = world_of(s, node);
+        lie_mat4 W = lie_node_world_matrix(s, node);
         lie_mat4 to = lie_mat4_translation(-W.m[12], -W.m[13], -W.m[14]);
         lie_mat4 back = lie_mat4_translation(W.m[12], W.m[13], W.m[14]);
         lie_mat4 R = lie_mat4_rotation(op->v, op->degrees * M_PI / 180.0);
@@ -514,7 +506,7 @@ static lie_status apply_op(lie_scene *s, const lie_edit *e, const lie_edit_op *o
         int src_node;
         st = lie_edit_find_node(src, op->node, &src_node, file, op->line, op->col, err);
         if (st == LIE_OK) {
-            lie_mat4 local = (op->has & (1u << 8)) ? lie_mat4_identity() : world_of(src, src_node);
+            lie_mat4 local = (op->has & (1u << 8)) ? lie_mat4_identity() : lie_node_world_matrix(src, src_node);
             if (op->has & (1u << 8))
                 memcpy(local.m, op->matrix, sizeof local.m);
             st = add_from(s, src, src_node, op->as, &local, &node, err, file, op->line, op->col);

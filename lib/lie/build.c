@@ -173,13 +173,20 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     return st;
 }
 
+void lie_env_describe(lie_env *env, const lie_scene *s, const lie_build_params *p)
+{
+    env->n_tris = s->n_tris;
+    env->n_clusters = s->n_clusters;
+    env->params = *p;
+    env->params.threads = 0; /* not part of what was built: any count builds the same */
+    env->scene_hash = s->hash;
+}
+
 void lie_env_destroy(lie_env *env)
 {
     if (!env)
         return;
-    free(env->root);
-    free(env->nodes);
-    free(env->pool);
+    lie_forest_free(env->root, env->nodes, env->pool);
     free(env);
 }
 
@@ -304,9 +311,7 @@ static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32
         free(pb);
         return st;
     }
-    free(env->root);
-    free(env->nodes);
-    free(env->pool);
+    lie_forest_free(env->root, env->nodes, env->pool);
     env->root = root;
     env->nodes = nd;
     env->pool = pl;
@@ -330,26 +335,31 @@ lie_status lie_env_build(const lie_scene *s, const lie_rt *rt, const lie_build_p
     return lie_env_build_masked(s, rt, p, NULL, progress, out, stats, err);
 }
 
-lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
-                                const uint8_t *tri_mask, lie_progress *progress, lie_env **out,
-                                lie_build_stats *stats, lie_error *err)
+/* A build with no control but a triangle mask or views, and progress. */
+static lie_status build_simple(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                               const uint8_t *tri_mask, const lie_pixels *px, lie_progress *progress,
+                               lie_env **out, lie_build_stats *stats, lie_error *err)
 {
     lie_build_control ctl;
     memset(&ctl, 0, sizeof ctl);
     ctl.tri_mask = tri_mask;
+    ctl.pixels = px;
     ctl.progress = progress;
     return lie_env_build_with(s, rt, p, &ctl, out, stats, err);
+}
+
+lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                                const uint8_t *tri_mask, lie_progress *progress, lie_env **out,
+                                lie_build_stats *stats, lie_error *err)
+{
+    return build_simple(s, rt, p, tri_mask, NULL, progress, out, stats, err);
 }
 
 lie_status lie_env_build_views(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
                                const lie_pixels *px, lie_progress *progress, lie_env **out,
                                lie_build_stats *stats, lie_error *err)
 {
-    lie_build_control ctl;
-    memset(&ctl, 0, sizeof ctl);
-    ctl.pixels = px;
-    ctl.progress = progress;
-    return lie_env_build_with(s, rt, p, &ctl, out, stats, err);
+    return build_simple(s, rt, p, NULL, px, progress, out, stats, err);
 }
 
 /* A resumed env must be the interrupted build of this very build: the same
@@ -407,11 +417,7 @@ lie_status lie_env_build_with(const lie_scene *s, const lie_rt *rt, const lie_bu
     }
     if (!env)
         return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
-    env->n_tris = s->n_tris;
-    env->n_clusters = s->n_clusters;
-    env->params = *p;
-    env->params.threads = 0;
-    env->scene_hash = s->hash;
+    lie_env_describe(env, s, p);
     if (stats)
         memset(stats, 0, sizeof *stats);
     lie_status st = run_build(env, s, rt, old_unit, NULL, ctl->tri_mask, ctl->pixels, 0, n_units, p->threads, 0,

@@ -85,6 +85,11 @@ lie_status lie_build_update(lie_env *env, const lie_scene *s, const lie_rt *rt, 
                             const int32_t *old_unit, const uint8_t *node_flags, int threads, int memo,
                             lie_build_stats *stats, lie_error *err);
 /* The error of a build that needs more than max-nodes nodes (build.c). */
+/* What an env was built from: the scene's counts and hash, the parameters. */
+void lie_env_describe(lie_env *env, const lie_scene *s, const lie_build_params *p);
+/* The three arrays of an env's or a part's patch forest (root, nodes,
+ * pool), released. */
+void lie_forest_free(uint32_t *root, lie_pnode *nodes, uint32_t *pool);
 lie_status lie_budget_error(lie_error *err, const lie_scene *s, const lie_build_params *p);
 
 #endif

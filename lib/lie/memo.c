@@ -114,12 +114,9 @@ void lie_memo_free(build_ctx *c, size_t n)
 {
     for (size_t i = 0; c->memo && i < n; i++)
         free(c->memo[i].list);
-    free(c->memo);
-    free(c->memo_of);
-    free(c->memo_new);
-    c->memo = NULL;
-    c->memo_of = NULL;
-    c->memo_new = NULL;
+    LIE_FREE(c->memo);
+    LIE_FREE(c->memo_of);
+    LIE_FREE(c->memo_new);
 }
 
 /* Entries [first, n) by decreasing patch area, ties in entry order, as

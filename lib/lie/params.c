@@ -13,21 +13,20 @@ const char *lie_class_name(lie_class c)
 
 lie_build_params lie_build_params_default(void)
 {
-    lie_build_params p;
-    memset(&p, 0, sizeof p);
-    p.samples = LIE_SAMPLES_DEFAULT;
-    p.max_samples = LIE_MAX_SAMPLES_DEFAULT;
-    p.max_blockers = LIE_MAX_BLOCKERS_DEFAULT;
-    p.complex_cap = LIE_COMPLEX_CAP_DEFAULT;
-    p.min_patch = LIE_MIN_PATCH_DEFAULT;
-    p.split_gain = LIE_SPLIT_GAIN_DEFAULT;
-    p.mode = LIE_BLOCKERS_SAMPLED;
-    p.frames = LIE_FRAMES_DEFAULT;
-    p.light_samples = LIE_MODEL_LIGHT_SAMPLES_DEFAULT;
-    p.ns_segment = LIE_NS_SEGMENT_DEFAULT;
-    p.ns_blocker = LIE_NS_BLOCKER_DEFAULT;
-    p.ns_ray = LIE_NS_RAY_DEFAULT;
-    return p;
+    return (lie_build_params){
+        .samples = LIE_SAMPLES_DEFAULT,
+        .max_samples = LIE_MAX_SAMPLES_DEFAULT,
+        .max_blockers = LIE_MAX_BLOCKERS_DEFAULT,
+        .complex_cap = LIE_COMPLEX_CAP_DEFAULT,
+        .min_patch = LIE_MIN_PATCH_DEFAULT,
+        .split_gain = LIE_SPLIT_GAIN_DEFAULT,
+        .mode = LIE_BLOCKERS_SAMPLED,
+        .frames = LIE_FRAMES_DEFAULT,
+        .light_samples = LIE_MODEL_LIGHT_SAMPLES_DEFAULT,
+        .ns_segment = LIE_NS_SEGMENT_DEFAULT,
+        .ns_blocker = LIE_NS_BLOCKER_DEFAULT,
+        .ns_ray = LIE_NS_RAY_DEFAULT,
+    };
 }
 
 lie_status lie_build_params_check(const lie_build_params *p, lie_error *err)

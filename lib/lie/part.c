@@ -7,13 +7,18 @@
 #include <stdlib.h>
 #include <string.h>
 
+void lie_forest_free(uint32_t *root, lie_pnode *nodes, uint32_t *pool)
+{
+    free(root);
+    free(nodes);
+    free(pool);
+}
+
 void lie_env_part_free(lie_env_part *part)
 {
     if (!part)
         return;
-    free(part->root);
-    free(part->nodes);
-    free(part->pool);
+    lie_forest_free(part->root, part->nodes, part->pool);
     memset(part, 0, sizeof *part);
 }
 
@@ -73,11 +78,7 @@ lie_status lie_env_join(const lie_scene *s, const lie_build_params *p, const lie
         lie_env_destroy(env);
         return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
     }
-    env->n_tris = s->n_tris;
-    env->n_clusters = s->n_clusters;
-    env->params = *p;
-    env->params.threads = 0;
-    env->scene_hash = s->hash;
+    lie_env_describe(env, s, p);
     uint32_t nb = 0, pb = 0;
     for (size_t i = 0; i < n_parts; i++) {
         const lie_env_part *q = &parts[i];

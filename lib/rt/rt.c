@@ -417,14 +417,7 @@ lie_status lie_rt_all_hits(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float t
                            const uint32_t *exclude, int n_exclude, uint32_t **out, size_t *n,
                            size_t *cap)
 {
-    query_ctx q;
-    memset(&q, 0, sizeof q);
-    q.mode = QUERY_ALL;
-    q.exclude = exclude;
-    q.n_exclude = n_exclude;
-    q.out = out;
-    q.n = n;
-    q.cap = cap;
+    query_ctx q = {.mode = QUERY_ALL, .exclude = exclude, .n_exclude = n_exclude, .out = out, .n = n, .cap = cap};
     run_query(rt, &q, org, dir, tnear, tfar);
     return q.nomem ? LIE_ERR_NOMEM : LIE_OK;
 }
@@ -455,11 +448,7 @@ lie_status lie_rt_all_hits8(const lie_rt *rt, const lie_vec3 *org, const lie_vec
 int lie_rt_any_hit(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, float tfar, const uint32_t *exclude,
                    int n_exclude)
 {
-    query_ctx q;
-    memset(&q, 0, sizeof q);
-    q.mode = QUERY_ANY;
-    q.exclude = exclude;
-    q.n_exclude = n_exclude;
+    query_ctx q = {.mode = QUERY_ANY, .exclude = exclude, .n_exclude = n_exclude};
     run_query(rt, &q, org, dir, tnear, tfar);
     return q.found;
 }

@@ -23,6 +23,14 @@ lie_mat4 lie_node_trs_matrix(const double trs[10])
     return lie_mat4_from_trs(trs, trs + 3, trs + 7);
 }
 
+lie_mat4 lie_node_world_matrix(const lie_scene *s, int node)
+{
+    lie_mat4 w = s->nodes[node].local;
+    for (int p = s->nodes[node].parent, guard = 0; p >= 0 && guard < s->n_nodes; p = s->nodes[p].parent, guard++)
+        w = lie_mat4_mul(&s->nodes[p].local, &w);
+    return w;
+}
+
 int lie_scene_find_animation(const lie_scene *s, const char *spec)
 {
     if (!spec || !*spec)

@@ -122,6 +122,17 @@ template <class T> T *alloc_array(size_t n)
     return static_cast<T *>(p);
 }
 
+/* An array for one of the glTF's top-level lists (skins, animations), its
+ * count in an int (`what`: the list's name for the error). */
+template <class T, class V> T *alloc_list(const std::vector<V> &list, int *count, const char *what)
+{
+    if (list.size() > size_t(INT_MAX))
+        fail(LIE_ERR_LIMIT, "too many %s", what);
+    T *a = alloc_array<T>(list.size());
+    *count = int(list.size()); /* after the allocation: a failed one leaves an empty list */
+    return a;
+}
+
 char *dup_name(const std::string &s)
 {
     if (s.empty())
@@ -1930,10 +1941,7 @@ void import_document(const tinygltf::Model &m, lie_scene *s, const lie_scene_opt
  * within range. */
 void import_skins(const tinygltf::Model &m, lie_scene *s)
 {
-    if (m.skins.size() > size_t(INT_MAX))
-        fail(LIE_ERR_LIMIT, "too many skins");
-    s->skins = alloc_array<lie_skin>(m.skins.size());
-    s->n_skins = int(m.skins.size());
+    s->skins = alloc_list<lie_skin>(m.skins, &s->n_skins, "skins");
     for (size_t i = 0; i < m.skins.size(); i++) {
         const tinygltf::Skin &g = m.skins[i];
         lie_skin &k = s->skins[i];
@@ -1992,10 +2000,7 @@ void import_skins(const tinygltf::Model &m, lie_scene *s)
  * A channel without a target node (left to extensions) is not read. */
 void import_animations(const tinygltf::Model &m, lie_scene *s)
 {
-    if (m.animations.size() > size_t(INT_MAX))
-        fail(LIE_ERR_LIMIT, "too many animations");
-    s->animations = alloc_array<lie_animation>(m.animations.size());
-    s->n_animations = int(m.animations.size());
+    s->animations = alloc_list<lie_animation>(m.animations, &s->n_animations, "animations");
     for (size_t ai = 0; ai < m.animations.size(); ai++) {
         const tinygltf::Animation &g = m.animations[ai];
         lie_animation &a = s->animations[ai];

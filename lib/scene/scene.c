@@ -28,44 +28,31 @@ const lie_material *lie_scene_material(const lie_scene *s, int32_t index)
 
 static void free_world(lie_scene *s)
 {
-    free(s->instances);
-    free(s->tri_p);
-    free(s->tri_n);
-    free(s->tri_uv);
-    free(s->tri_uv1);
-    free(s->tri_color);
-    free(s->tri_ng);
-    free(s->tri_area);
-    free(s->tri_material);
-    free(s->tri_instance);
-    free(s->tri_removed);
-    free(s->tri_emitter);
-    free(s->clusters);
-    free(s->cluster_tris);
-    free(s->cluster_cdf);
-    free(s->tri_cluster);
-    s->clusters = NULL;
-    s->cluster_tris = NULL;
-    s->cluster_cdf = NULL;
-    s->tri_cluster = NULL;
+    LIE_FREE(s->instances);
+    s->n_instances = 0;
+    LIE_FREE(s->tri_p);
+    LIE_FREE(s->tri_n);
+    LIE_FREE(s->tri_uv);
+    LIE_FREE(s->tri_uv1);
+    LIE_FREE(s->tri_color);
+    LIE_FREE(s->tri_ng);
+    LIE_FREE(s->tri_area);
+    LIE_FREE(s->tri_material);
+    LIE_FREE(s->tri_instance);
+    LIE_FREE(s->tri_removed);
+    LIE_FREE(s->tri_emitter);
+    LIE_FREE(s->clusters);
+    LIE_FREE(s->cluster_tris);
+    LIE_FREE(s->cluster_cdf);
+    LIE_FREE(s->tri_cluster);
     s->n_clusters = 0;
     for (int i = 0; i < s->n_emitters; i++)
         free(s->emitters[i].tri_cdf);
-    free(s->emitters);
+    LIE_FREE(s->emitters);
+    s->n_emitters = 0;
     for (int i = 0; i < s->n_cameras; i++)
         free(s->cameras[i].name);
-    free(s->cameras);
-    s->instances = NULL;
-    s->n_instances = 0;
-    s->tri_p = s->tri_n = s->tri_ng = NULL;
-    s->tri_uv = s->tri_uv1 = s->tri_area = s->tri_color = NULL;
-    s->tri_material = NULL;
-    s->tri_instance = NULL;
-    s->tri_removed = NULL;
-    s->tri_emitter = NULL;
-    s->emitters = NULL;
-    s->n_emitters = 0;
-    s->cameras = NULL;
+    LIE_FREE(s->cameras);
     s->n_cameras = 0;
     s->n_tris = 0;
 }

@@ -547,6 +547,10 @@ lie_status lie_animation_pose(const lie_scene *s, int a, double t, lie_pose **ou
 void lie_pose_destroy(lie_pose *p);
 /* The local matrix of a node's TRS (10 doubles as in lie_node.trs). */
 lie_mat4 lie_node_trs_matrix(const double trs[10]);
+/* A node's world matrix from the nodes' local ones: its parents' times its
+ * own, as lie_scene_flatten composes them (a chain longer than n_nodes, a
+ * cycle, stops there). */
+lie_mat4 lie_node_world_matrix(const lie_scene *s, int node);
 /* Animation by name or index; -1 when none matches. */
 int lie_scene_find_animation(const lie_scene *s, const char *spec);
 /* Whether node n is the default scene's (reachable from its roots). */

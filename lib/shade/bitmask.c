@@ -18,24 +18,25 @@ typedef struct bm_pt {
 
 /* total orders (ties by the other coordinate, then the index): the same
  * order on every run whatever qsort does with equal keys */
+static int by_first(float a1, float a2, int ai, float b1, float b2, int bi)
+{
+    if (a1 != b1)
+        return a1 < b1 ? -1 : 1;
+    if (a2 != b2)
+        return a2 < b2 ? -1 : 1;
+    return (ai > bi) - (ai < bi);
+}
+
 static int by_s(const void *a, const void *b)
 {
     const bm_pt *p = a, *q = b;
-    if (p->s != q->s)
-        return p->s < q->s ? -1 : 1;
-    if (p->t != q->t)
-        return p->t < q->t ? -1 : 1;
-    return (p->i > q->i) - (p->i < q->i);
+    return by_first(p->s, p->t, p->i, q->s, q->t, q->i);
 }
 
 static int by_t(const void *a, const void *b)
 {
     const bm_pt *p = a, *q = b;
-    if (p->t != q->t)
-        return p->t < q->t ? -1 : 1;
-    if (p->s != q->s)
-        return p->s < q->s ? -1 : 1;
-    return (p->i > q->i) - (p->i < q->i);
+    return by_first(p->t, p->s, p->i, q->t, q->s, q->i);
 }
 
 /* Order p[lo, hi) so that every aligned run of 8^k samples is compact: a

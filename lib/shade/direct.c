@@ -381,6 +381,16 @@ static void add_scaled(const float k[3], double omega, float rgb[3])
     rgb[2] += k[2] * w;
 }
 
+/* A pair's light in closed form: a Lambert surface's colour kc times the
+ * solid angle omega it sees of the emitter, or the LTC integral kl. */
+static void add_closed(const lie_surface *sf, const float kc[3], double omega, const float kl[3], float rgb[3])
+{
+    if (sf->lambert)
+        add_scaled(kc, omega, rgb);
+    else
+        add_scaled(kl, 1.0, rgb);
+}
+
 /* An emitter of several clusters (lie_cluster) under the LIE: the samples
  * are the emitter's, as ever; each sample's shadow test goes to the pair of
  * the cluster holding its triangle.  classify_clusters looks every
@@ -568,10 +578,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                 if (timers)
                     st->t_exact += lie_time_now() - t0;
                 if (ok) {
-                    if (sf->lambert)
-                        add_scaled(kc, omega, rgb);
-                    else
-                        add_scaled(kl, 1.0, rgb);
+                    add_closed(sf, kc, omega, kl, rgb);
                     st->pairs_exact++;
                     st->shadow_rays_skipped += (uint64_t)opt->light_samples;
                     continue;
@@ -585,10 +592,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
             if (timers)
                 st->t_analytic += lie_time_now() - t0;
             if (cls == LIE_VISCLASS_VISIBLE) {
-                if (sf->lambert)
-                    add_scaled(kc, omega, rgb);
-                else
-                    add_scaled(kl, 1.0, rgb);
+                add_closed(sf, kc, omega, kl, rgb);
                 st->pairs_analytic++;
                 st->shadow_rays_skipped += (uint64_t)opt->light_samples;
                 continue;

@@ -33,7 +33,8 @@
  *   which the edge sum gives exactly (Arvo 1995; the LTC with M = I).
  *
  * The tables are fitted by scripts/ltc-fit.c (`make ltc-tables`) and written
- * to lib/shade/ltc_table.c; its header comment holds the fit's error table.
+ * as data to lib/shade/ltc_table.dat, whose "#" lines hold the fit's error
+ * table; the build turns it into C (scripts/ltc-table.awk).
  *
  * Limits of the approximation (measured in tests/unit/test_ltc.c, reported
  * by `make ltc-bench`): an LTC is a 4-parameter fit of the lobe, so a

@@ -171,12 +171,9 @@ void lie_polylight_work_free(lie_polylight_work *w)
 {
     if (!w)
         return;
-    free(w->a);
-    free(w->idx);
-    free(w->pts);
-    w->a = NULL;
-    w->idx = NULL;
-    w->pts = NULL;
+    LIE_FREE(w->a);
+    LIE_FREE(w->idx);
+    LIE_FREE(w->pts);
 }
 
 /* ---- per shading point --------------------------------------------------- */

@@ -39,6 +39,48 @@ static inline lie_build_params test_params(float min_patch)
     return p;
 }
 
+/* The default render options for a w x h image, light_samples shadow rays
+ * and `threads` threads (0: all cores). */
+static inline lie_render_options test_render_options(int w, int h, int light_samples, int threads)
+{
+    lie_render_options o = lie_render_options_default();
+    o.width = w;
+    o.height = h;
+    o.light_samples = light_samples;
+    o.threads = threads;
+    return o;
+}
+
+/* What a test of the LIE oracle needs over a scene: its ray tracer, its
+ * environments built at min_patch, and the oracle over them. */
+typedef struct test_oracle {
+    lie_rt *rt;
+    lie_env *env;
+    lie_lie_vis *lv;
+    const lie_vis_oracle *orc;
+} test_oracle;
+
+static inline void test_oracle_make(const lie_scene *s, float min_patch, test_oracle *t)
+{
+    lie_error err;
+    t->rt = NULL;
+    t->env = NULL;
+    t->lv = NULL;
+    assert_int_equal(lie_rt_create(s, &t->rt, &err), LIE_OK);
+    lie_build_params bp = test_params(min_patch);
+    lie_build_stats bst;
+    assert_int_equal(lie_env_build(s, t->rt, &bp, NULL, &t->env, &bst, &err), LIE_OK);
+    assert_int_equal(lie_lie_vis_create(s, t->env, &t->lv, &err), LIE_OK);
+    t->orc = lie_lie_vis_oracle(t->lv);
+}
+
+static inline void test_oracle_free(test_oracle *t)
+{
+    lie_lie_vis_destroy(t->lv);
+    lie_env_destroy(t->env);
+    lie_rt_destroy(t->rt);
+}
+
 /* Form factor from a point to a parallel rectangle a x b whose corner is
  * straight above it at height h (Howell's catalogue, configuration B-3). */
 static inline double ff_corner(double a, double b, double h)

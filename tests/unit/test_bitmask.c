@@ -218,17 +218,9 @@ typedef struct tally {
 static void oracle_case(int two_sided, int n, tally *tl)
 {
     lie_scene *s = square_light_and_blockers(1.0f, 2.0f, two_sided, degenerate, NDEG);
-    lie_error err;
-    lie_rt *rt = NULL;
-    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
-    lie_build_params bp = lie_build_params_default();
-    bp.min_patch = 0.5f;
-    lie_env *env = NULL;
-    lie_build_stats bst;
-    assert_int_equal(lie_env_build(s, rt, &bp, NULL, &env, &bst, &err), LIE_OK);
-    lie_lie_vis *lv = NULL;
-    assert_int_equal(lie_lie_vis_create(s, env, &lv, &err), LIE_OK);
-    const lie_vis_oracle *orc = lie_lie_vis_oracle(lv);
+    test_oracle t;
+    test_oracle_make(s, 0.5f, &t);
+    const lie_vis_oracle *orc = t.orc;
     assert_non_null(orc->occluded_mask);
     lie_light_samples ls;
     assert_int_equal(lie_light_samples_alloc(&ls, n), LIE_OK);
@@ -268,7 +260,7 @@ static void oracle_case(int two_sided, int n, tally *tl)
                 lie_shadow_query_segments(&qs);
                 for (int i = 0; i < n; i++) {
                     assert_int_equal(bit(mask, i), occ[i] != 0); /* the same bits as the per-sample path */
-                    int emb = lie_rt_occluded(rt, o, lie_v3(dx[i], dy[i], dz[i]), 0.0f, 1.0f);
+                    int emb = lie_rt_occluded(t.rt, o, lie_v3(dx[i], dy[i], dz[i]), 0.0f, 1.0f);
                     tl->off_embree += emb != bit(mask, i);
                     tl->samples++;
                 }
@@ -277,9 +269,7 @@ static void oracle_case(int two_sided, int n, tally *tl)
     free(dx);
     lie_bitmask_destroy(bm);
     lie_light_samples_free(&ls);
-    lie_lie_vis_destroy(lv);
-    lie_env_destroy(env);
-    lie_rt_destroy(rt);
+    test_oracle_free(&t);
     lie_scene_destroy(s);
 }
 

@@ -570,85 +570,82 @@ static void old_file(const lie_cache *c, sect s[N_SECT], uint32_t version, size_
     reseal(*a, *na);
 }
 
+/* A file of an older format version made from a cache, and that file decoded. */
+typedef struct old_version {
+    lie_cache *c; /* the cache it was made from */
+    sect s[N_SECT];
+    unsigned char *a;
+    size_t na;
+    lie_cache *d; /* the file decoded */
+} old_version;
+
+/* c as a file of `version` with a PARAMS of params_size bytes: it must read. */
+static void old_version_read(old_version *o, lie_cache *c, uint32_t version, size_t params_size)
+{
+    o->c = c;
+    o->d = NULL;
+    old_file(c, o->s, version, params_size, &o->a, &o->na);
+    lie_error err;
+    assert_int_equal(lie_cache_decode(o->a, o->na, "old.lie", &o->d, &err), LIE_OK);
+}
+
+/* The same bytes labelled the next version are damaged (msg); then all is freed. */
+static void old_version_done(old_version *o, const char *msg)
+{
+    lie_cache_destroy(o->d);
+    put32(o->a + 8, get32(o->a + 8) + 1);
+    reseal(o->a, o->na);
+    expect_reject(o->a, o->na, LIE_ERR_FORMAT, msg);
+    free_sections(o->s, N_SECT);
+    free(o->a);
+    lie_cache_destroy(o->c);
+}
+
 /* A version 3 file (16-byte EMITTERS) reads with one cluster per emitter;
  * a version 4 file with 16-byte records is damaged. */
 static void test_version_3_reads_with_one_cluster_each(void **state)
 {
     (void)state;
-    lie_cache *c = cornell_cache(LIE_BLOCKERS_SAMPLED);
-    sect s[N_SECT];
-    unsigned char *a;
-    size_t na;
-    old_file(c, s, 3, 48, &a, &na);
-    lie_cache *d = NULL;
-    lie_error err;
-    assert_int_equal(lie_cache_decode(a, na, "v3.lie", &d, &err), LIE_OK);
-    assert_int_equal(d->n_emitters, c->n_emitters);
-    for (int e = 0; e < d->n_emitters; e++) {
-        assert_int_equal(d->emitters[e].n_clusters, 1);
-        assert_int_equal(d->emitters[e].partition, 0);
+    old_version o;
+    old_version_read(&o, cornell_cache(LIE_BLOCKERS_SAMPLED), 3, 48);
+    assert_int_equal(o.d->n_emitters, o.c->n_emitters);
+    for (int e = 0; e < o.d->n_emitters; e++) {
+        assert_int_equal(o.d->emitters[e].n_clusters, 1);
+        assert_int_equal(o.d->emitters[e].partition, 0);
     }
-    assert_int_equal(d->env->n_clusters, c->env->n_clusters);
-    lie_cache_destroy(d);
-    put32(a + 8, 4);
-    reseal(a, na);
-    expect_reject(a, na, LIE_ERR_FORMAT, "section EMITTERS");
-    free_sections(s, N_SECT);
-    free(a);
-    lie_cache_destroy(c);
+    assert_int_equal(o.d->env->n_clusters, o.c->env->n_clusters);
+    old_version_done(&o, "section EMITTERS");
 }
 
 /* A version 1 file (PARAMS of 24 bytes, no split_gain) still reads: its
- * trees were built splitting wherever a list was too long, split_gain 0. */
+ * trees were built splitting wherever a list was too long, split_gain 0;
+ * a version 2 file with a 24-byte PARAMS is damaged. */
 static void test_version_1_reads_with_split_gain_0(void **state)
 {
     (void)state;
-    lie_cache *c = cornell_cache(LIE_BLOCKERS_SAMPLED);
-    sect s[N_SECT];
-    unsigned char *a;
-    size_t na;
-    old_file(c, s, 1, 24, &a, &na);
-    lie_cache *d = NULL;
-    lie_error err;
-    assert_int_equal(lie_cache_decode(a, na, "v1.lie", &d, &err), LIE_OK);
-    assert_true(d->env->params.split_gain == 0.0f);
-    assert_int_equal(d->env->params.complex_cap, c->env->params.complex_cap);
-    assert_int_equal(d->env->n_nodes, c->env->n_nodes);
-    lie_cache_destroy(d);
-    /* and a version 2 file with a 24-byte PARAMS is damaged */
-    put32(a + 8, 2);
-    reseal(a, na);
-    expect_reject(a, na, LIE_ERR_FORMAT, "section PARAMS: 24 bytes, expected 28");
-    free_sections(s, N_SECT);
-    free(a);
-    lie_cache_destroy(c);
+    old_version o;
+    old_version_read(&o, cornell_cache(LIE_BLOCKERS_SAMPLED), 1, 24);
+    assert_true(o.d->env->params.split_gain == 0.0f);
+    assert_int_equal(o.d->env->params.complex_cap, o.c->env->params.complex_cap);
+    assert_int_equal(o.d->env->n_nodes, o.c->env->n_nodes);
+    old_version_done(&o, "section PARAMS: 24 bytes, expected 28");
 }
 
+/* A version 2 file reads with the default cost model; a version 3 file
+ * with a 28-byte PARAMS is damaged. */
 static void test_version_2_reads_with_the_default_cost_model(void **state)
 {
     (void)state;
     lie_cache *c = cornell_cache(LIE_BLOCKERS_SAMPLED);
     c->env->params.frames = 77;
-    sect s[N_SECT];
-    unsigned char *a;
-    size_t na;
-    old_file(c, s, 2, 28, &a, &na);
-    lie_cache *d = NULL;
-    lie_error err;
-    assert_int_equal(lie_cache_decode(a, na, "v2.lie", &d, &err), LIE_OK);
+    old_version o;
+    old_version_read(&o, c, 2, 28);
     lie_build_params def = lie_build_params_default();
-    assert_int_equal(d->env->params.frames, def.frames);
-    assert_true(d->env->params.ns_ray == def.ns_ray);
-    assert_true(d->env->params.split_gain == c->env->params.split_gain);
-    assert_int_equal(d->views.n_cams, 0);
-    lie_cache_destroy(d);
-    /* and a version 3 file with a 28-byte PARAMS is damaged */
-    put32(a + 8, 3);
-    reseal(a, na);
-    expect_reject(a, na, LIE_ERR_FORMAT, "section PARAMS: 28 bytes, expected 48");
-    free_sections(s, N_SECT);
-    free(a);
-    lie_cache_destroy(c);
+    assert_int_equal(o.d->env->params.frames, def.frames);
+    assert_true(o.d->env->params.ns_ray == def.ns_ray);
+    assert_true(o.d->env->params.split_gain == c->env->params.split_gain);
+    assert_int_equal(o.d->views.n_cams, 0);
+    old_version_done(&o, "section PARAMS: 28 bytes, expected 48");
 }
 
 static void test_views_round_trip_and_bad_views_are_rejected(void **state)

@@ -309,11 +309,7 @@ static lie_frame *render_strip(const lie_scene *s, const lie_env *env, int threa
     lie_rt *rt = NULL;
     assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
     lie_camera cam = lie_scene_default_camera(s);
-    lie_render_options o = lie_render_options_default();
-    o.width = 48;
-    o.height = 32;
-    o.light_samples = 24;
-    o.threads = threads;
+    lie_render_options o = test_render_options(48, 32, 24, threads);
     o.exact = LIE_EXACT_OFF; /* sampled partial pairs: the oracle's image is full visibility's */
     lie_lie_vis *lv = NULL;
     if (env) {

@@ -345,9 +345,7 @@ static void test_polylight_glossy_receiver_uses_ltc(void **state)
     cam.yfov = 0.01f;
     float px[2][3];
     for (int k = 0; k < 2; k++) {
-        lie_render_options o = lie_render_options_default();
-        o.width = o.height = 1;
-        o.threads = 1;
+        lie_render_options o = test_render_options(1, 1, LIE_LIGHT_SAMPLES_DEFAULT, 1);
         o.visibility = LIE_VIS_NONE;
         o.exact = k ? LIE_EXACT_ONLY : LIE_EXACT_OFF;
         o.light_samples = k ? 16 : 16384;

@@ -58,10 +58,7 @@ static void render_pixel(const lie_scene *s, lie_vec3 eye, lie_vec3 target, int 
     lie_vec3 up = fabsf(cam.forward.y) > 0.9f ? lie_v3(0, 0, 1) : lie_v3(0, 1, 0);
     cam.up = lie_v3_norm(lie_v3_sub(up, lie_v3_scale(cam.forward, lie_v3_dot(up, cam.forward))));
     cam.yfov = 0.01f;
-    lie_render_options o = lie_render_options_default();
-    o.width = o.height = 1;
-    o.light_samples = light_samples;
-    o.threads = 1;
+    lie_render_options o = test_render_options(1, 1, light_samples, 1);
     lie_frame *f = NULL;
     assert_int_equal(lie_render(s, rt, &cam, &o, &f, NULL, &err), LIE_OK);
     memcpy(rgb, f->rgb, 3 * sizeof(float));
@@ -271,10 +268,7 @@ static void test_render_is_identical_for_any_thread_count(void **state)
     lie_rt *rt = NULL;
     assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
     lie_camera cam = lie_scene_default_camera(s);
-    lie_render_options o = lie_render_options_default();
-    o.width = 37;
-    o.height = 23;
-    o.light_samples = 20;
+    lie_render_options o = test_render_options(37, 23, 20, 0);
     o.pattern = LIE_PATTERN_ROTATED;
     o.spp = 2;
     lie_frame *f1 = NULL, *f3 = NULL;
@@ -298,9 +292,7 @@ static void test_ray_modes_agree(void **state)
     lie_rt *rt = NULL;
     assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
     lie_camera cam = lie_scene_default_camera(s);
-    lie_render_options o = lie_render_options_default();
-    o.width = o.height = 24;
-    o.light_samples = 13;
+    lie_render_options o = test_render_options(24, 24, 13, 0);
     lie_frame *f[3];
     for (int m = 0; m < 3; m++) {
         o.rays = (lie_ray_mode)m;
@@ -483,16 +475,9 @@ static void planar_case(uint64_t seed, float tilt, int two_sided, planar_tally *
     assert_non_null(solid);
     assert_true(solid[s->n_tris - 1] >= 0 && solid[s->n_tris - 13] >= 0); /* both boxes */
     free(solid);
-    lie_rt *rt = NULL;
-    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
-    lie_build_params bparams = lie_build_params_default();
-    bparams.min_patch = 0.5f;
-    lie_env *env = NULL;
-    lie_build_stats bst;
-    assert_int_equal(lie_env_build(s, rt, &bparams, NULL, &env, &bst, &err), LIE_OK);
-    lie_lie_vis *lv = NULL;
-    assert_int_equal(lie_lie_vis_create(s, env, &lv, &err), LIE_OK);
-    const lie_vis_oracle *orc = lie_lie_vis_oracle(lv);
+    test_oracle t;
+    test_oracle_make(s, 0.5f, &t);
+    const lie_vis_oracle *orc = t.orc;
     const int n = 64;
     lie_light_samples ls;
     assert_int_equal(lie_light_samples_alloc(&ls, n), LIE_OK);
@@ -521,7 +506,7 @@ static void planar_case(uint64_t seed, float tilt, int two_sided, planar_tally *
                 orc->occluded(orc->ctx, blockers, NALL, &q3, occ3);
                 lie_shadow_query_segments(&q3);
                 for (int i = 0; i < n; i++) {
-                    int emb = lie_rt_occluded(rt, o, lie_v3(dx[i], dy[i], dz[i]), 0.0f, 1.0f);
+                    int emb = lie_rt_occluded(t.rt, o, lie_v3(dx[i], dy[i], dz[i]), 0.0f, 1.0f);
                     tl->tested++;
                     tl->blocked += emb;
                     tl->off2 += (occ2[i] != 0) != emb;
@@ -529,9 +514,7 @@ static void planar_case(uint64_t seed, float tilt, int two_sided, planar_tally *
                 }
             }
     lie_light_samples_free(&ls);
-    lie_lie_vis_destroy(lv);
-    lie_env_destroy(env);
-    lie_rt_destroy(rt);
+    test_oracle_free(&t);
     lie_scene_destroy(s);
 }
 

@@ -142,9 +142,7 @@ static int find_camera_node(const lie_scene *s, const char *name)
 /* A camera node's world view, as lie_scene_flatten computes it. */
 static lie_camera_key camera_key(const lie_scene *s, int node)
 {
-    lie_mat4 w = s->nodes[node].local;
-    for (int p = s->nodes[node].parent, g = 0; p >= 0 && g < s->n_nodes; p = s->nodes[p].parent, g++)
-        w = lie_mat4_mul(&s->nodes[p].local, &w);
+    lie_mat4 w = lie_node_world_matrix(s, node);
     lie_camera_key k;
     memset(&k, 0, sizeof k);
     k.eye = lie_mat4_point(&w, lie_v3(0.0f, 0.0f, 0.0f));

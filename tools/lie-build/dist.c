@@ -119,12 +119,7 @@ lie_status build_dist(const lie_scene *s, const lie_rt *rt, const lie_build_para
     *out = NULL;
     double t0 = lie_time_now();
     int ranks = lie_dist_size();
-    job j;
-    memset(&j, 0, sizeof j);
-    j.s = s;
-    j.rt = rt;
-    j.p = p;
-    j.px = px;
+    job j = {.s = s, .rt = rt, .p = p, .px = px};
     uint64_t n_units = (uint64_t)s->n_tris * (uint64_t)s->n_clusters;
     j.n_items = plan(NULL, n_units, ranks);
     j.items = calloc(j.n_items + 1, sizeof *j.items);

@@ -212,16 +212,8 @@ lie_status render_dist(const lie_scene *s, const lie_rt *rt, const lie_render_op
                        const lie_camera_path *path, const lie_camera *cam, const int *frames, int n_frames,
                        render_write_fn write, void *write_ctx, lie_render_stats *rs, double *t_write, lie_error *err)
 {
-    job j;
-    memset(&j, 0, sizeof j);
-    j.s = s;
-    j.rt = rt;
-    j.ro = ro;
-    j.path = path;
-    j.cam = cam;
-    j.list = frames;
-    j.write = write;
-    j.write_ctx = write_ctx;
+    job j = {.s = s, .rt = rt, .ro = ro, .path = path, .cam = cam, .list = frames, .write = write,
+             .write_ctx = write_ctx};
     j.n_tiles = lie_render_tile_count(ro->width, ro->height);
     int ranks = lie_dist_size();
     j.n_items = plan(&j, n_frames, ranks);

@@ -144,6 +144,32 @@ static const lie_cli_choice visibilities[] = {
 static const lie_cli_choice ray_modes[] = {
     {"stream", LIE_RAYS_STREAM}, {"packet", LIE_RAYS_PACKET}, {"single", LIE_RAYS_SINGLE}, {NULL, 0}};
 
+/* An option that names a mode of lie_render_options: 1 when it set it, 0
+ * when c is not one, -1 after its usage error (cli->status). */
+static int pick_mode(lie_cli *cli, int c, lie_render_options *ro)
+{
+    static const struct {
+        int code;
+        const lie_cli_choice *choices;
+        size_t offset; /* of an enum or unsigned field: int-sized (below) */
+    } modes[] = {
+        {OPT_EXACT, exact_modes, offsetof(lie_render_options, exact)},
+        {OPT_BITMASK, bitmask_modes, offsetof(lie_render_options, bitmask)},
+        {OPT_PATTERN, patterns, offsetof(lie_render_options, pattern)},
+        {OPT_LIE_SKIP, lie_skips, offsetof(lie_render_options, lie_skip)},
+        {OPT_VISIBILITY, visibilities, offsetof(lie_render_options, visibility)},
+        {OPT_RAYS, ray_modes, offsetof(lie_render_options, rays)},
+    };
+    _Static_assert(sizeof(lie_exact_mode) == sizeof(int) && sizeof(lie_bitmask_mode) == sizeof(int) &&
+                       sizeof(lie_pattern) == sizeof(int) && sizeof(lie_visibility_mode) == sizeof(int) &&
+                       sizeof(lie_ray_mode) == sizeof(int) && sizeof(unsigned) == sizeof(int),
+                   "the modes are stored as ints");
+    for (size_t i = 0; i < sizeof modes / sizeof modes[0]; i++)
+        if (modes[i].code == c)
+            return lie_cli_pick(cli, modes[i].choices, (int *)((char *)ro + modes[i].offset)) ? 1 : -1;
+    return 0;
+}
+
 static int parse_aovs(const char *list, unsigned *bits)
 {
     char buf[256];
@@ -385,8 +411,14 @@ int main(int argc, char **argv)
     int c;
     lie_cli cli = {.tool = prog, .usage = usage, .missing = "missing input scene",
                    .takes = LIE_CLI_OUTPUT | LIE_CLI_THREADS | LIE_CLI_EXTERNAL | LIE_CLI_STATS | LIE_CLI_VERBOSE};
-    int choice;
+    int taken;
     while ((c = lie_cli_next(&cli, argc, argv, "", long_opts)) > 0) {
+        if ((taken = pick_mode(&cli, c, &ro)) != 0) {
+            if (taken < 0)
+                return cli.status;
+            visibility_set |= c == OPT_VISIBILITY;
+            continue;
+        }
         switch (c) {
         case OPT_CAMERA: camera = optarg; break;
         case OPT_SIZE:
@@ -410,38 +442,7 @@ int main(int argc, char **argv)
             if (ro.exact == LIE_EXACT_ONLY)
                 ro.exact = LIE_EXACT_AUTO;
             break;
-        case OPT_EXACT:
-            if (!lie_cli_pick(&cli, exact_modes, &choice))
-                return cli.status;
-            ro.exact = (lie_exact_mode)choice;
-            break;
-        case OPT_BITMASK:
-            if (!lie_cli_pick(&cli, bitmask_modes, &choice))
-                return cli.status;
-            ro.bitmask = (lie_bitmask_mode)choice;
-            break;
         case OPT_TIMERS: ro.timers = 1; break;
-        case OPT_PATTERN:
-            if (!lie_cli_pick(&cli, patterns, &choice))
-                return cli.status;
-            ro.pattern = (lie_pattern)choice;
-            break;
-        case OPT_LIE_SKIP:
-            if (!lie_cli_pick(&cli, lie_skips, &choice))
-                return cli.status;
-            ro.lie_skip = (unsigned)choice;
-            break;
-        case OPT_VISIBILITY:
-            visibility_set = 1;
-            if (!lie_cli_pick(&cli, visibilities, &choice))
-                return cli.status;
-            ro.visibility = (lie_visibility_mode)choice;
-            break;
-        case OPT_RAYS:
-            if (!lie_cli_pick(&cli, ray_modes, &choice))
-                return cli.status;
-            ro.rays = (lie_ray_mode)choice;
-            break;
         case OPT_MAX_DEPTH:
             if (!lie_cli_long(&cli, 0, 64, &v))
                 return cli.status;

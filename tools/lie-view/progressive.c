@@ -252,11 +252,7 @@ void view_render_stop(view_render *r)
     if (!r)
         return;
     if (r->started) {
-        pthread_mutex_lock(&r->m);
-        r->quit = 1;
-        pthread_cond_broadcast(&r->cv);
-        pthread_mutex_unlock(&r->m);
-        pthread_join(r->tid, NULL);
+        view_thread_quit(&r->m, &r->cv, &r->quit, r->tid);
     }
     for (int lv = 0; lv < LEVELS; lv++)
         for (int m = 0; m < 3; m++)

@@ -38,6 +38,10 @@ void view_orbit_frame(view_orbit *o, lie_box3 b);       /* F: target the box, fi
 /* "eye=X,Y,Z,target=X,Y,Z,up=0,1,0,fov=DEG" (%.9g: floats round-trip). */
 void view_orbit_spec(const view_orbit *o, char *buf, size_t size);
 
+/* A worker thread (the renderer's, the constructor) that waits on cv under
+ * m and ends when *quit is set: set it, wake the thread and join it. */
+void view_thread_quit(pthread_mutex_t *m, pthread_cond_t *cv, int *quit, pthread_t tid);
+
 /* ---- the world: scene, cache, edits, constructor (world.c) ----------- */
 
 typedef struct view_world view_world;

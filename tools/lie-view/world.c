@@ -187,16 +187,21 @@ lie_status view_world_open(const char *input, const view_world_options *opt, vie
     return LIE_OK;
 }
 
+void view_thread_quit(pthread_mutex_t *m, pthread_cond_t *cv, int *quit, pthread_t tid)
+{
+    pthread_mutex_lock(m);
+    *quit = 1;
+    pthread_cond_broadcast(cv);
+    pthread_mutex_unlock(m);
+    pthread_join(tid, NULL);
+}
+
 void view_world_close(view_world *w)
 {
     if (!w)
         return;
     if (w->ctor_started) {
-        pthread_mutex_lock(&w->cm);
-        w->quit = 1;
-        pthread_cond_broadcast(&w->ccv);
-        pthread_mutex_unlock(&w->cm);
-        pthread_join(w->ctor, NULL);
+        view_thread_quit(&w->cm, &w->ccv, &w->quit, w->ctor);
     }
     world_free_session(w);
     free(w->update_ms);
