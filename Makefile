@@ -52,7 +52,7 @@ TOOL_BIN := $(TOOLS:%=$(BINDIR)/%)
 UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
 UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/tests/%)
 
-.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench bench-build bench-mpi bench-view scenes fuzz clean \
+.PHONY: all deps demo test test-unit test-tools test-asan test-valgrind bench bench-build bench-build-scenes bench-mpi bench-view scenes fuzz clean \
         install uninstall man shared ltc-tables ltc-bench
 all: $(TOOL_BIN)
 
@@ -189,6 +189,11 @@ bench: all build-tests
 # what a lie-build costs in full frames, per scene: the paper's rule against the cost rule
 bench-build: all build-tests
 	@sh bench/build.sh
+
+# the same for the third-party scenes of ../shared/scenes alone (minutes: scifi_hallway)
+bench-build-scenes: all build-tests
+	@SCENES="$(wildcard ../shared/scenes/bedroom_corner/scene.gltf ../shared/scenes/lights_punctual_lamp/LightsPunctualLamp.gltf ../shared/scenes/scifi_hallway/space_ship_hallway.glb)" \
+	  ATRIUM=0 PAPER=0 ONE=0 VIEW_SCENES=" " sh bench/build.sh
 
 # lie-view's interactive loop under Xvfb (not a timed test: figures depend on the load)
 bench-view: all

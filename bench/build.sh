@@ -13,6 +13,12 @@
 # Last, a generated 250k-triangle atrium (bench/atrium.c; ATRIUM=0 skips it)
 # whose area lights an edit file adds, built for its camera only.
 #
+# BIN (default bin) names the binaries, so that two trees can be set side by
+# side; CLUSTERS=K builds with --emitter-clusters K (README, "Emitters of many
+# triangles"); PAPER=0 skips the paper-rule builds, ONE=0 the 1-thread ones.
+# make bench-build-scenes runs the third-party scenes of ../shared/scenes
+# alone, scifi_hallway among them, which takes minutes.
+#
 # Targets (issue 14): build <= 5 full frames on every scene with a light and
 # <= 2 on museum1; cache <= 16 MB under 50k triangles; LIE frame <= half the
 # full frame; the atrium built in <= 60 s.  Writes out/bench-build.json.
@@ -24,6 +30,8 @@ SIZE=${SIZE:-512x512}
 THREADS=${THREADS:-$(nproc)}
 SCENES=${SCENES:-"tests/scenes/museum1.gltf tests/scenes/museum3.gltf ../shared/scenes/bedroom_corner/scene.gltf ../shared/scenes/lights_punctual_lamp/LightsPunctualLamp.gltf"}
 TIMEOUT=${TIMEOUT:-900}
+BIN=${BIN:-bin}
+CLARGS=; [ -z "${CLUSTERS:-}" ] || CLARGS="--emitter-clusters $CLUSTERS"
 mkdir -p out
 TMP=$(mktemp -d); trap 'rm -rf "$TMP"' EXIT
 
@@ -36,7 +44,7 @@ mb() { awk -v b="$1" 'BEGIN { if (b + 0 > 0) printf "%.2f", b / 1048576; else pr
 # core per worker (its CPU less the workers', plus the busiest worker's)
 build() {
     scene=$1; out=$2; shift 2
-    if timeout "$TIMEOUT" bin/lie-build "$scene" -q --stats=json -o "$out" "$@" 2>"$TMP/b.json"; then
+    if timeout "$TIMEOUT" "$BIN/lie-build" "$scene" $CLARGS -q --stats=json -o "$out" "$@" 2>"$TMP/b.json"; then
         cpu=$(field seconds_cpu <"$TMP/b.json")
         crit=$(awk -v c="$cpu" -v w="$(field seconds_cpu_workers <"$TMP/b.json")" \
             -v m="$(field seconds_cpu_worker_max <"$TMP/b.json")" 'BEGIN { printf "%.3f", c - w + m }')
@@ -47,8 +55,8 @@ build() {
 }
 
 echo "bench-build: $SIZE frames, 100 light samples, $THREADS threads (ratios measured side by side; load $(cut -d' ' -f1 /proc/loadavg))"
-printf '  %-26s %7s %4s %8s | %9s %9s %8s | %9s %9s %8s %9s | %8s %7s | %7s %7s\n' scene tris emit "frame s" \
-    "paper s" "frames" "cache MB" "cost s" "frames" "cache MB" "segments" "LIE s" "LIE/full" "1->${THREADS}t" "cpu"
+printf '  %-26s %7s %4s %8s | %9s %9s %8s | %9s %9s %8s %9s | %8s %7s %7s | %7s %7s\n' scene tris emit "frame s" \
+    "paper s" "frames" "cache MB" "cost s" "frames" "cache MB" "segments" "LIE s" "LIE/full" "off>2%" "1->${THREADS}t" "cpu"
 echo "[" >out/bench-build.json
 first=1
 
@@ -57,31 +65,37 @@ first=1
 bench_scene() {
     name=$1; scene=$2; paper=$3; shift 3
     tp=-; bp=-
-    if [ "$paper" = 1 ]; then
+    if [ "$paper" = 1 ] && [ "${PAPER:-1}" = 1 ]; then
         r=$(build "$scene" "$TMP/paper.lie" --split-gain 0 --threads "$THREADS" "$@")
         tp=$(echo "$r" | cut -d' ' -f1); bp=$(echo "$r" | cut -d' ' -f2)
     fi
     set -- $(build "$scene" "$TMP/cost.lie" --threads "$THREADS" "$@") "$@"
     tc=$1; bc=$2; segc=$3; cpun=$5; critn=$6; shift 6
-    set -- $(build "$scene" "$TMP/one.lie" --threads 1 "$@") "$@"
+    if [ "${ONE:-1}" = 1 ]; then
+        set -- $(build "$scene" "$TMP/one.lie" --threads 1 "$@") "$@"
+    else
+        set -- - - - - - - "$@"
+    fi
     t1=$1; cpu1=$5
-    tl=-; tf=-; tris=-; emit=-
+    tl=-; tf=-; tris=-; emit=-; off=-
     if [ "$tc" != timeout ]; then
-        bin/lie-render "$TMP/cost.lie" --visibility=full --size "$SIZE" --threads "$THREADS" -q --stats=json \
+        "$BIN/lie-render" "$TMP/cost.lie" --visibility=full --size "$SIZE" --threads "$THREADS" -q --stats=json \
             -o "$TMP/full.exr" 2>"$TMP/f.json"
         tf=$(field seconds_render <"$TMP/f.json")
         tris=$(field triangles <"$TMP/f.json"); emit=$(field emitters <"$TMP/f.json")
-        bin/lie-render "$TMP/cost.lie" --size "$SIZE" --threads "$THREADS" -q --stats=json -o "$TMP/lie.exr" \
+        "$BIN/lie-render" "$TMP/cost.lie" --size "$SIZE" --threads "$THREADS" -q --stats=json -o "$TMP/lie.exr" \
             2>"$TMP/l.json"
         tl=$(field seconds_render <"$TMP/l.json")
+        off=$(build/release/tests/exr-compare "$TMP/full.exr" "$TMP/lie.exr" 1 1 |
+            sed -n 's/.* by more than 2% (\([0-9.]*%\)).*/\1/p')
     fi
-    printf '  %-26s %7s %4s %8s | %9s %9s %8s | %9s %9s %8s %9s | %8s %7s | %7s %7s\n' "$name" "$tris" "$emit" "$tf" \
+    printf '  %-26s %7s %4s %8s | %9s %9s %8s | %9s %9s %8s %9s | %8s %7s %7s | %7s %7s\n' "$name" "$tris" "$emit" "$tf" \
         "$tp" "$(ratio "$tp" "$tf")" "$(mb "$bp")" "$tc" "$(ratio "$tc" "$tf")" "$(mb "$bc")" "$segc" "$tl" \
-        "$(ratio "$tl" "$tf")" "$(ratio "$t1" "$tc")" "$(ratio "$cpu1" "$critn")"
+        "$(ratio "$tl" "$tf")" "$off" "$(ratio "$t1" "$tc")" "$(ratio "$cpu1" "$critn")"
     [ $first = 1 ] || echo "," >>out/bench-build.json
     first=0
-    printf '{"scene":"%s","triangles":"%s","emitters":"%s","full_frame_s":"%s","paper_build_s":"%s","paper_cache_bytes":"%s","cost_build_s":"%s","cost_cache_bytes":"%s","cost_segments":"%s","lie_frame_s":"%s","build_1_thread_s":"%s","cpu_1_thread_s":"%s","cpu_s":"%s","critical_path_s":"%s"}' \
-        "$name" "$tris" "$emit" "$tf" "$tp" "$bp" "$tc" "$bc" "$segc" "$tl" "$t1" "$cpu1" "$cpun" "$critn" >>out/bench-build.json
+    printf '{"scene":"%s","triangles":"%s","emitters":"%s","full_frame_s":"%s","paper_build_s":"%s","paper_cache_bytes":"%s","cost_build_s":"%s","cost_cache_bytes":"%s","cost_segments":"%s","lie_frame_s":"%s","off_2pct":"%s","build_1_thread_s":"%s","cpu_1_thread_s":"%s","cpu_s":"%s","critical_path_s":"%s"}' \
+        "$name" "$tris" "$emit" "$tf" "$tp" "$bp" "$tc" "$bc" "$segc" "$tl" "$off" "$t1" "$cpu1" "$cpun" "$critn" >>out/bench-build.json
 }
 
 for scene in $SCENES; do

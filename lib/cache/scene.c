@@ -25,8 +25,16 @@ lie_status lie_cache_load_scene(const lie_cache *c, const char *cache_path, cons
                 path = alt;
         }
     }
+    /* the partition the cache was built with (lie-build --emitter-clusters):
+     * its largest cluster count reproduces it, as lib/scene/cluster.c
+     * splits greedily, the same cuts in the same order for any larger cap */
+    lie_scene_options kso = so ? *so : lie_scene_options_default();
+    for (int e = 0; e < c->n_emitters; e++)
+        if ((int)c->emitters[e].n_clusters > kso.emitter_clusters && c->emitters[e].n_clusters <= LIE_CLUSTER_MAX &&
+            (!so || so->emitter_clusters == 0))
+            kso.emitter_clusters = (int)c->emitters[e].n_clusters;
     lie_scene *s = NULL;
-    lie_status st = lie_scene_load(path, so, &s, err);
+    lie_status st = lie_scene_load(path, &kso, &s, err);
     if (st != LIE_OK)
         return st;
     if (s->hash != c->scene_hash) {

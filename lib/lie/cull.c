@@ -102,6 +102,15 @@ static int pair_hull(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3
     return lie_pair_hull_points(c->s, tri, V, e, w->hull);
 }
 
+/* The emitter triangles a pair's shaft leaves out: the whole emitter's, or,
+ * for one cluster of several (lie_cluster), the cluster's own; the other
+ * clusters' triangles can block it as any triangle can. */
+static int own_emitter_tri(const lie_scene *s, uint32_t t, int e)
+{
+    int em = s->clusters[e].emitter;
+    return s->emitters[em].n_clusters > 1 ? s->tri_cluster[t] == e : s->tri_emitter[t] == em;
+}
+
 /* Every triangle other than the patch's own and the emitter's that enters
  * the pair's shaft, into w->cand (sorted, unique); returns how many.  Only
  * these can block a segment of the pair.  Triangles that merely touch the
@@ -133,7 +142,7 @@ static size_t shaft_upto(const build_ctx *c, worker *w, uint32_t tri, const lie_
     size_t m = 0;
     for (size_t i = 0; i < w->n_cand && m < limit; i++) {
         uint32_t t = w->cand[i];
-        if (t == tri || s->tri_emitter[t] == s->clusters[e].emitter || !(s->tri_area[t] > 0.0f))
+        if (t == tri || own_emitter_tri(s, t, e) || !(s->tri_area[t] > 0.0f))
             continue;
         if (lie_sat_rejects(&sat, &s->tri_p[3 * (size_t)t]))
             continue;
@@ -194,7 +203,7 @@ void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3
             uint32_t t = scan ? in->first_tri + (uint32_t)k : w->cand[k];
             if (!scan && s->tri_instance[t] != inst)
                 continue;
-            if (t == tri || s->tri_emitter[t] == s->clusters[e].emitter || !(s->tri_area[t] > 0.0f))
+            if (t == tri || own_emitter_tri(s, t, e) || !(s->tri_area[t] > 0.0f))
                 continue;
             if (lie_sat_rejects(&sat, &s->tri_p[3 * (size_t)t]) ||
                 !lie_hull_meets_triangle(w->hull, nh, &s->tri_p[3 * (size_t)t], tol))

@@ -48,12 +48,25 @@ lie_status lie_sample_tables(build_ctx *c)
 /* ---- sampled blocker lists (§4.1, §4.3.2) ------------------------------ */
 
 /* The pair's sampling: segment i runs from a patch point (Halton bases 2,
- * 3) to an emitter point (bases 5, 7), each shifted by a hash of the pair. */
+ * 3) to an emitter point (bases 5, 7), each shifted by a hash of the patch
+ * and the emitter.
+ *
+ * Shared across the clusters of one emitter (lie_cluster): the segments
+ * are the whole emitter's, and cluster e keeps those that end on one of
+ * its triangles.  So the clusters of an emitter together cast about the
+ * segments one unsplit emitter would, not one emitter's each, and every
+ * kept segment lies inside cluster e's own (narrower) hull, so what the
+ * unit finds depends on its own shaft only: units stay independent, and
+ * an update recomputes exactly the units a rebuild would change (§5).
+ * The density of segments per unit of shaft is the unsplit emitter's.
+ * An emitter of one cluster keeps every segment, as before clusters. */
 typedef struct pair_sampler {
     const build_ctx *c;
     uint32_t tri;
     const lie_vec3 *V;
     int two_sided, e;
+    int em;       /* the emitter of cluster e, whose points the segments aim at */
+    int shared;   /* the emitter has several clusters: keep cluster e's segments */
     float sp1, sp2, se1, se2;
 } pair_sampler;
 
@@ -72,8 +85,15 @@ static int pair_segment(const pair_sampler *ps, uint32_t i, lie_vec3 *org, lie_v
     lie_vec3 p = lie_v3_add(lie_v3_add(lie_v3_scale(V[0], b0), lie_v3_scale(V[1], b1)), lie_v3_scale(V[2], b2));
     lie_vec3 q, ne;
     int one_sided;
-    uint32_t target = lie_cluster_target(s, ps->e, frac_shift(halton(c, 2, i), ps->se1),
-                                         frac_shift(halton(c, 3, i), ps->se2), p, c->ray_far, &q, &ne, &one_sided);
+    const float u1 = frac_shift(halton(c, 2, i), ps->se1), u2 = frac_shift(halton(c, 3, i), ps->se2);
+    uint32_t target;
+    if (ps->shared) {
+        target = lie_emitter_target(s, ps->em, u1, u2, p, c->ray_far, &q, &ne, &one_sided);
+        if (target >= s->n_tris || s->tri_cluster[target] != ps->e)
+            return 0; /* another cluster's segment */
+    } else {
+        target = lie_cluster_target(s, ps->e, u1, u2, p, c->ray_far, &q, &ne, &one_sided);
+    }
     lie_vec3 d = lie_v3_sub(q, p);
     lie_vec3 ng = s->tri_ng[ps->tri];
     float cg = lie_v3_dot(ng, d);
@@ -136,14 +156,22 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
                           int two_sided, int e, uint32_t *quality, size_t *n_list)
 {
     const lie_scene *s = c->s;
-    const lie_emitter *em = &s->emitters[s->clusters[e].emitter];
-    uint64_t h = lie_hash_u64x4(tri, path.digits, (uint64_t)path.depth, (uint64_t)e);
+    const int em_index = s->clusters[e].emitter;
+    const lie_emitter *em = &s->emitters[em_index];
+    const int shared = em->n_clusters > 1;
+    /* the shifts are the emitter's, so that its clusters share one pattern
+     * (an emitter of one cluster: cluster and emitter hash alike only if
+     * every emitter before it has one cluster too, as they hashed before) */
+    uint64_t h = lie_hash_u64x4(tri, path.digits, (uint64_t)path.depth,
+                                shared ? (uint64_t)em->first_cluster | 0x100000000ull : (uint64_t)e);
     uint64_t h2 = lie_hash_u64x4(h, 0x656d6974ull, 0, 0);
     const pair_sampler ps = {c,
                              tri,
                              V,
                              two_sided,
                              e,
+                             em_index,
+                             shared,
                              lie_hash_to_unit(h),
                              lie_hash_to_unit(h << 24),
                              lie_hash_to_unit(h2),
@@ -161,6 +189,8 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
     uint64_t valid = 0, blocked = 0;
     size_t known = 0; /* distinct blockers after the previous round */
     int forced = 0;
+    size_t n_forced = 0;
+    uint64_t cast = 0;
     w->n_hits = 0;
     /* hits are kept unique as they come (a segment through an occluder
      * hits it hundreds of times a pair), by stamping triangles */
@@ -187,7 +217,7 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
              * emitters most lit pairs are such. */
             if (i0 == SHAFT_PROBE && total == 0 && w->n_hits == 0 && SHAFT_PROBE < round_n) {
                 if (lie_cull_shaft_empty(c, w, tri, V, two_sided, e)) {
-                    w->st.segments += SHAFT_PROBE;
+                    w->st.segments += shared ? cast : SHAFT_PROBE;
                     *quality = round_n; /* what the whole round would have said */
                     *n_list = 0;
                     return LIE_CLASS_VISIBLE;
@@ -204,6 +234,7 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
                 m += pair_segment(&ps, i, &org[m], &dir[m], &tnear[m], &tfar[m], ex[m], &n_ex[m]);
             if (m == 0)
                 continue;
+            cast += (uint64_t)m;
             size_t before = w->n_hits;
             unsigned hit_mask = 0;
             if (lie_rt_all_hits8(c->rt, org, dir, tnear, tfar, (const uint32_t(*)[2])ex, n_ex, m, &w->hits,
@@ -224,7 +255,8 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
             }
             w->n_hits = k;
         }
-        w->st.segments += round_n;
+        w->st.segments += shared ? cast : round_n; /* shared: the segments this cluster kept */
+        cast = 0;
         total += round_n;
         w->n_hits = lie_sort_unique(w->hits, w->n_hits);
         int found_new = w->n_hits > known;
@@ -264,10 +296,24 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
                 return LIE_CLASS_PARTIAL;
             }
             forced = 1;
+            n_forced = n_shaft;
         }
         round_n = total;
         if (total + round_n > c->p->max_samples)
             round_n = c->p->max_samples - total;
+    }
+    if (shared && forced && blocked == 0 && n_forced <= c->p->complex_cap) {
+        /* a cluster's share of the segments found nothing in a shaft of
+         * many triangles: they are its list, which lie_subdiv narrows to
+         * the exact one at the leaf */
+        if (!LIE_GROW(w->hits, w->cap_hits, n_forced)) {
+            w->nomem = 1;
+            return LIE_CLASS_VISIBLE;
+        }
+        memcpy(w->hits, w->cand, n_forced * sizeof *w->hits);
+        *quality = total;
+        *n_list = n_forced;
+        return LIE_CLASS_PARTIAL;
     }
     if (blocked > 0 && blocked < valid)
         lie_cull_expand(c, w, tri, V, two_sided, e);

@@ -298,6 +298,7 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
         return;
     w->st.patches_per_depth[path.depth]++;
     size_t n_list = nc.n_list;
+    int exact_done = 0; /* w->hits holds the leaf's exact list */
     int splits = lie_subdiv_splits(c, tri, path, e, nc.cls, w->hits, n_list);
     if (splits && c->pix && !lie_subdiv_pixels_pay(c, tri, path, nc.cls, n_list, nc.quality)) {
         /* too few pixels see the patch for a split to pay: a leaf, with the
@@ -312,6 +313,7 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
             nc.cls = LIE_CLASS_COMPLEX;
         } else if (c->p->mode == LIE_BLOCKERS_SAMPLED) {
             n_list = exact_leaf_list(c, w, tri, path, e, two_sided, cap);
+            exact_done = 1;
             if (w->nomem)
                 return;
             /* the exact list holds the sampled one, longer than
@@ -411,6 +413,7 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
         }
         if (c->p->mode == LIE_BLOCKERS_SAMPLED && n_list <= c->p->complex_cap) {
             n_list = n_leaf; /* the exact list, in w->hits */
+            exact_done = 1;
             if (!n_list)
                 nc.cls = LIE_CLASS_VISIBLE;
         } else {
@@ -425,6 +428,17 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
         if (w->nomem)
             return;
         w->st.splits_undone++;
+    }
+    if (exact_done == 0 && nc.cls == LIE_CLASS_PARTIAL && c->p->mode == LIE_BLOCKERS_SAMPLED &&
+        s->emitters[s->clusters[e].emitter].n_clusters > 1 && n_list <= c->p->complex_cap) {
+        /* A cluster of a shared sampling (lib/lie/sample.c) saw only its
+         * share of the emitter's segments: its leaf gets the exact list of
+         * its own, narrow hull (§4.1.2), as a leaf kept whole does. */
+        n_list = exact_leaf_list(c, w, tri, path, e, two_sided, c->p->complex_cap);
+        if (w->nomem)
+            return;
+        if (n_list == 0)
+            nc.cls = LIE_CLASS_VISIBLE;
     }
     lie_pnode *nd = &u->nodes[idx];
     nd->quality = nc.quality;
@@ -507,6 +521,27 @@ static int copied_whole(const build_ctx *c, uint32_t tri, unit_buf *u)
     return 1;
 }
 
+/* §4.3.3 with the cost model, for a whole unit: whether the unit (tri, e)
+ * can pay for itself over the frames the cache serves.  At best it saves
+ * every shadow ray of every pixel that sees the triangle (one a pixel for
+ * a punctual light, light_samples for an area light); at least it costs
+ * its root's first round of segments.  A unit that cannot pay is left
+ * unbuilt (none), and lie-render answers it with Embree, as it does units
+ * outside the views: punctual lights on triangles a few pixels cover.  A
+ * function of the unit's pixels and the parameters only, growing with the
+ * pixels, so that adding views (lib/lie/views.c) and updates find the
+ * units a build for the same views builds. */
+int lie_subdiv_unit_pays(const lie_build_params *p, const lie_scene *s, const lie_pixels *px, uint32_t tri, int e)
+{
+    if (!px || p->frames == 0)
+        return 1;
+    const lie_emitter *em = &s->emitters[s->clusters[e].emitter];
+    double pixels = (double)lie_pixels_hits(px, tri, lie_patch_root()) / (double)px->rays_per_pixel;
+    double saving = (double)p->frames * pixels * (double)lie_emitter_sample_count(em, (int)p->light_samples) *
+                    (double)p->ns_ray;
+    return saving >= (double)p->samples * (double)p->ns_segment;
+}
+
 void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
 {
     build_ctx *c = ctx;
@@ -534,8 +569,8 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
             return;
         u->roots[e] = (uint32_t)root;
         int64_t old = c->old_unit && c->old_unit[unit] >= 0 ? (int64_t)c->old->root[c->old_unit[unit]] : -1;
-        if (!lie_subdiv_seen(c, tri)) {
-            u->nodes[root].cls = LIE_CLASS_NONE; /* outside the views: not built */
+        if (!lie_subdiv_seen(c, tri) || !lie_subdiv_unit_pays(c->p, s, c->pix, tri, (int)e)) {
+            u->nodes[root].cls = LIE_CLASS_NONE; /* outside the views, or too few pixels: not built */
             w->st.pairs[LIE_CLASS_NONE]++;
             continue;
         }

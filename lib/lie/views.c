@@ -3,6 +3,7 @@
  * and the result is the env one build for all the views gives
  * (lib/lie/lie.h, lie_env_add_views). */
 #include "lie/internal.h"
+#include "lie/subdiv.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -74,8 +75,10 @@ lie_status lie_env_add_views(lie_env *env, const lie_scene *s, const lie_rt *rt,
         for (size_t e = 0; e < ne; e++) {
             size_t u = (size_t)t * ne + e;
             old_unit[u] = (int32_t)u;
-            if (!seen_before && new_px->first[t + 1] > new_px->first[t]) {
-                old_unit[u] = -1; /* not built before: built now */
+            int unpaid = seen_before && env->nodes[env->root[u]].cls == LIE_CLASS_NONE &&
+                         lie_subdiv_unit_pays(&env->params, s, new_px, t, (int)e);
+            if ((!seen_before && new_px->first[t + 1] > new_px->first[t]) || unpaid) {
+                old_unit[u] = -1; /* not built before (not seen, or too few pixels to pay): built now */
                 as->units_new++;
             } else if (seen_before && env->params.frames &&
                        flag_node(env, s, old_px, new_px, env->root[u], t, lie_patch_root(), flags)) {

@@ -23,11 +23,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Lit triangles are split while a part's extent passes this share of the
- * scene's, into at most CLUSTER_SPLIT_MAX parts.  1: no spatial split, as
- * measured (the closing note of issue 14): every cluster repeats the
- * per-unit sampling of the build, and splitting the lit part of
- * bedroom_corner's emitter into 4 cost 16x the build and 5x the frame.
+/* Lit triangles (textured or not: clusters change visibility only) are
+ * split while a part's extent passes this share of the scene's, into at
+ * most CLUSTER_SPLIT_MAX parts, or lie_scene_options.emitter_clusters.
+ * 1: no spatial split by default, as measured (README, "Emitters of many
+ * triangles"): with the sampling shared between an emitter's clusters
+ * (lib/lie/sample.c) bedroom_corner's emitter in 8 clusters still builds
+ * 6x slower than whole, for no faster frame.
  * (With the split on, tests/data/gltf/light_strip.gltf's strip in 2
  * clusters updates as it rebuilds for moves, rotations and removals; an
  * update removing its beam differed from the rebuild in one unit on a tree
@@ -40,7 +42,7 @@
  * LightsPunctualLamp's 1.5x the CPU time, for no faster frame (dark samples
  * weigh 0, and full visibility casts no ray for them either). */
 #define CLUSTER_DARK_SPLIT 0
-#define CLUSTER_EXTENT_SHARE 0.5f
+#define CLUSTER_EXTENT_SHARE 0.125f
 #define CLUSTER_SPLIT_MAX 1
 
 typedef struct keyed {
@@ -222,7 +224,7 @@ lie_status lie_scene_cluster(lie_scene *s)
             np = 1;
         }
         if (n_lit > 0)
-            np += split_emitter(s, scratch + n_dark, n_lit, kx, parts + np, tex ? 1 : s->cluster_max > 0 ? s->cluster_max : CLUSTER_SPLIT_MAX);
+            np += split_emitter(s, scratch + n_dark, n_lit, kx, parts + np, s->cluster_max > 0 ? s->cluster_max : CLUSTER_SPLIT_MAX);
         for (int i = n_dark > 0; i < np; i++)
             parts[i].lo += n_dark;
         /* canonical: each part's triangles ascending; the dark part first,

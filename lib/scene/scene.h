@@ -332,11 +332,13 @@ typedef struct lie_scene_options {
      * it references are taken from this set when it holds them (lib/core,
      * lie_file_set); the URI policy applies the same either way. */
     lie_file_set *files;
-    /* Clusters an untextured area emitter's lit triangles may be split into
-     * in space (lib/scene/cluster.c), 1..LIE_CLUSTER_MAX; 0 means the
-     * default, 1: measured, a spatial split costs more than it saves
-     * (README, "Clusters").  No tool sets it: caches do not record it, so
-     * a cache built with another value is refused by its partition digest. */
+    /* Clusters an area emitter's lit triangles may be split into in space
+     * (lib/scene/cluster.c), 1..LIE_CLUSTER_MAX; 0 means the default, 1:
+     * measured, a spatial split costs more than it saves (README, "Emitters
+     * of many triangles").  lie-build --emitter-clusters sets it; a cache
+     * records each emitter's cluster count, and lie_cache_load_scene loads
+     * with the largest of them when this is 0, which reproduces the
+     * partition (its digest is checked). */
     int emitter_clusters;
 } lie_scene_options;
 #define LIE_SCENE_MAX_TRIANGLES_DEFAULT 50000000u

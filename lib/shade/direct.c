@@ -428,32 +428,60 @@ static lie_vis_class classify_clusters(const lie_shade_ctx *c, const lie_surface
     return all_occ ? LIE_VISCLASS_OCCLUDED : all_vis ? LIE_VISCLASS_VISIBLE : VISCLASS_CLUSTERS;
 }
 
-/* sc->occ for the query's samples, each by its cluster's pair. */
+/* sc->occ for the query's samples, each by its cluster's pair.  The
+ * samples are bucketed by cluster first (sc->idx), so that a partial
+ * cluster tests only its own samples against its own list: the segments of
+ * its samples are gathered (into the ray batch's direction arrays, free
+ * until the Embree pass at the end) and answered in 3D. */
 static void clustered_occlusion(const lie_shade_ctx *c, lie_shade_scratch *sc, lie_shadow_query *q, int n,
                                 const lie_emitter *em)
 {
     const lie_scene *s = c->s;
     const lie_vis_oracle *vo = c->opt->oracle;
     const uint32_t *tri = q->ls->tri;
-    const int first = em->first_cluster;
+    const int first = em->first_cluster, nc = em->n_clusters;
     lie_render_stats *st = &sc->stats;
+    int at[LIE_CLUSTER_MAX + 1] = {0};
+    for (int i = 0; i < n; i++)
+        at[s->tri_cluster[tri[i]] - first + 1]++;
+    for (int j = 0; j < nc; j++)
+        at[j + 1] += at[j];
+    int fill[LIE_CLUSTER_MAX];
+    memcpy(fill, at, sizeof(int) * (size_t)nc);
+    for (int i = 0; i < n; i++)
+        sc->idx[fill[s->tri_cluster[tri[i]] - first]++] = i;
     memset(sc->occ, 0, sizeof *sc->occ * (size_t)n);
     int any_embree = 0;
-    for (int j = 0; j < em->n_clusters; j++) {
-        const int k = sc->ccls[j];
+    for (int j = 0; j < nc; j++) {
+        const int k = sc->ccls[j], m = at[j + 1] - at[j];
+        const int *ix = sc->idx + at[j];
+        if (m == 0)
+            continue;
         if (k == LIE_VISCLASS_OCCLUDED) {
-            for (int i = 0; i < n; i++)
-                if (s->tri_cluster[tri[i]] - first == j)
-                    sc->occ[i] = ~0u;
+            for (int i = 0; i < m; i++)
+                sc->occ[ix[i]] = ~0u;
             st->pairs_occluded++;
         } else if (k == LIE_VISCLASS_BLOCKERS) {
             int nb = vo->select(vo->ctx, sc->cpair[j], first + j, q->o, q->eps, sc->blockers);
             if (nb == 0)
                 continue;
-            vo->occluded(vo->ctx, sc->blockers, nb, q, sc->occ2);
-            for (int i = 0; i < n; i++)
-                if (s->tri_cluster[tri[i]] - first == j)
-                    sc->occ[i] = sc->occ2[i];
+            if (c->opt->exact == LIE_EXACT_AUTO && c->opt->bitmask == LIE_BITMASK_AUTO &&
+                lie_render_embree_cost(m) < lie_render_samples_cost(m, nb)) {
+                sc->ccls[j] = LIE_VISCLASS_TEST_ALL; /* never slower than full, as a single pair */
+                any_embree = 1;
+                continue;
+            }
+            lie_shadow_query_segments(q);
+            float *gx = sc->batch.dx, *gy = sc->batch.dy, *gz = sc->batch.dz;
+            for (int i = 0; i < m; i++) {
+                gx[i] = q->dx[ix[i]];
+                gy[i] = q->dy[ix[i]];
+                gz[i] = q->dz[ix[i]];
+            }
+            lie_shadow_query g = {q->o, q->eps, NULL, m, 1, gx, gy, gz, q->work, q->kind, q->work_stride, NULL};
+            vo->occluded(vo->ctx, sc->blockers, nb, &g, sc->occ2);
+            for (int i = 0; i < m; i++)
+                sc->occ[ix[i]] = sc->occ2[i];
             st->pairs_blockers++;
         } else if (k == LIE_VISCLASS_TEST_ALL) {
             any_embree = 1;

@@ -10,6 +10,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -354,8 +355,51 @@ static void test_split_strip_builds_and_renders_as_full(void **state)
     lie_scene_destroy(s);
 }
 
-/* A cache of the split strip records its partition; read against the
- * strip in one cluster, it is refused by name. */
+/* The sampled build of the split strip shares the strip's segments among
+ * its clusters (lib/lie/sample.c): a node of a cluster casts fewer
+ * segments than a node of the whole strip does; the env is the same for 1
+ * and 2 threads, and its image is full visibility's (leaves get their
+ * cluster's exact list). */
+static void test_split_strip_shares_its_sampling(void **state)
+{
+    (void)state;
+    lie_scene *s = load_split(STRIP, 4), *one = load(STRIP);
+    lie_error err;
+    lie_build_stats st1, st4, st4b;
+    lie_env *e1 = NULL, *a = NULL, *b = NULL;
+    lie_rt *rt1 = NULL, *rt4 = NULL;
+    assert_int_equal(lie_rt_create(one, &rt1, &err), LIE_OK);
+    assert_int_equal(lie_rt_create(s, &rt4, &err), LIE_OK);
+    lie_build_params p = lie_build_params_default();
+    p.min_patch = 1e-3f;
+    p.threads = 1;
+    assert_int_equal(lie_env_build(one, rt1, &p, NULL, &e1, &st1, &err), LIE_OK);
+    assert_int_equal(lie_env_build(s, rt4, &p, NULL, &a, &st4, &err), LIE_OK);
+    p.threads = 2;
+    assert_int_equal(lie_env_build(s, rt4, &p, NULL, &b, &st4b, &err), LIE_OK);
+    assert_env_equal(a, b);
+    assert_true(s->emitters[0].n_clusters > 1);
+    assert_true((double)st4.segments / (double)a->n_nodes < (double)st1.segments / (double)e1->n_nodes);
+    lie_frame *full = render_strip(s, NULL, 2), *l = render_strip(s, a, 2);
+    size_t n = (size_t)3 * full->width * full->height, off = 0;
+    for (size_t i = 0; i < n; i++)
+        off += fabsf(l->rgb[i] - full->rgb[i]) > 1e-5f * (1.0f + full->rgb[i]);
+    assert_int_equal(off, 0);
+    lie_frame_destroy(full);
+    lie_frame_destroy(l);
+    lie_env_destroy(e1);
+    lie_env_destroy(a);
+    lie_env_destroy(b);
+    lie_rt_destroy(rt1);
+    lie_rt_destroy(rt4);
+    lie_scene_destroy(s);
+    lie_scene_destroy(one);
+}
+
+/* A cache of the split strip records its partition: loaded with the
+ * default options, its scene is split the same way (the cache's cluster
+ * count, lib/cache/scene.c); read against the strip in one cluster, it is
+ * refused by name. */
 static void test_cache_of_another_partition_is_refused(void **state)
 {
     (void)state;
@@ -370,8 +414,15 @@ static void test_cache_of_another_partition_is_refused(void **state)
     lie_cache *d = NULL;
     assert_int_equal(lie_cache_decode(data, size, "strip.lie", &d, &err), LIE_OK);
     assert_env_equal(c->env, d->env);
+    lie_scene *same = NULL;
+    assert_int_equal(lie_cache_load_scene(d, "strip.lie", NULL, NULL, &same, &err), LIE_OK);
+    assert_int_equal(same->emitters[0].n_clusters, s->emitters[0].n_clusters);
+    assert_int_equal(lie_scene_cluster_digest(same, 0), lie_scene_cluster_digest(s, 0));
+    lie_scene_destroy(same);
+    lie_scene_options o1 = lie_scene_options_default();
+    o1.emitter_clusters = 1;
     lie_scene *one = NULL;
-    assert_int_equal(lie_cache_load_scene(d, "strip.lie", NULL, NULL, &one, &err), LIE_ERR_FORMAT);
+    assert_int_equal(lie_cache_load_scene(d, "strip.lie", NULL, &o1, &one, &err), LIE_ERR_FORMAT);
     assert_null(one);
     assert_non_null(strstr(err.msg, "clusters"));
     lie_cache_destroy(d);
@@ -399,6 +450,7 @@ int main(void)
         cmocka_unit_test(test_update_equals_rebuild_with_clusters),
         cmocka_unit_test(test_strip_splits_in_space),
         cmocka_unit_test(test_split_strip_builds_and_renders_as_full),
+        cmocka_unit_test(test_split_strip_shares_its_sampling),
         cmocka_unit_test(test_cache_of_another_partition_is_refused),
         cmocka_unit_test(test_update_equals_rebuild_with_split_clusters),
     };

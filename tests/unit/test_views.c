@@ -152,12 +152,91 @@ static void test_more_pixels_refine_and_adding_a_view_equals_one_build(void **st
     lie_scene_destroy(s);
 }
 
+/* Hits spread over triangle tri: n of them, at points inside it. */
+static size_t put_hits(uint64_t *h, size_t at, uint32_t tri, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        float u = (float)((i * 37) % 97) / 200.0f, v = (float)((i * 53) % 89) / 200.0f;
+        h[at + i] = (uint64_t)tri << 32 | lie_pixels_key(u, v);
+    }
+    return at + n;
+}
+
+/* A unit that cannot pay for its build is left unbuilt: over 10 frames a
+ * point light's one shadow ray a pixel on a 2-pixel triangle saves less
+ * than the unit's first round of segments costs, an area light's 100 do
+ * not; a triangle of 1000 pixels pays for both.  With --frames 0 every
+ * seen unit is built.  Adding the pixels that make the point light's unit
+ * pay builds it, as one build for all the pixels does. */
+static void test_units_that_cannot_pay_are_left_unbuilt(void **state)
+{
+    (void)state;
+    lie_scene *s = NULL;
+    lie_rt *rt = NULL;
+    lie_error err;
+    assert_int_equal(lie_scene_load("tests/data/gltf/bent_light.gltf", NULL, &s, &err), LIE_OK);
+    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
+    int area = -1, point = -1;
+    for (int c = 0; c < s->n_clusters; c++) {
+        if (lie_emitter_is_delta(&s->emitters[s->clusters[c].emitter]))
+            point = c;
+        else
+            area = c;
+    }
+    assert_true(area >= 0 && point >= 0);
+    uint32_t a = 0, b = 1; /* two triangles no emitter owns */
+    while (s->tri_emitter[a] >= 0)
+        a++;
+    b = a + 1;
+    while (s->tri_emitter[b] >= 0)
+        b++;
+    assert_true(b < s->n_tris);
+    uint64_t *h = malloc(sizeof *h * 8000);
+    assert_non_null(h);
+    size_t n = put_hits(h, put_hits(h, 0, a, 8), b, 4000);
+    lie_pixels *px = NULL, *more = NULL;
+    assert_int_equal(lie_pixels_create(s->n_tris, 4, h, n, &px, &err), LIE_OK);
+    n = put_hits(h, put_hits(h, 0, a, 4000), b, 4000);
+    assert_int_equal(lie_pixels_create(s->n_tris, 4, h, n, &more, &err), LIE_OK);
+    lie_build_params p = lie_build_params_default();
+    p.frames = 10;
+    lie_build_stats st;
+    lie_env *e = NULL, *e0 = NULL, *em = NULL;
+    assert_int_equal(lie_env_build_views(s, rt, &p, px, NULL, &e, &st, &err), LIE_OK);
+    const size_t nc = (size_t)s->n_clusters;
+#define ROOT_CLS(env, t, c) ((env)->nodes[(env)->root[(size_t)(t) * nc + (size_t)(c)]].cls)
+    assert_int_equal(ROOT_CLS(e, a, point), LIE_CLASS_NONE);
+    assert_int_not_equal(ROOT_CLS(e, a, area), LIE_CLASS_NONE);
+    assert_int_not_equal(ROOT_CLS(e, b, point), LIE_CLASS_NONE);
+    assert_int_not_equal(ROOT_CLS(e, b, area), LIE_CLASS_NONE);
+    p.frames = 0;
+    assert_int_equal(lie_env_build_views(s, rt, &p, px, NULL, &e0, &st, &err), LIE_OK);
+    assert_int_not_equal(ROOT_CLS(e0, a, point), LIE_CLASS_NONE);
+    p.frames = 10;
+    assert_int_equal(lie_env_build_views(s, rt, &p, more, NULL, &em, &st, &err), LIE_OK);
+    assert_int_not_equal(ROOT_CLS(em, a, point), LIE_CLASS_NONE);
+    lie_add_stats as;
+    assert_int_equal(lie_env_add_views(e, s, rt, px, more, 2, &st, &as, &err), LIE_OK);
+    assert_true(as.units_new >= 1);
+    assert_true(same_env(e, em));
+#undef ROOT_CLS
+    lie_env_destroy(e);
+    lie_env_destroy(e0);
+    lie_env_destroy(em);
+    lie_pixels_destroy(px);
+    lie_pixels_destroy(more);
+    free(h);
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_key_digits_follow_the_patch_descent),
         cmocka_unit_test(test_counts_add_up_and_ignore_order),
         cmocka_unit_test(test_more_pixels_refine_and_adding_a_view_equals_one_build),
+        cmocka_unit_test(test_units_that_cannot_pay_are_left_unbuilt),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -280,6 +280,20 @@ int lie_cli_long(lie_cli *cli, long min, long max, long *out)
     return 0;
 }
 
+int lie_cli_set_int(lie_cli *cli, int c, const lie_cli_int *table, size_t n, void *base)
+{
+    long v;
+    for (size_t i = 0; i < n; i++)
+        if (table[i].code == c) {
+            if (!lie_cli_long(cli, table[i].min, table[i].max, &v))
+                return -1;
+            uint32_t u = (uint32_t)v; /* an int's bits too, as v >= 0 */
+            memcpy((char *)base + table[i].offset, &u, sizeof u);
+            return 1;
+        }
+    return 0;
+}
+
 int lie_cli_pick(lie_cli *cli, const lie_cli_choice *choices, int *out)
 {
     char names[256] = "";

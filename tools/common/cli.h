@@ -80,6 +80,16 @@ int lie_cli_next(lie_cli *cli, int argc, char *const argv[], const char *shortop
  * 'VALUE'" is printed, cli->status is 2 and 0 is returned. */
 /* An integer in [min, max]. */
 int lie_cli_long(lie_cli *cli, long min, long max, long *out);
+/* An integer option that sets a 32-bit field (int or uint32_t, values >= 0)
+ * of an options struct: the option, its range, the field's offset. */
+typedef struct lie_cli_int {
+    int code;
+    long min, max;
+    size_t offset;
+} lie_cli_int;
+/* When option c is one of the n of `table`: its value stored in its field
+ * of *base (1), or its usage error (-1); 0 when c is not one of them. */
+int lie_cli_set_int(lie_cli *cli, int c, const lie_cli_int *table, size_t n, void *base);
 /* One of the names of `choices` (ended by a NULL name): its value. */
 typedef struct lie_cli_choice {
     const char *name;

@@ -195,157 +195,191 @@ static int write_frame(const char *name, const lie_scene *s, const char *scene_p
     return lie_atomic_commit(&af, err) == LIE_OK;
 }
 
-int main(int argc, char **argv)
+/* The command line, and what the run loads and makes. */
+typedef struct run {
+    lie_scene_options so;
+    const char *output, *anim_spec, *path_out, *camera_name, *scene_path;
+    double fps;
+    long fa, fb; /* the frames */
+    int have_frames;
+    lie_scene *s;
+    int a, cam;      /* the animation; the camera node of --camera-path */
+    double duration; /* the animation's, in seconds */
+    targets tg;
+    lie_camera_path cp;
+    lie_error err;
+} run;
+
+/* The options: -1 to go on, or the exit status. */
+static int parse_options(run *r, lie_cli *cli, int argc, char **argv)
 {
-    lie_scene_options so = lie_scene_options_default();
-    const char *output = NULL, *anim_spec = NULL, *path_out = NULL, *camera_name = NULL;
-    double fps = 0.0;
-    long fa = 0, fb = -1;
-    int have_frames = 0, c;
-    lie_cli cli = {.tool = prog, .usage = usage, .missing = "missing scene",
-                   .takes = LIE_CLI_OUTPUT | LIE_CLI_EXTERNAL | LIE_CLI_STATS};
-    while ((c = lie_cli_next(&cli, argc, argv, "", long_opts)) > 0) {
+    int c;
+    while ((c = lie_cli_next(cli, argc, argv, "", long_opts)) > 0) {
         switch (c) {
         case OPT_FPS: {
             float f;
             if (!lie_parse_float(optarg, 1e-3f, 1e6f, &f))
                 return usage_error("--fps: expected a number in [0.001, 1e6], got '%s'", optarg);
-            fps = f;
+            r->fps = f;
             break;
         }
-        case OPT_ANIMATION: anim_spec = optarg; break;
+        case OPT_ANIMATION: r->anim_spec = optarg; break;
         case OPT_FRAMES:
-            if (!lie_parse_range(optarg, 0, 999999, &fa, &fb))
+            if (!lie_parse_range(optarg, 0, 999999, &r->fa, &r->fb))
                 return usage_error("--frames: expected A-B with 0 <= A <= B <= 999999, got '%s'", optarg);
-            have_frames = 1;
+            r->have_frames = 1;
             break;
-        case OPT_CAMERA_PATH: path_out = optarg; break;
-        case OPT_CAMERA: camera_name = optarg; break;
+        case OPT_CAMERA_PATH: r->path_out = optarg; break;
+        case OPT_CAMERA: r->camera_name = optarg; break;
         }
     }
     if (c == LIE_CLI_EXIT)
-        return cli.status;
-    so.allow_external_uris = cli.external;
-    output = cli.output;
-    const char *scene_path = cli.operand;
-    if (!output)
+        return cli->status;
+    r->so.allow_external_uris = cli->external;
+    r->output = cli->output;
+    r->scene_path = cli->operand;
+    if (!r->output)
         return usage_error("%s", "missing -o EDITS_%%04d.yaml");
-    if (!lie_frame_pattern_ok(output))
-        return usage_error("-o: expected one %%d conversion (e.g. frame_%%04d.yaml), got '%s'", output);
-    if (fps <= 0.0)
+    if (!lie_frame_pattern_ok(r->output))
+        return usage_error("-o: expected one %%d conversion (e.g. frame_%%04d.yaml), got '%s'", r->output);
+    if (r->fps <= 0.0)
         return usage_error("%s", "missing --fps F");
-    if (camera_name && !path_out)
+    if (r->camera_name && !r->path_out)
         return usage_error("%s", "--camera needs --camera-path");
+    return -1;
+}
 
-    double t0 = lie_time_now();
-    lie_error err;
-    lie_error_clear(&err);
-    lie_scene *s = NULL;
+/* The scene, the animation, its frames and targets. */
+static lie_status load(run *r, int quiet)
+{
+    lie_error *err = &r->err;
+    lie_status st = lie_scene_load(r->scene_path, &r->so, &r->s, err);
+    if (st != LIE_OK)
+        return st;
+    const lie_scene *s = r->s;
+    if (!quiet)
+        lie_print_scene_warnings(prog, s, r->scene_path);
+    if (s->n_animations == 0)
+        return lie_error_set(err, LIE_ERR_NOT_FOUND, r->scene_path, "the scene has no animations");
+    r->a = lie_scene_find_animation(s, r->anim_spec);
+    if (r->a < 0)
+        return lie_error_set(err, LIE_ERR_NOT_FOUND, r->scene_path,
+                             "animation '%s': no animation has this name or index (0..%d)", r->anim_spec,
+                             s->n_animations - 1);
+    const lie_animation *an = &s->animations[r->a];
+    r->duration = (double)an->end - an->start;
+    if (!r->have_frames) {
+        r->fa = 0;
+        r->fb = (long)floor(r->duration * r->fps + 1e-6);
+    }
+    if (r->fb > 999999)
+        return lie_error_set(err, LIE_ERR_LIMIT, r->scene_path, "%ld frames: more than 1000000", r->fb + 1);
+    return pick_targets(s, r->a, quiet, r->scene_path, &r->tg, err);
+}
+
+/* --camera-path: the camera node, and room for a key per frame. */
+static lie_status camera_path_start(run *r)
+{
+    const lie_scene *s = r->s;
+    r->cam = find_camera_node(s, r->camera_name);
+    if (r->cam < 0)
+        return lie_error_set(&r->err, LIE_ERR_NOT_FOUND, r->scene_path,
+                             r->camera_name ? "camera '%s': no camera node has this name"
+                                            : "%sthe default scene has no camera",
+                             r->camera_name ? r->camera_name : "");
+    if (s->camera_defs[s->nodes[r->cam].camera].yfov <= 0.0f)
+        return lie_error_set(&r->err, LIE_ERR_UNSUPPORTED, r->scene_path,
+                             "camera node #%d is orthographic; camera paths hold perspective cameras", r->cam);
+    r->cp.keys = calloc((size_t)(r->fb - r->fa + 1), sizeof *r->cp.keys);
+    if (!r->cp.keys)
+        return lie_error_set(&r->err, LIE_ERR_NOMEM, r->scene_path, "out of memory");
+    return LIE_OK;
+}
+
+/* Every frame's edit file, and the camera's key for --camera-path. */
+static lie_status write_frames(run *r)
+{
     lie_pose *pose = NULL;
-    lie_camera_path cp;
-    memset(&cp, 0, sizeof cp);
-    targets tg;
-    memset(&tg, 0, sizeof tg);
-    int rc = 1, cam = -1;
-    if (lie_scene_load(scene_path, &so, &s, &err) != LIE_OK)
-        goto done;
-    if (!cli.quiet)
-        lie_print_scene_warnings(prog, s, scene_path);
-    if (s->n_animations == 0) {
-        lie_error_set(&err, LIE_ERR_NOT_FOUND, scene_path, "the scene has no animations");
-        goto done;
-    }
-    int a = lie_scene_find_animation(s, anim_spec);
-    if (a < 0) {
-        lie_error_set(&err, LIE_ERR_NOT_FOUND, scene_path, "animation '%s': no animation has this name or index (0..%d)",
-                      anim_spec, s->n_animations - 1);
-        goto done;
-    }
-    const lie_animation *an = &s->animations[a];
-    double duration = (double)an->end - an->start;
-    if (!have_frames) {
-        fa = 0;
-        fb = (long)floor(duration * fps + 1e-6);
-    }
-    if (fb > 999999) {
-        lie_error_set(&err, LIE_ERR_LIMIT, scene_path, "%ld frames: more than 1000000", fb + 1);
-        goto done;
-    }
-    if (pick_targets(s, a, cli.quiet, scene_path, &tg, &err) != LIE_OK)
-        goto done;
-    if (path_out) {
-        cam = find_camera_node(s, camera_name);
-        if (cam < 0) {
-            lie_error_set(&err, LIE_ERR_NOT_FOUND, scene_path, camera_name ? "camera '%s': no camera node has this name"
-                                                                          : "%sthe default scene has no camera",
-                          camera_name ? camera_name : "");
-            goto done;
-        }
-        if (s->camera_defs[s->nodes[cam].camera].yfov <= 0.0f) {
-            lie_error_set(&err, LIE_ERR_UNSUPPORTED, scene_path,
-                          "camera node #%d is orthographic; camera paths hold perspective cameras", cam);
-            goto done;
-        }
-        cp.keys = calloc((size_t)(fb - fa + 1), sizeof *cp.keys);
-        if (!cp.keys) {
-            lie_error_set(&err, LIE_ERR_NOMEM, scene_path, "out of memory");
-            goto done;
-        }
-    }
-    for (long f = fa; f <= fb; f++) {
-        double t = (double)f / fps;
+    lie_status st = LIE_OK;
+    for (long f = r->fa; st == LIE_OK && f <= r->fb; f++) {
+        double t = (double)f / r->fps;
         lie_pose_destroy(pose);
         pose = NULL;
-        if (lie_animation_pose(s, a, t, &pose, &err) != LIE_OK)
-            goto done;
+        if ((st = lie_animation_pose(r->s, r->a, t, &pose, &r->err)) != LIE_OK)
+            break;
         char name[4096];
-        if (snprintf(name, sizeof name, output, (int)f) >= (int)sizeof name) {
-            lie_error_set(&err, LIE_ERR_ARG, output, "output name too long");
-            goto done;
+        if (snprintf(name, sizeof name, r->output, (int)f) >= (int)sizeof name) {
+            st = lie_error_set(&r->err, LIE_ERR_ARG, r->output, "output name too long");
+            break;
         }
-        if (!write_frame(name, s, scene_path, a, f, t, pose, &tg, &err))
-            goto done;
-        if (path_out) {
+        if (!write_frame(name, r->s, r->scene_path, r->a, f, t, pose, &r->tg, &r->err)) {
+            st = r->err.status != LIE_OK ? r->err.status : LIE_ERR_IO;
+            break;
+        }
+        if (r->path_out) {
             /* pose the document's locals (the animated nodes only), then read the camera */
-            for (int k = 0; k < tg.n_trs; k++)
-                s->nodes[tg.trs_nodes[k]].local = lie_node_trs_matrix(pose->trs + 10 * (size_t)tg.trs_nodes[k]);
-            cp.keys[cp.n_keys++] = camera_key(s, cam);
+            for (int k = 0; k < r->tg.n_trs; k++)
+                r->s->nodes[r->tg.trs_nodes[k]].local =
+                    lie_node_trs_matrix(pose->trs + 10 * (size_t)r->tg.trs_nodes[k]);
+            r->cp.keys[r->cp.n_keys++] = camera_key(r->s, r->cam);
         }
     }
-    if (path_out) {
-        cp.smooth = 0; /* one key per frame: frame i is key i exactly */
-        cp.first = (int)fa;
-        cp.n_frames = cp.n_keys;
-        if (lie_camera_path_write(&cp, path_out, &err) != LIE_OK)
-            goto done;
-    }
-    rc = 0;
-    if (cli.stats) {
-        double secs = lie_time_now() - t0;
-        long frames = fb - fa + 1;
-        if (cli.stats == 2) {
-            fprintf(stderr, "{\"tool\":\"lie-animate\",\"animation\":%d,\"frames\":%ld,\"first\":%ld,\"fps\":%.9g,"
-                            "\"duration\":%.9g,\"channels\":%d,\"transforms\":%d,\"weights\":%d,\"outside_scene\":%d,"
-                            "\"inert\":%d,\"camera_path\":%d,\"seconds\":%.6f}\n",
-                    a, frames, fa, fps, duration, an->n_channels, tg.n_trs, tg.n_w, tg.outside, tg.inert,
-                    path_out != NULL, secs);
-        } else {
-            fprintf(stderr,
-                    "%s: %s: animation %d, %d channels, %.3f s at %g fps: frames %ld-%ld\n"
-                    "  per frame: %d set-transform, %d set-weights; %d nodes outside the default scene, %d whose "
-                    "transform moves nothing%s\n"
-                    "  time: %.3f s\n",
-                    prog, scene_path, a, an->n_channels, duration, fps, fa, fb, tg.n_trs, tg.n_w, tg.outside,
-                    tg.inert, path_out ? "; camera path written" : "", secs);
-        }
-    }
-done:
-    if (rc)
-        lie_report_error(prog, &err, 1);
-    free(cp.keys);
-    free(tg.trs_nodes);
-    free(tg.w_nodes);
     lie_pose_destroy(pose);
-    lie_scene_destroy(s);
+    return st;
+}
+
+static void print_stats(const run *r, double secs, int json)
+{
+    const targets *tg = &r->tg;
+    int channels = r->s->animations[r->a].n_channels;
+    long frames = r->fb - r->fa + 1;
+    if (json)
+        fprintf(stderr, "{\"tool\":\"lie-animate\",\"animation\":%d,\"frames\":%ld,\"first\":%ld,\"fps\":%.9g,"
+                        "\"duration\":%.9g,\"channels\":%d,\"transforms\":%d,\"weights\":%d,\"outside_scene\":%d,"
+                        "\"inert\":%d,\"camera_path\":%d,\"seconds\":%.6f}\n",
+                r->a, frames, r->fa, r->fps, r->duration, channels, tg->n_trs, tg->n_w, tg->outside, tg->inert,
+                r->path_out != NULL, secs);
+    else
+        fprintf(stderr,
+                "%s: %s: animation %d, %d channels, %.3f s at %g fps: frames %ld-%ld\n"
+                "  per frame: %d set-transform, %d set-weights; %d nodes outside the default scene, %d whose "
+                "transform moves nothing%s\n"
+                "  time: %.3f s\n",
+                prog, r->scene_path, r->a, channels, r->duration, r->fps, r->fa, r->fb, tg->n_trs, tg->n_w,
+                tg->outside, tg->inert, r->path_out ? "; camera path written" : "", secs);
+}
+
+int main(int argc, char **argv)
+{
+    run r;
+    memset(&r, 0, sizeof r);
+    r.so = lie_scene_options_default();
+    r.fb = -1;
+    r.cam = -1;
+    lie_error_clear(&r.err);
+    lie_cli cli = {.tool = prog, .usage = usage, .missing = "missing scene",
+                   .takes = LIE_CLI_OUTPUT | LIE_CLI_EXTERNAL | LIE_CLI_STATS};
+    int rc = parse_options(&r, &cli, argc, argv);
+    if (rc >= 0)
+        return rc;
+    double t0 = lie_time_now();
+    lie_status st = load(&r, cli.quiet);
+    if (st == LIE_OK && r.path_out)
+        st = camera_path_start(&r);
+    if (st == LIE_OK)
+        st = write_frames(&r);
+    if (st == LIE_OK && r.path_out) {
+        r.cp.smooth = 0; /* one key per frame: frame i is key i exactly */
+        r.cp.first = (int)r.fa;
+        r.cp.n_frames = r.cp.n_keys;
+        st = lie_camera_path_write(&r.cp, r.path_out, &r.err);
+    }
+    if (st == LIE_OK && cli.stats)
+        print_stats(&r, lie_time_now() - t0, cli.stats == 2);
+    rc = st == LIE_OK ? 0 : lie_report_error(prog, &r.err, 1);
+    free(r.cp.keys);
+    free(r.tg.trs_nodes);
+    free(r.tg.w_nodes);
+    lie_scene_destroy(r.s);
     return rc;
 }

@@ -60,6 +60,8 @@ static void usage(FILE *fp)
             "      --light-samples N shadow rays per pixel and emitter in them (default %u)\n"
             "      --cost S,B,R      ns per build segment, per blocker test, per Embree shadow\n"
             "                        ray (default %g,%g,%g; make bench-build measures them)\n"
+            "      --emitter-clusters K  split each large area emitter into up to K clusters\n"
+            "                        in space (default 1; README, \"Emitters of many triangles\")\n"
             "      --threads N       worker threads (default: all cores); the cache is the\n"
             "                        same for any N\n"
             "      --edit EDIT.yaml  apply these edits (formats/edit.md; repeatable, in order)\n"
@@ -96,7 +98,7 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 enum {
     OPT_SAMPLES = 256, OPT_MAX_SAMPLES, OPT_MAX_BLOCKERS, OPT_MIN_PATCH, OPT_SPLIT_GAIN, OPT_COMPLEX_CAP, OPT_BLOCKERS,
     OPT_VIEW, OPT_VIEW_SIZE, OPT_PATH, OPT_MAX_NODES,
-    OPT_INTO, OPT_FRAMES, OPT_LIGHT_SAMPLES, OPT_COST, OPT_PARTIAL, OPT_RESUME, OPT_EDIT
+    OPT_INTO, OPT_FRAMES, OPT_LIGHT_SAMPLES, OPT_COST, OPT_PARTIAL, OPT_RESUME, OPT_EDIT, OPT_CLUSTERS
 };
 
 static const struct option long_opts[] = {
@@ -118,6 +120,7 @@ static const struct option long_opts[] = {
     {"frames", required_argument, NULL, OPT_FRAMES},
     {"light-samples", required_argument, NULL, OPT_LIGHT_SAMPLES},
     {"cost", required_argument, NULL, OPT_COST},
+    {"emitter-clusters", required_argument, NULL, OPT_CLUSTERS},
     {NULL, 0, NULL, 0},
 };
 
@@ -141,12 +144,7 @@ static int build_param(lie_cli *cli, int c, lie_build_params *bp)
 {
     static const lie_cli_choice modes[] = {
         {"sampled", LIE_BLOCKERS_SAMPLED}, {"conservative", LIE_BLOCKERS_CONSERVATIVE}, {NULL, 0}};
-    /* the integer parameters: option, range, field */
-    static const struct {
-        int code;
-        long min, max;
-        size_t offset;
-    } ints[] = {
+    static const lie_cli_int ints[] = {
         {OPT_SAMPLES, 1, 1 << 20, offsetof(lie_build_params, samples)},
         {OPT_MAX_SAMPLES, 1, 1 << 24, offsetof(lie_build_params, max_samples)},
         {OPT_MAX_BLOCKERS, 0, 1 << 20, offsetof(lie_build_params, max_blockers)},
@@ -154,15 +152,9 @@ static int build_param(lie_cli *cli, int c, lie_build_params *bp)
         {OPT_FRAMES, 0, 1 << 24, offsetof(lie_build_params, frames)},
         {OPT_LIGHT_SAMPLES, 1, 1 << 24, offsetof(lie_build_params, light_samples)},
     };
-    long v;
-    int mode;
-    for (size_t i = 0; i < sizeof ints / sizeof ints[0]; i++)
-        if (ints[i].code == c) {
-            if (!lie_cli_long(cli, ints[i].min, ints[i].max, &v))
-                return -1;
-            *(uint32_t *)((char *)bp + ints[i].offset) = (uint32_t)v;
-            return 1;
-        }
+    int mode, taken = lie_cli_set_int(cli, c, ints, sizeof ints / sizeof ints[0], bp);
+    if (taken)
+        return taken;
     switch (c) {
     case OPT_MIN_PATCH:
         if (lie_parse_float(optarg, LIE_MIN_PATCH_MIN, 1.0f, &bp->min_patch))
@@ -211,6 +203,11 @@ static int parse_options(build_job *j, lie_cli *cli, int argc, char **argv)
             if (j->n_views == JOB_MAX_VIEWS)
                 return usage_error("--view: at most 64 views, got another: '%s'", optarg);
             j->views[j->n_views++] = optarg;
+            break;
+        case OPT_CLUSTERS:
+            if (!lie_cli_long(cli, 1, LIE_CLUSTER_MAX, &v))
+                return cli->status;
+            j->so.emitter_clusters = (int)v;
             break;
         case OPT_PATH: j->path_file = optarg; break;
         case OPT_INTO: j->into = optarg; break;

@@ -6,6 +6,7 @@
 #include "common/cli.h"
 #include "dist.h"
 #include "lie.h"
+#include "output.h"
 
 #include <getopt.h>
 #include <stdlib.h>
@@ -90,10 +91,6 @@ static void usage(FILE *fp)
             prog, d.width, d.height, d.spp, d.light_samples, d.max_depth);
 }
 
-static const char *exact_name(const lie_render_options *o)
-{
-    return o->exact == LIE_EXACT_ONLY ? "only" : o->exact == LIE_EXACT_OFF ? "off" : "auto";
-}
 
 #define usage_error(...) lie_usage_error(prog, __VA_ARGS__)
 
@@ -260,399 +257,317 @@ static lie_status load_input(void *ctx, const lie_scene_options *so, lie_error *
     return st;
 }
 
-static const char *vis_name(lie_visibility_mode m)
-{
-    return m == LIE_VIS_FULL ? "full" : m == LIE_VIS_LIE ? "lie" : "none";
-}
-static const char *rays_name(lie_ray_mode m)
-{
-    return m == LIE_RAYS_SINGLE ? "single" : m == LIE_RAYS_PACKET ? "packet" : "stream";
-}
+/* The command line. */
+typedef struct args {
+    lie_render_options ro;
+    lie_scene_options so;
+    lie_frame_options fopt;
+    const char *input, *output, *camera, *scene_override, *path_file;
+    long frame_a, frame_b; /* --frames, or -1 */
+    int skip_existing, visibility_set;
+} args;
 
-/* What every frame's file is written with. */
-typedef struct frame_out {
-    const char *output, *input, *hash;
-    const lie_render_options *ro;
-    int path;
-    lie_frame_options opt; /* the attributes are set per frame */
-    int first; /* the number of the path's frame 0 */
-} frame_out;
-
-static lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame, lie_error *err)
+/* A render option of the command line, not a mode (pick_mode): 1 when it
+ * took it, 0 when c is not one, -1 after its usage error (cli->status). */
+static int render_option(lie_cli *cli, int c, lie_render_options *ro)
 {
-    const frame_out *o = ctx;
-    const lie_render_options *ro = o->ro;
-    char name[4096];
-    int number = o->first + fi;
-    if (o->path)
-        snprintf(name, sizeof name, o->output, number);
-    else
-        snprintf(name, sizeof name, "%s", o->output);
-    float yfov_deg = fc->yfov * 180.0f / (float)M_PI;
-    lie_attr attrs[] = {
-        {.name = "software", .type = LIE_ATTR_STRING, .s = "lie-render " LIE_VERSION},
-        {.name = "lie.input", .type = LIE_ATTR_STRING, .s = o->input},
-        {.name = "lie.sceneHash", .type = LIE_ATTR_STRING, .s = o->hash},
-        {.name = "lie.visibility", .type = LIE_ATTR_STRING, .s = vis_name(ro->visibility)},
-        {.name = "lie.pattern", .type = LIE_ATTR_STRING, .s = ro->pattern == LIE_PATTERN_FIXED ? "fixed" : "rotated"},
-        {.name = "lie.lightSamples", .type = LIE_ATTR_INT, .i = ro->eye_only ? 0 : ro->light_samples},
-        {.name = "lie.spp", .type = LIE_ATTR_INT, .i = ro->spp},
-        {.name = "lie.maxDepth", .type = LIE_ATTR_INT, .i = ro->max_depth},
-        {.name = "lie.frame", .type = LIE_ATTR_INT, .i = number},
-        {.name = "lie.cameraEye", .type = LIE_ATTR_V3F, .v = {fc->eye.x, fc->eye.y, fc->eye.z}},
-        {.name = "lie.cameraForward", .type = LIE_ATTR_V3F, .v = {fc->forward.x, fc->forward.y, fc->forward.z}},
-        {.name = "lie.cameraUp", .type = LIE_ATTR_V3F, .v = {fc->up.x, fc->up.y, fc->up.z}},
-        {.name = "lie.cameraYFovDegrees", .type = LIE_ATTR_FLOAT, .f = yfov_deg},
-        /* orthographic views: their height in world units (0: perspective) */
-        {.name = "lie.cameraOrthoHeight", .type = LIE_ATTR_FLOAT, .f = 2.0f * fc->ymag},
-        /* OpenEXR's standard camera attributes (lie_view_exr_make) */
-        {.name = "worldToCamera", .type = LIE_ATTR_M44F},
-        {.name = "worldToNDC", .type = LIE_ATTR_M44F},
+    static const lie_cli_int ints[] = {
+        {OPT_SPP, 1, 65536, offsetof(lie_render_options, spp)},
+        {OPT_MAX_DEPTH, 0, 64, offsetof(lie_render_options, max_depth)},
     };
-    const int n_base = (int)(sizeof attrs / sizeof attrs[0]) - 2;
-    lie_frame_options opt = o->opt;
-    lie_view view = lie_view_make(fc, ro->width, ro->height);
-    lie_view_exr ve = lie_view_exr_make(&view);
-    memcpy(attrs[n_base].v, ve.world_to_camera, sizeof ve.world_to_camera);
-    memcpy(attrs[n_base + 1].v, ve.world_to_ndc, sizeof ve.world_to_ndc);
-    opt.exr.screen_window_center[0] = ve.screen_window_center[0];
-    opt.exr.screen_window_center[1] = ve.screen_window_center[1];
-    opt.exr.screen_window_width = ve.screen_window_width;
-    opt.exr.attrs = attrs;
-    opt.exr.n_attrs = (int)(sizeof attrs / sizeof attrs[0]);
-    return lie_frame_write(name, frame, &opt, err);
+    _Static_assert(sizeof ro->spp == 4 && sizeof ro->max_depth == 4, "32-bit fields");
+    long v;
+    int taken = lie_cli_set_int(cli, c, ints, sizeof ints / sizeof ints[0], ro);
+    if (taken)
+        return taken;
+    switch (c) {
+    case OPT_SIZE:
+        if (lie_parse_size(optarg, 65536, &ro->width, &ro->height))
+            return 1;
+        cli->status = usage_error("--size: expected WxH, got '%s'", optarg);
+        return -1;
+    case OPT_LIGHT_SAMPLES:
+        if (strcmp(optarg, "exact") == 0) {
+            ro->exact = LIE_EXACT_ONLY;
+            ro->light_samples = LIE_LIGHT_SAMPLES_DEFAULT;
+            return 1;
+        }
+        if (!lie_parse_long(optarg, 0, 1000000, &v)) {
+            cli->status = usage_error("--light-samples: expected an integer in 0..1000000 or exact, got '%s'", optarg);
+            return -1;
+        }
+        ro->light_samples = (int)v;
+        if (ro->exact == LIE_EXACT_ONLY)
+            ro->exact = LIE_EXACT_AUTO;
+        return 1;
+    case OPT_TIMERS: ro->timers = 1; return 1;
+    case OPT_AOV:
+        if (parse_aovs(optarg, &ro->aovs))
+            return 1;
+        cli->status = usage_error("--aov: expected a list of albedo, normal, depth, complexity, patch, got '%s'", optarg);
+        return -1;
+    case OPT_EMITTER:
+        if (!lie_parse_long(optarg, 0, 1 << 30, &v)) {
+            cli->status = usage_error("--emitter: expected an emitter index, got '%s'", optarg);
+            return -1;
+        }
+        ro->aov_emitter = (int)v;
+        return 1;
+    default: return 0;
+    }
 }
 
-/* What --stats prints: times are load, bvh, render and write seconds. */
-typedef struct run_stats {
-    const char *input;
-    int rendered, skipped;
-    double t_load, t_bvh, t_render, t_write;
-} run_stats;
-
-static void print_stats(int json, const run_stats *r, const lie_scene *scene, const lie_render_options *ro,
-                        const lie_render_stats *rs)
+/* The options: -1 to go on, or the exit status. */
+static int parse_options(args *a, lie_cli *cli, int argc, char **argv)
 {
-    const char *input = r->input;
-    int rendered = r->rendered, skipped = r->skipped;
-    int threads = ro->threads > 0 ? ro->threads : lie_cpu_count();
-    char size[32];
-    snprintf(size, sizeof size, "%dx%d", ro->width, ro->height);
-    /* pairs by path: occluded, closed form, exact, blockers, Embree, unshadowed, exact overflows, bitmasks */
-    const unsigned long long pairs[8] = {rs->pairs_occluded, rs->pairs_analytic,  rs->pairs_exact,
-                                         rs->pairs_blockers, rs->pairs_embree,    rs->pairs_unshadowed,
-                                         rs->exact_overflows, rs->pairs_bitmask};
-    double render = r->t_render;
-    double mrays = render > 0.0 ? (double)rs->shadow_rays / render * 1e-6 : 0.0;
-    if (json) {
-        fprintf(stderr, "{\"tool\":\"lie-render\",\"input\":");
-        lie_json_string(stderr, input);
-        fprintf(stderr,
-                ",\"frames\":%d,\"frames_skipped\":%d,\"triangles\":%u,\"emitters\":%d,"
-                "\"width\":%d,\"height\":%d,\"spp\":%d,\"light_samples\":%d,\"visibility\":\"%s\","
-                "\"rays\":\"%s\",\"threads\":%d,\"eye_rays\":%llu,\"reflection_rays\":%llu,"
-                "\"shadow_rays\":%llu,\"shading_points\":%llu,\"seconds_load\":%.6f,"
-                "\"seconds_bvh\":%.6f,\"seconds_render\":%.6f,\"seconds_write\":%.6f,"
-                "\"shadow_mrays_per_second\":%.3f,\"shadow_tests_without_embree\":%llu,"
-                "\"light_samples_total\":%llu,",
-                rendered, skipped, scene->n_tris, scene->n_emitters, ro->width, ro->height, ro->spp,
-                ro->eye_only ? 0 : ro->light_samples, vis_name(ro->visibility), rays_name(ro->rays), threads,
-                (unsigned long long)rs->eye_rays, (unsigned long long)rs->reflection_rays,
-                (unsigned long long)rs->shadow_rays, (unsigned long long)rs->shading_points, r->t_load,
-                r->t_bvh, render, r->t_write, mrays, (unsigned long long)rs->shadow_rays_skipped,
-                (unsigned long long)rs->light_samples);
-        fprintf(stderr,
-                "\"exact\":\"%s\",\"pairs_occluded\":%llu,\"pairs_analytic\":%llu,\"pairs_exact\":%llu,"
-                "\"pairs_blockers\":%llu,\"pairs_embree\":%llu,\"pairs_unshadowed\":%llu,"
-                "\"exact_overflows\":%llu,\"pairs_unbuilt\":%llu,\"points_unbuilt\":%llu,"
-                "\"timers\":%s,\"cpu_seconds_analytic\":%.6f,"
-                "\"cpu_seconds_exact\":%.6f,\"cpu_seconds_blockers\":%.6f,\"cpu_seconds_embree\":%.6f,"
-                "\"cpu_seconds_sampled_shading\":%.6f,\"pairs_bitmask\":%llu,\"cpu_seconds_bitmask\":%.6f,"
-                "\"pairs_silhouette\":%llu,\"cpu_seconds_silhouette\":%.6f",
-                exact_name(ro), pairs[0], pairs[1], pairs[2], pairs[3], pairs[4], pairs[5], pairs[6],
-                (unsigned long long)rs->pairs_unbuilt, (unsigned long long)rs->points_unbuilt,
-                ro->timers ? "true" : "false", rs->t_analytic,
-                rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, pairs[7], rs->t_bitmask,
-                (unsigned long long)rs->pairs_silhouette, rs->t_silhouette);
-        render_dist_stats(stderr, 1);
-        fprintf(stderr, "}\n");
-    } else {
-        fprintf(stderr,
-                "%s: %s: %u triangles, %d emitters, %d points and %d lines skipped\n"
-                "  image %s, %d spp, %d light samples, visibility %s, rays %s, %d threads\n"
-                "  %d frame%s (%d skipped: their files exist); rays: %llu eye, %llu reflection, %llu shadow (Embree); %llu light samples\n"
-                "  answered without Embree: %llu (visible pairs, blocker lists, or no shadows)\n"
-                "  time: load %.3f s, bvh %.3f s, render %.3f s, write %.3f s\n"
-                "  %.1f million Embree shadow rays per second of render time\n",
-                prog, input, scene->n_tris, scene->n_emitters, scene->stats.points_skipped,
-                scene->stats.lines_skipped, size, ro->spp, ro->eye_only ? 0 : ro->light_samples,
-                vis_name(ro->visibility), rays_name(ro->rays), threads, rendered, rendered == 1 ? "" : "s", skipped,
-                (unsigned long long)rs->eye_rays, (unsigned long long)rs->reflection_rays,
-                (unsigned long long)rs->shadow_rays, (unsigned long long)rs->light_samples,
-                (unsigned long long)rs->shadow_rays_skipped, r->t_load, r->t_bvh, render, r->t_write, mrays);
-        fprintf(stderr,
-                "  pairs (exact %s): %llu occluded, %llu seen whole in closed form, %llu partial exact,\n"
-                "    %llu partial sampled against blockers, %llu sampled against the scene (Embree),\n"
-                "    %llu seen whole and sampled, %llu partial as bitmasks (and %llu through silhouettes);\n"
-                "    %llu exact pairs fell back to samples\n",
-                exact_name(ro), pairs[0], pairs[1], pairs[2], pairs[3], pairs[4], pairs[5], pairs[7],
-                (unsigned long long)rs->pairs_silhouette, pairs[6]);
-        if (rs->pairs_unbuilt)
-            fprintf(stderr, "  not built in the cache (lie-build --view/--path): %llu pairs at %llu shading points, "
-                            "answered by Embree\n",
-                    (unsigned long long)rs->pairs_unbuilt, (unsigned long long)rs->points_unbuilt);
-        if (ro->timers)
-            fprintf(stderr,
-                    "  worker seconds: closed form %.3f, exact shadows %.3f, blocker samples %.3f,\n"
-                    "    Embree %.3f, sampled shading %.3f, bitmasks %.3f, silhouettes %.3f\n",
-                    rs->t_analytic, rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, rs->t_bitmask,
-                    rs->t_silhouette);
-        render_dist_stats(stderr, 0);
+    int c, taken;
+    while ((c = lie_cli_next(cli, argc, argv, "", long_opts)) > 0) {
+        if ((taken = pick_mode(cli, c, &a->ro)) != 0 || (taken = render_option(cli, c, &a->ro)) != 0) {
+            if (taken < 0)
+                return cli->status;
+            a->visibility_set |= c == OPT_VISIBILITY;
+            continue;
+        }
+        switch (c) {
+        case OPT_CAMERA: a->camera = optarg; break;
+        case OPT_FORMAT:
+            if (!lie_frame_format_parse(optarg, &a->fopt.format))
+                return usage_error("--format: expected exr or png, got '%s'", optarg);
+            break;
+        case OPT_HALF: a->fopt.exr.half = 1; break;
+        case OPT_COMPRESSION:
+            if (!lie_exr_compression_parse(optarg, &a->fopt.exr.compression))
+                return usage_error("--compression: expected zip, zips, piz, rle or none, got '%s'", optarg);
+            break;
+        case OPT_EXPOSURE:
+            if (!lie_parse_float(optarg, -64.0f, 64.0f, &a->fopt.png.exposure))
+                return usage_error("--exposure: expected a number of stops, got '%s'", optarg);
+            break;
+        case OPT_SCENE: a->scene_override = optarg; break;
+        case OPT_PATH: a->path_file = optarg; break;
+        case OPT_FRAMES:
+            if (!lie_parse_range(optarg, 0, 999999, &a->frame_a, &a->frame_b))
+                return usage_error("--frames: expected A-B with 0 <= A <= B <= 999999, got '%s'", optarg);
+            break;
+        case OPT_SKIP_EXISTING: a->skip_existing = 1; break;
+        }
     }
+    if (c == LIE_CLI_EXIT)
+        return cli->status;
+    a->so.allow_external_uris = cli->external;
+    a->ro.threads = cli->threads;
+    a->fopt.exr.threads = a->ro.threads;
+    a->output = cli->output;
+    a->input = cli->operand;
+    return -1;
+}
+
+/* The output and the options that go together: -1 to go on, or the exit
+ * status. */
+static int check_args(args *a)
+{
+    if (!a->output)
+        return usage_error("%s", "missing -o OUTPUT");
+    lie_frame_format out_format;
+    if (a->fopt.format == LIE_FORMAT_AUTO && !lie_frame_format_of(a->output, &out_format))
+        return usage_error("%s: cannot write this format: use .exr or .png (or --format exr|png)", a->output);
+    if (a->path_file && !lie_frame_pattern_ok(a->output))
+        return usage_error("--path: -o must hold one %%d conversion (e.g. frame_%%04d.exr), got '%s'", a->output);
+    if (a->path_file && a->camera)
+        return usage_error("%s", "--path and --camera exclude each other");
+    if (a->frame_a >= 0 && !a->path_file)
+        return usage_error("%s", "--frames needs --path");
+    if (a->ro.light_samples == 0) {
+        a->ro.eye_only = 1;
+        a->ro.light_samples = 1;
+    }
+    return -1;
+}
+
+/* What a run loads and makes. */
+typedef struct run {
+    lie_scene *scene;
+    lie_cache *cache;
+    lie_camera_path *cpath;
+    lie_lie_vis *lv;
+    lie_rt *rt;
+    lie_camera cam; /* without --path */
+    lie_error err;
+} run;
+
+static void run_free(run *r)
+{
+    lie_camera_path_destroy(r->cpath);
+    lie_rt_destroy(r->rt);
+    lie_lie_vis_destroy(r->lv);
+    lie_cache_destroy(r->cache);
+    lie_scene_destroy(r->scene);
+}
+
+/* After the load: the oracle, the warnings, --emitter and the camera
+ * checked against the scene. */
+static lie_status prepare(args *a, run *r, int quiet)
+{
+    lie_render_options *ro = &a->ro;
+    lie_status st = LIE_OK;
+    if (r->cache && (st = lie_lie_vis_create(r->scene, r->cache->env, &r->lv, &r->err)) != LIE_OK)
+        return st;
+    ro->oracle = r->lv ? lie_lie_vis_oracle(r->lv) : NULL;
+    if (!quiet)
+        lie_print_scene_warnings(prog, r->scene, a->input);
+    if (r->scene->n_emitters == 0 && !quiet)
+        fprintf(stderr, "%s: %s: warning: no emitters (no emissive material, no KHR_lights_punctual light): "
+                        "the image shows emission only\n", prog, a->input);
+    if (ro->aov_emitter >= r->scene->n_emitters)
+        return lie_error_set(&r->err, LIE_ERR_ARG, a->input, "--emitter %d: the scene has %d emitters",
+                             ro->aov_emitter, r->scene->n_emitters);
+    st = a->path_file ? LIE_OK : lie_camera_parse(r->scene, a->camera, &r->cam, &r->err);
+    if (st != LIE_OK && !r->err.file[0])
+        snprintf(r->err.file, sizeof r->err.file, "%s", a->input);
+    return st;
+}
+
+/* The frames to render (indices into the path, or 0 alone): --frames, and
+ * --skip-existing's files as rank 0 sees them.  *todo is the caller's. */
+static lie_status plan_frames(const args *a, const run *r, int **todo, int *n_todo, int *skipped, lie_error *err)
+{
+    int n_frames = r->cpath ? r->cpath->n_frames : 1, first = r->cpath ? r->cpath->first : 0;
+    if (r->cpath && a->frame_a >= 0 && (a->frame_a < first || a->frame_b > (long)first + n_frames - 1))
+        return lie_error_set(err, LIE_ERR_ARG, a->path_file, "--frames %ld-%ld: the path has frames %d-%d",
+                             a->frame_a, a->frame_b, first, first + n_frames - 1);
+    *n_todo = *skipped = 0;
+    *todo = malloc(sizeof **todo * ((size_t)n_frames + 1));
+    if (!*todo)
+        return lie_error_set(err, LIE_ERR_NOMEM, a->input, "out of memory");
+    for (int fi = 0; fi < n_frames; fi++) {
+        int number = first + fi;
+        if (a->frame_a >= 0 && (number < a->frame_a || number > a->frame_b))
+            continue;
+        char name[4096];
+        if (r->cpath)
+            snprintf(name, sizeof name, a->output, number);
+        else
+            snprintf(name, sizeof name, "%s", a->output);
+        struct stat sb;
+        if (a->skip_existing && strcmp(name, "-") != 0 && stat(name, &sb) == 0) {
+            (*skipped)++; /* a resumed run: the frame was written (atomically) before */
+            continue;
+        }
+        (*todo)[(*n_todo)++] = fi;
+    }
+    return LIE_OK;
+}
+
+/* One process's frames, rendered and written in order; -v's phases. */
+static lie_status render_here(args *a, run *r, frame_out *fo, const int *todo, int n_todo, int verbose,
+                              lie_render_stats *rs, double *t_render, double *t_write, int *rendered)
+{
+    lie_render_options *ro = &a->ro;
+    lie_status st = LIE_OK;
+    for (int k = 0; k < n_todo && st == LIE_OK; k++) {
+        int fi = todo[k];
+        lie_camera fc = r->cpath ? lie_camera_path_frame(r->cpath, fi) : r->cam;
+        (*rendered)++;
+        double ta = lie_time_now();
+        lie_frame *frame = NULL;
+        lie_render_stats fs;
+        char label[64];
+        if (r->cpath) {
+            snprintf(label, sizeof label, "frame %d/%d", k + 1, n_todo);
+            ro->progress_label = label;
+        }
+        st = lie_render(r->scene, r->rt, &fc, ro, &frame, &fs, &r->err);
+        ro->progress_label = NULL;
+        if (st != LIE_OK)
+            break;
+        double tb = lie_time_now();
+        lie_render_stats_add(rs, &fs);
+        if (r->cpath)
+            snprintf(label, sizeof label, "frame %d: render", fo->first + fi);
+        lie_phase(prog, verbose, r->cpath ? label : "render", ta);
+        st = write_frame(fo, fi, &fc, frame, &r->err);
+        lie_frame_destroy(frame);
+        if (r->cpath)
+            snprintf(label, sizeof label, "frame %d: write", fo->first + fi);
+        lie_phase(prog, verbose && st == LIE_OK, r->cpath ? label : "write", tb);
+        *t_render += tb - ta;
+        *t_write += lie_time_now() - tb;
+    }
+    return st;
+}
+
+/* Load, bvh, then every frame, shared out under mpirun: LIE_OK, or an
+ * error in r->err; 2 after a usage error found once the input is known. */
+static int render_all(args *a, run *r, const lie_cli *cli)
+{
+    lie_render_options *ro = &a->ro;
+    double t0 = lie_time_now();
+    inputs in = {a->input, a->scene_override, a->path_file, NULL, NULL, NULL};
+    lie_status st = lie_dist_load(&a->so, load_input, &in, &r->err);
+    r->scene = in.scene;
+    r->cache = in.cache;
+    r->cpath = in.cpath;
+    if (st != LIE_OK)
+        return st;
+    double t1 = lie_phase(prog, cli->verbose, "load", t0);
+    if (!a->visibility_set)
+        ro->visibility = r->cache ? LIE_VIS_LIE : LIE_VIS_FULL;
+    if (!r->cache && (ro->visibility == LIE_VIS_LIE || (ro->aovs & (LIE_AOV_COMPLEXITY | LIE_AOV_PATCH))))
+        return usage_error("%s: --visibility=lie and the complexity and patch layers need a cache", a->input);
+    if ((st = prepare(a, r, cli->quiet)) != LIE_OK || (st = lie_rt_create(r->scene, &r->rt, &r->err)) != LIE_OK ||
+        (st = lie_dist_check(r->scene->hash, r->cache ? r->cache->state_hash : 0, &r->err)) != LIE_OK)
+        return st;
+    double t2 = lie_phase(prog, cli->verbose, "bvh", t1);
+    char hash[32];
+    snprintf(hash, sizeof hash, "%016llx", (unsigned long long)r->scene->hash);
+    int *todo = NULL, n_todo = 0, rendered = 0, skipped = 0;
+    if ((st = plan_frames(a, r, &todo, &n_todo, &skipped, &r->err)) != LIE_OK)
+        return st;
+    lie_render_stats rs;
+    memset(&rs, 0, sizeof rs);
+    double t_render = 0.0, t_write = 0.0;
+    frame_out fo = {a->output, a->input, hash, ro, r->cpath != NULL, a->fopt, r->cpath ? r->cpath->first : 0};
+    if (lie_dist_size() > 1) {
+        lie_dist_bcast(&n_todo, sizeof n_todo);
+        lie_dist_bcast(todo, sizeof *todo * (size_t)n_todo);
+        double ta = lie_time_now();
+        st = render_dist(r->scene, r->rt, ro, r->cpath, &r->cam, todo, n_todo, write_frame, &fo, &rs, &t_write,
+                         &r->err);
+        t_render = lie_time_now() - ta - t_write;
+        rendered = n_todo;
+    } else {
+        st = render_here(a, r, &fo, todo, n_todo, cli->verbose, &rs, &t_render, &t_write, &rendered);
+    }
+    free(todo);
+    if (st == LIE_OK && cli->stats) {
+        run_stats rst = {a->input, rendered, skipped, t1 - t0, t2 - t1, t_render, t_write};
+        print_stats(prog, cli->stats == 2, &rst, r->scene, ro, &rs);
+    }
+    return st;
 }
 
 int main(int argc, char **argv)
 {
-    lie_render_options ro = lie_render_options_default();
-    lie_scene_options so = lie_scene_options_default();
-    const char *output = NULL, *camera = NULL, *scene_override = NULL, *path_file = NULL;
-    long frame_a = -1, frame_b = -1;
-    int skip_existing = 0;
-    int visibility_set = 0;
-    lie_frame_options fopt = {0};
-    long v;
-    int c;
+    args a = {.ro = lie_render_options_default(), .so = lie_scene_options_default(), .frame_a = -1, .frame_b = -1};
     lie_cli cli = {.tool = prog, .usage = usage, .missing = "missing input scene",
                    .takes = LIE_CLI_OUTPUT | LIE_CLI_THREADS | LIE_CLI_EXTERNAL | LIE_CLI_STATS | LIE_CLI_VERBOSE};
-    int taken;
-    while ((c = lie_cli_next(&cli, argc, argv, "", long_opts)) > 0) {
-        if ((taken = pick_mode(&cli, c, &ro)) != 0) {
-            if (taken < 0)
-                return cli.status;
-            visibility_set |= c == OPT_VISIBILITY;
-            continue;
-        }
-        switch (c) {
-        case OPT_CAMERA: camera = optarg; break;
-        case OPT_SIZE:
-            if (!lie_parse_size(optarg, 65536, &ro.width, &ro.height))
-                return usage_error("--size: expected WxH, got '%s'", optarg);
-            break;
-        case OPT_SPP:
-            if (!lie_cli_long(&cli, 1, 65536, &v))
-                return cli.status;
-            ro.spp = (int)v;
-            break;
-        case OPT_LIGHT_SAMPLES:
-            if (strcmp(optarg, "exact") == 0) {
-                ro.exact = LIE_EXACT_ONLY;
-                ro.light_samples = LIE_LIGHT_SAMPLES_DEFAULT;
-                break;
-            }
-            if (!lie_parse_long(optarg, 0, 1000000, &v))
-                return usage_error("--light-samples: expected an integer in 0..1000000 or exact, got '%s'", optarg);
-            ro.light_samples = (int)v;
-            if (ro.exact == LIE_EXACT_ONLY)
-                ro.exact = LIE_EXACT_AUTO;
-            break;
-        case OPT_TIMERS: ro.timers = 1; break;
-        case OPT_MAX_DEPTH:
-            if (!lie_cli_long(&cli, 0, 64, &v))
-                return cli.status;
-            ro.max_depth = (int)v;
-            break;
-        case OPT_AOV:
-            if (!parse_aovs(optarg, &ro.aovs))
-                return usage_error("--aov: expected a list of albedo, normal, depth, complexity, patch, got '%s'",
-                                   optarg);
-            break;
-        case OPT_FORMAT:
-            if (!lie_frame_format_parse(optarg, &fopt.format))
-                return usage_error("--format: expected exr or png, got '%s'", optarg);
-            break;
-        case OPT_HALF: fopt.exr.half = 1; break;
-        case OPT_COMPRESSION:
-            if (!lie_exr_compression_parse(optarg, &fopt.exr.compression))
-                return usage_error("--compression: expected zip, zips, piz, rle or none, got '%s'", optarg);
-            break;
-        case OPT_EXPOSURE:
-            if (!lie_parse_float(optarg, -64.0f, 64.0f, &fopt.png.exposure))
-                return usage_error("--exposure: expected a number of stops, got '%s'", optarg);
-            break;
-        case OPT_SCENE: scene_override = optarg; break;
-        case OPT_PATH: path_file = optarg; break;
-        case OPT_FRAMES:
-            if (!lie_parse_range(optarg, 0, 999999, &frame_a, &frame_b))
-                return usage_error("--frames: expected A-B with 0 <= A <= B <= 999999, got '%s'", optarg);
-            break;
-        case OPT_SKIP_EXISTING: skip_existing = 1; break;
-        case OPT_EMITTER:
-            if (!lie_parse_long(optarg, 0, 1 << 30, &v))
-                return usage_error("--emitter: expected an emitter index, got '%s'", optarg);
-            ro.aov_emitter = (int)v;
-            break;
-        }
-    }
-    if (c == LIE_CLI_EXIT)
-        return cli.status;
-    so.allow_external_uris = cli.external;
-    ro.threads = cli.threads;
-    fopt.exr.threads = ro.threads;
-    output = cli.output;
-    const char *input = cli.operand;
-    if (!output)
-        return usage_error("%s", "missing -o OUTPUT");
-    lie_frame_format out_format;
-    if (fopt.format == LIE_FORMAT_AUTO && !lie_frame_format_of(output, &out_format))
-        return usage_error("%s: cannot write this format: use .exr or .png (or --format exr|png)", output);
-    if (path_file && !lie_frame_pattern_ok(output))
-        return usage_error("--path: -o must hold one %%d conversion (e.g. frame_%%04d.exr), got '%s'", output);
-    if (path_file && camera)
-        return usage_error("%s", "--path and --camera exclude each other");
-    if (frame_a >= 0 && !path_file)
-        return usage_error("%s", "--frames needs --path");
-    if (ro.light_samples == 0) {
-        ro.eye_only = 1;
-        ro.light_samples = 1;
-    }
+    int rc = parse_options(&a, &cli, argc, argv);
+    if (rc < 0)
+        rc = check_args(&a);
+    if (rc >= 0)
+        return rc;
     if (lie_dist_start(&argc, &argv) > 1) {
         cli.quiet = 1; /* progress and warnings: one process's are enough; rank 0 prints the statistics */
         if (lie_dist_rank() != 0)
             cli.stats = 0;
     }
-    ro.progress = !cli.quiet;
-
-    lie_error err;
-    lie_error_clear(&err);
-    double t0 = lie_time_now();
-    inputs in = {input, scene_override, path_file, NULL, NULL, NULL};
-    if (lie_dist_load(&so, load_input, &in, &err) != LIE_OK) {
-        lie_camera_path_destroy(in.cpath);
-        lie_scene_destroy(in.scene);
-        lie_cache_destroy(in.cache);
-        return fail(&err);
-    }
-    lie_scene *scene = in.scene;
-    lie_cache *cache = in.cache;
-    lie_camera_path *cpath = in.cpath;
-    lie_lie_vis *lv = NULL;
-    lie_rt *rt = NULL;
-    lie_status st = LIE_OK;
-    double t1 = lie_phase(prog, cli.verbose, "load", t0);
-    if (!visibility_set)
-        ro.visibility = cache ? LIE_VIS_LIE : LIE_VIS_FULL;
-    if (!cache && (ro.visibility == LIE_VIS_LIE || (ro.aovs & (LIE_AOV_COMPLEXITY | LIE_AOV_PATCH)))) {
-        lie_camera_path_destroy(cpath);
-        lie_scene_destroy(scene);
-        return usage_error("%s: --visibility=lie and the complexity and patch layers need a cache", input);
-    }
-    if (cache && (st = lie_lie_vis_create(scene, cache->env, &lv, &err)) != LIE_OK)
-        goto done;
-    ro.oracle = lv ? lie_lie_vis_oracle(lv) : NULL;
-    if (!cli.quiet)
-        lie_print_scene_warnings(prog, scene, input);
-    if (scene->n_emitters == 0 && !cli.quiet)
-        fprintf(stderr, "%s: %s: warning: no emitters (no emissive material, no KHR_lights_punctual light): "
-                        "the image shows emission only\n", prog, input);
-    if (ro.aov_emitter >= scene->n_emitters) {
-        st = lie_error_set(&err, LIE_ERR_ARG, input, "--emitter %d: the scene has %d emitters", ro.aov_emitter,
-                           scene->n_emitters);
-        goto done;
-    }
-    lie_camera cam;
-    st = path_file ? LIE_OK : lie_camera_parse(scene, camera, &cam, &err);
-    if (st != LIE_OK) {
-        if (!err.file[0])
-            snprintf(err.file, sizeof err.file, "%s", input);
-        goto done;
-    }
-    if ((st = lie_rt_create(scene, &rt, &err)) != LIE_OK ||
-        (st = lie_dist_check(scene->hash, cache ? cache->state_hash : 0, &err)) != LIE_OK)
-        goto done;
-    double t2 = lie_phase(prog, cli.verbose, "bvh", t1);
-    char hash[32];
-    snprintf(hash, sizeof hash, "%016llx", (unsigned long long)scene->hash);
-    int n_frames = cpath ? cpath->n_frames : 1, first = cpath ? cpath->first : 0, rendered = 0, skipped = 0;
-    if (cpath && frame_a >= 0 && (frame_a < first || frame_b > (long)first + n_frames - 1)) {
-        st = lie_error_set(&err, LIE_ERR_ARG, path_file, "--frames %ld-%ld: the path has frames %d-%d", frame_a,
-                           frame_b, first, first + n_frames - 1);
-        goto done;
-    }
-    lie_render_stats rs;
-    memset(&rs, 0, sizeof rs);
-    double t_render = 0.0, t_write = 0.0;
-    /* the frames to render: --frames, and --skip-existing's files as rank 0 sees them */
-    int *todo = malloc(sizeof *todo * ((size_t)n_frames + 1)), n_todo = 0;
-    if (!todo) {
-        lie_error_set(&err, LIE_ERR_NOMEM, input, "out of memory");
-        st = LIE_ERR_NOMEM;
-    }
-    for (int fi = 0; todo && fi < n_frames; fi++) {
-        int number = first + fi;
-        if (frame_a >= 0 && (number < frame_a || number > frame_b))
-            continue;
-        char name[4096];
-        if (cpath)
-            snprintf(name, sizeof name, output, number);
-        else
-            snprintf(name, sizeof name, "%s", output);
-        struct stat sb;
-        if (skip_existing && strcmp(name, "-") != 0 && stat(name, &sb) == 0) {
-            skipped++; /* a resumed run: the frame was written (atomically) before */
-            continue;
-        }
-        todo[n_todo++] = fi;
-    }
-    frame_out fo = {output, input, hash, &ro, cpath != NULL, fopt, first};
-    if (todo && lie_dist_size() > 1) {
-        lie_dist_bcast(&n_todo, sizeof n_todo);
-        lie_dist_bcast(todo, sizeof *todo * (size_t)n_todo);
-        double ta = lie_time_now();
-        st = render_dist(scene, rt, &ro, cpath, &cam, todo, n_todo, write_frame, &fo, &rs, &t_write, &err);
-        t_render = lie_time_now() - ta - t_write;
-        rendered = n_todo;
-    }
-    for (int k = 0; todo && lie_dist_size() == 1 && k < n_todo && st == LIE_OK; k++) {
-        int fi = todo[k];
-        lie_camera fc = cpath ? lie_camera_path_frame(cpath, fi) : cam;
-        rendered++;
-        double ta = lie_time_now();
-        lie_frame *frame = NULL;
-        lie_render_stats fs;
-        char label[64];
-        if (cpath) {
-            snprintf(label, sizeof label, "frame %d/%d", k + 1, n_todo);
-            ro.progress_label = label;
-        }
-        st = lie_render(scene, rt, &fc, &ro, &frame, &fs, &err);
-        ro.progress_label = NULL;
-        if (st != LIE_OK)
-            break;
-        double tb = lie_time_now();
-        lie_render_stats_add(&rs, &fs);
-        if (cpath)
-            snprintf(label, sizeof label, "frame %d: render", first + fi);
-        lie_phase(prog, cli.verbose, cpath ? label : "render", ta);
-        st = write_frame(&fo, fi, &fc, frame, &err);
-        lie_frame_destroy(frame);
-        if (cpath)
-            snprintf(label, sizeof label, "frame %d: write", first + fi);
-        lie_phase(prog, cli.verbose && st == LIE_OK, cpath ? label : "write", tb);
-        t_render += tb - ta;
-        t_write += lie_time_now() - tb;
-    }
-    free(todo);
-    if (st == LIE_OK && cli.stats) {
-        run_stats r = {input, rendered, skipped, t1 - t0, t2 - t1, t_render, t_write};
-        print_stats(cli.stats == 2, &r, scene, &ro, &rs);
-    }
-done:
-    lie_camera_path_destroy(cpath);
-    lie_rt_destroy(rt);
-    lie_lie_vis_destroy(lv);
-    lie_cache_destroy(cache);
-    lie_scene_destroy(scene);
-    if (st != LIE_OK)
-        return fail(&err);
-    return 0;
+    a.ro.progress = !cli.quiet;
+    run r;
+    memset(&r, 0, sizeof r);
+    lie_error_clear(&r.err);
+    rc = render_all(&a, &r, &cli);
+    run_free(&r);
+    if (rc == 2)
+        return 2;
+    return rc != LIE_OK ? fail(&r.err) : 0;
 }

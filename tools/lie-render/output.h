@@ -1,0 +1,30 @@
+/* lie-render's frames on disk and its statistics (tools/lie-render/output.c). */
+#ifndef LIE_RENDER_OUTPUT_H
+#define LIE_RENDER_OUTPUT_H
+
+#include "lie.h"
+
+/* What every frame's file is written with. */
+typedef struct frame_out {
+    const char *output, *input, *hash;
+    const lie_render_options *ro;
+    int path;
+    lie_frame_options opt; /* the attributes are set per frame */
+    int first; /* the number of the path's frame 0 */
+} frame_out;
+
+/* Write frame fi (the path's frame first + fi) of camera fc to its file,
+ * its header saying how it was made (README.md, lie-render). */
+lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame, lie_error *err);
+
+/* What --stats prints: times are load, bvh, render and write seconds. */
+typedef struct run_stats {
+    const char *input;
+    int rendered, skipped;
+    double t_load, t_bvh, t_render, t_write;
+} run_stats;
+
+void print_stats(const char *prog, int json, const run_stats *r, const lie_scene *scene, const lie_render_options *ro,
+                 const lie_render_stats *rs);
+
+#endif
