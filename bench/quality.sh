@@ -14,6 +14,14 @@
 # (complete lists); the third-party scenes' are sampled with coarse patches
 # (--min-patch 1e-2), built for the bench's view.  Writes
 # out/bench-quality.json.
+#
+# BASE=DIR (a folder holding another build's lie-build and lie-render, for
+# example an older commit's bin/) renders every LIE row with those too, in
+# the same run, row by row: the table gains "before" columns (its own
+# cache, built with BASE_BUILD if set, else the scene's options).  Full
+# visibility is rendered once, by this tree.  Method lie-silhouette
+# (--bitmask only --silhouette only) is measured when listed in METHODS.
+# REPS=R renders each row R times and keeps the fastest (a loaded machine).
 set -e
 cd "$(dirname "$0")/.."
 QSIZE=${QSIZE:-256x256}
@@ -35,19 +43,33 @@ ratio() { awk -v a="$1" -v b="$2" 'BEGIN { if (b > 0) printf "%.1f", a / b; else
 # (bedroom_corner: an emissive texture; lights_punctual_lamp: textured
 # emitters and five point lights).  scifi_hallway is left out: lie-build
 # takes more than two minutes on its emitters of 1,570 triangles.
-SCENES=${SCENES:-"museum1|tests/scenes/museum1.gltf|||--blockers conservative
-museum3|tests/scenes/museum3.gltf|||--blockers conservative
-cornell|tests/scenes/cornell.gltf|||--blockers conservative
+# The bundled scenes are built with --complex-cap 1024: their lists of up
+# to 1024 blockers cost less as bitmasks than Embree's rays (museum3 at
+# 1024 samples: 10,266 complex pairs at the default cap of 128, 1,181 at
+# 1024, and a frame 1.5 times faster; README.md, "Complex pairs").
+SCENES=${SCENES:-"museum1|tests/scenes/museum1.gltf|||--blockers conservative --complex-cap 1024
+museum3|tests/scenes/museum3.gltf|||--blockers conservative --complex-cap 1024
+cornell|tests/scenes/cornell.gltf|||--blockers conservative --complex-cap 1024
 bedroom_corner|../shared/scenes/bedroom_corner/scene.gltf|eye=30,25,35,target=-40,20,-20|64x64|--min-patch 1e-2
 lights_punctual_lamp|../shared/scenes/lights_punctual_lamp/LightsPunctualLamp.gltf||64x64|--min-patch 1e-2"}
 
 # one INPUT ARGS...: seconds_render and the error against $truth, as
 # "seconds rmse p99 over2"; the stats JSON is left in $TMP/last.json
+# (RENDER: the lie-render to run, bin/lie-render unless set)
+# (REPS renders, default 1, the fastest kept: images are the same each time)
 one() {
     input=$1; shift
-    bin/lie-render "$input" --size "$QSIZE" --threads "$THREADS" -q --stats=json -o "$TMP/f.exr" "$@" 2>"$TMP/last.json"
+    best=""
+    k=0
+    while [ $k -lt "${REPS:-1}" ]; do
+        ${RENDER:-bin/lie-render} "$input" --size "$QSIZE" --threads "$THREADS" -q --stats=json -o "$TMP/f.exr" "$@" \
+            2>"$TMP/last.json"
+        t=$(field seconds_render <"$TMP/last.json")
+        if [ -z "$best" ] || awk -v a="$best" -v b="$t" 'BEGIN { exit !(b < a) }'; then best=$t; fi
+        k=$((k + 1))
+    done
     "$CMP" --error "$truth" "$TMP/f.exr" >"$TMP/e.json"
-    echo "$(field seconds_render <"$TMP/last.json") $(field rmse <"$TMP/e.json") $(field p99 <"$TMP/e.json") $(field over2 <"$TMP/e.json")"
+    echo "$best $(field rmse <"$TMP/e.json") $(field p99 <"$TMP/e.json") $(field over2 <"$TMP/e.json")"
 }
 
 echo "bench-quality: $QSIZE, $THREADS threads, error against full visibility at $TRUTH rotated samples"
@@ -69,9 +91,16 @@ echo "$SCENES" | while IFS='|' read -r name scene cam size build; do
     [ -n "$cam" ] && view="--view $cam --view-size $QSIZE"
     # shellcheck disable=SC2086
     bin/lie-build "$scene" -q --threads "$THREADS" $build $view -o "$TMP/c.lie"
-    printf '\n  %s (%s)\n  %-26s %6s %9s %8s %8s %8s\n' "$name" "$QSIZE" "method" "N" "seconds" "rmse" "p99" ">2%"
+    if [ -n "$BASE" ]; then
+        # shellcheck disable=SC2086
+        "$BASE/lie-build" "$scene" -q --threads "$THREADS" ${BASE_BUILD:-$build} $view -o "$TMP/b.lie"
+        printf '\n  %s (%s)\n  %-26s %6s %9s %8s %8s %8s | %9s %8s %8s %8s (before)\n' "$name" "$QSIZE" "method" "N" \
+            "seconds" "rmse" "p99" ">2%" "seconds" "rmse" "p99" ">2%"
+    else
+        printf '\n  %s (%s)\n  %-26s %6s %9s %8s %8s %8s\n' "$name" "$QSIZE" "method" "N" "seconds" "rmse" "p99" ">2%"
+    fi
     rows=""
-    best_full=""; best_lie=""; best_lie_what=""; full1024=""; auto1024=""
+    best_full=""; best_lie=""; best_lie_what=""; full1024=""; auto1024=""; best_base=""; best_base_what=""; base1024=""
     t_eye=$(one "$scene" --light-samples 0 "$@"); t_eye=${t_eye%% *}
     for method in ${METHODS:-full lie-sampled lie-bitmask lie-auto lie-exact}; do
         list=$LADDER
@@ -83,11 +112,32 @@ echo "$SCENES" | while IFS='|' read -r name scene cam size build; do
             lie-bitmask) r=$(one "$TMP/c.lie" --bitmask only --light-samples "$n" "$@") ;;
             lie-auto) r=$(one "$TMP/c.lie" --light-samples "$n" "$@") ;;
             lie-exact) r=$(one "$TMP/c.lie" --light-samples exact "$@") ;;
+            lie-silhouette) r=$(one "$TMP/c.lie" --bitmask only --silhouette only --light-samples "$n" "$@") ;;
             esac
             t=${r%% *}; rest=${r#* }; rmse=${rest%% *}; rest=${rest#* }; p99=${rest%% *}; over=${rest#* }
-            printf '  %-26s %6s %9.3f %7.2f%% %7.2f%% %7.2f%%\n' "$method" "$n" "$t" \
+            base=""
+            if [ -n "$BASE" ] && [ "$method" != full ] && [ "$method" != lie-silhouette ]; then
+                cp "$TMP/last.json" "$TMP/keep.json"
+                case $method in
+                lie-sampled) b=$(RENDER=$BASE/lie-render one "$TMP/b.lie" --exact off --light-samples "$n" "$@") ;;
+                lie-bitmask) b=$(RENDER=$BASE/lie-render one "$TMP/b.lie" --bitmask only --light-samples "$n" "$@") ;;
+                lie-auto) b=$(RENDER=$BASE/lie-render one "$TMP/b.lie" --light-samples "$n" "$@") ;;
+                lie-exact) b=$(RENDER=$BASE/lie-render one "$TMP/b.lie" --light-samples exact "$@") ;;
+                esac
+                cp "$TMP/keep.json" "$TMP/last.json"
+                bt=${b%% *}; rest=${b#* }; brmse=${rest%% *}; rest=${rest#* }; bp99=${rest%% *}; bover=${rest#* }
+                base=$(printf ' | %9.3f %7.2f%% %7.2f%% %7.2f%%' "$bt" "$(awk -v x="$brmse" 'BEGIN{print 100 * x}')" \
+                    "$(awk -v x="$bp99" 'BEGIN{print 100 * x}')" "$(awk -v x="$bover" 'BEGIN{print 100 * x}')")
+                if awk -v p="$bp99" 'BEGIN { exit !(p <= 0.02) }'; then
+                    if [ -z "$best_base" ] || awk -v a="$best_base" -v b="$bt" 'BEGIN { exit !(b < a) }'; then
+                        best_base=$bt; best_base_what="$method $n"
+                    fi
+                fi
+                [ "$method" = lie-auto ] && [ "$n" = 1024 ] && base1024="$bt $bp99"
+            fi
+            printf '  %-26s %6s %9.3f %7.2f%% %7.2f%% %7.2f%%%s\n' "$method" "$n" "$t" \
                 "$(awk -v x="$rmse" 'BEGIN{print 100 * x}')" "$(awk -v x="$p99" 'BEGIN{print 100 * x}')" \
-                "$(awk -v x="$over" 'BEGIN{print 100 * x}')"
+                "$(awk -v x="$over" 'BEGIN{print 100 * x}')" "$base"
             rows="$rows${rows:+,}{\"method\":\"$method\",\"samples\":\"$n\",\"seconds\":$t,\"rmse\":$rmse,\"p99\":$p99,\"over2\":$over,\"pairs_exact\":$(field pairs_exact <"$TMP/last.json"),\"pairs_blockers\":$(field pairs_blockers <"$TMP/last.json"),\"pairs_embree\":$(field pairs_embree <"$TMP/last.json"),\"pairs_bitmask\":$(field pairs_bitmask <"$TMP/last.json")}"
             if awk -v p="$p99" 'BEGIN { exit !(p <= 0.02) }'; then
                 if [ "$method" = full ]; then
@@ -114,6 +164,16 @@ echo "$SCENES" | while IFS='|' read -r name scene cam size build; do
     if [ -n "$full1024" ] && [ -n "$auto1024" ]; then
         printf '  at 1024 samples: LIE (auto) %sx faster than full, p99 %s against %s\n' \
             "$(ratio "${full1024%% *}" "${auto1024%% *}")" "${auto1024#* }" "${full1024#* }"
+    fi
+    if [ -n "$BASE" ]; then
+        if [ -n "$best_full" ] && [ -n "$best_base" ]; then
+            printf '  before: time to p99 <= 2%%: LIE %.3f s (%s): %sx; LIE/eye %s\n' "$best_base" "$best_base_what" \
+                "$(ratio "$best_full" "$best_base")" "$(ratio "$best_base" "$t_eye")"
+        fi
+        if [ -n "$full1024" ] && [ -n "$base1024" ]; then
+            printf '  before: at 1024 samples: LIE (auto) %sx faster than full, p99 %s\n' \
+                "$(ratio "${full1024%% *}" "${base1024%% *}")" "${base1024#* }"
+        fi
     fi
     # where the best LIE setting's frame goes, from per-worker timers
     bin/lie-render "$TMP/c.lie" --size "$QSIZE" --threads "$THREADS" -q --stats=json --timers -o "$TMP/f.exr" \

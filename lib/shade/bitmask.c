@@ -313,16 +313,36 @@ static void classify8(const bm_query *q, int l, int g0, unsigned *in, unsigned *
     *in &= ~*out;
 }
 
-/* 1 if every bit of group g of level l (>= 2) is set already */
-static int group_full(const bm_query *q, int l, int g)
+/* The words group g of level l >= 2 covers: [*w0, *w1). */
+static void group_words(const lie_bitmask *b, int l, int g, size_t *w0, size_t *w1)
 {
-    size_t per = (size_t)1 << (3 * (l - 2)), w0 = (size_t)g * per, w1 = w0 + per;
-    if (w1 > (size_t)q->b->n_words)
-        w1 = (size_t)q->b->n_words;
+    size_t per = (size_t)1 << (3 * (l - 2));
+    *w0 = (size_t)g * per;
+    *w1 = *w0 + per < (size_t)b->n_words ? *w0 + per : (size_t)b->n_words;
+}
+
+int lie_bitmask_group_full(const lie_bitmask *b, const uint64_t *mask, int l, int g)
+{
+    if (l == 1)
+        return ((mask[g >> 3] >> (8 * (g & 7))) & 0xffu) == 0xffu;
+    size_t w0, w1;
+    group_words(b, l, g, &w0, &w1);
     for (size_t w = w0; w < w1; w++)
-        if (q->mask[w] != ~0ull)
+        if (mask[w] != ~0ull)
             return 0;
     return 1;
+}
+
+void lie_bitmask_set_group(const lie_bitmask *b, uint64_t *mask, int l, int g)
+{
+    if (l == 1) {
+        mask[g >> 3] |= 0xffull << (8 * (g & 7));
+        return;
+    }
+    size_t w0, w1;
+    group_words(b, l, g, &w0, &w1);
+    for (size_t w = w0; w < w1; w++)
+        mask[w] = ~0ull;
 }
 
 /* Groups g0 .. g0 + 7 of level l: inside sets their bits, outside is
@@ -346,17 +366,11 @@ static void visit(bm_query *q, int l, int g0)
         }
         return;
     }
-    const size_t per = (size_t)1 << (3 * (l - 2)); /* words per group */
-    for (unsigned m = in; m; m &= m - 1) {
-        size_t w0 = (size_t)(g0 + __builtin_ctz(m)) * per, w1 = w0 + per;
-        if (w1 > (size_t)q->b->n_words)
-            w1 = (size_t)q->b->n_words;
-        for (size_t w = w0; w < w1; w++)
-            q->mask[w] = ~0ull;
-    }
+    for (unsigned m = in; m; m &= m - 1)
+        lie_bitmask_set_group(q->b, q->mask, l, g0 + __builtin_ctz(m));
     for (unsigned m = rest; m; m &= m - 1) {
         int g = g0 + __builtin_ctz(m);
-        if (group_full(q, l, g))
+        if (lie_bitmask_group_full(q->b, q->mask, l, g))
             continue;
         if (l == 2)
             word(q, g);

@@ -75,6 +75,11 @@ typedef struct lie_planar_lambert lie_planar_lambert;
 double lie_bitmask_lambert(const lie_bitmask *b, const lie_planar_lambert *P, const uint64_t *mask, double omega,
                            double area);
 
+/* Group g of level l (8^l samples from 8^l g): 1 if all its bits are set;
+ * set them all. */
+int lie_bitmask_group_full(const lie_bitmask *b, const uint64_t *mask, int l, int g);
+void lie_bitmask_set_group(const lie_bitmask *b, uint64_t *mask, int l, int g);
+
 /* 1 if every sample's bit is set. */
 int lie_bitmask_all(const lie_bitmask *b, const uint64_t *mask);
 

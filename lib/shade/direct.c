@@ -47,7 +47,8 @@ lie_status lie_shade_scratch_init(lie_shade_scratch *sc, int cap, int max_blocke
     sc->bwork = aligned_alloc(64, sizeof(float) * LIE_BLOCKER_WORK * sc->bstride);
     sc->bkind = malloc(sizeof *sc->bkind * sc->bstride);
     if (!sc->batch.occluded || !sc->blockers || !sc->bwork || !sc->bkind ||
-        lie_light_samples_alloc(&sc->rotated, cap) != LIE_OK || lie_polylight_work_init(&sc->poly, max_blockers) != LIE_OK) {
+        lie_light_samples_alloc(&sc->rotated, cap) != LIE_OK || lie_polylight_work_init(&sc->poly, max_blockers) != LIE_OK ||
+        lie_sil_work_init(&sc->sil, max_blockers) != LIE_OK) {
         lie_shade_scratch_free(sc);
         return LIE_ERR_NOMEM;
     }
@@ -70,6 +71,7 @@ void lie_shade_scratch_free(lie_shade_scratch *sc)
     free(sc->bkind);
     lie_light_samples_free(&sc->rotated);
     lie_polylight_work_free(&sc->poly);
+    lie_sil_work_free(&sc->sil);
     memset(sc, 0, sizeof *sc);
 }
 
@@ -476,7 +478,7 @@ static void clustered_occlusion(const lie_shade_ctx *c, lie_shade_scratch *sc, l
                 gy[i] = q->dy[ix[i]];
                 gz[i] = q->dz[ix[i]];
             }
-            lie_shadow_query g = {q->o, q->eps, NULL, m, 1, gx, gy, gz, q->work, q->kind, q->work_stride};
+            lie_shadow_query g = {q->o, q->eps, NULL, m, 1, gx, gy, gz, q->work, q->kind, q->work_stride, NULL};
             vo->occluded(vo->ctx, sc->blockers, nb, &g, sc->occ2);
             for (int i = 0; i < m; i++)
                 sc->occ[ix[i]] = sc->occ2[i];
@@ -495,6 +497,19 @@ static void clustered_occlusion(const lie_shade_ctx *c, lie_shade_scratch *sc, l
 }
 
 static inline double clock_if(int on) { return on ? lie_time_now() : 0.0; }
+
+/* a pair answered as a bitmask, by the walk per blocker or through
+ * silhouette edges, and its time */
+static void count_bitmask(lie_render_stats *st, int sil, double dt)
+{
+    if (sil) {
+        st->pairs_silhouette++;
+        st->t_silhouette += dt;
+    } else {
+        st->pairs_bitmask++;
+        st->t_bitmask += dt;
+    }
+}
 
 void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pixel, int depth,
                       lie_shade_scratch *sc, float rgb[3])
@@ -572,6 +587,9 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
         const int ns = opt->light_samples;
         const double bits_cost = bm ? lie_render_bitmask_cost(ns, n_blockers, !(pl && sf->lambert && bm->ls.uniform)) : 0.0;
         int use_bits = bm && (opt->bitmask == LIE_BITMASK_ONLY || bits_cost < lie_render_samples_cost(ns, n_blockers));
+        /* and of those, the ones counted through silhouette edges
+         * (silhouette.h): the same bits */
+        const int use_sil = bm && opt->oracle && opt->oracle->occluded_sil && opt->silhouette == LIE_SILHOUETTE_ONLY;
         if (cls == LIE_VISCLASS_BLOCKERS && opt->exact == LIE_EXACT_AUTO && opt->bitmask == LIE_BITMASK_AUTO &&
             !lie_emitter_is_delta(em)) {
             /* a list so long that its cheapest answer costs more than
@@ -634,14 +652,13 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
             lie_planar_lambert P;
             const int lit = lie_planar_lambert_setup(&bm->ls, o, sf->n, sf->ng, em->double_sided, &P);
             lie_shadow_query q = {o,         eps,       &bm->ls,    bm->n, 0, sc->dx, sc->dy, sc->dz,
-                                  sc->bwork, sc->bkind, sc->bstride};
-            if (!lit || opt->oracle->occluded_mask(opt->oracle->ctx, sc->blockers, n_blockers, &q, bm, sc->mask)) {
+                                  sc->bwork, sc->bkind, sc->bstride, use_sil ? &sc->sil : NULL};
+            if (!lit || (use_sil ? opt->oracle->occluded_sil : opt->oracle->occluded_mask)(
+                            opt->oracle->ctx, sc->blockers, n_blockers, &q, bm, sc->mask)) {
                 if (lit)
                     add_scaled(kc, lie_bitmask_lambert(bm, &P, sc->mask, omega, em->area), rgb);
-                st->pairs_bitmask++;
                 st->shadow_rays_skipped += (uint64_t)bm->n;
-                if (timers)
-                    st->t_bitmask += lie_time_now() - t0;
+                count_bitmask(st, use_sil, timers ? lie_time_now() - t0 : 0.0);
                 continue;
             }
         }
@@ -676,7 +693,7 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
             memset(sc->occ, 0, sizeof *sc->occ * (size_t)n);
         {
             lie_shadow_query q = {o,     eps,       ls,       n, ls == NULL, sc->dx, sc->dy, sc->dz,
-                                  sc->bwork, sc->bkind, sc->bstride};
+                                  sc->bwork, sc->bkind, sc->bstride, use_sil ? &sc->sil : NULL};
             float *sdx = sc->dx, *sdy = sc->dy, *sdz = sc->dz;
             if (!ls) {
                 float len = lie_ray_end(sc->dist[0], eps);
@@ -690,12 +707,11 @@ void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pi
                 sc->stats.shadow_rays_skipped += (uint64_t)n;
                 if (timers)
                     st->t_blockers += lie_time_now() - t0;
-            } else if (use_bits && opt->oracle->occluded_mask(opt->oracle->ctx, sc->blockers, n_blockers, &q, bm, sc->mask)) {
+            } else if (use_bits && (use_sil ? opt->oracle->occluded_sil : opt->oracle->occluded_mask)(
+                                       opt->oracle->ctx, sc->blockers, n_blockers, &q, bm, sc->mask)) {
                 bits = 1;
                 sc->stats.shadow_rays_skipped += (uint64_t)n;
-                st->pairs_bitmask++;
-                if (timers)
-                    st->t_bitmask += lie_time_now() - t0;
+                count_bitmask(st, use_sil, timers ? lie_time_now() - t0 : 0.0);
             } else if (cls == LIE_VISCLASS_BLOCKERS) {
                 /* short lists: test every sample, no compaction */
                 opt->oracle->occluded(opt->oracle->ctx, sc->blockers, n_blockers, &q, sc->occ);

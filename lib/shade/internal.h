@@ -3,6 +3,7 @@
 #define LIE_SHADE_INTERNAL_H
 
 #include "shade/bitmask.h"
+#include "shade/silhouette.h"
 #include "shade/polylight.h"
 #include "shade/shade.h"
 
@@ -44,6 +45,7 @@ typedef struct lie_shade_scratch {
     lie_ray_batch batch;
     lie_light_samples rotated; /* --pattern rotated: this point's samples */
     lie_polylight_work poly;   /* closed-form shading's pieces */
+    lie_sil_work sil;          /* silhouette counting's (silhouette.h) */
     lie_render_stats stats;
 } lie_shade_scratch;
 

@@ -37,6 +37,7 @@ void lie_render_stats_add(lie_render_stats *acc, const lie_render_stats *w)
     acc->pairs_analytic += w->pairs_analytic;
     acc->pairs_exact += w->pairs_exact;
     acc->pairs_bitmask += w->pairs_bitmask;
+    acc->pairs_silhouette += w->pairs_silhouette;
     acc->pairs_blockers += w->pairs_blockers;
     acc->pairs_embree += w->pairs_embree;
     acc->pairs_unshadowed += w->pairs_unshadowed;
@@ -46,6 +47,7 @@ void lie_render_stats_add(lie_render_stats *acc, const lie_render_stats *w)
     acc->t_analytic += w->t_analytic;
     acc->t_exact += w->t_exact;
     acc->t_bitmask += w->t_bitmask;
+    acc->t_silhouette += w->t_silhouette;
     acc->t_blockers += w->t_blockers;
     acc->t_embree += w->t_embree;
     acc->t_sampled_shading += w->t_sampled_shading;

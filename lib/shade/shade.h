@@ -117,6 +117,9 @@ typedef struct lie_shadow_query {
     float *work;
     uint32_t *kind;
     size_t work_stride;
+    /* silhouette counting's workspace (lib/shade/silhouette.h), for
+     * occluded_sil; NULL: that answer is the bitmask's */
+    struct lie_sil_work *sil;
 } lie_shadow_query;
 #define LIE_BLOCKER_WORK 15
 void lie_shadow_query_segments(lie_shadow_query *q);
@@ -141,6 +144,10 @@ typedef struct lie_vis_oracle {
      * answer (then occluded() does). */
     int (*occluded_mask)(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
                          const lie_bitmask *bm, uint64_t *mask);
+    /* Optional: the same mask through silhouette counting
+     * (lib/shade/silhouette.h), bit for bit; q->sil its workspace. */
+    int (*occluded_sil)(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
+                        const lie_bitmask *bm, uint64_t *mask);
     /* For AOVs: the pair's class (lie_class), list length and a patch id. */
     void (*describe)(void *ctx, const lie_surface *sf, int emitter, int *cls, uint32_t *count,
                      uint64_t *patch_id);
@@ -198,13 +205,18 @@ typedef enum lie_exact_mode {
  * visibility: one or two rays cost less than the leaf lookup and the
  * classes (museum1 at 1 sample: 40 ms against 33 ms). */
 #define LIE_LIE_MIN_SAMPLES 4
-/* The cost model of LIE_EXACT_AUTO, in tenths of a nanosecond, measured on
- * museum1 (256x256, one thread): testing n samples against b selected
- * blockers costs about n (4 + 1.5 b), the exact shadow 3000 + 2000 b.  So
- * exact shadows pay from about 1000 samples on. */
+/* The cost model of LIE_EXACT_AUTO, in tenths of a nanosecond.  Fitted
+ * (least squares on relative error) to --timers of museum1, museum3 and
+ * cornell with conservative caches, 256x256, one thread, 256, 1024 and
+ * 4096 samples, each path forced in turn, best of 2 (2026-12-01, on 2
+ * cores shared with other jobs): testing n samples against b selected
+ * blockers costs about n (4 + 2 b), the exact shadow 1400 + 2700 b.  So
+ * exact shadows pay from about 1350 samples on.  The fits are within a
+ * factor of 1.5 of the measured totals per scene (the cost of a blocker
+ * depends on how early it is culled, which b does not see). */
 static inline int lie_render_exact_pays(int n, int b)
 {
-    return (double)n * (4.0 + 1.5 * b) >= 3000.0 + 2000.0 * b;
+    return (double)n * (4.0 + 2.0 * b) >= 1400.0 + 2700.0 * b;
 }
 /* Partial pairs toward a planar emitter may also be answered with all
  * samples at once (lib/shade/bitmask.h): LIE_BITMASK_AUTO where the cost
@@ -220,24 +232,35 @@ typedef enum lie_bitmask_mode {
     LIE_BITMASK_ONLY = 2
 } lie_bitmask_mode;
 #define LIE_BITMASK_MIN_SAMPLES 64
-/* Its cost in the units of lie_render_exact_pays, measured the same way
- * (museum1, --timers, side by side with the per-sample path): a set-up
- * and the sum over the fewer of the blocked and the visible samples, 300,
- * and per blocker a walk whose cost grows with its shadow's perimeter in
- * groups of 8 samples, 420 + 9 sqrt(n).  A receiver that is not Lambert's
- * still shades every sample (shade_all), 4 n. */
+/* Its cost in the units of lie_render_exact_pays, fitted the same way: a
+ * set-up and the sum over the fewer of the blocked and the visible
+ * samples, 500, and per blocker a walk whose cost grows with its shadow's
+ * perimeter in groups of 8 samples, 600 + 20 sqrt(n).  A receiver that is
+ * not Lambert's still shades every sample (shade_all), 4 n. */
 static inline double lie_render_bitmask_cost(int n, int b, int shade_all)
 {
-    return 300.0 + (shade_all ? 4.0 * n : 0.0) + (double)b * (420.0 + 9.0 * __builtin_sqrt((double)n));
+    return 500.0 + (shade_all ? 4.0 * n : 0.0) + (double)b * (600.0 + 20.0 * __builtin_sqrt((double)n));
 }
-static inline double lie_render_samples_cost(int n, int b) { return (double)n * (4.0 + 1.5 * b); }
-/* Embree's rays over the whole scene, in the same units: museum1's shadow
- * rays and its blocker tests measured side by side with --timers, 160
- * a ray.  A pair whose list answers cost more (hundreds of blockers) asks
- * Embree instead, so that no pair is slower than full visibility (with
+static inline double lie_render_samples_cost(int n, int b) { return (double)n * (4.0 + 2.0 * b); }
+/* Partial pairs answered as bitmasks may count their blockers through
+ * silhouette edges instead (lib/shade/silhouette.h): LIE_SILHOUETTE_ONLY
+ * for every bitmask pair; OFF (the default) never.  Measured, it lost to
+ * the walk of every blocker on museum1, museum3 and cornell (README.md,
+ * "Silhouette counting"), so no cost model chooses it. */
+typedef enum lie_silhouette_mode {
+    LIE_SILHOUETTE_OFF = 0,
+    LIE_SILHOUETTE_ONLY = 1
+} lie_silhouette_mode;
+/* Embree's rays over the whole scene, in the same units: the complex
+ * pairs' rays of museum1 and museum3 (--timers, fitted as above), 800 a
+ * ray, 70 to 120 ns each on this machine.  (The last fit, 160, sent lists
+ * of more than about 230 blockers to Embree at 1024 samples, where the
+ * lists cost less: museum3 built with --complex-cap 1024 took 0.68 CPU s
+ * a frame at 256 samples with it, 0.49 s with 800.)  A pair whose list
+ * answers cost more (hundreds of blockers) asks Embree instead, so that no pair is slower than full visibility (with
  * the default modes; --exact off and --bitmask only keep the lists). */
-static inline double lie_render_embree_cost(int n) { return 160.0 * n; }
-static inline double lie_render_exact_cost(int b) { return 3000.0 + 2000.0 * b; }
+static inline double lie_render_embree_cost(int n) { return 800.0 * n; }
+static inline double lie_render_exact_cost(int b) { return 1400.0 + 2700.0 * b; }
 
 typedef struct lie_render_options {
     int width, height;
@@ -258,6 +281,7 @@ typedef struct lie_render_options {
     lie_exact_mode exact;  /* closed-form shading and exact visibility (polylight.h) */
     int timers;            /* per-worker timers of each path into the stats (costs a clock read per pair) */
     lie_bitmask_mode bitmask; /* all samples at once for partial pairs (bitmask.h) */
+    lie_silhouette_mode silhouette; /* bitmasks through silhouette edges (silhouette.h) */
 } lie_render_options;
 
 /* Benchmark ablations of --visibility=lie: answer partial pairs (their
@@ -283,11 +307,12 @@ typedef struct lie_render_stats {
     uint64_t pairs_embree;    /* samples against the whole scene */
     uint64_t pairs_unshadowed; /* seen whole, sampled shading */
     uint64_t pairs_bitmask;   /* partial, all samples at once as a bitmask (bitmask.h) */
+    uint64_t pairs_silhouette; /* partial, the same bitmask through silhouette edges (silhouette.h) */
     uint64_t exact_overflows; /* exact pairs that fell back to samples */
     uint64_t pairs_unbuilt;   /* of pairs_embree: units lie-build left out (--view, --path) */
     uint64_t points_unbuilt;  /* shading points with such a pair: pixels, at 1 spp without mirrors */
     /* with lie_render_options.timers: seconds summed over workers */
-    double t_analytic, t_exact, t_blockers, t_embree, t_sampled_shading, t_bitmask;
+    double t_analytic, t_exact, t_blockers, t_embree, t_sampled_shading, t_bitmask, t_silhouette;
     double seconds;
 } lie_render_stats;
 /* acc += w, field by field */

@@ -16,6 +16,25 @@ not_ok() { n=$((n + 1)); failures=$((failures + 1)); echo "not ok $n - $1"; }
 # run CMD...: runs with stdout/stderr captured to $TMP/out, $TMP/err; sets rc
 run() { "$@" >"$TMP/out" 2>"$TMP/err"; rc=$?; }
 
+# xvfb_run CMD...: CMD under a private Xvfb.  The server picks a free display
+# itself and says which (-displayfd), so test runs side by side cannot take
+# the same display, as two `xvfb-run -a` can (both pick the first unlocked one).
+xvfb_run() {
+    _xn="$TMP/xvfb.display.$$"
+    rm -f "$_xn"
+    Xvfb -displayfd 3 -screen 0 1024x768x24 -nolisten tcp 3>"$_xn" 2>/dev/null &
+    _xp=$!
+    _xi=0
+    while [ ! -s "$_xn" ] && [ $_xi -lt 200 ] && kill -0 $_xp 2>/dev/null; do sleep 0.05; _xi=$((_xi + 1)); done
+    if [ ! -s "$_xn" ]; then
+        kill $_xp 2>/dev/null; wait $_xp 2>/dev/null
+        echo "xvfb_run: Xvfb did not start" >&2; return 127
+    fi
+    DISPLAY=":$(cat "$_xn")" "$@"; _xr=$?
+    kill $_xp 2>/dev/null; wait $_xp 2>/dev/null
+    return $_xr
+}
+
 # expect_rc CODE WHAT
 expect_rc() {
     if [ "$rc" -eq "$1" ]; then ok "$2 (exit $rc)"; else

@@ -60,11 +60,11 @@ run "$B/lie-animate" anim.gltf --fps 2 -o "a_%d.yaml"
 warned lie-animate ""
 run "$B/lie-animate" anim.gltf --fps 2 -o "a_%d.yaml" -q
 silent lie-animate
-if command -v xvfb-run >/dev/null 2>&1; then
+if command -v Xvfb >/dev/null 2>&1; then
     printf 'quit\n' >quit.txt
     # X libraries keep a few allocations to the end of the process: not ours (as in t0800)
-    run env ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0" \
-        xvfb-run -a "$B/lie-view" corrupt.gltf --size 16x16 --light-samples 1 --script quit.txt
+    run xvfb_run env ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0" \
+        "$B/lie-view" corrupt.gltf --size 16x16 --light-samples 1 --script quit.txt
     warned lie-view ""
 fi
 

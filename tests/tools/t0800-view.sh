@@ -20,8 +20,8 @@ run "$B/lie-view" "$S/cornell.gltf" --script "$TMP/bad.txt"
 expect_rc 1 "a bad script fails before a window opens"
 expect_one_error_line "lie-view: $TMP/bad.txt:1:1: orbit: expected 2 numbers" "bad script: file:line and the command"
 
-if ! command -v xvfb-run >/dev/null 2>&1; then
-    not_ok "xvfb-run is missing (make deps installs xvfb)"
+if ! command -v Xvfb >/dev/null 2>&1; then
+    not_ok "Xvfb is missing (make deps installs xvfb)"
     finish
 fi
 
@@ -50,7 +50,7 @@ wait
 screenshot $TMP/shot.png
 quit
 EOF
-run xvfb-run -a "$B/lie-view" "$TMP/m1.lie" --size 128x128 --light-samples 16 --script "$TMP/s.txt" \
+run xvfb_run "$B/lie-view" "$TMP/m1.lie" --size 128x128 --light-samples 16 --script "$TMP/s.txt" \
     --record "$TMP/edits.yaml" --save "$TMP/saved.lie" --stats=json -q
 expect_rc 0 "scripted session"
 expect_file "$TMP/shot.png" "the screenshot is written"
@@ -93,7 +93,7 @@ xdotool key --window "\$win" q
 wait \$pid
 echo \$? >"$TMP/keys.rc"
 EOF
-xvfb-run -a sh "$TMP/keys.sh" >/dev/null 2>&1
+xvfb_run sh "$TMP/keys.sh" >/dev/null 2>&1
 rc=$(cat "$TMP/keys.rc" 2>/dev/null || echo none)
 if [ "$rc" = 0 ]; then ok "xdotool key q closes the window (exit 0)"; else
     not_ok "xdotool key q: exit $rc"; sed 's/^/# /' "$TMP/keys.err" | head -5; fi

@@ -160,4 +160,41 @@ static inline lie_scene *square_light_and_blockers(float a, float h, int two_sid
     return s;
 }
 
+#ifdef LIE_SHADE_BITMASK_H
+/* The LIE oracle over scene s (built with patches of 0.5: lists that
+ * hold every blocker), and emitter 0's fixed pattern of n samples as a
+ * bitmask, for tests that ask the oracle directly (test_bitmask,
+ * test_silhouette).  oracle_fixture_free destroys the scene too. */
+typedef struct oracle_fixture {
+    lie_scene *s;
+    test_oracle t;
+    const lie_vis_oracle *orc;
+    lie_rt *rt;
+    lie_light_samples ls;
+    lie_bitmask *bm;
+} oracle_fixture;
+
+static inline void oracle_fixture_init(oracle_fixture *f, lie_scene *s, int n)
+{
+    f->s = s;
+    test_oracle_make(s, 0.5f, &f->t);
+    f->orc = f->t.orc;
+    f->rt = f->t.rt;
+    assert_non_null(f->orc->occluded_mask);
+    assert_int_equal(lie_light_samples_alloc(&f->ls, n), LIE_OK);
+    lie_light_samples_generate(s, 0, n, 0.37f, 0.71f, &f->ls);
+    f->bm = NULL;
+    assert_int_equal(lie_bitmask_create(&f->ls, &f->bm), LIE_OK);
+    assert_non_null(f->bm);
+}
+
+static inline void oracle_fixture_free(oracle_fixture *f)
+{
+    lie_bitmask_destroy(f->bm);
+    lie_light_samples_free(&f->ls);
+    test_oracle_free(&f->t);
+    lie_scene_destroy(f->s);
+}
+#endif
+
 #endif

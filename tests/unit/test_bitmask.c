@@ -217,24 +217,20 @@ typedef struct tally {
 
 static void oracle_case(int two_sided, int n, tally *tl)
 {
-    lie_scene *s = square_light_and_blockers(1.0f, 2.0f, two_sided, degenerate, NDEG);
-    test_oracle t;
-    test_oracle_make(s, 0.5f, &t);
-    const lie_vis_oracle *orc = t.orc;
-    assert_non_null(orc->occluded_mask);
-    lie_light_samples ls;
-    assert_int_equal(lie_light_samples_alloc(&ls, n), LIE_OK);
-    lie_light_samples_generate(s, 0, n, 0.37f, 0.71f, &ls);
-    lie_bitmask *bm = NULL;
-    assert_int_equal(lie_bitmask_create(&ls, &bm), LIE_OK);
-    assert_non_null(bm);
+    oracle_fixture fx;
+    oracle_fixture_init(&fx, square_light_and_blockers(1.0f, 2.0f, two_sided, degenerate, NDEG), n);
+    const lie_vis_oracle *orc = fx.orc;
+    const lie_bitmask *bm = fx.bm;
+    lie_rt *rt = fx.rt;
     /* every triangle, the light's own two included */
     uint32_t blockers[NDEG + 2];
     for (int k = 0; k < NDEG + 2; k++)
         blockers[k] = (uint32_t)k;
     uint32_t *occ = malloc(sizeof *occ * (size_t)(n + 16));
     float *dx = malloc(sizeof(float) * 3 * (size_t)(n + 16)), *dy = dx + n + 16, *dz = dy + n + 16;
-    uint64_t mask[64];
+    uint64_t mask[64], smask[64];
+    lie_sil_work sw;
+    assert_int_equal(lie_sil_work_init(&sw, NDEG + 2), LIE_OK);
     enum { STRIDE = 32 };
     static float work[LIE_BLOCKER_WORK * STRIDE];
     static uint32_t kind[STRIDE];
@@ -248,9 +244,14 @@ static void oracle_case(int two_sided, int n, tally *tl)
             for (int gz = 0; gz < 9; gz++) {
                 lie_vec3 o = lie_v3(-1.2f + 0.3f * (float)gx, heights[gy], -1.2f + 0.3f * (float)gz);
                 const float eps = 1e-4f;
-                lie_shadow_query qm = {o, eps, &bm->ls, n, 0, dx, dy, dz, work, kind, STRIDE};
+                lie_shadow_query qm = {o, eps, &bm->ls, n, 0, dx, dy, dz, work, kind, STRIDE, NULL};
                 int ok = orc->occluded_mask(orc->ctx, blockers, NDEG + 2, &qm, bm, mask);
-                lie_shadow_query qs = {o, eps, &bm->ls, n, 0, dx, dy, dz, work, kind, STRIDE};
+                /* the same through silhouette counting (silhouette.h) */
+                lie_shadow_query qc = {o, eps, &bm->ls, n, 0, dx, dy, dz, work, kind, STRIDE, &sw};
+                assert_int_equal(orc->occluded_sil(orc->ctx, blockers, NDEG + 2, &qc, bm, smask), ok);
+                for (int w = 0; ok && w < bm->n_words; w++)
+                    assert_true(smask[w] == mask[w]);
+                lie_shadow_query qs = {o, eps, &bm->ls, n, 0, dx, dy, dz, work, kind, STRIDE, NULL};
                 orc->occluded(orc->ctx, blockers, NDEG + 2, &qs, occ);
                 tl->pairs++;
                 if (!ok) {
@@ -260,17 +261,15 @@ static void oracle_case(int two_sided, int n, tally *tl)
                 lie_shadow_query_segments(&qs);
                 for (int i = 0; i < n; i++) {
                     assert_int_equal(bit(mask, i), occ[i] != 0); /* the same bits as the per-sample path */
-                    int emb = lie_rt_occluded(t.rt, o, lie_v3(dx[i], dy[i], dz[i]), 0.0f, 1.0f);
+                    int emb = lie_rt_occluded(rt, o, lie_v3(dx[i], dy[i], dz[i]), 0.0f, 1.0f);
                     tl->off_embree += emb != bit(mask, i);
                     tl->samples++;
                 }
             }
     free(occ);
     free(dx);
-    lie_bitmask_destroy(bm);
-    lie_light_samples_free(&ls);
-    test_oracle_free(&t);
-    lie_scene_destroy(s);
+    lie_sil_work_free(&sw);
+    oracle_fixture_free(&fx);
 }
 
 static void test_bitmask_oracle_degenerate_blockers(void **state)

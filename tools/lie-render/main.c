@@ -55,6 +55,8 @@ static void usage(FILE *fp)
             "      --bitmask MODE      partial pairs toward planar emitters with all samples at\n"
             "                          once: auto (default: where cheaper, not under --exact\n"
             "                          off) | off | only (the same image, samples in another order)\n"
+            "      --silhouette MODE   off (default) | only: bitmasks counted through the\n"
+            "                          blockers' silhouette edges (the same image; measured slower)\n"
             "      --timers            --stats also reports per-path times (benchmarks)\n"
             "      --pattern P         fixed (default: the same emitter samples everywhere)\n"
             "                          | rotated (a per-pixel rotation of the pattern)\n"
@@ -97,7 +99,8 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 enum {
     OPT_CAMERA = 256, OPT_SIZE, OPT_SPP, OPT_LIGHT_SAMPLES, OPT_PATTERN, OPT_VISIBILITY, OPT_RAYS, OPT_LIE_SKIP,
     OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_SCENE,
-    OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS, OPT_FRAMES, OPT_SKIP_EXISTING, OPT_FORMAT, OPT_HALF, OPT_BITMASK
+    OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS, OPT_FRAMES, OPT_SKIP_EXISTING, OPT_FORMAT, OPT_HALF, OPT_BITMASK,
+    OPT_SILHOUETTE
 };
 
 static const struct option long_opts[] = {
@@ -114,6 +117,7 @@ static const struct option long_opts[] = {
     {"exact", required_argument, NULL, OPT_EXACT},
     {"timers", no_argument, NULL, OPT_TIMERS},
     {"bitmask", required_argument, NULL, OPT_BITMASK},
+    {"silhouette", required_argument, NULL, OPT_SILHOUETTE},
     {"visibility", required_argument, NULL, OPT_VISIBILITY},
     {"rays", required_argument, NULL, OPT_RAYS},
     {"lie-skip", required_argument, NULL, OPT_LIE_SKIP},
@@ -131,6 +135,8 @@ static const struct option long_opts[] = {
 static const lie_cli_choice exact_modes[] = {{"auto", LIE_EXACT_AUTO}, {"off", LIE_EXACT_OFF}, {NULL, 0}};
 static const lie_cli_choice bitmask_modes[] = {
     {"auto", LIE_BITMASK_AUTO}, {"off", LIE_BITMASK_OFF}, {"only", LIE_BITMASK_ONLY}, {NULL, 0}};
+static const lie_cli_choice silhouette_modes[] = {
+    {"off", LIE_SILHOUETTE_OFF}, {"only", LIE_SILHOUETTE_ONLY}, {NULL, 0}};
 static const lie_cli_choice patterns[] = {{"fixed", LIE_PATTERN_FIXED}, {"rotated", LIE_PATTERN_ROTATED}, {NULL, 0}};
 static const lie_cli_choice lie_skips[] = {{"blockers", LIE_SKIP_BLOCKERS},
                                            {"fallback", LIE_SKIP_FALLBACK},
@@ -152,12 +158,14 @@ static int pick_mode(lie_cli *cli, int c, lie_render_options *ro)
     } modes[] = {
         {OPT_EXACT, exact_modes, offsetof(lie_render_options, exact)},
         {OPT_BITMASK, bitmask_modes, offsetof(lie_render_options, bitmask)},
+        {OPT_SILHOUETTE, silhouette_modes, offsetof(lie_render_options, silhouette)},
         {OPT_PATTERN, patterns, offsetof(lie_render_options, pattern)},
         {OPT_LIE_SKIP, lie_skips, offsetof(lie_render_options, lie_skip)},
         {OPT_VISIBILITY, visibilities, offsetof(lie_render_options, visibility)},
         {OPT_RAYS, ray_modes, offsetof(lie_render_options, rays)},
     };
     _Static_assert(sizeof(lie_exact_mode) == sizeof(int) && sizeof(lie_bitmask_mode) == sizeof(int) &&
+                       sizeof(lie_silhouette_mode) == sizeof(int) &&
                        sizeof(lie_pattern) == sizeof(int) && sizeof(lie_visibility_mode) == sizeof(int) &&
                        sizeof(lie_ray_mode) == sizeof(int) && sizeof(unsigned) == sizeof(int),
                    "the modes are stored as ints");

@@ -106,11 +106,13 @@ void print_stats(const char *prog, int json, const run_stats *r, const lie_scene
                 "\"exact_overflows\":%llu,\"pairs_unbuilt\":%llu,\"points_unbuilt\":%llu,"
                 "\"timers\":%s,\"cpu_seconds_analytic\":%.6f,"
                 "\"cpu_seconds_exact\":%.6f,\"cpu_seconds_blockers\":%.6f,\"cpu_seconds_embree\":%.6f,"
-                "\"cpu_seconds_sampled_shading\":%.6f,\"pairs_bitmask\":%llu,\"cpu_seconds_bitmask\":%.6f",
+                "\"cpu_seconds_sampled_shading\":%.6f,\"pairs_bitmask\":%llu,\"cpu_seconds_bitmask\":%.6f,"
+                "\"pairs_silhouette\":%llu,\"cpu_seconds_silhouette\":%.6f",
                 exact_name(ro), pairs[0], pairs[1], pairs[2], pairs[3], pairs[4], pairs[5], pairs[6],
                 (unsigned long long)rs->pairs_unbuilt, (unsigned long long)rs->points_unbuilt,
                 ro->timers ? "true" : "false", rs->t_analytic,
-                rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, pairs[7], rs->t_bitmask);
+                rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, pairs[7], rs->t_bitmask,
+                (unsigned long long)rs->pairs_silhouette, rs->t_silhouette);
         render_dist_stats(stderr, 1);
         fprintf(stderr, "}\n");
     } else {
@@ -130,8 +132,10 @@ void print_stats(const char *prog, int json, const run_stats *r, const lie_scene
         fprintf(stderr,
                 "  pairs (exact %s): %llu occluded, %llu seen whole in closed form, %llu partial exact,\n"
                 "    %llu partial sampled against blockers, %llu sampled against the scene (Embree),\n"
-                "    %llu seen whole and sampled, %llu partial as bitmasks; %llu exact pairs fell back to samples\n",
-                exact_name(ro), pairs[0], pairs[1], pairs[2], pairs[3], pairs[4], pairs[5], pairs[7], pairs[6]);
+                "    %llu seen whole and sampled, %llu partial as bitmasks (and %llu through silhouettes);\n"
+                "    %llu exact pairs fell back to samples\n",
+                exact_name(ro), pairs[0], pairs[1], pairs[2], pairs[3], pairs[4], pairs[5], pairs[7],
+                (unsigned long long)rs->pairs_silhouette, pairs[6]);
         if (rs->pairs_unbuilt)
             fprintf(stderr, "  not built in the cache (lie-build --view/--path): %llu pairs at %llu shading points, "
                             "answered by Embree\n",
@@ -139,8 +143,9 @@ void print_stats(const char *prog, int json, const run_stats *r, const lie_scene
         if (ro->timers)
             fprintf(stderr,
                     "  worker seconds: closed form %.3f, exact shadows %.3f, blocker samples %.3f,\n"
-                    "    Embree %.3f, sampled shading %.3f, bitmasks %.3f\n",
-                    rs->t_analytic, rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, rs->t_bitmask);
+                    "    Embree %.3f, sampled shading %.3f, bitmasks %.3f, silhouettes %.3f\n",
+                    rs->t_analytic, rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, rs->t_bitmask,
+                    rs->t_silhouette);
         render_dist_stats(stderr, 0);
     }
 }
