@@ -177,7 +177,7 @@ static int steps_constant(const lie_sil_edge *edges, const int32_t *e, int n, fl
     int at0 = 0;
     for (int i = 0; i < n; i++) {
         const lie_sil_edge *E = &edges[e[i]];
-        at0 += (s0 >= E->a) & (s0 < E->b) ? E->sigma : 0;
+        at0 += ((s0 >= E->a) & (s0 < E->b)) ? E->sigma : 0;
     }
     for (int j = 0; j < n; j++) {
         const float x[2] = {edges[e[j]].a, edges[e[j]].b};
@@ -187,7 +187,7 @@ static int steps_constant(const lie_sil_edge *edges, const int32_t *e, int n, fl
             int v = 0;
             for (int i = 0; i < n; i++) {
                 const lie_sil_edge *E = &edges[e[i]];
-                v += (x[c] >= E->a) & (x[c] < E->b) ? E->sigma : 0;
+                v += ((x[c] >= E->a) & (x[c] < E->b)) ? E->sigma : 0;
             }
             if (v != at0)
                 return 0;
