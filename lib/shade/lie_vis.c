@@ -741,7 +741,8 @@ static void describe(void *ctx, const lie_surface *sf, int e, int *cls, uint32_t
     *patch_id = lie_hash_u64x4(sf->tri, path.digits, (uint64_t)path.depth, (uint64_t)e);
 }
 
-/* Edge adjacency (lie_lie_vis.adj), once per scene: every triangle edge
+/* Edge adjacency (lie_lie_vis.adj), once per scene and only for
+ * lie_lie_vis_use_silhouette: every triangle edge
  * keyed by its two end points in a fixed order, sorted, and the keys held
  * by exactly two edges linked. */
 typedef struct edge_key {
@@ -879,18 +880,12 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
         lie_lie_vis_destroy(v);
         return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
     }
-    v->adj = edge_adjacency(s);
-    if (!v->adj) {
-        lie_lie_vis_destroy(v);
-        return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
-    }
     v->s = s;
     v->env = env;
     v->oracle.ctx = v;
     v->oracle.classify = classify;
     v->oracle.occluded = occluded;
     v->oracle.occluded_mask = occluded_mask;
-    v->oracle.occluded_sil = occluded_sil;
     v->oracle.select = select_blockers;
     uint32_t longest = 0;
     for (uint32_t i = 0; i < env->n_nodes; i++)
@@ -904,6 +899,17 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
 }
 
 const lie_vis_oracle *lie_lie_vis_oracle(const lie_lie_vis *v) { return &v->oracle; }
+
+lie_status lie_lie_vis_use_silhouette(lie_lie_vis *v, lie_error *err)
+{
+    if (v->adj)
+        return LIE_OK;
+    v->adj = edge_adjacency(v->s);
+    if (!v->adj)
+        return lie_error_set(err, LIE_ERR_NOMEM, v->s->path, "out of memory");
+    v->oracle.occluded_sil = occluded_sil;
+    return LIE_OK;
+}
 
 void lie_lie_vis_destroy(lie_lie_vis *v)
 {

@@ -164,6 +164,10 @@ typedef struct lie_env lie_env;
 typedef struct lie_lie_vis lie_lie_vis;
 lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vis **out, lie_error *err);
 const lie_vis_oracle *lie_lie_vis_oracle(const lie_lie_vis *v);
+/* Silhouette counting (occluded_sil) needs the scene's edge adjacency, a
+ * sort of every edge: made here, on request, not by every create.  Until
+ * then occluded_sil is NULL and bitmasks are walked blocker by blocker. */
+lie_status lie_lie_vis_use_silhouette(lie_lie_vis *v, lie_error *err);
 void lie_lie_vis_destroy(lie_lie_vis *v);
 
 /* ---- the renderer ------------------------------------------------------ */

@@ -71,6 +71,7 @@ static inline void test_oracle_make(const lie_scene *s, float min_patch, test_or
     lie_build_stats bst;
     assert_int_equal(lie_env_build(s, t->rt, &bp, NULL, &t->env, &bst, &err), LIE_OK);
     assert_int_equal(lie_lie_vis_create(s, t->env, &t->lv, &err), LIE_OK);
+    assert_int_equal(lie_lie_vis_use_silhouette(t->lv, &err), LIE_OK);
     t->orc = lie_lie_vis_oracle(t->lv);
 }
 

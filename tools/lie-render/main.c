@@ -412,6 +412,8 @@ static lie_status prepare(args *a, run *r, int quiet)
     lie_status st = LIE_OK;
     if (r->cache && (st = lie_lie_vis_create(r->scene, r->cache->env, &r->lv, &r->err)) != LIE_OK)
         return st;
+    if (r->lv && ro->silhouette == LIE_SILHOUETTE_ONLY && (st = lie_lie_vis_use_silhouette(r->lv, &r->err)) != LIE_OK)
+        return st;
     ro->oracle = r->lv ? lie_lie_vis_oracle(r->lv) : NULL;
     if (!quiet)
         lie_print_scene_warnings(prog, r->scene, a->input);
