@@ -172,7 +172,7 @@ static lie_status apply(view_world *w, const lie_edit *e, const char *yaml, lie_
     lie_status st = LIE_OK;
     pthread_rwlock_wrlock(&w->lock);
     if (w->up) {
-        st = lie_update_edit(w->up, e, (const unsigned char *)yaml, strlen(yaml), err);
+        st = lie_update_edit(w->up, e, err); /* e holds yaml as its text (lie_edit_text) */
     } else {
         st = lie_edit_apply(w->scene, e, &w->opt.so, NULL, err);
     }
