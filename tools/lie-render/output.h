@@ -14,7 +14,7 @@ typedef struct frame_out {
 } frame_out;
 
 /* Write frame fi (the path's frame first + fi) of camera fc to its file,
- * its header saying how it was made (README.md, lie-render). */
+ * its header saying how it was made (docs/tools.md, lie-render). */
 lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame, lie_error *err);
 
 /* What --stats prints: times are load, bvh, render and write seconds. */
