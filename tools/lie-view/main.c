@@ -15,7 +15,7 @@ const char *view_prog = "lie-view";
 static void usage(FILE *fp)
 {
     fprintf(fp,
-            "usage: %s CACHE|SCENE.gltf [options]\n"
+            "Usage: %s CACHE|SCENE.gltf [options]\n"
             "\n"
             "An interactive window on a LIE cache (or a glTF scene, with Embree for every\n"
             "shadow ray).  Frames come coarse first while the view moves and refine to every\n"
@@ -36,6 +36,7 @@ static void usage(FILE *fp)
             "      --save OUT.lie      write the cache at exit (and on Ctrl+S)\n"
             "      --allow-external-uris  let the glTF reference files outside its folder\n"
             "      --stats[=json]      at exit: frames, fps while moving, update times, pending\n"
+            "      --stats-file FILE   the --stats=json record to FILE, not stderr\n"
             "  -q, --quiet             print nothing but errors and what is asked for\n"
             "  -h, --help              this help\n"
             "      --version           print the version\n"
@@ -79,28 +80,33 @@ static const struct option long_opts[] = {
 
 /* ---- statistics and overlay ---------------------------------------------------- */
 
-static void print_stats(session *S, int json)
+static lie_status print_stats(session *S, const lie_cli *cli, lie_error *err)
 {
     int n;
     const double *ms = view_world_update_ms(S->w, &n);
     double fps = S->moving_seconds > 0.0 ? (double)S->moving_frames / S->moving_seconds : 0.0;
-    if (json) {
-        fprintf(stderr, "{\"tool\":\"lie-view\",\"frames\":%llu,\"moving_frames\":%llu,\"fps_mean\":%.3f,\"update_ms\":[",
+    if (cli->stats == 2) {
+        lie_stats_json js;
+        FILE *fp = lie_stats_json_begin(&js, prog, NULL);
+        if (!fp)
+            return lie_stats_json_end(cli, &js, err);
+        fprintf(fp, ",\"frames\":%llu,\"moving_frames\":%llu,\"fps_mean\":%.3f,\"update_ms\":[",
                 (unsigned long long)S->frames, (unsigned long long)S->moving_frames, fps);
         for (int i = 0; i < n; i++)
-            fprintf(stderr, "%s%.3f", i ? "," : "", ms[i]);
-        fprintf(stderr, "],\"first_frame_ms\":[");
+            fprintf(fp, "%s%.3f", i ? "," : "", ms[i]);
+        fprintf(fp, "],\"first_frame_ms\":[");
         for (int i = 0; i < S->n_first; i++)
-            fprintf(stderr, "%s%.3f", i ? "," : "", S->first_ms[i]);
-        fprintf(stderr, "],\"catchup_ms\":[");
+            fprintf(fp, "%s%.3f", i ? "," : "", S->first_ms[i]);
+        fprintf(fp, "],\"catchup_ms\":[");
         for (int i = 0; i < S->n_catchup; i++)
-            fprintf(stderr, "%s%.3f", i ? "," : "", S->catchup_ms[i]);
-        fprintf(stderr, "],\"refine_ms\":[");
+            fprintf(fp, "%s%.3f", i ? "," : "", S->catchup_ms[i]);
+        fprintf(fp, "],\"refine_ms\":[");
         for (int i = 0; i < S->n_refine; i++)
-            fprintf(stderr, "%s%.3f", i ? "," : "", S->refine_ms[i]);
-        fprintf(stderr, "],\"pending_max\":%lld,\"camera\":", (long long)view_world_pending_max(S->w));
-        lie_json_string(stderr, S->spec);
-        fprintf(stderr, "}\n");
+            fprintf(fp, "%s%.3f", i ? "," : "", S->refine_ms[i]);
+        fprintf(fp, "],\"pending_max\":%lld,\"camera\":", (long long)view_world_pending_max(S->w));
+        lie_json_string(fp, S->spec);
+        fprintf(fp, "}\n");
+        return lie_stats_json_end(cli, &js, err);
     } else {
         double sum = 0.0, mx = 0.0;
         for (int i = 0; i < n; i++) {
@@ -114,6 +120,7 @@ static void print_stats(session *S, int json)
                 prog, (unsigned long long)S->frames, fps, (unsigned long long)S->moving_frames, n,
                 n ? sum / n : 0.0, mx, (long long)view_world_pending_max(S->w), S->spec);
     }
+    return LIE_OK;
 }
 
 static void draw_overlay(session *S, uint32_t *argb)
@@ -420,7 +427,7 @@ static int open_world(session *S, const view_world_options *wo, const char *inpu
 }
 
 /* At exit: the script's error, the record, --save, --stats. */
-static int finish(session *S, const script_run *R, int stats, int rc)
+static int finish(session *S, const script_run *R, const lie_cli *cli, int rc)
 {
     lie_error err;
     lie_error_clear(&err);
@@ -431,8 +438,8 @@ static int finish(session *S, const script_run *R, int stats, int rc)
         rc = fail_line(&err);
     if (rc == 0 && S->save && view_world_save(S->w, S->save, &err) != LIE_OK)
         rc = fail_line(&err);
-    if (rc == 0 && stats)
-        print_stats(S, stats == 2);
+    if (rc == 0 && cli->stats && print_stats(S, cli, &err) != LIE_OK)
+        rc = fail_line(&err);
     return rc;
 }
 
@@ -485,7 +492,7 @@ int main(int argc, char **argv)
             if (spent < 0.008)
                 SDL_Delay((Uint32)((0.008 - spent) * 1000.0) + 1);
         }
-        rc = finish(&S, &R, cli.stats, rc);
+        rc = finish(&S, &R, &cli, rc);
     }
     free(S.first_ms);
     free(S.catchup_ms);
