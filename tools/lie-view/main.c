@@ -65,7 +65,8 @@ static void usage(FILE *fp)
             "drag DX DY DZ, rotate AX AY AZ DEG, set-material FIELDS, set-emission FIELDS\n"
             "(FIELDS as in edit files: base-color: [r, g, b], roughness: r, strength: s),\n"
             "remove (the selection), undo, redo, wait (until no unit is pending),\n"
-            "pause and resume (units stop landing in between), redraw N (the full frame N\n"
+            "wait-at-most S (as wait, S seconds at most), pause and resume (units stop\n"
+            "landing in between), redraw N (the full frame N\n"
             "times more, each timed), screenshot FILE.png (of what has landed), quit.\n",
             prog, 512, 512, LIE_LIGHT_SAMPLES_DEFAULT, LIE_MAX_DEPTH_DEFAULT);
 }
