@@ -66,8 +66,9 @@ static void usage(FILE *fp)
             "drag DX DY DZ, rotate AX AY AZ DEG, set-material FIELDS, set-emission FIELDS\n"
             "(FIELDS as in edit files: base-color: [r, g, b], roughness: r, strength: s),\n"
             "remove (the selection), undo, redo, wait (until no unit is pending),\n"
-            "pause and resume (units stop landing in between), redraw N (the full frame N\n"
-            "times more, each timed), screenshot FILE.png (of what has landed), quit.\n",
+            "wait-at-most S (as wait, S seconds at most), pause and resume (units stop\n"
+            "landing in between), redraw N (the full frame N times more, each timed),\n"
+            "screenshot FILE.png (of what has landed), quit.\n",
             prog, 512, 512, LIE_LIGHT_SAMPLES_DEFAULT, LIE_MAX_DEPTH_DEFAULT);
 }
 
@@ -466,11 +467,13 @@ static void count_frames(session *S, uint64_t images, uint64_t image_version, in
 }
 
 /* The constructor builds for the camera once it has been still a quarter
- * of a second (and at once for the first): each such camera is a view of
+ * of a second (and for the first, once the first image is on screen): each such camera is a view of
  * the cache it builds (lie-build --view), what it sees first in the queue. */
 static void look(session *S)
 {
     double now = lie_time_now();
+    if (S->first_image_ms < 0.0)
+        return; /* the first image first: sampling the view would take the cores from it */
     if (S->looked_set && memcmp(&S->looked, &S->cam, sizeof S->cam) == 0) {
         S->cam_change_t = now;
         return;
