@@ -16,7 +16,7 @@
  * Pending units in a render: lie_update_snapshot gives an env for the
  * edited scene in which every leaf still to be recomputed, and the root of
  * every unit still to be rebuilt, has class LIE_CLASS_NONE; the renderer
- * (lib/shade, lie_lie_vis) already answers those pairs with Embree over
+ * (lib/shade, lie_env_shadows) already answers those pairs with Embree over
  * the whole scene, so a frame rendered from a snapshot equals a frame
  * rendered with full visibility wherever a unit is pending, and with the
  * finished update everywhere else (unflagged leaves are exactly what the
@@ -30,7 +30,7 @@
  * lie_cache_load_scene loaded) from create to destroy.
  *   - lie_update_edit writes the scene and the update: nothing may read
  *     either meanwhile (no render, no step, no snapshot).  After it, the
- *     caller's Embree scene and lie_lie_vis for the old scene are stale:
+ *     caller's Embree scene and lie_env_shadows for the old scene are stale:
  *     rebuild them (from a snapshot) before rendering again.
  *   - lie_update_step and lie_update_snapshot only read the scene, so
  *     rendering may run concurrently with them, from a snapshot or any

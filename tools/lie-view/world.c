@@ -17,11 +17,11 @@
 
 lie_status world_make_oracle(view_world *w, lie_error *err)
 {
-    lie_lie_vis_destroy(w->vis);
+    lie_env_shadows_destroy(w->vis);
     w->vis = NULL;
     if (!w->render_env)
         return LIE_OK;
-    return lie_lie_vis_create(w->scene, w->render_env, &w->vis, err);
+    return lie_env_shadows_create(w->scene, w->render_env, &w->vis, err);
 }
 
 /* ---- reading ---------------------------------------------------------- */
@@ -30,7 +30,7 @@ void view_world_read_lock(view_world *w) { pthread_rwlock_rdlock(&w->lock); }
 void view_world_read_unlock(view_world *w) { pthread_rwlock_unlock(&w->lock); }
 const lie_scene *view_world_scene(const view_world *w) { return w->scene; }
 const lie_rt *view_world_rt(const view_world *w) { return w->rt; }
-const lie_vis_oracle *view_world_oracle(const view_world *w) { return w->vis ? lie_lie_vis_oracle(w->vis) : NULL; }
+const lie_vis_oracle *view_world_oracle(const view_world *w) { return w->vis ? lie_env_shadows_oracle(w->vis) : NULL; }
 uint64_t view_world_version(const view_world *w) { return atomic_load(&((view_world *)w)->version); }
 int64_t view_world_pending(const view_world *w) { return atomic_load(&((view_world *)w)->n_pending); }
 int view_world_busy(const view_world *w)
@@ -207,7 +207,7 @@ void view_world_close(view_world *w)
     free(w->update_ms);
     lie_update_destroy(w->up);
     lie_env_destroy(w->render_env);
-    lie_lie_vis_destroy(w->vis);
+    lie_env_shadows_destroy(w->vis);
     lie_rt_destroy(w->rt);
     lie_scene_destroy(w->scene);
     lie_cache_destroy(w->cache);
