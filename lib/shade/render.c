@@ -356,11 +356,9 @@ static lie_status frame_setup(render_job *j, const lie_scene *s, const lie_rende
     } else {
         c->texlights = calloc((size_t)ne + 1, sizeof *c->texlights);
         float *scale = malloc(sizeof *scale * ((size_t)ne + 1));
-        st = c->texlights && scale ? LIE_OK : LIE_ERR_NOMEM;
-        for (int e = 0; st == LIE_OK && e < ne; e++) {
-            st = lie_texlight_create(s, e, &c->texlights[e]);
+        st = c->texlights && scale ? lie_texlight_create_all(s, c->texlights) : LIE_ERR_NOMEM;
+        for (int e = 0; st == LIE_OK && e < ne; e++)
             scale[e] = lie_texlight_power_scale(c->texlights[e]);
-        }
         lie_light_bounds *bounds = NULL;
         if (st == LIE_OK)
             st = lie_light_bounds_all(s, scale, &bounds);

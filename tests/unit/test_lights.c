@@ -229,8 +229,8 @@ static void test_one_lit_texel_matches_quadrature(void **state)
     lie_texlight *tl = NULL;
     assert_int_equal(lie_texlight_create(s, 0, &tl), LIE_OK);
     assert_non_null(tl);
-    /* most samples land where the texture is lit (the rest within a
-     * texel of it, where the bilinear lookup is 0 at the cell's edge) */
+    /* the samples land where the texture is lit, or in cells next to it
+     * whose lookups can reach it (where the bilinear lookup may be 0) */
     int lit = 0;
     double far = 0.0;
     for (int i = 0; i < 1024; i++) {
@@ -241,8 +241,11 @@ static void test_one_lit_texel_matches_quadrature(void **state)
         /* in texels from the lit one's centre */
         far = fmax(far, fmax(fabs((q.p.x + 1.0) * 32.0 - 21.5), fabs((q.p.z + 1.0) * 32.0 - 37.5)));
     }
-    assert_true(far <= 3.0);
-    assert_true(lit >= 512);
+    /* within a few texels of the lit one, the rest of the 64 x 64 take
+     * none; a quarter or more where the light is (sampling by area, one in
+     * a thousand: the 2 x 2 texels a bilinear lookup of it reaches) */
+    assert_true(far <= 5.0);
+    assert_true(lit >= 256);
     lie_texlight_destroy(tl);
     const double want = quadrature(s, 0.2f, 0.3f, 256);
     double v = render_point(s, 0.2f, 0.3f, LIE_SAMPLER_TREE, 4096, 3);
