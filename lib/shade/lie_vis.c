@@ -664,6 +664,12 @@ lie_status lie_env_shadows_create(const lie_scene *s, const lie_env *env, lie_en
 
 const lie_vis_oracle *lie_env_shadows_oracle(const lie_env_shadows *v) { return &v->oracle; }
 
+void lie_env_shadows_grow(lie_env_shadows *v, uint32_t longest)
+{
+    if ((int)longest > v->oracle.max_blockers)
+        v->oracle.max_blockers = (int)longest;
+}
+
 void lie_env_shadows_destroy(lie_env_shadows *v)
 {
     if (!v)

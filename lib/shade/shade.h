@@ -155,6 +155,10 @@ typedef struct lie_env lie_env;
 typedef struct lie_env_shadows lie_env_shadows;
 lie_status lie_env_shadows_create(const lie_scene *s, const lie_env *env, lie_env_shadows **out, lie_error *err);
 const lie_vis_oracle *lie_env_shadows_oracle(const lie_env_shadows *v);
+/* The env grew lists up to `longest` blockers since the oracle was made (an
+ * env built while it is rendered from, lib/update's lie_ctor): the
+ * oracle's max_blockers follows.  Call while nothing renders from it. */
+void lie_env_shadows_grow(lie_env_shadows *v, uint32_t longest);
 void lie_env_shadows_destroy(lie_env_shadows *v);
 
 /* ---- the renderer ------------------------------------------------------ */
