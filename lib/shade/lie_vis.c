@@ -28,6 +28,7 @@ struct lie_env_shadows {
     float *soa_sphere[4];
     float *soa_vert[9];
     int32_t *solid;         /* per triangle: its convex solid (lie_solids_find) or -1 */
+    uint8_t *unbuilt;       /* lie_env_shadows_record_unbuilt's mask, or NULL */
     lie_vis_oracle oracle;
 };
 
@@ -45,6 +46,9 @@ static lie_class classify(void *ctx, const lie_surface *sf, int e, const void **
         *pair = n;
         return LIE_CLASS_PARTIAL;
     case LIE_CLASS_NONE:
+        /* a byte set to 1 by any number of threads: relaxed atomic stores */
+        if (v->unbuilt)
+            __atomic_store_n(&v->unbuilt[sf->tri], (uint8_t)1, __ATOMIC_RELAXED);
         return LIE_CLASS_NONE; /* not built: the whole scene answers */
     default:
         return LIE_CLASS_COMPLEX; /* complex */
@@ -663,6 +667,8 @@ lie_status lie_env_shadows_create(const lie_scene *s, const lie_env *env, lie_en
 }
 
 const lie_vis_oracle *lie_env_shadows_oracle(const lie_env_shadows *v) { return &v->oracle; }
+
+void lie_env_shadows_record_unbuilt(lie_env_shadows *v, uint8_t *mask) { v->unbuilt = mask; }
 
 void lie_env_shadows_grow(lie_env_shadows *v, uint32_t longest)
 {

@@ -159,6 +159,11 @@ const lie_vis_oracle *lie_env_shadows_oracle(const lie_env_shadows *v);
  * env built while it is rendered from, lib/update's lie_ctor): the
  * oracle's max_blockers follows.  Call while nothing renders from it. */
 void lie_env_shadows_grow(lie_env_shadows *v, uint32_t longest);
+/* From now on, set mask[tri] (n_tris bytes, the caller's, not cleared) for
+ * every triangle whose unbuilt (LIE_CLASS_NONE) unit a render asks about:
+ * what a render from an env still being built answered with Embree
+ * (lie-render --cache).  NULL stops it. */
+void lie_env_shadows_record_unbuilt(lie_env_shadows *v, uint8_t *mask);
 void lie_env_shadows_destroy(lie_env_shadows *v);
 
 /* ---- the renderer ------------------------------------------------------ */
