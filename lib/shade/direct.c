@@ -204,7 +204,7 @@ static void shade_guided(point *pt, int n, double u, float rgb[3])
     }
 }
 
-void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pixel, int depth,
+LIE_HOT void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pixel, int depth,
                       lie_shade_scratch *sc, float rgb[3])
 {
     const lie_render_options *opt = c->opt;
