@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* A light for a scene that has none (lie_scene_add_default_light, scene.h), as a modeller's
  * viewport lights geometry that has no lights of its own: a KHR_lights_punctual light added
  * to the document as an ordinary node, so every part of the library sees a normal emitter. */

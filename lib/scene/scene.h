@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/scene: the in-memory scene.
  *
  * Two layers live in one lie_scene:

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # A scene without emitters: a warning that names --default-light; headlight (a point light at
 # the camera) or sun (a directional light from above) light its geometry; a scene with
 # emitters is left as it is; a cache cannot take one (its environments know no such light).
