@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* atrium-gen DIR: a Sponza-class bench scene for make bench-build (its
  * 250k-triangle row, bench/build.sh), generated, never committed.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The tools' MPI layer (lib/dist/dist.h).
  * Size: one job, the MPI layer: start, broadcast, the setup check and the work
  * sharing share the communicator state. */

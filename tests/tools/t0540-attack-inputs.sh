@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # The input classes of an outsider's attack (docs/tools.md, "Hostile inputs
 # and outputs"), each refused with one
 # line and exit 1, quickly, and never a crash:

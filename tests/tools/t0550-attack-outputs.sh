@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # The output classes of an outsider's attack (docs/tools.md, "Hostile inputs
 # and outputs"):
 #   2. -o naming a character device, a FIFO or a symlink must not replace it

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/core's inputs, outputs and messages (docs/tools.md, "Hostile inputs
  * and outputs"): control bytes are
  * escaped, inputs are regular files within a limit, a group of outputs

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/scene: the glTF importer (gltf_*.cpp) and texture lookup (texture.c),
  * through lie_scene_load.  Fixtures: tests/data/gltf/ (gen_fixtures.py).
  * Size: long as the importer's trust boundary is wide: one test per class of
