@@ -27,7 +27,7 @@ COMMON   := $(OPT) $(ARCHFLAGS) $(WARN) -DTEST_SCENES=\"$(CURDIR)/tests/scenes\"
 CFLAGS   += -std=c11 $(COMMON)
 CXXFLAGS += -std=c++17 $(COMMON) -I/usr/include/stb -I/usr/include/nlohmann
 LDFLAGS  += $(filter -fsanitize=%,$(OPT))
-LDLIBS   := -lembree3 -lOpenEXRCore-3_1 -lyaml -ltinygltf -lxxhash -lpng -lz -lpthread -lm -lstdc++
+LDLIBS   := -lembree3 -lOpenEXRCore-3_1 -lyaml -ltinygltf -lstb -lxxhash -lpng -lz -lpthread -lm -lstdc++
 
 LIB_C    := $(sort $(filter-out lib/dist/%,$(wildcard lib/*/*.c)))
 LIB_CXX  := $(sort $(wildcard lib/*/*.cpp))

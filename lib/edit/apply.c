@@ -598,7 +598,11 @@ lie_status lie_edit_apply(lie_scene *s, const lie_edit *e, const lie_scene_optio
             return st;
     }
     lie_status st = lie_scene_flatten(s, err);
-    if (st != LIE_OK && err && !err->file[0])
-        snprintf(err->file, sizeof err->file, "%s", e->name);
+    /* the edits made the world what it is: they are the input to blame */
+    if (st != LIE_OK && err && st != LIE_ERR_NOMEM) {
+        char msg[sizeof err->msg];
+        snprintf(msg, sizeof msg, "%s", err->msg);
+        lie_error_set(err, st, e->name, "the edited scene: %s", msg);
+    }
     return st;
 }

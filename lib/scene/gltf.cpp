@@ -15,6 +15,7 @@
 #include "scene/scene.h"
 
 #include <nlohmann/json.hpp> /* the exporter adds its buffer to tinygltf's JSON */
+#include <stb_image.h> /* libstb: the decoder tinygltf uses; its header reader sizes every format */
 #include <tiny_gltf.h>
 
 #include <algorithm>
@@ -363,46 +364,17 @@ bool fs_write(std::string *err, const std::string &, const std::vector<unsigned 
 /* ---- images ---------------------------------------------------------------
  * tinygltf hands an image stored in a bufferView to the decoder without
  * checking the view's range against its buffer, so this loader checks it
- * first, and refuses images beyond MAX_IMAGE_PIXELS from the PNG or JPEG
- * header before stb allocates them. */
+ * first.  It decodes nothing: it keeps the encoded bytes, and an image is
+ * decoded only when a material uses it (texture_for), after its header
+ * (stb_image's stbi_info_from_memory, which reads the header of every
+ * format stb decodes: PNG, JPEG, BMP, GIF, PSD, PIC, PNM, TGA, HDR) showed
+ * it within MAX_IMAGE_PIXELS.  A 70-byte BMP claiming 40000 x 13000 pixels
+ * then costs nothing unused, and one line of error used. */
 
 struct ImageState {
     const tinygltf::Model *model;
-    std::string limit_msg;
-    std::map<int, std::string> undecodable; /* image -> why the decoder refused it */
+    std::map<int, std::vector<unsigned char>> encoded; /* image -> its bytes, undecoded */
 };
-
-uint32_t be16(const unsigned char *p) { return uint32_t(p[0]) << 8 | p[1]; }
-uint32_t be32(const unsigned char *p) { return be16(p) << 16 | be16(p + 2); }
-
-/* Width and height from a PNG or JPEG header; false when not found. */
-bool image_header_size(const unsigned char *b, size_t n, uint32_t *w, uint32_t *h)
-{
-    if (n >= 24 && memcmp(b, "\x89PNG\r\n\x1a\n", 8) == 0 && memcmp(b + 12, "IHDR", 4) == 0) {
-        *w = be32(b + 16);
-        *h = be32(b + 20);
-        return true;
-    }
-    if (n >= 4 && b[0] == 0xff && b[1] == 0xd8) {
-        size_t at = 2;
-        while (at + 9 <= n) {
-            if (b[at] != 0xff)
-                return false;
-            unsigned m = b[at + 1];
-            if (m == 0xff) { /* fill byte */
-                at++;
-                continue;
-            }
-            if (m >= 0xc0 && m <= 0xcf && m != 0xc4 && m != 0xc8 && m != 0xcc) { /* SOFn */
-                *h = be16(b + at + 5);
-                *w = be16(b + at + 7);
-                return true;
-            }
-            at += 2 + be16(b + at + 2);
-        }
-    }
-    return false;
-}
 
 bool image_load(tinygltf::Image *image, const int index, std::string *err, std::string *warn, int req_w,
                 int req_h, const unsigned char *bytes, int size, void *user)
@@ -429,27 +401,7 @@ bool image_load(tinygltf::Image *image, const int index, std::string *err, std::
             *err += "image " + std::to_string(index) + " is empty\n";
         return false;
     }
-    uint32_t w, h;
-    if (image_header_size(bytes, size_t(size), &w, &h) && uint64_t(w) * h > MAX_IMAGE_PIXELS) {
-        st.limit_msg = "image " + std::to_string(index) + " is " + std::to_string(w) + "x" +
-                       std::to_string(h) + ", beyond the limit of " + std::to_string(MAX_IMAGE_PIXELS) +
-                       " pixels";
-        if (err)
-            *err += st.limit_msg + "\n";
-        return false;
-    }
-    /* stb decoding, expanded to 8- or 16-bit RGBA (tinygltf's default options) */
-    std::string derr;
-    if (tinygltf::LoadImageData(image, index, &derr, warn, req_w, req_h, bytes, size, nullptr))
-        return true;
-    /* An image the decoder cannot read (a corrupt PNG, a KTX2 or WebP named
-     * as a plain source) is not the whole scene's failure: the slots using
-     * it fall back to their factors, as Blender and three.js do, with a
-     * warning (texture_for).  Required extensions are refused earlier. */
-    /* tinygltf's message repeats the index and name; keep what it says */
-    st.undecodable[index] = derr.find("Unknown image format") != std::string::npos
-                                ? std::string("not a PNG or JPEG the decoder can read")
-                                : std::string("the decoder refused it");
+    st.encoded[index].assign(bytes, bytes + size);
     image->image.clear();
     image->width = image->height = 0;
     return true;
@@ -732,9 +684,10 @@ void check_json(const std::vector<unsigned char> &d, bool glb)
 }
 
 /* Parse the file into `model`; `image_errors` gets why external images that
- * tinygltf skipped (with a warning) could not be opened. */
+ * tinygltf skipped (with a warning) could not be opened, `encoded` every
+ * image's bytes, undecoded (image_load). */
 void load_model(tinygltf::Model &model, const char *path, const lie_scene_options &opt,
-                std::map<int, std::string> &image_errors, std::map<int, std::string> &undecodable)
+                std::map<int, std::string> &image_errors, std::map<int, std::vector<unsigned char>> &encoded)
 {
     std::vector<unsigned char> data = read_input(path, opt.files);
 
@@ -753,7 +706,7 @@ void load_model(tinygltf::Model &model, const char *path, const lie_scene_option
             fs.root += '/';
     }
 
-    ImageState images{&model, std::string(), {}};
+    ImageState images{&model, {}};
     tinygltf::TinyGLTF loader;
     tinygltf::FsCallbacks cb;
     cb.FileExists = fs_exists;
@@ -777,8 +730,6 @@ void load_model(tinygltf::Model &model, const char *path, const lie_scene_option
     }
     if (!fs.refused.empty())
         fail(LIE_ERR_UNSUPPORTED, "URI '%s' %s", clean(fs.refused).c_str(), fs.refused_why.c_str());
-    if (!images.limit_msg.empty())
-        fail(LIE_ERR_LIMIT, "%s", images.limit_msg.c_str());
     /* tinygltf's result decides; it also puts notes on problems it tolerated
      * in err.  An external image it could not open is only a warning: that is
      * an error where the image is used (texture_for). */
@@ -789,19 +740,13 @@ void load_model(tinygltf::Model &model, const char *path, const lie_scene_option
 
     for (size_t i = 0; i < model.images.size(); i++) {
         const tinygltf::Image &im = model.images[i];
-        if (im.image.empty() && !im.uri.empty()) {
+        if (!images.encoded.count(int(i)) && !im.uri.empty()) {
             auto it = fs.missing.find(percent_decode(im.uri));
             image_errors[int(i)] = "'" + clean(im.uri) + "': cannot open: " +
                                    (it != fs.missing.end() ? it->second : std::string("not loaded"));
         }
     }
-    for (const auto &u : images.undecodable) {
-        const tinygltf::Image &im = model.images[size_t(u.first)];
-        std::string name = !im.uri.empty() && im.uri.compare(0, 5, "data:") != 0 ? " '" + clean(im.uri) + "'"
-                           : !im.name.empty()                                  ? " '" + clean(im.name) + "'"
-                                                                               : std::string();
-        undecodable[u.first] = "image " + std::to_string(u.first) + name + ": cannot decode (" + clean(u.second) + ")";
-    }
+    encoded.swap(images.encoded);
 }
 
 /* ---- accessors ------------------------------------------------------------
@@ -1333,8 +1278,9 @@ std::vector<double> morph_weights(const tinygltf::Model &m, size_t mi, const std
 struct Import {
     const tinygltf::Model &m;
     lie_scene *s;
-    const std::map<int, std::string> &image_errors; /* from load_model */
-    const std::map<int, std::string> &undecodable;  /* from load_model: images to warn about */
+    const std::map<int, std::string> &image_errors;               /* from load_model */
+    const std::map<int, std::vector<unsigned char>> &encoded;     /* from load_model: images' bytes */
+    std::map<int, tinygltf::Image> decoded;                       /* images decoded so far */
     std::map<int, int> texture_of; /* glTF texture * 2 + srgb -> s->textures index */
     std::set<int> warned;          /* images warned about */
 };
@@ -1368,6 +1314,42 @@ float code_value(size_t i, size_t levels, bool srgb)
     return float(srgb ? srgb_to_linear(c) : c);
 }
 
+/* Image `index` decoded, once: its size from the header first (any format
+ * stb reads), refused past MAX_IMAGE_PIXELS before anything is allocated;
+ * then stb's decoding, expanded to 8- or 16-bit RGBA (tinygltf's default
+ * options).  An image the decoder cannot read sets *why and comes back
+ * without pixels; one that was never loaded comes back without pixels. */
+const tinygltf::Image &decode_image(Import &im, int index, std::string *why)
+{
+    auto done = im.decoded.find(index);
+    if (done != im.decoded.end())
+        return done->second;
+    tinygltf::Image &img = im.decoded[index] = im.m.images[size_t(index)];
+    auto enc = im.encoded.find(index);
+    if (enc == im.encoded.end())
+        return img;
+    const std::vector<unsigned char> &b = enc->second;
+    std::string name = !img.uri.empty() && img.uri.compare(0, 5, "data:") != 0 ? " '" + clean(img.uri) + "'"
+                       : !img.name.empty()                                   ? " '" + clean(img.name) + "'"
+                                                                             : std::string();
+    std::string iw = "image " + std::to_string(index) + name;
+    int w = 0, h = 0, comp = 0;
+    if (!stbi_info_from_memory(b.data(), int(b.size()), &w, &h, &comp)) {
+        *why = iw + ": cannot decode (not an image format the decoder reads)";
+        return img;
+    }
+    if (w <= 0 || h <= 0 || uint64_t(w) * uint64_t(h) > MAX_IMAGE_PIXELS)
+        fail(LIE_ERR_LIMIT, "image %d is %dx%d, beyond the limit of %llu pixels", index, w, h,
+             (unsigned long long)MAX_IMAGE_PIXELS);
+    std::string derr, warn;
+    if (!tinygltf::LoadImageData(&img, index, &derr, &warn, 0, 0, b.data(), int(b.size()), nullptr)) {
+        img.image.clear();
+        img.width = img.height = 0;
+        *why = iw + ": cannot decode (the decoder refused it)";
+    }
+    return img;
+}
+
 /* The lie_texture for glTF texture `ti` in a colour space, made on first use. */
 int texture_for(Import &im, int ti, bool srgb, const std::string &what)
 {
@@ -1384,15 +1366,19 @@ int texture_for(Import &im, int ti, bool srgb, const std::string &what)
         fail(LIE_ERR_UNSUPPORTED, "%s has no image source (only PNG/JPEG sources are supported)", tw.c_str());
     if (size_t(tex.source) >= m.images.size())
         fail(LIE_ERR_FORMAT, "%s: image %d out of range", tw.c_str(), tex.source);
-    const tinygltf::Image &img = m.images[size_t(tex.source)];
     std::string iw = "image " + std::to_string(tex.source);
+    std::string why; /* why the decoder cannot read it */
+    const tinygltf::Image &img = decode_image(im, tex.source, &why);
+    if (!why.empty()) {
+        /* An image the decoder cannot read (a corrupt PNG, a KTX2 or WebP
+         * named as a plain source) is not the whole scene's failure: the
+         * slots using it fall back to their factors, as Blender and three.js
+         * do, with a warning.  Required extensions are refused earlier. */
+        if (im.warned.insert(tex.source).second)
+            scene_warn(im.s, why + "; its textures fall back to their factors");
+        return -1;
+    }
     if (img.image.empty() || img.width <= 0 || img.height <= 0) {
-        auto u = im.undecodable.find(tex.source);
-        if (u != im.undecodable.end()) { /* no texture: the slot keeps its factor */
-            if (im.warned.insert(tex.source).second)
-                scene_warn(im.s, u->second + "; its textures fall back to their factors");
-            return -1;
-        }
         auto e = im.image_errors.find(tex.source);
         if (e != im.image_errors.end())
             fail(LIE_ERR_IO, "%s %s", iw.c_str(), e->second.c_str());
@@ -2119,12 +2105,13 @@ extern "C" lie_status lie_gltf_import(lie_scene *s, const char *path, const lie_
     lie_scene_options o = opt ? *opt : lie_scene_options_default();
     try {
         tinygltf::Model model;
-        std::map<int, std::string> image_errors, undecodable;
-        load_model(model, path, o, image_errors, undecodable);
+        std::map<int, std::string> image_errors;
+        std::map<int, std::vector<unsigned char>> encoded;
+        load_model(model, path, o, image_errors, encoded);
         s->stats.points_skipped = s->stats.lines_skipped = s->stats.prims_without_material = 0;
         import_document(model, s, o);
         s->n_warnings = 0;
-        Import im{model, s, image_errors, undecodable, {}, {}};
+        Import im{model, s, image_errors, encoded, {}, {}, {}};
         import_materials(im);
         import_cameras(model, s);
         import_lights(model, s);
@@ -2807,12 +2794,15 @@ std::map<std::string, std::string> previous_side_files(const std::string &gltf_p
     return out;
 }
 
-void check_side_file(const std::string &path, const std::string &uri,
-                     const std::map<std::string, std::string> &ours)
+/* Returns the open flags of its write: a file absent now is created with
+ * LIE_ATOMIC_NO_REPLACE, so one that appears before the rename is not
+ * replaced either (the test and the write are one step, lib/core). */
+unsigned check_side_file(const std::string &path, const std::string &uri,
+                         const std::map<std::string, std::string> &ours)
 {
     struct stat st;
     if (lstat(path.c_str(), &st) != 0 && errno == ENOENT)
-        return;
+        return LIE_ATOMIC_NO_REPLACE;
     auto it = ours.find(uri);
     unsigned char *d = nullptr;
     size_t n = 0;
@@ -2822,13 +2812,15 @@ void check_side_file(const std::string &path, const std::string &uri,
     free(d);
     if (!same)
         throw ExistsError{path};
+    return 0;
 }
 
 /* Write one output through a temporary file of `group`; `body` fills it. */
-template <class F> lie_status write_atomic(const std::string &path, lie_atomic_group *group, lie_error *err, F body)
+template <class F>
+lie_status write_atomic(const std::string &path, lie_atomic_group *group, lie_error *err, F body, unsigned flags = 0)
 {
     lie_atomic_file af;
-    lie_status st = lie_atomic_open_group(&af, path.c_str(), group, err);
+    lie_status st = lie_atomic_open_flags(&af, path.c_str(), group, flags, err);
     if (st != LIE_OK)
         return st;
     st = body(af.fp);
@@ -2904,23 +2896,28 @@ extern "C" lie_status lie_gltf_export_group(const lie_scene *s, const char *path
             return write_atomic(p, group, err, [&](FILE *fp) { return write_bytes(fp, p, bytes.data(), bytes.size(), err); });
         }
         std::string bin_path = dir + stem + ".bin";
+        std::map<std::string, unsigned> flags; /* per side file (check_side_file) */
         if (!o.force) { /* before anything is written */
             std::map<std::string, std::string> ours = previous_side_files(p);
             if (!ex.bin.empty())
-                check_side_file(bin_path, uri_escape(stem + ".bin"), ours);
+                flags[bin_path] = check_side_file(bin_path, uri_escape(stem + ".bin"), ours);
             for (const Png &png : ex.pngs)
-                check_side_file(png.path, png.uri, ours);
+                flags[png.path] = check_side_file(png.path, png.uri, ours);
         }
         /* the side files first, the .gltf last: a .gltf never names a missing file */
         for (const Png &png : ex.pngs) {
-            st = write_atomic(png.path, group, err,
-                              [&](FILE *fp) { return write_bytes(fp, png.path, png.bytes.data(), png.bytes.size(), err); });
+            st = write_atomic(
+                png.path, group, err,
+                [&](FILE *fp) { return write_bytes(fp, png.path, png.bytes.data(), png.bytes.size(), err); },
+                flags[png.path]);
             if (st != LIE_OK)
                 break;
         }
         if (st == LIE_OK && !ex.bin.empty()) {
-            st = write_atomic(bin_path, group, err,
-                              [&](FILE *fp) { return write_bytes(fp, bin_path, ex.bin.data(), ex.bin.size(), err); });
+            st = write_atomic(
+                bin_path, group, err,
+                [&](FILE *fp) { return write_bytes(fp, bin_path, ex.bin.data(), ex.bin.size(), err); },
+                flags[bin_path]);
         }
         if (st == LIE_OK)
             st = write_atomic(p, group, err, [&](FILE *fp) { return write_bytes(fp, p, json.data(), json.size(), err); });

@@ -269,11 +269,16 @@ static lie_status load(run *r, int quiet)
     const lie_animation *an = &s->animations[r->a];
     r->duration = (double)an->end - an->start;
     if (!r->have_frames) {
+        /* the last frame, compared before it is converted: an end of 1e30 s
+         * (a last key, or an unused sampler's) must not reach the cast */
+        double last = floor(r->duration * r->fps + 1e-6);
+        if (!(last <= 999999.0))
+            return lie_error_set(err, LIE_ERR_LIMIT, r->scene_path,
+                                 "%.6g frames (%.6g s at %g fps): more than 1000000", last + 1.0, r->duration,
+                                 r->fps);
         r->fa = 0;
-        r->fb = (long)floor(r->duration * r->fps + 1e-6);
+        r->fb = (long)last;
     }
-    if (r->fb > 999999)
-        return lie_error_set(err, LIE_ERR_LIMIT, r->scene_path, "%ld frames: more than 1000000", r->fb + 1);
     return pick_targets(s, r->a, quiet, r->scene_path, &r->tg, err);
 }
 
@@ -321,7 +326,14 @@ static lie_status write_frames(run *r)
             for (int k = 0; k < r->tg.n_trs; k++)
                 r->s->nodes[r->tg.trs_nodes[k]].local =
                     lie_node_trs_matrix(pose->trs + 10 * (size_t)r->tg.trs_nodes[k]);
-            r->cp.keys[r->cp.n_keys++] = camera_key(r->s, r->cam);
+            lie_camera_key k = camera_key(r->s, r->cam);
+            if (!lie_v3_within(k.eye, LIE_CAMERA_COORD_MAX) || !lie_v3_within(k.target, LIE_CAMERA_COORD_MAX)) {
+                st = lie_error_set(&r->err, LIE_ERR_LIMIT, r->scene_path,
+                                   "frame %ld: the camera is outside the coordinate range (+-%g)", f,
+                                   (double)LIE_CAMERA_COORD_MAX);
+                break;
+            }
+            r->cp.keys[r->cp.n_keys++] = k;
         }
     }
     lie_pose_destroy(pose);
