@@ -352,7 +352,12 @@ lie_status lie_read_file(const char *path, unsigned char **data, size_t *size, l
  * reader's checks) and adds what it read, LIE_FILES_ONLY fails with
  * "cannot open: " LIE_FILE_SET_MISSING.  A NULL set means the file system.
  * Not thread-safe: one load at a time. */
-typedef enum { LIE_FILES_RECORD, LIE_FILES_ONLY } lie_file_set_mode;
+typedef enum {
+    LIE_FILES_RECORD,
+    LIE_FILES_ONLY,
+    LIE_FILES_NAMES /* like RECORD, but only the names and identities of the files read are kept, not
+                     * their bytes: a run's inputs, for lie_file_set_claim */
+} lie_file_set_mode;
 typedef struct lie_file_set lie_file_set;
 #define LIE_FILE_SET_MISSING "not among the files read by the first process"
 /* NULL when out of memory; destroy accepts NULL. */
@@ -370,6 +375,22 @@ lie_status lie_file_set_read(lie_file_set *set, const char *path, uint64_t max, 
                              lie_error *err);
 /* Could path be read: held, or (not LIE_FILES_ONLY) it exists on disk. */
 int lie_file_set_exists(const lie_file_set *set, const char *path);
+/* A run's inputs and outputs (CONTRIBUTING.md, Files): an output must be
+ * neither an input nor another output of the run.  lie_file_set_note adds
+ * an input read outside the set (its identity: device and inode); _note_all
+ * adds every input of `from`.  lie_file_set_claim checks an output about to
+ * be written against every input and every output claimed before, as the
+ * same file (device and inode) or, for one not there yet, the same resolved
+ * path, and claims it; "-", devices and FIFOs always pass.  `replaces`
+ * (may be NULL) names the one input this output is the new version of (a
+ * cache updated in place), which it may replace.  The error: "OUT: is also
+ * the input IN: refusing to write over it".  set NULL: nothing is checked. */
+lie_status lie_file_set_note(lie_file_set *set, const char *path, lie_error *err);
+lie_status lie_file_set_note_all(lie_file_set *set, const lie_file_set *from, lie_error *err);
+lie_status lie_file_set_claim(lie_file_set *set, const char *path, const char *replaces, lie_error *err);
+/* The same check, without claiming: for the many outputs of a pattern
+ * (frame_%04d.exr), distinct by construction. */
+lie_status lie_file_set_check(lie_file_set *set, const char *path, lie_error *err);
 /* The set as one malloc'd buffer, and back (the result is LIE_FILES_ONLY;
  * every length is checked). */
 lie_status lie_file_set_pack(const lie_file_set *set, unsigned char **data, size_t *size, lie_error *err);

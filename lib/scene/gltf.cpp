@@ -2896,6 +2896,12 @@ extern "C" lie_status lie_gltf_export_group(const lie_scene *s, const char *path
             return write_atomic(p, group, err, [&](FILE *fp) { return write_bytes(fp, p, bytes.data(), bytes.size(), err); });
         }
         std::string bin_path = dir + stem + ".bin";
+        /* a side file must be neither an input nor another output of the run */
+        if (!ex.bin.empty() && (st = lie_file_set_claim(o.files, bin_path.c_str(), nullptr, err)) != LIE_OK)
+            return st;
+        for (const Png &png : ex.pngs)
+            if ((st = lie_file_set_claim(o.files, png.path.c_str(), nullptr, err)) != LIE_OK)
+                return st;
         std::map<std::string, unsigned> flags; /* per side file (check_side_file) */
         if (!o.force) { /* before anything is written */
             std::map<std::string, std::string> ours = previous_side_files(p);

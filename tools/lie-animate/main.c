@@ -207,8 +207,22 @@ typedef struct run {
     double duration; /* the animation's, in seconds */
     targets tg;
     lie_camera_path cp;
+    lie_file_set *files; /* the scene's files: no output may replace one */
     lie_error err;
 } run;
+
+/* Every frame's file and --camera-path: none an input, nor the path one of
+ * the frames; checked before the first is written. */
+static lie_status check_outputs(run *r)
+{
+    lie_status st = r->path_out ? lie_file_set_claim(r->files, r->path_out, NULL, &r->err) : LIE_OK;
+    for (long f = r->fa; st == LIE_OK && f <= r->fb; f++) {
+        char name[4096];
+        snprintf(name, sizeof name, r->output, (int)f);
+        st = lie_file_set_check(r->files, name, &r->err);
+    }
+    return st;
+}
 
 /* The options: -1 to go on, or the exit status. */
 static int parse_options(run *r, lie_cli *cli, int argc, char **argv)
@@ -253,6 +267,9 @@ static int parse_options(run *r, lie_cli *cli, int argc, char **argv)
 static lie_status load(run *r, int quiet)
 {
     lie_error *err = &r->err;
+    if (!(r->files = lie_file_set_create(LIE_FILES_NAMES)))
+        return lie_error_set(err, LIE_ERR_NOMEM, r->scene_path, "out of memory");
+    r->so.files = r->files;
     lie_status st = lie_scene_load(r->scene_path, &r->so, &r->s, err);
     if (st != LIE_OK)
         return st;
@@ -379,6 +396,8 @@ int main(int argc, char **argv)
     if (st == LIE_OK && r.path_out)
         st = camera_path_start(&r);
     if (st == LIE_OK)
+        st = check_outputs(&r);
+    if (st == LIE_OK)
         st = write_frames(&r);
     if (st == LIE_OK && r.path_out) {
         r.cp.smooth = 0; /* one key per frame: frame i is key i exactly */
@@ -393,5 +412,6 @@ int main(int argc, char **argv)
     free(r.tg.trs_nodes);
     free(r.tg.w_nodes);
     lie_scene_destroy(r.s);
+    lie_file_set_destroy(r.files);
     return rc;
 }

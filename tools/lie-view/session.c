@@ -257,7 +257,9 @@ void session_key(session *S, const SDL_KeyboardEvent *k, int *quit)
             say(S, done ? (redo ? "redone" : "undone") : (redo ? "nothing to redo" : "nothing to undo"));
     } else if (ctrl && key == SDLK_s) {
         const char *out = S->save ? S->save : "lie-view.lie";
-        st = view_world_save(S->w, out, &err);
+        st = S->save ? LIE_OK : lie_file_set_check(S->files, out, &err); /* --save was claimed at the start */
+        if (st == LIE_OK)
+            st = view_world_save(S->w, out, &err);
         if (st == LIE_OK)
             say(S, "wrote %s", out);
     } else if (key == SDLK_w) {
