@@ -218,5 +218,22 @@ for f in bmp ppm pgm tga gif hdr psd; do
         not_ok "the same $f unused: exit $rc in $((end - start)) s"; sed 's/^/# /' "$TMP/err" | head -3
     fi
 done
+# ---- a removed skin joint still poses its mesh: --write-scene writes it bare
+cp "$G/animated.gltf" anim.gltf
+"$B/lie-build" anim.gltf $BUILD -o anim.lie || not_ok "build animated.gltf"
+for joint in Bone0 Bone1; do
+    printf -- '- remove: {node: %s}\n' $joint >rm.yaml
+    run "$B/rst-update" anim.lie rm.yaml -q -o rm.lie --write-scene rm.gltf
+    expect_rc 0 "remove the joint $joint, then --write-scene"
+    run "$B/lie-build" rm.gltf $BUILD -o rebuilt.lie
+    expect_rc 0 "the written scene builds"
+    "$B/lie-inspect" diff rm.lie rebuilt.lie | tail -1 | grep -qx same &&
+        ok "and equals the update (lie-inspect diff)" || not_ok "$joint: the written scene differs from the update"
+done
+printf -- '- remove: {node: Bone0}\n- remove: {node: Arm}\n' >rm.yaml
+run "$B/rst-update" anim.lie rm.yaml -q -o rm.lie --write-scene rm2.gltf
+expect_rc 0 "remove the joint and its mesh"
+python3 -c "import json,sys; d=json.load(open('rm2.gltf')); sys.exit(0 if not d.get('skins') and all(n.get('name') not in ('Bone0', 'Arm') for n in d['nodes']) else 1)" &&
+    ok "neither is written" || not_ok "rm2.gltf still holds the joint or the skin"
 expect_no_temp "$T" "no temporary left"
 finish

@@ -347,6 +347,15 @@ void session_key(session *S, const SDL_KeyboardEvent *k, int *quit)
 
 /* ---- scripts ----------------------------------------------------------------- */
 
+/* The node or an ancestor removed: it is not in the scene. */
+static int node_removed(const lie_scene *s, int node)
+{
+    for (int a = node, hops = 0; a >= 0 && a < s->n_nodes && hops <= s->n_nodes; a = s->nodes[a].parent, hops++)
+        if (s->nodes[a].removed)
+            return 1;
+    return 0;
+}
+
 
 int session_script_step(session *S, script_run *R, uint64_t images, int idle)
 {
@@ -391,6 +400,8 @@ int session_script_step(session *S, script_run *R, uint64_t images, int idle)
             int node;
             view_world_read_lock(S->w);
             st = lie_edit_find_node(view_world_scene(S->w), c->arg, &node, R->path, c->line, 1, &err);
+            if (st == LIE_OK && node_removed(view_world_scene(S->w), node)) /* nothing to act on: refused */
+                st = lie_error_set_at(&err, LIE_ERR_ARG, R->path, c->line, 1, "select: node '%s' was removed", c->arg);
             view_world_read_unlock(S->w);
             if (st == LIE_OK)
                 session_select(S, node);

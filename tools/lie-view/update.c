@@ -60,8 +60,9 @@ static void ref(char *out, size_t size, int node) { snprintf(out, size, "'#%d'",
  * when it adds a node (edit files have no operation taking an added node
  * out again; a removal is undone by `restore`).  Absolute values, so the order of the restoring
  * operations does not matter: a node's local transform, and per mesh node
- * of a subtree the first material's colour, metallic, roughness and
- * emission (a base colour texture that set-material dropped stays dropped). */
+ * of a subtree each primitive's own material (`primitive: K`): colour,
+ * metallic, roughness and emission (a base colour texture that set-material
+ * dropped stays dropped). */
 static char *inverse_of(const lie_scene *s, const lie_edit *e, int *removes)
 {
     buf b = {0};
@@ -90,16 +91,21 @@ static char *inverse_of(const lie_scene *s, const lie_edit *e, int *removes)
                 if (!in[n] || done_mat[n] || s->nodes[n].mesh < 0 || s->meshes[s->nodes[n].mesh].n_prims == 0)
                     continue;
                 done_mat[n] = 1;
-                const lie_material *m = lie_scene_material(s, s->meshes[s->nodes[n].mesh].prims[0].material);
-                float peak = fmaxf(m->emissive[0], fmaxf(m->emissive[1], m->emissive[2]));
                 ref(r, sizeof r, n);
-                put(&b, "- set-material: {node: %s, base-color: [%.9g, %.9g, %.9g], metallic: %.9g, roughness: %.9g}\n",
-                    r, m->base_color[0], m->base_color[1], m->base_color[2], m->metallic, m->roughness);
-                if (peak > 0.0f)
-                    put(&b, "- set-emission: {node: %s, emissive: [%.9g, %.9g, %.9g], strength: %.9g}\n", r,
-                        m->emissive[0] / peak, m->emissive[1] / peak, m->emissive[2] / peak, peak);
-                else
-                    put(&b, "- set-emission: {node: %s, emissive: [0, 0, 0]}\n", r);
+                const lie_mesh *mesh = &s->meshes[s->nodes[n].mesh];
+                for (int pi = 0; pi < mesh->n_prims; pi++) { /* each primitive its own material back */
+                    const lie_material *m = lie_scene_material(s, mesh->prims[pi].material);
+                    float peak = fmaxf(m->emissive[0], fmaxf(m->emissive[1], m->emissive[2]));
+                    put(&b,
+                        "- set-material: {node: %s, primitive: %d, base-color: [%.9g, %.9g, %.9g], metallic: %.9g, "
+                        "roughness: %.9g}\n",
+                        r, pi, m->base_color[0], m->base_color[1], m->base_color[2], m->metallic, m->roughness);
+                    if (peak > 0.0f)
+                        put(&b, "- set-emission: {node: %s, primitive: %d, emissive: [%.9g, %.9g, %.9g], strength: %.9g}\n",
+                            r, pi, m->emissive[0] / peak, m->emissive[1] / peak, m->emissive[2] / peak, peak);
+                    else
+                        put(&b, "- set-emission: {node: %s, primitive: %d, emissive: [0, 0, 0]}\n", r, pi);
+                }
             }
         } else if (!done_tf[node]) {
             done_tf[node] = 1;
