@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* --script FILE: one command a line, '#' comments (see lie-view --help).
  * A '#' inside single or double quotes is not a comment, so a node is
  * selected by index as edit files name it, `select '#3'` (an unquoted #3
