@@ -54,7 +54,31 @@ typedef struct build {
     /* the pieces so far */
     lie_poly2 *polys;
     int n_polys, cap_polys;
+    /* the parts' boundaries so far: vertices (s, t), edges (vertex pairs) */
+    double *bv;
+    int32_t *be;
+    int n_bv, cap_bv, n_be, cap_be;
 } build;
+
+/* Room for m more boundary vertices and edges. */
+static int boundary_room(build *b, int m)
+{
+    if (b->n_bv + m > b->cap_bv) {
+        int cap = 2 * (b->n_bv + m);
+        double *nv = realloc(b->bv, sizeof *nv * 2 * (size_t)cap);
+        if (!nv)
+            return -1;
+        b->bv = nv, b->cap_bv = cap;
+    }
+    if (b->n_be + m > b->cap_be) {
+        int cap = 2 * (b->n_be + m);
+        int32_t *ne = realloc(b->be, sizeof *ne * 2 * (size_t)cap);
+        if (!ne)
+            return -1;
+        b->be = ne, b->cap_be = cap;
+    }
+    return 0;
+}
 
 static int push_piece(build *b, const lie_poly2 *p)
 {
@@ -291,8 +315,16 @@ static int part_pieces(build *b, int part, const uint32_t *tris, int nt, const d
     }
     free(hull);
     if (p.n && fabs(lie_poly_area(&p) - area) <= 1e-5 * area) {
-        /* the triangles tile their hull (a quad, a tessellated panel): one piece */
+        /* the triangles tile their hull (a quad, a tessellated panel): one
+         * piece, its own boundary */
         free(pts);
+        if (boundary_room(b, p.n) < 0)
+            return -1;
+        for (int k = 0; k < p.n; k++) {
+            b->bv[2 * (b->n_bv + k)] = p.s[k], b->bv[2 * (b->n_bv + k) + 1] = p.t[k];
+            b->be[2 * (b->n_be + k)] = k, b->be[2 * (b->n_be + k) + 1] = (k + 1) % p.n;
+        }
+        b->n_bv += p.n, b->n_be += p.n;
         return push_piece(b, &p);
     }
     mesh2 m;
@@ -302,6 +334,33 @@ static int part_pieces(build *b, int part, const uint32_t *tris, int nt, const d
         return -1;
     }
     free(pts);
+    /* the boundary: half-edges with no twin, before merging removes any */
+    int *local = malloc(sizeof *local * (size_t)m.nv + 1);
+    if (!local || boundary_room(b, m.nh) < 0) {
+        free(local);
+        mesh2_free(&m);
+        return -1;
+    }
+    for (int v = 0; v < m.nv; v++)
+        local[v] = -1;
+    int nbv = 0;
+    for (int h = 0; h < m.nh; h++) {
+        if (m.twin[h] >= 0)
+            continue;
+        const int ends[2] = {m.from[h], to_of(&m, h)};
+        for (int k = 0; k < 2; k++) {
+            if (local[ends[k]] < 0) {
+                local[ends[k]] = nbv;
+                b->bv[2 * (b->n_bv + nbv)] = V(&m, ends[k])[0];
+                b->bv[2 * (b->n_bv + nbv) + 1] = V(&m, ends[k])[1];
+                nbv++;
+            }
+            b->be[2 * b->n_be + k] = local[ends[k]];
+        }
+        b->n_be++;
+    }
+    b->n_bv += nbv;
+    free(local);
     cand *cs = malloc(sizeof *cs * (size_t)m.nh + 1);
     if (!cs) {
         mesh2_free(&m);
@@ -433,6 +492,16 @@ static int group(build *b, lie_polypart **parts_out, int *n_parts_out)
     return 0;
 }
 
+/* The box of part P's boundary vertices bv[0..n) in (s, t), so of the part. */
+static void part_box(lie_polypart *P, const double *bv, int n)
+{
+    P->s0 = P->t0 = INFINITY, P->s1 = P->t1 = -INFINITY;
+    for (int i = 0; i < n; i++) {
+        P->s0 = fmin(P->s0, bv[2 * i]), P->s1 = fmax(P->s1, bv[2 * i]);
+        P->t0 = fmin(P->t0, bv[2 * i + 1]), P->t1 = fmax(P->t1, bv[2 * i + 1]);
+    }
+}
+
 lie_status lie_polylight_create(const lie_scene *s, int e, lie_polylight **out)
 {
     *out = NULL;
@@ -470,12 +539,17 @@ lie_status lie_polylight_create(const lie_scene *s, int e, lie_polylight **out)
         for (uint32_t i = 0; i < n; i++)
             if (b.part[i] == j)
                 tris[nt++] = f + i;
-        parts[j].first = b.n_polys;
-        int r = part_pieces(&b, j, tris, nt, parts[j].po, parts[j].pu, parts[j].pv);
+        lie_polypart *P = &parts[j];
+        P->first = b.n_polys;
+        P->first_bv = b.n_bv;
+        P->first_be = b.n_be;
+        int r = part_pieces(&b, j, tris, nt, P->po, P->pu, P->pv);
         if (r < 0)
             st = LIE_ERR_NOMEM;
         ok = r > 0;
-        parts[j].n = b.n_polys - parts[j].first;
+        P->n = b.n_polys - P->first;
+        P->n_be = b.n_be - P->first_be;
+        part_box(P, b.bv + 2 * (size_t)P->first_bv, b.n_bv - P->first_bv);
     }
     free(tris);
     free(b.order);
@@ -483,6 +557,8 @@ lie_status lie_polylight_create(const lie_scene *s, int e, lie_polylight **out)
         free(parts);
         free(b.part);
         free(b.polys);
+        free(b.bv);
+        free(b.be);
         free(L);
         return st; /* too many pieces (or no area): sampled */
     }
@@ -498,6 +574,8 @@ lie_status lie_polylight_create(const lie_scene *s, int e, lie_polylight **out)
     L->n_polys = b.n_polys;
     L->polys = b.polys;
     L->tri_part = b.part;
+    L->bv = b.bv;
+    L->be = b.be;
     *out = L;
     return LIE_OK;
 }
@@ -509,5 +587,7 @@ void lie_polylight_destroy(lie_polylight *L)
     free(L->parts);
     free(L->polys);
     free(L->tri_part);
+    free(L->bv);
+    free(L->be);
     free(L);
 }

@@ -69,7 +69,9 @@ lie_status lie_polylight_work_init(lie_polylight_work *w, int max_blockers)
     w->a = malloc(sizeof *w->a * LIE_POLY_MAXP);
     w->idx = malloc(sizeof *w->idx * 2 * (size_t)w->cap);
     w->pts = malloc(sizeof *w->pts * 2 * (6 * (size_t)w->cap + 1));
-    if (!w->a || !w->idx || !w->pts) {
+    w->whole = malloc(sizeof *w->whole * LIE_POLYLIGHT_MAX_PIECES);
+    w->n = w->n_whole = 0;
+    if (!w->a || !w->idx || !w->pts || !w->whole) {
         lie_polylight_work_free(w);
         return LIE_ERR_NOMEM;
     }
@@ -83,6 +85,7 @@ void lie_polylight_work_free(lie_polylight_work *w)
     LIE_FREE(w->a);
     LIE_FREE(w->idx);
     LIE_FREE(w->pts);
+    LIE_FREE(w->whole);
 }
 
 /* ---- per shading point --------------------------------------------------- */
@@ -223,14 +226,57 @@ static double part_sum(const view *vw, const lie_poly2 *p, int m, d3 n)
     return 0.5 * fabs(sum);
 }
 
+/* Lambert's edge sum over part P's boundary edges, seen through vw:
+ * twice its projected solid angle, signed by its winding. */
+static double boundary_sum(const lie_polylight *L, const lie_polypart *P, const view *vw, d3 n)
+{
+    const double *bv = L->bv + 2 * (size_t)P->first_bv;
+    const int32_t *be = L->be + 2 * (size_t)P->first_be;
+    double sum = 0.0;
+    for (int k = 0; k < P->n_be; k++) {
+        const double *a = &bv[2 * be[2 * k]], *b = &bv[2 * be[2 * k + 1]];
+        d3 qa = {vw->w.x + a[0] * vw->u.x + a[1] * vw->v.x, vw->w.y + a[0] * vw->u.y + a[1] * vw->v.y,
+                 vw->w.z + a[0] * vw->u.z + a[1] * vw->v.z};
+        d3 qb = {vw->w.x + b[0] * vw->u.x + b[1] * vw->v.x, vw->w.y + b[0] * vw->u.y + b[1] * vw->v.y,
+                 vw->w.z + b[0] * vw->u.z + b[1] * vw->v.z};
+        d3 c = d3_cross(qa, qb);
+        double cl = sqrt(d3_dot(c, c));
+        if (cl > 0.0)
+            sum += atan2(cl, d3_dot(qa, qb)) * (d3_dot(n, c) / cl);
+    }
+    return sum;
+}
+
+/* Whether all of part P lies strictly above the plane of form f (its
+ * box's corners do: the least of a linear form over a box is at a corner). */
+static int part_above(const lie_polypart *P, form f)
+{
+    return f.c + fmin(f.cs * P->s0, f.cs * P->s1) + fmin(f.ct * P->t0, f.ct * P->t1) > 0.0;
+}
+
 double lie_polylight_unshadowed(const lie_polylight *L, lie_vec3 o, lie_vec3 n, lie_vec3 ng,
                                 lie_polylight_work *w)
 {
     double omega = 0.0, d;
     const d3 N = d3_of(n);
     int m = 0;
+    w->n_whole = 0;
     for (int j = 0; j < L->n_parts; j++) {
+        const lie_polypart *P = &L->parts[j];
         view vw;
+        vw.w = d3_sub((d3){P->po[0], P->po[1], P->po[2]}, d3_of(o));
+        vw.u = (d3){P->pu[0], P->pu[1], P->pu[2]};
+        vw.v = (d3){P->pv[0], P->pv[1], P->pv[2]};
+        if (P->n > 1 && part_above(P, form_of(&vw, N)) && part_above(P, form_of(&vw, d3_of(ng)))) {
+            /* wholly above both tangent planes: no clipping, and the
+             * boundary alone (shared edges cancel) */
+            d = P->pn[0] * vw.w.x + P->pn[1] * vw.w.y + P->pn[2] * vw.w.z;
+            if (!(d < 0.0) && !(L->two_sided && d > 0.0))
+                continue;
+            omega += 0.5 * fabs(boundary_sum(L, P, &vw, N));
+            w->whole[w->n_whole++] = j;
+            continue;
+        }
         int mp = part_pieces(L, j, o, n, ng, &vw, &d, w->a + m); /* pieces <= LIE_POLYLIGHT_MAX_PIECES: room */
         omega += part_sum(&vw, w->a + m, mp, N);
         m += mp;
@@ -555,7 +601,7 @@ int lie_polylight_visible(const lie_polylight *L, lie_vec3 o, lie_vec3 n, lie_ve
                           lie_polylight_work *w, double *omega)
 {
     *omega = 0.0;
-    w->n = 0;
+    w->n = w->n_whole = 0;
     if (n_blockers > w->cap)
         return -1;
     int m = 0;
@@ -574,23 +620,32 @@ int lie_polylight_visible(const lie_polylight *L, lie_vec3 o, lie_vec3 n, lie_ve
     return 0;
 }
 
+/* radiance-free LTC integral of piece p (of its part's plane) from o, added to acc */
+static void piece_ltc(const lie_polylight *L, const lie_ltc_shading *sh, lie_vec3 o, const lie_poly2 *p, float acc[3])
+{
+    const lie_polypart *P = &L->parts[p->part];
+    const double wx = P->po[0] - o.x, wy = P->po[1] - o.y, wz = P->po[2] - o.z;
+    lie_vec3 v[LIE_POLY_MAXV];
+    for (int i = 0; i < p->n; i++) {
+        double s = p->s[i], t = p->t[i];
+        v[i] = lie_v3((float)(wx + s * P->pu[0] + t * P->pv[0]), (float)(wy + s * P->pu[1] + t * P->pv[1]),
+                      (float)(wz + s * P->pu[2] + t * P->pv[2]));
+    }
+    float f[3];
+    lie_ltc_polygon(sh, v, p->n, f);
+    acc[0] += f[0], acc[1] += f[1], acc[2] += f[2];
+}
+
 void lie_polylight_ltc(const lie_polylight *L, const lie_ltc_shading *sh, lie_vec3 o, const lie_polylight_work *w,
                        float out[3])
 {
     float acc[3] = {0.0f, 0.0f, 0.0f};
-    for (int k = 0; k < w->n; k++) {
-        const lie_poly2 *p = &w->a[k];
-        const lie_polypart *P = &L->parts[p->part];
-        const double wx = P->po[0] - o.x, wy = P->po[1] - o.y, wz = P->po[2] - o.z;
-        lie_vec3 v[LIE_POLY_MAXV];
-        for (int i = 0; i < p->n; i++) {
-            double s = p->s[i], t = p->t[i];
-            v[i] = lie_v3((float)(wx + s * P->pu[0] + t * P->pv[0]), (float)(wy + s * P->pu[1] + t * P->pv[1]),
-                          (float)(wz + s * P->pu[2] + t * P->pv[2]));
-        }
-        float f[3];
-        lie_ltc_polygon(sh, v, p->n, f);
-        acc[0] += f[0], acc[1] += f[1], acc[2] += f[2];
+    for (int k = 0; k < w->n; k++)
+        piece_ltc(L, sh, o, &w->a[k], acc);
+    for (int k = 0; k < w->n_whole; k++) { /* above both tangent planes: the pieces as they are */
+        const lie_polypart *P = &L->parts[w->whole[k]];
+        for (int i = P->first; i < P->first + P->n; i++)
+            piece_ltc(L, sh, o, &L->polys[i], acc);
     }
     for (int c = 0; c < 3; c++)
         out[c] = L->radiance[c] * acc[c];

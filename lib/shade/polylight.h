@@ -40,11 +40,19 @@ typedef struct lie_poly2 {
     double s[LIE_POLY_MAXV], t[LIE_POLY_MAXV];
 } lie_poly2;
 
-/* One plane of the emitter: its frame and its convex pieces
- * polys[first, first + n). */
+/* One plane of the emitter: its frame, its convex pieces polys[first,
+ * first + n), and its boundary: the edges of its triangles that no other
+ * triangle of the part runs back along (shared edges cancel in the edge
+ * sum), bv[first_bv + be[2 k]] -> bv[first_bv + be[2 k + 1]] for k in
+ * [first_be, first_be + n_be), as (s, t) pairs, and a box holding it.
+ * A part wholly above a point's tangent planes is summed over its boundary
+ * (about half the edges of its pieces on a strip); one the planes cut, over
+ * its clipped pieces. */
 typedef struct lie_polypart {
     double po[3], pu[3], pv[3], pn[3];
     int first, n;
+    int first_bv, first_be, n_be;
+    double s0, s1, t0, t1;       /* the box of its boundary in (s, t) */
 } lie_polypart;
 
 /* Any emitter of one radiance made of triangles: its triangles grouped by
@@ -68,6 +76,8 @@ typedef struct lie_polylight {
     int n_polys;                 /* pieces, over all parts */
     lie_poly2 *polys;
     int32_t *tri_part;           /* per own triangle (first_tri + i), its part; -1: of no area */
+    double *bv;                  /* boundary vertices (s, t), all parts */
+    int32_t *be;                 /* boundary edges, vertex pairs within a part */
 } lie_polylight;
 
 /* The emitter as planar parts of convex pieces, or *out = NULL with LIE_OK
@@ -83,6 +93,8 @@ void lie_polylight_destroy(lie_polylight *L);
 typedef struct lie_polylight_work {
     lie_poly2 *a;    /* the pieces */
     int n;           /* how many the last unshadowed() or visible() left in a (0 on -1) */
+    int *whole;      /* parts the last unshadowed() took whole (their pieces are not in a) */
+    int n_whole;
     uint32_t *idx;   /* 2 cap */
     double *pts;     /* 2 (6 cap + 1) */
     int cap;
