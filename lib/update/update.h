@@ -121,13 +121,12 @@ lie_status lie_update_create(lie_cache *cache, lie_scene *scene, const lie_updat
  * keeps its last committed state, the scene its edits. */
 void lie_update_destroy(lie_update *u);
 
-/* Phase 1: apply one parsed edit file to the scene and mark the units it
- * may change pending.  `text` (`size` bytes) is the file's full text and
- * edit->name its name, both copied for the edit log.  On an error the
+/* Phase 1: apply one edit to the scene and mark the units it may change
+ * pending.  The edit log gets edit->name and the edit's text (lie_edit_text:
+ * a parsed file's text as it was, a built edit's written form).  On an error the
  * scene may be partly edited and the update is unusable (every later call
  * fails); the cache is untouched. */
-lie_status lie_update_edit(lie_update *u, const lie_edit *edit, const unsigned char *text, size_t size,
-                           lie_error *err);
+lie_status lie_update_edit(lie_update *u, const lie_edit *edit, lie_error *err);
 
 /* Phase 2: recompute up to max_units pending units (0 = all), in unit
  * order; commit when none is left.  *remaining (may be NULL) receives the
@@ -147,12 +146,11 @@ lie_status lie_update_snapshot(const lie_update *u, lie_env **out, lie_error *er
  * committed, until the next edit). */
 void lie_update_get_stats(const lie_update *u, lie_update_stats *stats);
 
-/* All of it: create, every edit file in order (texts[i] of sizes[i] bytes
- * for the log), steps to completion, destroy.  The cache then holds the
+/* All of it: create, every edit in order (lie_update_edit), steps to
+ * completion, destroy.  The cache then holds the
  * edited scene's environments and longer edit log; scene is edited.
  * stats may be NULL. */
-lie_status lie_update_apply(lie_cache *cache, lie_scene *scene, const lie_edit *const *edits,
-                            const unsigned char *const *texts, const size_t *sizes, int n_edits,
+lie_status lie_update_apply(lie_cache *cache, lie_scene *scene, const lie_edit *const *edits, int n_edits,
                             const lie_update_options *opt, lie_update_stats *stats, lie_error *err);
 
 
@@ -184,6 +182,11 @@ typedef struct lie_ctor_options {
     lie_build_params params; /* as lie-build's (params.threads is ignored: one per constructor thread) */
     int whole;               /* build every unit, as lie-build without --view; the views only order it */
     int view_width, view_height, max_depth; /* how views are sampled (lie_cache_views) */
+    /* The views, all known at the start (a camera path's frames): the
+     * units are built for them, and lie_ctor_view only orders the work. */
+    const lie_camera *views;
+    int n_views;
+    int manual;              /* no constructor threads: units are built by lie_ctor_build only */
 } lie_ctor_options;
 lie_ctor_options lie_ctor_options_default(void);
 
@@ -226,6 +229,14 @@ void lie_ctor_release(lie_ctor *c);
  * scale, set-transform); otherwise every unit is built again.  An edit that
  * changes the number of triangles or emitter clusters is refused. */
 lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie_error *err);
+
+/* Build now, on `threads` workers of the caller (0: all cores), every
+ * pending triangle with mask[t] set (n_tris bytes), or (mask NULL) every
+ * pending triangle the camera `cam` sees in the views' sampling (as
+ * lie_camera_mark_visible).  *built (may be NULL): triangles built.  For a
+ * manual constructor (the caller renders between builds), or a held one. */
+lie_status lie_ctor_build(lie_ctor *c, const uint8_t *mask, const lie_camera *cam, int threads, uint64_t *built,
+                          lie_error *err);
 
 /* Wait until nothing is pending (seconds < 0: no limit); 1: done, 0: not
  * yet (or held), -1: the constructor failed (err filled, may be NULL). */
