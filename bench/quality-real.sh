@@ -12,8 +12,8 @@
 # Per method and budget: seconds of rendering, and the per-pixel error over
 # lit pixels (exr-compare --error: RMSE, p99, share above 2%) against a
 # converged image: full visibility at TRUTH light samples (rotated patterns),
-# rendered once and kept in out/truth/ (delete it after a change to the
-# shading).  Then per method the time to p99 <= 2%: the first budget that
+# rendered once and kept in out/truth/ (delete it, or out/bench-scenes/, after
+# a change to the shading or to bench/lambert.c).  Then per method the time to p99 <= 2%: the first budget that
 # gets there, else "~T" extrapolated from its last two budgets (p99 taken
 # as a power of the time), else "-".  A method's ladder stops at the first
 # budget within 2%, or once a render takes longer than STOP seconds.
@@ -40,10 +40,11 @@
 # Writes out/bench-quality-real.json, out/bench-quality-real.dat (one line
 # per render: scene method budget seconds p99 over2 rmse) and the figure
 # out/bench-quality.svg (p99 against seconds, log-log, one curve per method
-# and scene; gnuplot).
+# and scene; gnuplot).  BIN=DIR measures DIR's lie-render and lie-build.
 set -e
 cd "$(dirname "$0")/.."
 QSIZE=${QSIZE:-256x256}
+BIN=${BIN:-bin} # the lie-render and lie-build to measure
 THREADS=${THREADS:-2}
 LADDER=${REAL_LADDER:-16 64 256 1024}
 CYCLES_LADDER=${CYCLES_LADDER:-16 64 256 1024 4096}
@@ -60,7 +61,7 @@ TMP=$(mktemp -d); trap 'rm -rf "$TMP"' EXIT
 field() { sed -n "s/.*\"$1\":\"\{0,1\}\([^,\"}]*\).*/\1/p"; }
 pct() { awk -v x="$1" 'BEGIN { printf "%.2f%%", 100 * x }'; }
 
-has() { bin/lie-render --help | grep -q -- "$1"; }
+has() { "$BIN"/lie-render --help | grep -q -- "$1"; }
 SEED=0; has '--seed' && SEED=1
 SAMPLER=0; has '--light-sampler' && SAMPLER=1
 CYCLES=0; command -v blender >/dev/null 2>&1 && CYCLES=1
@@ -78,7 +79,7 @@ lights_punctual_lamp|../shared/scenes/lights_punctual_lamp/LightsPunctualLamp.gl
 # render INPUT OUT.exr ARGS...: seconds_render (stats on stderr in $TMP/last.json)
 render() {
     input=$1; out=$2; shift 2
-    bin/lie-render "$input" --size "$QSIZE" --threads "$THREADS" -q --stats=json -o "$out" "$@" 2>"$TMP/last.json"
+    "$BIN"/lie-render "$input" --size "$QSIZE" --threads "$THREADS" -q --stats=json -o "$out" "$@" 2>"$TMP/last.json"
     field seconds_render <"$TMP/last.json"
 }
 
@@ -117,7 +118,7 @@ echo "$SCENES" | while IFS='|' read -r name scene eye target build; do
     [ -n "$name" ] || continue
     if [ ! -f "$scene" ]; then echo "  $name: $scene missing, skipped"; continue; fi
     lam=out/bench-scenes/$name.glb
-    if [ ! -f "$lam" ] || [ "$scene" -nt "$lam" ] || [ "$LAMBERT" -nt "$lam" ]; then
+    if [ ! -f "$lam" ] || [ "$scene" -nt "$lam" ]; then
         "$LAMBERT" "$scene" "$lam"
     fi
     validate "$scene" "$lam"
@@ -134,7 +135,7 @@ echo "$SCENES" | while IFS='|' read -r name scene eye target build; do
     built=0
     if echo "$METHODS" | grep -q lie; then
         # shellcheck disable=SC2086
-        if timeout "$BUILD_TIMEOUT" bin/lie-build "$lam" -q --threads "$THREADS" $build --view "$cam" \
+        if timeout "$BUILD_TIMEOUT" "$BIN"/lie-build "$lam" -q --threads "$THREADS" $build --view "$cam" \
             --view-size "$QSIZE" -o "$TMP/c.lie" 2>"$TMP/build.err"; then
             built=1
         fi
