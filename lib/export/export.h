@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/export: writing a scene's document as glTF 2.0 (.gltf with its side
  * files, or one .glb).  It sits above lib/scene and lib/image: texture
  * pixels go back to their code values (lie_texture_code_value) and out
@@ -39,7 +40,10 @@ extern "C" {
  * else 16-bit), in the colour space of the slot that uses them.  "-"
  * (stdout) is refused. */
 typedef struct lie_gltf_export_options {
-    int force; /* replace side files that are not this exporter's (above) */
+    int force;           /* replace side files that are not this exporter's (above) */
+    lie_file_set *files; /* the run's inputs and outputs (lib/core): every side file is claimed there
+                          * (lie_file_set_claim) before anything is written; the caller claims `path`.
+                          * NULL: no check */
 } lie_gltf_export_options;
 lie_gltf_export_options lie_gltf_export_options_default(void);
 /* With the default options. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to lib/shade: the ways a (shading point, emitter) pair's light
  * is answered, behind one interface (pbrt-v4's shape: a table of functions
  * per kind, a file per kind):

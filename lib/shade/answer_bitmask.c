@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* A partial pair toward a planar emitter answered with all the samples of
  * its fixed pattern at once, as a bitmask (bitmask.h).  A Lambert receiver
  * under an emitter of one colour then shades only the fewer of the blocked

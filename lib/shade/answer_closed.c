@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* A pair seen whole toward an emitter a closed form integrates: Lambert's
  * edge sum, or the LTC integral where asked (answer.h).  No samples. */
 #include "shade/answer.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* An emitter of several clusters (lie_cluster) under the LIE: the samples
  * are the emitter's, as ever; each sample's shadow test goes to the pair of
  * the cluster holding its triangle (answer.h).  A dark cluster's samples

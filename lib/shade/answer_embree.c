@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Samples against the whole scene through Embree (answer.h): full
  * visibility's one answer, a complex pair's, and a partial pair's whose
  * blocker list would cost more (so that no pair is slower than full

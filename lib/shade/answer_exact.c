@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* A partial pair's visible part found exactly: its blockers
  * back-projected onto the emitter's plane and integrated in closed form
  * (polylight.h), no samples.  It pays where the blockers are few against

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Sampled pairs without Embree (answer.h): one seen whole shades its
  * samples and tests none; a partial one tests each sample against its
  * blocker list (a loop the compiler vectorises over the samples). */

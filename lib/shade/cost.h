@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to lib/shade: the fitted cost model by which a pair's shadow is
  * answered the cheapest way (lib/shade/answer.h), the thresholds below which
  * a frame takes a simpler path, and the benchmark ablations.  Not part of

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Direct lighting at a shading point: which emitters take its light
  * samples (a light sampler, sampler.h, or the LIE's classes), what each
  * (point, emitter) pair's class is, and the cheapest answer for it

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The light BVH sampler (sampler.h): emitters in a binary tree whose
  * nodes bound their lights' power, box and normal cone (Conty Estevez and
  * Kulla 2018, "Importance Sampling of Many Lights with Adaptive Tree

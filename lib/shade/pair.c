@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* What the ways of answering a pair (answer.h) share: per-worker scratch,
  * the kernels that weigh each light sample's unshadowed contribution in one
  * branch-free loop over structure-of-arrays samples (vectorised by the

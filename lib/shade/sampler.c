@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Light samplers (sampler.h): the emitters' bounds and importance, the
  * uniform and power samplers, and the choice by name. */
 #include "shade/sampler.h"

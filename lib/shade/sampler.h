@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to lib/shade: light samplers, which share a shading point's
  * budget of light samples among the emitters (lie_light_sampler_kind in
  * shade.h).  pbrt-v4's LightSampler is the model: one interface, a file per

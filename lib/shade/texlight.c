@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Emitters with an emissive texture sampled by their light (texlight.h). */
 #include "shade/texlight.h"
 

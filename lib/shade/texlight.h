@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to lib/shade: light samples on an emitter with an emissive
  * texture, in proportion to its light (pbrt-v4's DiffuseAreaLight takes
  * its texture's distribution likewise).  A triangle is chosen by the light

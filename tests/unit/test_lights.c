@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/shade's light samplers and textured emitters against quadrature, on
  * the degenerate cases of real scenes: 500 emitters, a strip of 1,000
  * triangles, an emissive texture with one lit texel; and the systematic

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-render: render frames with direct lighting.
  *   lie-render CACHE|SCENE.gltf|SCENE.glb|- -o OUT.exr|OUT.png|- [options]
  * From a cache (lie-build), shadow rays are answered by the local
@@ -98,6 +99,9 @@ static void usage(FILE *fp)
             "                          rle (several times faster to write than zip, files a\n"
             "                          little larger) or none\n"
             "      --exposure EV       PNG exposure in stops (default 0)\n"
+            "      --default-light L   a scene without emitters: headlight (a point light at\n"
+            "                          the camera, 1 lux at the scene's centre) or sun (1 lux\n"
+            "                          from above); a scene input only\n"
             "      --threads N         worker threads (default: all cores)\n"
             "      --allow-external-uris  let the glTF reference files outside its folder\n"
             "      --stats[=json]      print statistics to stderr\n"
@@ -120,7 +124,7 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 
 enum {
     OPT_CAMERA = 256, OPT_SIZE, OPT_SPP, OPT_LIGHT_SAMPLES, OPT_PATTERN, OPT_VISIBILITY, OPT_RAYS, OPT_LIE_SKIP,
-    OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_SCENE,
+    OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_SCENE, OPT_DEFAULT_LIGHT,
     OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS, OPT_FRAMES, OPT_SKIP_EXISTING, OPT_FORMAT, OPT_HALF, OPT_BITMASK,
     OPT_LIGHT_SAMPLER, OPT_SEED, OPT_CACHE, OPT_VIEW_SIZE
 };
@@ -152,6 +156,7 @@ static const struct option long_opts[] = {
     {"format", required_argument, NULL, OPT_FORMAT},
     {"half", no_argument, NULL, OPT_HALF},
     {"exposure", required_argument, NULL, OPT_EXPOSURE},
+    {"default-light", required_argument, NULL, OPT_DEFAULT_LIGHT},
     {NULL, 0, NULL, 0},
 };
 
@@ -261,7 +266,7 @@ static lie_status load_input(void *ctx, const lie_scene_options *so, lie_error *
          * its bytes go to the loader in a set of their own */
         lie_scene_options o = *so;
         lie_file_set *own = NULL;
-        if (!so->files && strcmp(in->input, "-") == 0) {
+        if ((!so->files || lie_file_set_get_mode(so->files) == LIE_FILES_NAMES) && strcmp(in->input, "-") == 0) {
             o.files = own = lie_file_set_create(LIE_FILES_RECORD);
             st = own ? lie_file_set_add(own, in->input, data, size, err)
                      : lie_error_set(err, LIE_ERR_NOMEM, in->input, "out of memory");
@@ -291,6 +296,7 @@ typedef struct args {
     lie_scene_options so;
     lie_frame_options fopt;
     const char *input, *output, *camera, *scene_override, *path_file, *cache_file;
+    int default_light;     /* --default-light: lie_default_light, 0 none */
     int view_w, view_h;    /* --view-size */
     long frame_a, frame_b; /* --frames, or -1 */
     int skip_existing, visibility_set, pattern_set;
@@ -386,6 +392,13 @@ static int parse_options(args *a, lie_cli *cli, int argc, char **argv)
                 return usage_error("--exposure: expected a number of stops, got '%s'", optarg);
             break;
         case OPT_SCENE: a->scene_override = optarg; break;
+        case OPT_DEFAULT_LIGHT: {
+            static const lie_cli_choice lights[] = {
+                {"headlight", LIE_DEFAULT_LIGHT_HEADLIGHT}, {"sun", LIE_DEFAULT_LIGHT_SUN}, {NULL, 0}};
+            if (!lie_cli_pick(cli, lights, &a->default_light))
+                return cli->status;
+            break;
+        }
         case OPT_PATH: a->path_file = optarg; break;
         case OPT_FRAMES:
             if (!lie_parse_range(optarg, 0, 999999, &a->frame_a, &a->frame_b))
@@ -448,11 +461,13 @@ typedef struct run {
     lie_env_shadows *lv;
     lie_rt *rt;
     lie_camera cam; /* without --path */
+    lie_file_set *files; /* the run's inputs: no frame may replace one */
     lie_error err;
 } run;
 
 static void run_free(run *r)
 {
+    lie_file_set_destroy(r->files);
     lie_camera_path_destroy(r->cpath);
     lie_rt_destroy(r->rt);
     lie_env_shadows_destroy(r->lv);
@@ -471,13 +486,22 @@ static lie_status prepare(args *a, run *r, int quiet)
     ro->oracle = r->lv ? lie_env_shadows_oracle(r->lv) : NULL;
     if (!quiet)
         lie_print_scene_warnings(prog, r->scene, a->input);
-    if (r->scene->n_emitters == 0 && !quiet)
+    st = a->path_file ? LIE_OK : lie_camera_parse(r->scene, a->camera, &r->cam, &r->err);
+    if (st == LIE_OK && a->default_light && r->scene->n_emitters == 0) {
+        /* the headlight stays where the camera (a path's first frame) is */
+        lie_camera at = r->cpath ? lie_camera_path_frame(r->cpath, 0) : r->cam;
+        st = lie_scene_add_default_light(r->scene, (lie_default_light)a->default_light, &at, &r->err);
+    } else if (st == LIE_OK && r->scene->n_emitters == 0 && !quiet) {
         fprintf(stderr, "%s: %s: warning: no emitters (no emissive material, no KHR_lights_punctual light): "
-                        "the image shows emission only\n", prog, a->input);
+                        "the image shows emission only; --default-light headlight or sun lights the geometry\n",
+                prog, a->input);
+    }
+    if (st != LIE_OK)
+        goto done;
     if (ro->aov_emitter >= r->scene->n_emitters)
         return lie_error_set(&r->err, LIE_ERR_ARG, a->input, "--emitter %d: the scene has %d emitters",
                              ro->aov_emitter, r->scene->n_emitters);
-    st = a->path_file ? LIE_OK : lie_camera_parse(r->scene, a->camera, &r->cam, &r->err);
+done:
     if (st != LIE_OK && !r->err.file[0])
         snprintf(r->err.file, sizeof r->err.file, "%s", a->input);
     return st;
@@ -559,7 +583,12 @@ static int render_all(args *a, run *r, const lie_cli *cli)
     lie_render_options *ro = &a->ro;
     double t0 = lie_time_now();
     inputs in = {a->input, a->scene_override, a->path_file, NULL, NULL, NULL};
+    lie_file_set *files = r->files = lie_file_set_create(LIE_FILES_NAMES);
+    if (!files)
+        return lie_error_set(&r->err, LIE_ERR_NOMEM, a->input, "out of memory");
+    a->so.files = files;
     lie_status st = lie_dist_load(&a->so, load_input, &in, &r->err);
+    a->so.files = NULL;
     r->scene = in.scene;
     r->cache = in.cache;
     r->cpath = in.cpath;
@@ -568,6 +597,9 @@ static int render_all(args *a, run *r, const lie_cli *cli)
     double t1 = lie_phase(prog, cli->verbose, "load", t0);
     if (a->cache_file && (r->cache || a->visibility_set))
         return usage_error("%s: --cache takes a scene, and renders with the cache it builds (no --visibility)",
+                           a->input);
+    if (a->default_light && (r->cache || a->cache_file))
+        return usage_error("%s: --default-light renders a scene: a cache holds no environments of its light",
                            a->input);
     if (a->cache_file && lie_dist_size() > 1)
         return usage_error("%s", "--cache: not under mpirun (the frames build as they go, one after another)");
@@ -585,14 +617,28 @@ static int render_all(args *a, run *r, const lie_cli *cli)
     char hash[32];
     snprintf(hash, sizeof hash, "%016llx", (unsigned long long)r->scene->hash);
     int *todo = NULL, n_todo = 0, rendered = 0, skipped = 0;
-    if ((st = plan_frames(a, r, &todo, &n_todo, &skipped, &r->err)) != LIE_OK)
-        return st;
-    lie_render_stats rs;
-    memset(&rs, 0, sizeof rs);
-    double t_render = 0.0, t_write = 0.0;
+    st = plan_frames(a, r, &todo, &n_todo, &skipped, &r->err);
     /* with --cache, the frames say what lie-render of the cache says */
     frame_out fo = {a->output, a->cache_file ? a->cache_file : a->input, hash, ro, r->cpath != NULL, a->fopt,
                     r->cpath ? r->cpath->first : 0};
+    /* no output may be an input (the cache, the scene's files, the path),
+     * nor a frame --cache: every name is checked before the first is
+     * written (an interrupted run's --cache is read by cached_render, not
+     * through the set: it may be replaced) */
+    if (st == LIE_OK && a->cache_file)
+        st = lie_file_set_claim(files, a->cache_file, NULL, &r->err);
+    for (int i = 0; st == LIE_OK && lie_dist_rank() == 0 && i < n_todo; i++) {
+        char name[4096];
+        frame_name(&fo, todo[i], name, sizeof name);
+        st = lie_file_set_check(files, name, &r->err);
+    }
+    if (st != LIE_OK) {
+        free(todo);
+        return st;
+    }
+    lie_render_stats rs;
+    memset(&rs, 0, sizeof rs);
+    double t_render = 0.0, t_write = 0.0;
     if (a->cache_file) {
         cached_run cr = {a->cache_file, a->input, a->view_w ? a->view_w : 512, a->view_h ? a->view_h : 512, r->scene,
                          r->rt, r->cpath, ro, cli->quiet, cli->verbose, a->frame_a < 0, 0, 0};
