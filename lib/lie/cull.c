@@ -33,7 +33,7 @@ void lie_cull_candidates(const build_ctx *c, worker *w, const lie_vec3 *hull, in
     lie_box3 all = lie_box3_empty();
     for (int i = 0; i < nh; i++)
         lie_box3_grow(&all, hull[i]);
-    float grow = lie_maxf(tol, 0.0f) + 1e-6f * lie_rt_scale(c->rt);
+    float grow = lie_maxf(tol, 0.0f) + 1e-6f * lie_pair_hull_scale(hull, nh);
     w->n_cand = 0;
     int a = 0;
     lie_vec3 ext = lie_v3_sub(all.hi, all.lo);
@@ -135,7 +135,7 @@ static size_t shaft_upto(const build_ctx *c, worker *w, uint32_t tri, const lie_
     ectr = lie_v3_scale(ectr, 1.0f / (float)(nh - n_patch));
     for (int i = n_patch; i < nh; i++)
         w->hull[i] = lie_v3_add(ectr, lie_v3_scale(lie_v3_sub(w->hull[i], ectr), 0.999f));
-    float tol = -1e-7f * lie_rt_scale(c->rt); /* negative: contact is not entry */
+    float tol = -1e-7f * lie_pair_hull_scale(w->hull, nh); /* negative: contact is not entry */
     lie_cull_candidates(c, w, w->hull, nh, tol);
     lie_sat sat;
     pair_sat(c, w, nh, tri, two_sided, e, 0.0f, &sat);
@@ -177,7 +177,7 @@ void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3
     int nh = pair_hull(c, w, tri, V, e);
     if (!nh)
         return;
-    float tol = 1e-6f * lie_rt_scale(c->rt);
+    float tol = 1e-6f * lie_pair_hull_scale(w->hull, nh);
     lie_sat sat;
     pair_sat(c, w, nh, tri, two_sided, e, tol, &sat);
     /* A large instance (a terrain, a building exported as one mesh) is not
@@ -227,7 +227,7 @@ lie_class lie_cull_conservative(const build_ctx *c, worker *w, uint32_t tri, con
     *n_list = 0;
     if (!nh)
         return LIE_CLASS_VISIBLE;
-    float tol = 1e-6f * lie_rt_scale(c->rt);
+    float tol = 1e-6f * lie_pair_hull_scale(w->hull, nh);
     const uint32_t *cand;
     size_t n_cand;
     if (parent) {

@@ -167,11 +167,15 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
     const int em_index = s->clusters[e].emitter;
     const lie_emitter *em = &s->emitters[em_index];
     const int shared = em->n_clusters > 1;
-    /* the shifts are the emitter's, so that its clusters share one pattern
-     * (an emitter of one cluster: cluster and emitter hash alike only if
-     * every emitter before it has one cluster too, as they hashed before) */
-    uint64_t h = lie_hash_u64x4(tri, path.digits, (uint64_t)path.depth,
-                                shared ? (uint64_t)em->first_cluster | 0x100000000ull : (uint64_t)e);
+    /* The shifts hash the patch alone, so that every emitter, and every
+     * cluster of one, sees the same pattern from it.  Not the emitter's
+     * index: emitters are numbered in the scene's walk order, so one that
+     * appears or goes (a set-emission) renumbers those after it, and a
+     * unit's segments would change with no change to its patch or emitter
+     * (update = rebuild; formats/lie-cache.md, version 5).  The patterns of
+     * different emitters from one patch are alike, but their segments end
+     * on different emitters and meet different blockers. */
+    uint64_t h = lie_hash_u64x4(tri, path.digits, (uint64_t)path.depth, 0);
     uint64_t h2 = lie_hash_u64x4(h, 0x656d6974ull, 0, 0);
     const pair_sampler ps = {c,
                              tri,

@@ -449,6 +449,7 @@ lie_status view_world_save(view_world *w, const char *path, lie_error *err)
     pthread_rwlock_rdlock(&w->lock);
     lie_cache c = *w->cache;
     lie_cache_edit *log = malloc(sizeof *log * ((size_t)w->n_edits0 + 1));
+    char *rel = NULL;
     lie_status st = LIE_OK;
     if (!log) {
         st = lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
@@ -457,7 +458,10 @@ lie_status view_world_save(view_world *w, const char *path, lie_error *err)
         c.edits = log;
         c.n_edits = w->n_edits0;
         if (w->n_applied) {
-            log[c.n_edits].name = (char *)edit_name(w);
+            /* relative to the saved cache's folder, where its `add` files
+             * resolve from (lie_cache_log_relative_to) */
+            rel = lie_path_from_folder_of(edit_name(w), path);
+            log[c.n_edits].name = rel ? rel : (char *)edit_name(w);
             log[c.n_edits].text = (unsigned char *)w->applied;
             log[c.n_edits].size = w->n_applied;
             c.n_edits++;
@@ -466,5 +470,6 @@ lie_status view_world_save(view_world *w, const char *path, lie_error *err)
     }
     pthread_rwlock_unlock(&w->lock);
     free(log);
+    free(rel);
     return st;
 }
