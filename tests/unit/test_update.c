@@ -303,10 +303,8 @@ static void test_update_of_an_older_cache_rebuilds_every_unit(void **state)
     c->version = LIE_CACHE_RULES_VERSION - 1;
     assert_true(lie_cache_rules_old(c));
     lie_edit *e = parse(OPS[0]);
-    const unsigned char *text = (const unsigned char *)OPS[0];
-    size_t size = strlen(OPS[0]);
     lie_update_stats st;
-    assert_int_equal(lie_update_apply(c, s, (const lie_edit *const *)&e, &text, &size, 1, NULL, &st, &err), LIE_OK);
+    assert_int_equal(lie_update_apply(c, s, (const lie_edit *const *)&e, 1, NULL, &st, &err), LIE_OK);
     assert_int_equal(st.units_rebuilt, st.units);
     assert_false(lie_cache_rules_old(c));
     lie_env *ref = rebuild(&CORNELL, &OPS[0], 1, &ref_scene);
