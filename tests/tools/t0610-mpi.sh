@@ -3,7 +3,7 @@
 # process for builds, frames and paths, for any ranks and threads; inputs
 # read on rank 0 only and broadcast (ranks 1 and 2 run in an empty folder,
 # the scene, cache or camera path may come on stdin); per-rank statistics;
-# usage errors said once; failures (ranks given different inputs, a
+# usage errors said once; failures (ranks given different inputs or options, a
 # different binary, a rank killed mid-frame) end the job with an error,
 # never a hang.  Every launch checks several things: MPI_Init costs about
 # half a second a launch, four times that under ASan.
@@ -104,6 +104,24 @@ else
     not_ok "another scene on rank 2 (exit $rc):"; sed 's/^/# /' "$TMP/err" | head -8
 fi
 expect_no_file "$TMP/miss.exr" "no output when a rank fails"
+
+# Ranks started with different options (mpirun's A : B form) would mix two
+# images or caches: refused, one line naming the option, every rank exits 1
+refused() { # TOOL PATTERN WHAT
+    if [ "$rc" -eq 1 ] && [ "$(grep -c "^$1: " "$TMP/err")" -eq 1 ] && grep -q "^$1: $2" "$TMP/err"; then
+        ok "$3: $(grep "^$1" "$TMP/err")"
+    else
+        not_ok "$3 (exit $rc):"; sed 's/^/# /' "$TMP/err" | head -8
+    fi
+}
+run $MPI_NOLEAK -np 1 "$B/lie-render" "$A/m-1.lie" -q --size 32x32 -o "$TMP/opt.exr" : \
+    -np 2 "$B/lie-render" "$A/m-1.lie" -q --size 32x24 -o "$TMP/opt.exr"
+refused lie-render "rank 1: started with --size 32x24 where rank 0 has --size 32x32" "ranks with another --size"
+expect_no_file "$TMP/opt.exr" "no image when options differ"
+run $MPI_NOLEAK -np 1 "$B/lie-build" "$A/bent_light.gltf" -q --samples 16 -o "$TMP/opt.lie" : \
+    -np 1 "$B/lie-build" "$A/bent_light.gltf" -q -o "$TMP/opt.lie"
+refused lie-build "rank 1: started with -o .* where rank 0 has --samples 16" "a rank without --samples"
+expect_no_file "$TMP/opt.lie" "no cache when options differ"
 
 # A different binary on one rank is refused
 cp "$B/lie-build" "$TMP/lie-build-other" && printf 'x' >>"$TMP/lie-build-other"
