@@ -7,6 +7,7 @@
 
 #include <math.h>
 #include <string.h>
+#include <sys/stat.h>
 
 static const char *exact_name(const lie_render_options *o)
 {
@@ -23,7 +24,7 @@ static const char *rays_name(lie_ray_mode m)
 }
 
 
-lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame, lie_error *err)
+lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame, uint64_t *bytes, lie_error *err)
 {
     const frame_out *o = ctx;
     const lie_render_options *ro = o->ro;
@@ -65,7 +66,12 @@ lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame 
     opt.exr.screen_window_width = ve.screen_window_width;
     opt.exr.attrs = attrs;
     opt.exr.n_attrs = (int)(sizeof attrs / sizeof attrs[0]);
-    return lie_frame_write(name, frame, &opt, err);
+    opt.exr.threads = ro->threads; /* the chunks compressed on --threads workers; the bytes do not depend on it */
+    lie_status st = lie_frame_write(name, frame, &opt, err);
+    struct stat sb;
+    if (bytes)
+        *bytes = st == LIE_OK && strcmp(name, "-") != 0 && stat(name, &sb) == 0 ? (uint64_t)sb.st_size : 0;
+    return st;
 }
 
 
