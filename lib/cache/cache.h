@@ -13,6 +13,8 @@
 #include "lie/lie.h"
 #include "scene/scene.h"
 
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -112,16 +114,6 @@ typedef struct lie_cache_section {
 lie_status lie_cache_sections(const unsigned char *data, size_t size, const char *name,
                               lie_cache_section *out, int *n, lie_error *err);
 
-/* Load the scene the cache describes: its glTF file (`override`, or the
- * recorded path as given, or that path relative to the cache's folder),
- * checked against scene_hash, with the edit log replayed and the result
- * checked against state_hash.  A logged edit's `add` files resolve the
- * same way: relative to its recorded name's folder as given, or else with
- * that name taken relative to the cache's folder.  `cache_path` (may be
- * NULL) names the cache in messages. */
-#include "scene/scene.h"
-
-#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
 /* Record the names of edits first .. n_edits - 1 of the log (given relative
  * to the working directory) relative to the folder of cache_path, the file
  * the cache is about to be written to, so that their `add` files resolve
@@ -129,6 +121,13 @@ lie_status lie_cache_sections(const unsigned char *data, size_t size, const char
  * Absolute names, names whose folder does not exist, and "-" (stdout) stay
  * as they are. */
 void lie_cache_log_relative_to(lie_cache *c, int first, const char *cache_path);
+/* Load the scene the cache describes: its glTF file (`override`, or the
+ * recorded path as given, or that path relative to the cache's folder),
+ * checked against scene_hash, with the edit log replayed and the result
+ * checked against state_hash.  A logged edit's `add` files resolve the
+ * same way: relative to its recorded name's folder as given, or else with
+ * that name taken relative to the cache's folder.  `cache_path` (may be
+ * NULL) names the cache in messages. */
 lie_status lie_cache_load_scene(const lie_cache *c, const char *cache_path, const char *override,
                                 const lie_scene_options *so, lie_scene **out, lie_error *err);
 

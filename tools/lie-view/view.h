@@ -83,10 +83,11 @@ int64_t view_world_pending_max(const view_world *w);
 double view_world_last_update_ms(const view_world *w);
 int view_world_has_cache(const view_world *w);
 
-/* An edit as formats/edit.md text (one or more "- op: {...}" lines):
- * applied at once, recorded, and undoable as a group; join: part of the
- * last group (the steps of one drag undo together). */
-lie_status view_world_edit(view_world *w, const char *yaml, int join, lie_error *err);
+/* An empty edit for view_world_edit, named as the session's record. */
+lie_edit *view_world_new_edit(const view_world *w);
+/* An edit (lib/edit): applied at once, recorded, and undoable as a group;
+ * join: part of the last group (the steps of one drag undo together). */
+lie_status view_world_edit(view_world *w, const lie_edit *e, int join, lie_error *err);
 lie_status view_world_undo(view_world *w, int *done, lie_error *err);
 lie_status view_world_redo(view_world *w, int *done, lie_error *err);
 /* update_ms of every edit applied so far (for --stats=json). */
@@ -163,7 +164,8 @@ void view_text(uint32_t *argb, int width, int height, int x, int y, int scale, u
 typedef enum view_cmd_kind {
     VIEW_CMD_FRAMES, VIEW_CMD_ORBIT, VIEW_CMD_DOLLY, VIEW_CMD_SELECT, VIEW_CMD_PICK, VIEW_CMD_DRAG,
     VIEW_CMD_ROTATE, VIEW_CMD_SET_MATERIAL, VIEW_CMD_SET_EMISSION, VIEW_CMD_UNDO, VIEW_CMD_REDO, VIEW_CMD_WAIT,
-    VIEW_CMD_SCREENSHOT, VIEW_CMD_QUIT, VIEW_CMD_REMOVE, VIEW_CMD_PAUSE, VIEW_CMD_RESUME, VIEW_CMD_REDRAW
+    VIEW_CMD_SCREENSHOT, VIEW_CMD_QUIT, VIEW_CMD_REMOVE, VIEW_CMD_PAUSE, VIEW_CMD_RESUME, VIEW_CMD_REDRAW,
+    VIEW_CMD_WAIT_AT_MOST
 } view_cmd_kind;
 
 typedef struct view_cmd {
@@ -171,6 +173,7 @@ typedef struct view_cmd {
     int line;
     double v[4];
     char *arg;             /* node name, file, or the edit fields "{...}" minus "node" */
+    lie_edit *fields;      /* set-material, set-emission: the operation, its node unset */
 } view_cmd;
 
 typedef struct view_script {
