@@ -170,6 +170,11 @@ ATRIUM_GEN := $(BUILD)/atrium-gen
 $(ATRIUM_GEN): $(BUILD)/bench/atrium.o $(BUILD)/tests/scenes/gen/gen_gltf.o
 	$(CC) $(LDFLAGS) $^ -lpng -lz -lm -o $@
 
+# the equal-quality bench's Lambertian copies of the third-party scenes (bench/lambert.c)
+BENCH_LAMBERT := $(BUILD)/bench-lambert
+$(BENCH_LAMBERT): $(BUILD)/bench/lambert.o $(LIB_A)
+	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
+
 # ---- LTC tables (lib/shade/ltc.h): fitted by scripts/ltc-fit.c, the data committed ----
 LTC_FIT := $(BUILD)/ltc-fit
 $(LTC_FIT): scripts/ltc-fit.c

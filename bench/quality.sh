@@ -22,6 +22,8 @@
 # visibility is rendered once, by this tree.  Method lie-silhouette
 # (--bitmask only --silhouette only) is measured when listed in METHODS.
 # REPS=R renders each row R times and keeps the fastest (a loaded machine).
+# Then the table of the third-party scenes against Blender Cycles
+# (bench/quality-real.sh; REAL=0 leaves it out).
 set -e
 cd "$(dirname "$0")/.."
 QSIZE=${QSIZE:-256x256}
@@ -203,3 +205,4 @@ done
 echo "$json$(cat "$TMP/scenes.keep" 2>/dev/null)}}" >out/bench-quality.json
 echo
 echo "bench-quality: wrote out/bench-quality.json"
+[ "${REAL:-1}" = 0 ] || sh bench/quality-real.sh

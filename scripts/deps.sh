@@ -1,12 +1,14 @@
 #!/bin/sh
 # Install the Debian packages this project needs, only those missing.
-# Runs `apt-get update` once before installing anything.
+# Runs `apt-get update` once before installing anything.  blender,
+# python3-numpy (its glTF importer) and gnuplot-nox serve `make bench` only
+# (bench/cycles.py, the figure of bench/quality-real.sh).
 set -e
 PKGS="build-essential pkg-config libembree-dev libopenexr-dev libyaml-dev libtinygltf-dev
 nlohmann-json3-dev libstb-dev libxxhash-dev libpng-dev zlib1g-dev libcmocka-dev
 clang libclang-rt-14-dev valgrind
 libopenmpi-dev openmpi-bin libsdl2-dev xvfb xauth xdotool man-db groff-base openimageio-tools bsdutils help2man lowdown
-qemu-user"
+qemu-user blender python3-numpy gnuplot-nox"
 missing=""
 for p in $PKGS; do
     status=$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null || true)

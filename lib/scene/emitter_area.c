@@ -317,12 +317,13 @@ static int area_uniform(const lie_scene *s, const lie_emitter *em)
 
 static int area_polygon(const lie_scene *s, const lie_emitter *em, lie_emitter_polygon *out)
 {
-    if (!em->planar || em->n_tris == 0 || !area_uniform(s, em))
-        return 0; /* radiance varies over the emitter, or no plane: sampled */
+    if (em->n_tris == 0 || !area_uniform(s, em))
+        return 0; /* radiance varies over the emitter: sampled */
     out->first_tri = em->first_tri;
     out->n_tris = em->n_tris;
     out->two_sided = em->double_sided;
     memcpy(out->radiance, em->radiance, sizeof out->radiance);
+    out->planar = em->planar;
     out->o = em->plane_o;
     out->u = em->plane_u;
     out->v = em->plane_v;

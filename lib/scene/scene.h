@@ -454,17 +454,18 @@ int lie_emitter_uniform(const lie_scene *s, int e);
  * `far`), and radiant intensity after falloff; 0 (and *out zeroed) for an
  * area emitter, whose light is sampled. */
 int lie_emitter_light_at(const lie_scene *s, int e, lie_vec3 o, float far, lie_emitter_incident *out);
-/* An emitter that closed forms can integrate: one planar polygon (or a few
- * triangles) of one radiance (lib/shade/polylight.c: the edge sum, exact
+/* An emitter that closed forms can integrate: triangles of one radiance
+ * (lib/shade/polylight.c takes them plane by plane: the edge sum, exact
  * shadows by back-projection, LTC). */
 typedef struct lie_emitter_polygon {
-    uint32_t first_tri, n_tris; /* its triangles, in the plane */
+    uint32_t first_tri, n_tris; /* its triangles */
     int two_sided;
     float radiance[3];
-    lie_vec3 o, u, v, n;        /* the plane's frame (lie_emitter.plane_*) */
+    int planar;                 /* all in one plane (lie_emitter.planar), whose frame follows */
+    lie_vec3 o, u, v, n;        /* the plane's frame (lie_emitter.plane_*) when planar */
 } lie_emitter_polygon;
-/* 1 and *out filled when the emitter is such a polygon (a planar area
- * emitter without an emissive texture), else 0. */
+/* 1 and *out filled when the emitter is such a set of triangles (an area
+ * emitter without an emissive texture, planar or not), else 0. */
 int lie_emitter_polygon_of(const lie_scene *s, int e, lie_emitter_polygon *out);
 /* Emitted power in watts per channel (photometric units as given),
  * for choosing among lights in proportion to power: area pi Le A (twice for

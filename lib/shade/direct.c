@@ -311,30 +311,6 @@ static void closed_colour(const lie_polylight *pl, const lie_surface *sf, float 
         k[c] = pl->radiance[c] * sf->diffuse[c] * (float)M_1_PI;
 }
 
-/* Other BRDFs: radiance x the LTC integral (ltc.h) over each piece that
- * lie_polylight_unshadowed or lie_polylight_visible left in w, the pieces
- * mapped from the emitter plane's (s, t) to directions from o. */
-static void closed_ltc(const lie_polylight *pl, const lie_ltc_shading *sh, lie_vec3 o, const lie_polylight_work *w,
-                       float out[3])
-{
-    const double wx = pl->po[0] - o.x, wy = pl->po[1] - o.y, wz = pl->po[2] - o.z;
-    float acc[3] = {0.0f, 0.0f, 0.0f};
-    for (int k = 0; k < w->n; k++) {
-        const lie_poly2 *p = &w->a[k];
-        lie_vec3 v[LIE_POLY_MAXV];
-        for (int i = 0; i < p->n; i++) {
-            double s = p->s[i], t = p->t[i];
-            v[i] = lie_v3((float)(wx + s * pl->pu[0] + t * pl->pv[0]), (float)(wy + s * pl->pu[1] + t * pl->pv[1]),
-                          (float)(wz + s * pl->pu[2] + t * pl->pv[2]));
-        }
-        float f[3];
-        lie_ltc_polygon(sh, v, p->n, f);
-        acc[0] += f[0], acc[1] += f[1], acc[2] += f[2];
-    }
-    for (int c = 0; c < 3; c++)
-        out[c] = pl->radiance[c] * acc[c];
-}
-
 /* Embree answers the segments (sc->dx, dy, dz from o) of the samples that
  * would contribute (and, when `want` is given, have want[i] set), into
  * sc->occ; returns how many rays it cast. */
@@ -611,7 +587,7 @@ LIE_HOT void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uin
                 int ok = lie_polylight_visible(pl, o, sf->n, sf->ng, s->tri_p, opt->oracle->solid, sc->blockers, n_blockers, eps,
                                                &sc->poly, &omega) == 0;
                 if (ok && !sf->lambert)
-                    closed_ltc(pl, &ltc, o, &sc->poly, kl);
+                    lie_polylight_ltc(pl, &ltc, o, &sc->poly, kl);
                 if (timers)
                     st->t_exact += lie_time_now() - t0;
                 if (ok) {
@@ -625,7 +601,7 @@ LIE_HOT void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uin
             double t0 = clock_if(timers);
             omega = lie_polylight_unshadowed(pl, o, sf->n, sf->ng, &sc->poly);
             if (!sf->lambert)
-                closed_ltc(pl, &ltc, o, &sc->poly, kl);
+                lie_polylight_ltc(pl, &ltc, o, &sc->poly, kl);
             if (timers)
                 st->t_analytic += lie_time_now() - t0;
             if (cls == LIE_VISCLASS_VISIBLE) {

@@ -1,10 +1,11 @@
 /* Polygonal lights in closed form (polylight.h): Lambert's edge sum over
- * convex pieces of a planar emitter, and the visible pieces left by
- * back-projected blockers.  Double precision throughout: the pieces are
+ * the convex pieces of an emitter's planes, and the visible pieces left by
+ * back-projected blockers (the pieces are built in polybuild.c).  Double precision throughout: the pieces are
  * cut by lines that nearly coincide (a blocker edge on the emitter's edge,
  * neighbouring blockers sharing an edge), and the edge sum of a thin
  * sliver must come out as thin. */
 #include "shade/polylight.h"
+#include "shade/ltc.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -23,15 +24,13 @@ static inline d3 d3_cross(d3 a, d3 b)
 static inline d3 d3_of(lie_vec3 v) { return (d3){v.x, v.y, v.z}; }
 static inline d3 d3_lerp(d3 a, d3 b, double t) { return (d3){a.x + t * (b.x - a.x), a.y + t * (b.y - a.y), a.z + t * (b.z - a.z)}; }
 
-static double poly_area(const lie_poly2 *p)
+double lie_poly_area(const lie_poly2 *p)
 {
     double a = 0.0;
     for (int i = 0, j = p->n - 1; i < p->n; j = i++)
         a += p->s[j] * p->t[i] - p->s[i] * p->t[j];
     return 0.5 * a;
 }
-
-/* ---- building ------------------------------------------------------------ */
 
 static int cmp_pt(const void *a, const void *b)
 {
@@ -46,9 +45,8 @@ static double turn(const double *o, const double *a, const double *b)
     return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
 }
 
-/* Andrew's monotone chain: the convex hull of pts (n x 2, sorted in place)
- * counter-clockwise into hull; returns its vertex count. */
-static int convex_hull(double *pts, int n, double *hull)
+/* Andrew's monotone chain. */
+int lie_poly_convex_hull(double *pts, int n, double *hull)
 {
     qsort(pts, (size_t)n, 2 * sizeof *pts, cmp_pt);
     int k = 0;
@@ -65,102 +63,15 @@ static int convex_hull(double *pts, int n, double *hull)
     return k > 1 ? k - 1 : k;
 }
 
-lie_status lie_polylight_create(const lie_scene *s, int e, lie_polylight **out)
-{
-    *out = NULL;
-    lie_emitter_polygon pg;
-    if (!lie_emitter_polygon_of(s, e, &pg))
-        return LIE_OK; /* not a polygon of one radiance: sampled */
-    const size_t nv = 3 * (size_t)pg.n_tris;
-    double *pts = malloc(sizeof *pts * 2 * nv), *hull = malloc(sizeof *hull * 2 * (nv + 1));
-    lie_polylight *L = calloc(1, sizeof *L);
-    if (!pts || !hull || !L) {
-        free(pts), free(hull), free(L);
-        return LIE_ERR_NOMEM;
-    }
-    L->emitter = e;
-    L->first_tri = pg.first_tri;
-    L->n_tris = pg.n_tris;
-    L->two_sided = pg.two_sided;
-    memcpy(L->radiance, pg.radiance, sizeof L->radiance);
-    const lie_vec3 fr[4] = {pg.o, pg.u, pg.v, pg.n};
-    double *dst[4] = {L->po, L->pu, L->pv, L->pn};
-    for (int k = 0; k < 4; k++)
-        dst[k][0] = fr[k].x, dst[k][1] = fr[k].y, dst[k][2] = fr[k].z;
-    const d3 O = d3_of(pg.o), U = d3_of(pg.u), V = d3_of(pg.v);
-    for (size_t i = 0; i < nv; i++) {
-        d3 q = d3_sub(d3_of(s->tri_p[3 * (size_t)pg.first_tri + i]), O);
-        pts[2 * i] = d3_dot(q, U);
-        pts[2 * i + 1] = d3_dot(q, V);
-    }
-    double area = 0.0;
-    for (uint32_t t = 0; t < pg.n_tris; t++) {
-        const double *a = &pts[6 * t];
-        area += 0.5 * fabs(turn(a, a + 2, a + 4));
-    }
-    L->area = area;
-    /* the triangles as they are (counter-clockwise), before the hull sorts pts */
-    lie_poly2 *tris = NULL;
-    if (pg.n_tris <= LIE_POLYLIGHT_MAX_TRIS) {
-        tris = malloc(sizeof *tris * pg.n_tris);
-        if (!tris) {
-            free(pts), free(hull), free(L);
-            return LIE_ERR_NOMEM;
-        }
-        for (uint32_t t = 0; t < pg.n_tris; t++) {
-            const double *a = &pts[6 * t];
-            int flip = turn(a, a + 2, a + 4) < 0.0;
-            tris[t].n = 3;
-            for (int k = 0; k < 3; k++) {
-                int src = flip ? 2 - k : k;
-                tris[t].s[k] = a[2 * src];
-                tris[t].t[k] = a[2 * src + 1];
-            }
-        }
-    }
-    int nh = convex_hull(pts, (int)nv, hull);
-    lie_poly2 h = {0};
-    h.n = nh <= LIE_POLY_MAXV - 4 ? nh : 0; /* room for the two hemisphere cuts and splits */
-    for (int k = 0; k < h.n; k++)
-        h.s[k] = hull[2 * k], h.t[k] = hull[2 * k + 1];
-    free(pts);
-    free(hull);
-    if (h.n >= 3 && fabs(poly_area(&h) - area) <= 1e-5 * area) {
-        /* the triangles tile their hull (a quad, a tessellated panel): one piece */
-        free(tris);
-        L->polys = malloc(sizeof *L->polys);
-        if (!L->polys) {
-            free(L);
-            return LIE_ERR_NOMEM;
-        }
-        L->polys[0] = h;
-        L->n_polys = 1;
-    } else if (tris) {
-        L->polys = tris;
-        L->n_polys = (int)pg.n_tris;
-    } else {
-        free(L);
-        return LIE_OK; /* many triangles, not convex: sampled */
-    }
-    *out = L;
-    return LIE_OK;
-}
-
-void lie_polylight_destroy(lie_polylight *L)
-{
-    if (!L)
-        return;
-    free(L->polys);
-    free(L);
-}
-
 lie_status lie_polylight_work_init(lie_polylight_work *w, int max_blockers)
 {
     w->cap = max_blockers > 0 ? max_blockers : 1;
     w->a = malloc(sizeof *w->a * LIE_POLY_MAXP);
     w->idx = malloc(sizeof *w->idx * 2 * (size_t)w->cap);
     w->pts = malloc(sizeof *w->pts * 2 * (6 * (size_t)w->cap + 1));
-    if (!w->a || !w->idx || !w->pts) {
+    w->whole = malloc(sizeof *w->whole * LIE_POLYLIGHT_MAX_PIECES);
+    w->n = w->n_whole = 0;
+    if (!w->a || !w->idx || !w->pts || !w->whole) {
         lie_polylight_work_free(w);
         return LIE_ERR_NOMEM;
     }
@@ -174,6 +85,7 @@ void lie_polylight_work_free(lie_polylight_work *w)
     LIE_FREE(w->a);
     LIE_FREE(w->idx);
     LIE_FREE(w->pts);
+    LIE_FREE(w->whole);
 }
 
 /* ---- per shading point --------------------------------------------------- */
@@ -224,9 +136,9 @@ static int split(const lie_poly2 *p, const double *fv, lie_poly2 *in, lie_poly2 
         }
     }
     if (in)
-        in->n = ni;
+        in->n = ni, in->part = p->part;
     if (out)
-        out->n = no;
+        out->n = no, out->part = p->part;
     return 0;
 }
 
@@ -263,24 +175,26 @@ static double edge_sum(const view *vw, const lie_poly2 *p, d3 n)
     return sum;
 }
 
-/* The view from o, and the emitter's pieces above both tangent planes into
- * w->a; returns their count, 0 if o sees nothing of the emitter (behind a
- * one-sided emitter, in its plane). */
-static int visible_pieces(const lie_polylight *L, lie_vec3 o, lie_vec3 n, lie_vec3 ng, view *vw,
-                          lie_polylight_work *w)
+/* Part P's view from o and its pieces above both tangent planes into out;
+ * returns their count, 0 if o sees nothing of the part (behind a one-sided
+ * part, in its plane).  *d: the signed depth of the plane (< 0: o in
+ * front). */
+static int part_pieces(const lie_polylight *L, int part, lie_vec3 o, lie_vec3 n, lie_vec3 ng, view *vw, double *d,
+                       lie_poly2 *out)
 {
+    const lie_polypart *P = &L->parts[part];
     const d3 O = {o.x, o.y, o.z};
-    vw->w = d3_sub((d3){L->po[0], L->po[1], L->po[2]}, O);
-    vw->u = (d3){L->pu[0], L->pu[1], L->pu[2]};
-    vw->v = (d3){L->pv[0], L->pv[1], L->pv[2]};
-    const d3 pn = {L->pn[0], L->pn[1], L->pn[2]};
-    double d = d3_dot(pn, vw->w); /* < 0: o in front of the emitter */
-    if (!(d < 0.0) && !(L->two_sided && d > 0.0))
+    vw->w = d3_sub((d3){P->po[0], P->po[1], P->po[2]}, O);
+    vw->u = (d3){P->pu[0], P->pu[1], P->pu[2]};
+    vw->v = (d3){P->pv[0], P->pv[1], P->pv[2]};
+    const d3 pn = {P->pn[0], P->pn[1], P->pn[2]};
+    *d = d3_dot(pn, vw->w);
+    if (!(*d < 0.0) && !(L->two_sided && *d > 0.0))
         return 0;
     const form fr = form_of(vw, d3_of(n)), fg = form_of(vw, d3_of(ng));
     int m = 0;
     double fv[LIE_POLY_MAXV], lo, hi;
-    for (int k = 0; k < L->n_polys; k++) {
+    for (int k = P->first; k < P->first + P->n; k++) {
         lie_poly2 a = L->polys[k], b;
         eval(&a, fr, fv, &lo, &hi);
         if (hi <= 0.0)
@@ -297,22 +211,78 @@ static int visible_pieces(const lie_polylight *L, lie_vec3 o, lie_vec3 n, lie_ve
             a = b;
         }
         if (a.n >= 3)
-            w->a[m++] = a;
+            out[m++] = a;
     }
     return m;
+}
+
+/* The edge sums of pieces p[0..m) of one part, as a projected solid angle:
+ * the pieces of a part share a winding, seen from either side. */
+static double part_sum(const view *vw, const lie_poly2 *p, int m, d3 n)
+{
+    double sum = 0.0;
+    for (int k = 0; k < m; k++)
+        sum += edge_sum(vw, &p[k], n);
+    return 0.5 * fabs(sum);
+}
+
+/* Lambert's edge sum over part P's boundary edges, seen through vw:
+ * twice its projected solid angle, signed by its winding. */
+static double boundary_sum(const lie_polylight *L, const lie_polypart *P, const view *vw, d3 n)
+{
+    const double *bv = L->bv + 2 * (size_t)P->first_bv;
+    const int32_t *be = L->be + 2 * (size_t)P->first_be;
+    double sum = 0.0;
+    for (int k = 0; k < P->n_be; k++) {
+        const double *a = &bv[2 * be[2 * k]], *b = &bv[2 * be[2 * k + 1]];
+        d3 qa = {vw->w.x + a[0] * vw->u.x + a[1] * vw->v.x, vw->w.y + a[0] * vw->u.y + a[1] * vw->v.y,
+                 vw->w.z + a[0] * vw->u.z + a[1] * vw->v.z};
+        d3 qb = {vw->w.x + b[0] * vw->u.x + b[1] * vw->v.x, vw->w.y + b[0] * vw->u.y + b[1] * vw->v.y,
+                 vw->w.z + b[0] * vw->u.z + b[1] * vw->v.z};
+        d3 c = d3_cross(qa, qb);
+        double cl = sqrt(d3_dot(c, c));
+        if (cl > 0.0)
+            sum += atan2(cl, d3_dot(qa, qb)) * (d3_dot(n, c) / cl);
+    }
+    return sum;
+}
+
+/* Whether all of part P lies strictly above the plane of form f (its
+ * box's corners do: the least of a linear form over a box is at a corner). */
+static int part_above(const lie_polypart *P, form f)
+{
+    return f.c + fmin(f.cs * P->s0, f.cs * P->s1) + fmin(f.ct * P->t0, f.ct * P->t1) > 0.0;
 }
 
 double lie_polylight_unshadowed(const lie_polylight *L, lie_vec3 o, lie_vec3 n, lie_vec3 ng,
                                 lie_polylight_work *w)
 {
-    view vw;
-    int m = visible_pieces(L, o, n, ng, &vw, w);
-    w->n = m;
-    double sum = 0.0;
+    double omega = 0.0, d;
     const d3 N = d3_of(n);
-    for (int k = 0; k < m; k++)
-        sum += edge_sum(&vw, &w->a[k], N);
-    return 0.5 * fabs(sum);
+    int m = 0;
+    w->n_whole = 0;
+    for (int j = 0; j < L->n_parts; j++) {
+        const lie_polypart *P = &L->parts[j];
+        view vw;
+        vw.w = d3_sub((d3){P->po[0], P->po[1], P->po[2]}, d3_of(o));
+        vw.u = (d3){P->pu[0], P->pu[1], P->pu[2]};
+        vw.v = (d3){P->pv[0], P->pv[1], P->pv[2]};
+        if (P->n > 1 && part_above(P, form_of(&vw, N)) && part_above(P, form_of(&vw, d3_of(ng)))) {
+            /* wholly above both tangent planes: no clipping, and the
+             * boundary alone (shared edges cancel) */
+            d = P->pn[0] * vw.w.x + P->pn[1] * vw.w.y + P->pn[2] * vw.w.z;
+            if (!(d < 0.0) && !(L->two_sided && d > 0.0))
+                continue;
+            omega += 0.5 * fabs(boundary_sum(L, P, &vw, N));
+            w->whole[w->n_whole++] = j;
+            continue;
+        }
+        int mp = part_pieces(L, j, o, n, ng, &vw, &d, w->a + m); /* pieces <= LIE_POLYLIGHT_MAX_PIECES: room */
+        omega += part_sum(&vw, w->a + m, mp, N);
+        m += mp;
+    }
+    w->n = m;
+    return omega;
 }
 
 /* Sutherland-Hodgman of a 3D polygon against k . q >= c (keep), in place
@@ -440,7 +410,7 @@ static int shadow_of_solid(const view *vw, d3 k, double D, double reach, const l
         }
     }
     double *hp = pts + 2 * np; /* the hull after the points (room for 3n + 1 more) */
-    int nh = convex_hull(pts, np, hp);
+    int nh = lie_poly_convex_hull(pts, np, hp);
     if (nh < 3 || nh > LIE_POLY_MAXF)
         return 0;
     /* back to rays, counter-clockwise about c: inside is m . d >= 0 */
@@ -461,6 +431,7 @@ static int shadow_of_solid(const view *vw, d3 k, double D, double reach, const l
 static inline void poly_copy(lie_poly2 *d, const lie_poly2 *p)
 {
     d->n = p->n;
+    d->part = p->part;
     d->s0 = p->s0, d->s1 = p->s1, d->t0 = p->t0, d->t1 = p->t1;
     memcpy(d->s, p->s, sizeof *d->s * (size_t)p->n);
     memcpy(d->t, p->t, sizeof *d->t * (size_t)p->n);
@@ -478,8 +449,8 @@ static void piece_box(lie_poly2 *p)
 
 /* Subtract a shadow from the pieces cur[0..*m), in place: a piece the
  * shadow misses stays, one it cuts is replaced by its parts outside.
- * Returns -1 on overflow. */
-static int subtract(lie_poly2 *cur, int *m_io, const shadow *sh, double tiny)
+ * Returns -1 on overflow (more than cap pieces). */
+static int subtract(lie_poly2 *cur, int *m_io, int cap, const shadow *sh, double tiny)
 {
     int m = *m_io;
     const int m0 = m;
@@ -514,16 +485,16 @@ static int subtract(lie_poly2 *cur, int *m_io, const shadow *sh, double tiny)
                 break;
             if (lo >= 0.0)
                 continue;
-            if (m >= LIE_POLY_MAXP || split(&in, fv, &tmp, &cur[m]) < 0)
+            if (m >= cap || split(&in, fv, &tmp, &cur[m]) < 0)
                 return -1;
-            if (cur[m].n >= 3 && fabs(poly_area(&cur[m])) > tiny) {
+            if (cur[m].n >= 3 && fabs(lie_poly_area(&cur[m])) > tiny) {
                 piece_box(&cur[m]);
                 m++;
             }
             poly_copy(&in, &tmp);
         }
         if (e < sh->nf) {
-            if (m >= LIE_POLY_MAXP)
+            if (m >= cap)
                 return -1;
             piece_box(&in);
             poly_copy(&cur[m++], &in); /* the rest lies outside an edge: kept */
@@ -551,25 +522,26 @@ static int subtract(lie_poly2 *cur, int *m_io, const shadow *sh, double tiny)
     return 0;
 }
 
-int lie_polylight_visible(const lie_polylight *L, lie_vec3 o, lie_vec3 n, lie_vec3 ng, const lie_vec3 *tri_p,
-                          const int32_t *solid, const uint32_t *blockers, int n_blockers, float eps,
-                          lie_polylight_work *w, double *omega)
+/* Part j of the emitter as seen from o past the blockers: its visible
+ * pieces into cur (room for cap), their count in *m_out; returns the
+ * part's projected solid angle, or -1 on overflow. */
+static double part_visible(const lie_polylight *L, int j, lie_vec3 o, lie_vec3 n, lie_vec3 ng, const lie_vec3 *tri_p,
+                           const int32_t *solid, const uint32_t *blockers, int n_blockers, float eps,
+                           lie_polylight_work *w, lie_poly2 *cur, int cap, int *m_out)
 {
     view vw;
-    int m = visible_pieces(L, o, n, ng, &vw, w);
-    *omega = 0.0;
-    w->n = 0;
+    double d;
+    int m = part_pieces(L, j, o, n, ng, &vw, &d, cur);
+    *m_out = 0;
     if (m == 0)
-        return 0;
-    const d3 pn = {L->pn[0], L->pn[1], L->pn[2]};
-    const double d = d3_dot(pn, vw.w);
+        return 0.0;
+    const d3 pn = {L->parts[j].pn[0], L->parts[j].pn[1], L->parts[j].pn[2]};
     const d3 k = d > 0.0 ? pn : (d3){-pn.x, -pn.y, -pn.z}; /* depth away from o */
     const double D = fabs(d), reach = D - (double)eps;
     if (!(reach > 0.0))
-        return 0; /* o within eps of the emitter's plane */
+        return 0.0; /* o within eps of the part's plane */
     const double tiny = 1e-12 * L->area;
     const d3 O = {o.x, o.y, o.z};
-    lie_poly2 *cur = w->a;
     for (int i = 0; i < m; i++)
         piece_box(&cur[i]);
     /* Convex solids first, each as one shadow (the hull of its faces'
@@ -578,12 +550,10 @@ int lie_polylight_visible(const lie_polylight *L, lie_vec3 o, lie_vec3 n, lie_ve
     int32_t gid[MAX_GROUPS];
     int ng_ = 0;
     uint32_t *done = w->idx; /* 1: answered by its solid's hull */
-    if (n_blockers > w->cap)
-        return -1;
     memset(done, 0, sizeof *done * (size_t)n_blockers);
     if (solid) {
-        for (int j = 0; j < n_blockers; j++) {
-            int32_t id = solid[blockers[j]];
+        for (int b = 0; b < n_blockers; b++) {
+            int32_t id = solid[blockers[b]];
             if (id < 0)
                 continue;
             int g = 0;
@@ -595,38 +565,88 @@ int lie_polylight_visible(const lie_polylight *L, lie_vec3 o, lie_vec3 n, lie_ve
         for (int g = 0; g < ng_ && m > 0; g++) {
             uint32_t *idx = w->idx + n_blockers;
             int ni = 0;
-            for (int j = 0; j < n_blockers; j++)
-                if (solid[blockers[j]] == gid[g])
-                    idx[ni++] = blockers[j];
+            for (int b = 0; b < n_blockers; b++)
+                if (solid[blockers[b]] == gid[g])
+                    idx[ni++] = blockers[b];
             if (ni < 2)
                 continue;
             shadow sh;
             if (!shadow_of_solid(&vw, k, D, reach, tri_p, O, idx, ni, w->pts, &sh))
                 continue;
-            if (subtract(cur, &m, &sh, tiny) < 0)
-                return -1;
-            for (int j = 0; j < n_blockers; j++)
-                if (solid[blockers[j]] == gid[g])
-                    done[j] = 1;
+            if (subtract(cur, &m, cap, &sh, tiny) < 0)
+                return -1.0;
+            for (int b = 0; b < n_blockers; b++)
+                if (solid[blockers[b]] == gid[g])
+                    done[b] = 1;
         }
     }
-    for (int j = 0; j < n_blockers && m > 0; j++) {
-        uint32_t b = blockers[j];
-        if (done[j] || b - L->first_tri < L->n_tris)
-            continue; /* answered by its solid, or the emitter's own triangle */
-        const lie_vec3 *P = &tri_p[3 * (size_t)b];
+    for (int b = 0; b < n_blockers && m > 0; b++) {
+        uint32_t t = blockers[b];
+        if (done[b] || (t - L->first_tri < L->n_tris && L->tri_part[t - L->first_tri] == j))
+            continue; /* answered by its solid, or a triangle of this very part */
+        const lie_vec3 *P = &tri_p[3 * (size_t)t];
         shadow sh;
         if (!shadow_of_triangle(&vw, k, D, reach, d3_sub(d3_of(P[0]), O), d3_sub(d3_of(P[1]), O),
                                 d3_sub(d3_of(P[2]), O), &sh))
             continue;
-        if (subtract(cur, &m, &sh, tiny) < 0)
-            return -1;
+        if (subtract(cur, &m, cap, &sh, tiny) < 0)
+            return -1.0;
     }
+    *m_out = m;
+    return part_sum(&vw, cur, m, d3_of(n));
+}
+
+int lie_polylight_visible(const lie_polylight *L, lie_vec3 o, lie_vec3 n, lie_vec3 ng, const lie_vec3 *tri_p,
+                          const int32_t *solid, const uint32_t *blockers, int n_blockers, float eps,
+                          lie_polylight_work *w, double *omega)
+{
+    *omega = 0.0;
+    w->n = w->n_whole = 0;
+    if (n_blockers > w->cap)
+        return -1;
+    int m = 0;
     double sum = 0.0;
-    const d3 N = d3_of(n);
-    for (int i = 0; i < m; i++)
-        sum += edge_sum(&vw, &cur[i], N);
-    *omega = 0.5 * fabs(sum);
+    for (int j = 0; j < L->n_parts; j++) {
+        int mp;
+        double om = part_visible(L, j, o, n, ng, tri_p, solid, blockers, n_blockers, eps, w, w->a + m,
+                                 LIE_POLY_MAXP - m, &mp);
+        if (om < 0.0)
+            return -1;
+        sum += om;
+        m += mp;
+    }
+    *omega = sum;
     w->n = m;
     return 0;
+}
+
+/* radiance-free LTC integral of piece p (of its part's plane) from o, added to acc */
+static void piece_ltc(const lie_polylight *L, const lie_ltc_shading *sh, lie_vec3 o, const lie_poly2 *p, float acc[3])
+{
+    const lie_polypart *P = &L->parts[p->part];
+    const double wx = P->po[0] - o.x, wy = P->po[1] - o.y, wz = P->po[2] - o.z;
+    lie_vec3 v[LIE_POLY_MAXV];
+    for (int i = 0; i < p->n; i++) {
+        double s = p->s[i], t = p->t[i];
+        v[i] = lie_v3((float)(wx + s * P->pu[0] + t * P->pv[0]), (float)(wy + s * P->pu[1] + t * P->pv[1]),
+                      (float)(wz + s * P->pu[2] + t * P->pv[2]));
+    }
+    float f[3];
+    lie_ltc_polygon(sh, v, p->n, f);
+    acc[0] += f[0], acc[1] += f[1], acc[2] += f[2];
+}
+
+void lie_polylight_ltc(const lie_polylight *L, const lie_ltc_shading *sh, lie_vec3 o, const lie_polylight_work *w,
+                       float out[3])
+{
+    float acc[3] = {0.0f, 0.0f, 0.0f};
+    for (int k = 0; k < w->n; k++)
+        piece_ltc(L, sh, o, &w->a[k], acc);
+    for (int k = 0; k < w->n_whole; k++) { /* above both tangent planes: the pieces as they are */
+        const lie_polypart *P = &L->parts[w->whole[k]];
+        for (int i = P->first; i < P->first + P->n; i++)
+            piece_ltc(L, sh, o, &L->polys[i], acc);
+    }
+    for (int c = 0; c < 3; c++)
+        out[c] = L->radiance[c] * acc[c];
 }

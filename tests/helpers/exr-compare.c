@@ -8,7 +8,14 @@
  * A pixel is lit when its reference luminance exceeds 1% of the image's
  * mean; its error is |Y_test - Y_ref| / Y_ref (Y = Rec. 709 luminance);
  * rmse is the root mean square of these, p99 their 99th percentile, over2
- * the share above 0.02.  Exit 0, or 2 on error. */
+ * the share above 0.02.  Exit 0, or 2 on error.
+ *
+ * exr-compare --error2 A.exr B.exr: the same statistics with no reference,
+ * from two renders that differ only in their random seed: a pixel is lit
+ * by the mean Y of the two, and its error is |Y_a - Y_b| / sqrt 2 over
+ * that mean (the difference of two independent estimates has sqrt 2 times
+ * the spread of either's error about the truth), for the bench's methods
+ * whose converged image costs too much (bench/quality.sh). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -23,21 +30,23 @@ static int cmp_double(const void *a, const void *b)
 
 static double luminance(const float *p) { return 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]; }
 
-static int error_stats(const lie_frame *a, const lie_frame *b)
+/* two_seeds: a and b are two estimates, not reference and test */
+static int error_stats(const lie_frame *a, const lie_frame *b, int two_seeds)
 {
     size_t n = (size_t)a->width * (size_t)a->height, lit = 0, over = 0;
     double mean = 0.0, sq = 0.0;
     for (size_t i = 0; i < n; i++)
-        mean += luminance(&a->rgb[3 * i]);
+        mean += two_seeds ? 0.5 * (luminance(&a->rgb[3 * i]) + luminance(&b->rgb[3 * i])) : luminance(&a->rgb[3 * i]);
     mean /= (double)(n ? n : 1);
     double *e = malloc(sizeof *e * (n ? n : 1));
     if (!e)
         return 2;
     for (size_t i = 0; i < n; i++) {
         double yr = luminance(&a->rgb[3 * i]), yt = luminance(&b->rgb[3 * i]);
-        if (!(yr > 0.01 * mean))
+        double ref = two_seeds ? 0.5 * (yr + yt) : yr;
+        if (!(ref > 0.01 * mean))
             continue;
-        double r = fabs(yt - yr) / yr;
+        double r = fabs(yt - yr) / (two_seeds ? M_SQRT2 * ref : ref);
         e[lit++] = r;
         sq += r * r;
         over += r > 0.02;
@@ -52,9 +61,10 @@ static int error_stats(const lie_frame *a, const lie_frame *b)
 
 int main(int argc, char **argv)
 {
-    int error_mode = argc == 4 && strcmp(argv[1], "--error") == 0;
+    int error_mode = argc == 4 && (strcmp(argv[1], "--error") == 0 || strcmp(argv[1], "--error2") == 0);
+    const int two_seeds = error_mode && strcmp(argv[1], "--error2") == 0;
     if (argc != 5 && !error_mode) {
-        fprintf(stderr, "usage: exr-compare A.exr B.exr MAX_ANY MAX_2PCT | --error REF.exr TEST.exr\n");
+        fprintf(stderr, "usage: exr-compare A.exr B.exr MAX_ANY MAX_2PCT | --error REF.exr TEST.exr | --error2 A.exr B.exr\n");
         return 2;
     }
     if (error_mode)
@@ -72,7 +82,7 @@ int main(int argc, char **argv)
         return 2;
     }
     if (error_mode) {
-        int rc = error_stats(a, b);
+        int rc = error_stats(a, b, two_seeds);
         lie_frame_destroy(a);
         lie_frame_destroy(b);
         return rc;

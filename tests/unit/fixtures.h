@@ -161,6 +161,31 @@ static inline lie_scene *square_light_and_blockers(float a, float h, int two_sid
     return s;
 }
 
+/* Segment o -> p (stopping eps short) against triangle T, in double: the
+ * quadratures of test_polylight and test_polyshape. */
+static inline int test_segment_hits(const double o[3], const double p[3], double eps, const lie_vec3 *T)
+{
+    double d[3] = {p[0] - o[0], p[1] - o[1], p[2] - o[2]};
+    double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    double tmax = 1.0 - eps / len;
+    double a[3] = {T[0].x, T[0].y, T[0].z}, e1[3] = {T[1].x - a[0], T[1].y - a[1], T[1].z - a[2]},
+           e2[3] = {T[2].x - a[0], T[2].y - a[1], T[2].z - a[2]};
+    double pv[3] = {d[1] * e2[2] - d[2] * e2[1], d[2] * e2[0] - d[0] * e2[2], d[0] * e2[1] - d[1] * e2[0]};
+    double det = e1[0] * pv[0] + e1[1] * pv[1] + e1[2] * pv[2];
+    if (fabs(det) < 1e-300)
+        return 0;
+    double tv[3] = {o[0] - a[0], o[1] - a[1], o[2] - a[2]};
+    double u = (tv[0] * pv[0] + tv[1] * pv[1] + tv[2] * pv[2]) / det;
+    if (u < 0.0 || u > 1.0)
+        return 0;
+    double qv[3] = {tv[1] * e1[2] - tv[2] * e1[1], tv[2] * e1[0] - tv[0] * e1[2], tv[0] * e1[1] - tv[1] * e1[0]};
+    double v = (d[0] * qv[0] + d[1] * qv[1] + d[2] * qv[2]) / det;
+    if (v < 0.0 || u + v > 1.0)
+        return 0;
+    double t = (e2[0] * qv[0] + e2[1] * qv[1] + e2[2] * qv[2]) / det;
+    return t > 0.0 && t < tmax;
+}
+
 #ifdef LIE_SHADE_BITMASK_H
 /* The LIE oracle over scene s (built with patches of 0.5: lists that
  * hold every blocker), and emitter 0's fixed pattern of n samples as a
