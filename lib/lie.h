@@ -6,6 +6,7 @@
 
 #include "core/core.h"
 #include "edit/edit.h"
+#include "export/export.h"
 #include "cache/cache.h"
 #include "image/image.h"
 #include "lie/lie.h"

@@ -9,6 +9,7 @@
 #define LIE_CACHE_H
 
 #include "core/core.h"
+#include "export/export.h"
 #include "lie/lie.h"
 #include "scene/scene.h"
 

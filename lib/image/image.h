@@ -124,7 +124,23 @@ typedef struct lie_png_options {
  * curve, with an sRGB chunk.  Written atomically. */
 lie_status lie_png_write(const char *path, const lie_frame *f, const lie_png_options *opt, lie_error *err);
 
-/* 8-bit RGB PNG from raw pixels (for false-colour images and tests). */
+/* Pixels for lie_png_encode: height rows of width pixels of `channels`
+ * (3: RGB, 4: RGBA) samples of `bits` (8: uint8_t, 16: uint16_t in host
+ * order), row 0 first. */
+typedef struct lie_png_pixels {
+    int width, height, bits, channels;
+    const void *data;
+    int srgb; /* 1: an sRGB chunk (with gAMA and cHRM); 0: no colour chunk */
+} lie_png_pixels;
+
+/* Encode a PNG in memory: *out (malloc'd; the caller frees it) of *size
+ * bytes, a function of the pixels alone (no time or text chunks).  `path`
+ * names the file in messages. */
+lie_status lie_png_encode(const lie_png_pixels *px, const char *path, unsigned char **out, size_t *size,
+                          lie_error *err);
+
+/* 8-bit RGB PNG from raw pixels (for false-colour images and tests), with
+ * an sRGB chunk.  Written atomically. */
 lie_status lie_png_write_rgb8(const char *path, int width, int height, const uint8_t *rgb,
                               lie_error *err);
 

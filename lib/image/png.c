@@ -1,4 +1,6 @@
-/* PNG previews through libpng, encoded in memory and written atomically. */
+/* PNG through libpng: encoded in memory (lie_png_encode), previews written
+ * atomically.  No tIME or text chunks: the bytes are a function of the
+ * pixels. */
 #include "image/image.h"
 
 #include <math.h>
@@ -39,7 +41,7 @@ static void sink_flush(png_structp png) {}
 
 /* Encode into s.  Kept apart from the caller so that nothing the caller
  * owns is live across setjmp. */
-static int encode_png(png_sink *s, int width, int height, const uint8_t *rgb)
+static int encode_png(png_sink *s, const lie_png_pixels *px)
 {
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, s, on_png_error,
                                               on_png_warning);
@@ -55,16 +57,51 @@ static int encode_png(png_sink *s, int width, int height, const uint8_t *rgb)
         return 0;
     }
     png_set_write_fn(png, s, sink_write, sink_flush);
-    png_set_IHDR(png, info, (png_uint_32)width, (png_uint_32)height, 8, PNG_COLOR_TYPE_RGB,
-                 PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+    png_set_IHDR(png, info, (png_uint_32)px->width, (png_uint_32)px->height, px->bits,
+                 px->channels == 4 ? PNG_COLOR_TYPE_RGBA : PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+                 PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
     /* sRGB chunk plus the matching gAMA/cHRM for readers that ignore sRGB. */
-    png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+    if (px->srgb)
+        png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
     png_write_info(png, info);
-    for (int y = 0; y < height; y++)
-        png_write_row(png, rgb + (size_t)y * (size_t)width * 3);
+    if (px->bits == 16) {
+        /* PNG stores 16-bit samples big-endian; ours are in host order */
+        const uint16_t one = 1;
+        unsigned char little;
+        memcpy(&little, &one, 1);
+        if (little)
+            png_set_swap(png);
+    }
+    size_t row = (size_t)px->width * (size_t)px->channels * (size_t)(px->bits / 8);
+    for (int y = 0; y < px->height; y++)
+        png_write_row(png, (png_const_bytep)px->data + (size_t)y * row);
     png_write_end(png, info);
     png_destroy_write_struct(&png, &info);
     return 1;
+}
+
+lie_status lie_png_encode(const lie_png_pixels *px, const char *path, unsigned char **out, size_t *size,
+                          lie_error *err)
+{
+    if (!px || !px->data || !out || !size || px->width <= 0 || px->height <= 0 ||
+        (px->bits != 8 && px->bits != 16) || (px->channels != 3 && px->channels != 4))
+        return lie_error_set(err, LIE_ERR_ARG, path, "PNG of %dx%d, %d-bit, %d channels: not supported",
+                             px ? px->width : 0, px ? px->height : 0, px ? px->bits : 0, px ? px->channels : 0);
+    /* PNG's limit is 2^31-1; libpng's default user limit is 10^6. */
+    if (px->width > 1000000 || px->height > 1000000)
+        return lie_error_set(err, LIE_ERR_LIMIT, path, "image too large for PNG: %dx%d", px->width,
+                             px->height);
+    png_sink s;
+    memset(&s, 0, sizeof s);
+    if (!encode_png(&s, px)) {
+        free(s.data);
+        if (s.oom || !s.msg[0])
+            return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory encoding PNG");
+        return lie_error_set(err, LIE_ERR_IO, path, "cannot encode PNG: %s", s.msg);
+    }
+    *out = s.data;
+    *size = s.size;
+    return LIE_OK;
 }
 
 lie_status lie_png_write_rgb8(const char *path, int width, int height, const uint8_t *rgb,
@@ -72,32 +109,25 @@ lie_status lie_png_write_rgb8(const char *path, int width, int height, const uin
 {
     if (!path || !rgb || width <= 0 || height <= 0)
         return lie_error_set(err, LIE_ERR_ARG, path, "no image to write");
-    /* PNG's limit is 2^31-1; libpng's default user limit is 10^6. */
-    if (width > 1000000 || height > 1000000)
-        return lie_error_set(err, LIE_ERR_LIMIT, path, "image too large for PNG: %dx%d", width,
-                             height);
-    png_sink s;
-    memset(&s, 0, sizeof s);
-    if (!encode_png(&s, width, height, rgb)) {
-        free(s.data);
-        if (s.oom || !s.msg[0])
-            return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory encoding PNG");
-        return lie_error_set(err, LIE_ERR_IO, path, "cannot encode PNG: %s", s.msg);
-    }
+    lie_png_pixels px = {width, height, 8, 3, rgb, 1};
+    unsigned char *data = NULL;
+    size_t size = 0;
+    lie_status st = lie_png_encode(&px, path, &data, &size, err);
+    if (st != LIE_OK)
+        return st;
     lie_atomic_file af;
-    lie_status st = lie_atomic_open(&af, path, err);
+    st = lie_atomic_open(&af, path, err);
     if (st == LIE_OK) {
-        if (fwrite(s.data, 1, s.size, af.fp) != s.size) {
+        if (fwrite(data, 1, size, af.fp) != size) {
             lie_atomic_abort(&af);
             st = lie_error_set(err, LIE_ERR_IO, path, "write failed");
         } else {
             st = lie_atomic_commit(&af, err);
         }
     }
-    free(s.data);
+    free(data);
     return st;
 }
-
 /* clamp(srgb(x)) to 8 bits, rounded to nearest; NaN gives 0. */
 static uint8_t encode_8bit(float x)
 {

@@ -23,7 +23,8 @@ static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32
                            const int32_t *old_unit, uint64_t unit_lo, uint64_t unit_hi, int threads);
 static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
                               const uint8_t *tri_mask, const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
-                              lie_env_part *out, lie_build_stats *stats, lie_error *err);
+                              const volatile sig_atomic_t *stop, lie_env_part *out, lie_build_stats *stats,
+                              lie_error *err);
 
 static void workers_free(worker *ws, int n)
 {
@@ -212,6 +213,46 @@ static void copy_direct(const lie_env *old, uint32_t from, lie_pnode *nd, uint32
         *next_pool += x.count;
     }
     nd[idx] = x;
+}
+
+lie_status lie_env_compact(const lie_env *src, lie_env **out, lie_error *err)
+{
+    *out = NULL;
+    size_t n_units = (size_t)src->n_tris * (size_t)src->n_clusters;
+    /* the sizes first: a unit's subtree, reachable from its root */
+    uint64_t nodes = 0, pool = 0;
+    for (size_t u = 0; u < n_units; u++) {
+        uint32_t nn = 0, np = 0;
+        lie_subtree_size(src, src->root[u], &nn, &np);
+        nodes += nn;
+        pool += np;
+    }
+    if (nodes >= 0xFFFFFFF0u || pool >= 0xFFFFFFF0u)
+        return lie_error_set(err, LIE_ERR_LIMIT, NULL, "the patch trees hold too many nodes for one env");
+    lie_env *env = calloc(1, sizeof *env);
+    if (env) {
+        *env = *src;
+        env->root = malloc(sizeof *env->root * (n_units + 1));
+        env->nodes = malloc(sizeof *env->nodes * (size_t)(nodes + 1));
+        env->pool = malloc(sizeof *env->pool * (size_t)(pool + 1));
+    }
+    if (!env || !env->root || !env->nodes || !env->pool) {
+        if (env)
+            lie_forest_free(env->root, env->nodes, env->pool);
+        free(env);
+        return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
+    }
+    /* unit by unit, each subtree as copy_node lays it out: a build's layout */
+    uint32_t next_node = 0, next_pool = 0;
+    for (size_t u = 0; u < n_units; u++) {
+        uint32_t idx = next_node++;
+        env->root[u] = idx;
+        copy_direct(src, src->root[u], env->nodes, env->pool, idx, &next_node, &next_pool);
+    }
+    env->n_nodes = next_node;
+    env->n_pool = next_pool;
+    *out = env;
+    return LIE_OK;
 }
 
 /* Concatenate per-triangle unit buffers (of triangles tri_lo + t) into
@@ -440,7 +481,7 @@ lie_status lie_env_build_range(const lie_scene *s, const lie_rt *rt, const lie_b
                                const uint8_t *tri_mask, uint64_t first_unit, uint64_t n_units, lie_env_part *out,
                                lie_build_stats *stats, lie_error *err)
 {
-    return build_range(s, rt, p, tri_mask, NULL, first_unit, n_units, out, stats, err);
+    return build_range(s, rt, p, tri_mask, NULL, first_unit, n_units, NULL, out, stats, err);
 }
 
 lie_status lie_env_build_range_views(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
@@ -450,12 +491,24 @@ lie_status lie_env_build_range_views(const lie_scene *s, const lie_rt *rt, const
     memset(out, 0, sizeof *out);
     if (px && px->n_tris != s->n_tris)
         return lie_error_set(err, LIE_ERR_ARG, s->path, "pixels for %u triangles, not %u", px->n_tris, s->n_tris);
-    return build_range(s, rt, p, NULL, px, first_unit, n_units, out, stats, err);
+    return build_range(s, rt, p, NULL, px, first_unit, n_units, NULL, out, stats, err);
+}
+
+lie_status lie_env_build_units(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                               const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
+                               const volatile sig_atomic_t *stop, lie_env_part *out, lie_build_stats *stats,
+                               lie_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (px && px->n_tris != s->n_tris)
+        return lie_error_set(err, LIE_ERR_ARG, s->path, "pixels for %u triangles, not %u", px->n_tris, s->n_tris);
+    return build_range(s, rt, p, NULL, px, first_unit, n_units, stop, out, stats, err);
 }
 
 static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
                               const uint8_t *tri_mask, const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
-                              lie_env_part *out, lie_build_stats *stats, lie_error *err)
+                              const volatile sig_atomic_t *stop, lie_env_part *out, lie_build_stats *stats,
+                              lie_error *err)
 {
     memset(out, 0, sizeof *out);
     if (lie_build_params_check(p, err) != LIE_OK)
@@ -474,7 +527,7 @@ static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_bu
     lie_status st = LIE_OK;
     if (n_units)
         st = run_build(&part, s, rt, NULL, NULL, tri_mask, px, first_unit, first_unit + n_units, p->threads, 0, NULL,
-                       NULL, stats);
+                       stop, stats);
     if (st != LIE_OK) {
         free(part.root);
         free(part.nodes);

@@ -84,6 +84,8 @@ void lie_stats_merge(lie_build_stats *dst, const lie_build_stats *src);
 lie_status lie_build_update(lie_env *env, const lie_scene *s, const lie_rt *rt, const lie_pixels *px,
                             const int32_t *old_unit, const uint8_t *node_flags, int threads, int memo,
                             lie_build_stats *stats, lie_error *err);
+/* The nodes and pool entries of node `from` of env and its subtree (subdiv.c). */
+void lie_subtree_size(const lie_env *env, uint32_t from, uint32_t *n_nodes, uint32_t *n_pool);
 /* The error of a build that needs more than max-nodes nodes (build.c). */
 /* What an env was built from: the scene's counts and hash, the parameters. */
 void lie_env_describe(lie_env *env, const lie_scene *s, const lie_build_params *p);

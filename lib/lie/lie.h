@@ -279,6 +279,27 @@ lie_status lie_env_build_views(const lie_scene *s, const lie_rt *rt, const lie_b
 lie_status lie_env_build_range_views(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
                                      const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
                                      lie_env_part *out, lie_build_stats *stats, lie_error *err);
+/* lie_env_build_range_views, stopped by *stop (may be NULL) as
+ * lie_build_control.stop stops a build: units the stop reaches are left
+ * LIE_CLASS_NONE and counted in stats->units_interrupted.  An asynchronous
+ * constructor builds a triangle's units at a time with it (lib/update,
+ * lie_ctor). */
+lie_status lie_env_build_units(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                               const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
+                               const volatile sig_atomic_t *stop, lie_env_part *out, lie_build_stats *stats,
+                               lie_error *err);
+/* An env laid out as a build lays it out (every unit's tree in unit order,
+ * nodes depth first as built, lists in node order), from one whose units
+ * were put together in any order and may hold unreachable nodes: the same
+ * trees, the bytes one build gives.  *out: lie_env_destroy. */
+lie_status lie_env_compact(const lie_env *src, lie_env **out, lie_error *err);
+/* Whether the units of triangle tri, built for the views whose pixels are
+ * old_px, differ from what a build for new_px (the old views and more)
+ * gives: a unit the new pixels make pay, or a leaf whose split they may
+ * now make pay (the rule lie_env_add_views refines by). */
+int lie_env_tri_stale(const lie_env *env, const lie_scene *s, const lie_pixels *old_px, const lie_pixels *new_px,
+                      uint32_t tri);
+
 /* lie_env_update for an env built for views: px are the views' pixels on s
  * (NULL: an env built without views). */
 lie_status lie_env_update_views(lie_env *env, const lie_scene *s, const lie_rt *rt, const lie_pixels *px,
@@ -290,8 +311,9 @@ lie_status lie_env_update_views(lie_env *env, const lie_scene *s, const lie_rt *
  * together.  Units the old views did not see are built; units whose
  * pixels grew are refined where a patch kept from splitting by too few
  * pixels may now split (only those nodes and their ancestors are
- * recomputed); the others are kept.  The result is exactly
- * lie_env_build_views(s, new_px). */
+ * recomputed); the others are kept.  An interrupted env (partial) is
+ * finished on the way: its unbuilt units that the views see and that pay
+ * are built.  The result is exactly lie_env_build_views(s, new_px). */
 typedef struct lie_add_stats {
     uint64_t units_kept, units_refined, units_new;
     uint64_t nodes_flagged;   /* old nodes recomputed */

@@ -511,13 +511,13 @@ static void copy_node(const lie_env *old, uint32_t from, worker *w, unit_buf *u,
 }
 
 /* The nodes and pool entries of old node `from` and its subtree. */
-static void subtree_size(const lie_env *old, uint32_t from, uint32_t *n_nodes, uint32_t *n_pool)
+void lie_subtree_size(const lie_env *old, uint32_t from, uint32_t *n_nodes, uint32_t *n_pool)
 {
     const lie_pnode *x = &old->nodes[from];
     ++*n_nodes;
     if (x->child)
         for (uint32_t k = 0; k < 4; k++)
-            subtree_size(old, x->child + k, n_nodes, n_pool);
+            lie_subtree_size(old, x->child + k, n_nodes, n_pool);
     else if (x->cls == LIE_CLASS_PARTIAL)
         *n_pool += x->count;
 }
@@ -535,7 +535,7 @@ static int copied_whole(const build_ctx *c, uint32_t tri, unit_buf *u)
             return 0;
     }
     for (size_t e = 0; e < ne; e++)
-        subtree_size(c->old, c->old->root[c->old_unit[(size_t)tri * ne + e]], &u->n_nodes, &u->n_pool);
+        lie_subtree_size(c->old, c->old->root[c->old_unit[(size_t)tri * ne + e]], &u->n_nodes, &u->n_pool);
     u->copied = 1;
     return 1;
 }

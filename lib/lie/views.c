@@ -46,9 +46,28 @@ static int flag_node(const lie_env *env, const lie_scene *s, const lie_pixels *o
         int may_split = area > p->min_patch * s->max_tri_area && path.depth < LIE_PATCH_MAX_DEPTH;
         any = may_split && (x->cls == LIE_CLASS_COMPLEX || (x->cls == LIE_CLASS_PARTIAL && x->count > p->max_blockers));
     }
-    if (any)
+    if (any && flags)
         flags[idx] = 1;
     return any;
+}
+
+int lie_env_tri_stale(const lie_env *env, const lie_scene *s, const lie_pixels *old_px, const lie_pixels *new_px,
+                      uint32_t tri)
+{
+    if (lie_pixels_tri_hash(old_px, tri) == lie_pixels_tri_hash(new_px, tri))
+        return 0;
+    if (old_px->first[tri + 1] == old_px->first[tri])
+        return 1; /* not seen before: built now */
+    for (int e = 0; e < env->n_clusters; e++) {
+        uint32_t root = env->root[(size_t)tri * (size_t)env->n_clusters + (size_t)e];
+        if (env->nodes[root].cls == LIE_CLASS_NONE) {
+            if (lie_subdiv_unit_pays(&env->params, s, new_px, tri, e))
+                return 1;
+        } else if (env->params.frames && flag_node(env, s, old_px, new_px, root, tri, lie_patch_root(), NULL)) {
+            return 1;
+        }
+    }
+    return 0;
 }
 
 lie_status lie_env_add_views(lie_env *env, const lie_scene *s, const lie_rt *rt, const lie_pixels *old_px,
@@ -92,6 +111,10 @@ lie_status lie_env_add_views(lie_env *env, const lie_scene *s, const lie_rt *rt,
         as->nodes_flagged += flags[i];
     if (st == LIE_OK)
         st = lie_build_update(env, s, rt, new_px, old_unit, flags, threads, 0, stats, err);
+    /* an interrupted env's unbuilt units were among those built (the seen
+     * ones that pay): the result is whole */
+    if (st == LIE_OK)
+        env->partial = 0;
     free(old_unit);
     free(flags);
     return st;

@@ -3,7 +3,7 @@
  * Two layers live in one lie_scene:
  *  - the *document*: what the glTF file says (nodes with local transforms,
  *    meshes in local space, materials, textures, cameras, punctual lights).
- *    The glTF importer (gltf.cpp, the one C++ file) fills it; edits
+ *    The glTF importer (gltf_*.cpp, lib/scene/gltf.h) fills it; edits
  *    (rst-update) change it.
  *  - the *world*: the document flattened by lie_scene_flatten() into
  *    world-space triangles with a stable global index in scene order
@@ -497,6 +497,11 @@ uint32_t lie_scene_cluster_digest(const lie_scene *s, int e);
 int lie_texture_wrap_index(long long i, int n, lie_wrap wrap);
 /* Bilinear lookup with the texture's wrap modes; rgba out. */
 void lie_texture_sample(const lie_texture *t, float u, float v, float rgba[4]);
+/* The linear value the importer decodes code i of an image with `levels`
+ * code values (256 or 65536) to, through the sRGB transfer curve
+ * (IEC 61966-2-1) when `srgb`; the exporter (lib/export) inverts exactly
+ * this. */
+float lie_texture_code_value(size_t i, size_t levels, int srgb);
 
 /* Whether the point (b1, b2) of triangle tri is solid: always, unless its
  * material is alphaMode MASK and the alpha there is below the cutoff. */
@@ -568,52 +573,9 @@ int lie_scene_add_node(lie_scene *s, const char *name, int parent, const lie_mat
 /* A material with glTF's defaults (white, metallic 1, roughness 1). */
 lie_material lie_material_default(void);
 
-/* ---- writing scenes ------------------------------------------------------ */
-
-/* Write the document as glTF 2.0, which lie_scene_load reads back into the
- * same world (the same hash when no node was removed).  The format follows
- * the name:
- *   "DIR/NAME.glb" (any case): one binary glTF (glTF 2.0 §4.4), a JSON chunk
- *     and one BIN chunk holding every vertex, index and image (PNG
- *     bufferViews with their mimeType); no other file is written.
- *   any other name, "DIR/NAME.gltf": JSON, plus DIR/NAME.bin (every vertex
- *     and index) and DIR/NAME_texN.png (image N).  The .gltf lists those
- *     side files with the XXH3-64 hash of each (asset.extras "lie.files").
- *     A side file that exists already is replaced only when it is ours: the
- *     DIR/NAME.gltf being replaced is this exporter's and lists it with the
- *     hash of the bytes it holds now.  Otherwise (another program's file, a
- *     file edited since, no previous .gltf) the export fails with
- *     "FILE: exists (use --force to overwrite)" before writing anything,
- *     unless opt->force.  The .gltf itself is always replaced.
- * All files are complete on disk before any is renamed into place (the
- * .gltf last); on failure none is.
- * Left out: removed nodes with their subtrees, nodes outside the default
- * scene, unused meshes, cameras and lights, and textures no material
- * uses.  Every material is
- * written, so material indices stay.  Texture pixels go back to the code
- * values they were decoded from (8-bit when every value is an 8-bit code's,
- * else 16-bit), in the colour space of the slot that uses them.  "-"
- * (stdout) is refused. */
-typedef struct lie_gltf_export_options {
-    int force; /* replace side files that are not this exporter's (above) */
-} lie_gltf_export_options;
-lie_gltf_export_options lie_gltf_export_options_default(void);
-/* With the default options. */
-lie_status lie_gltf_export(const lie_scene *s, const char *path, lie_error *err);
-/* Into `group` (lib/core): nothing is visible until the caller commits the
- * group, with whatever else the run writes.  opt NULL: the defaults. */
-lie_status lie_gltf_export_group(const lie_scene *s, const char *path, const lie_gltf_export_options *opt,
-                                 lie_atomic_group *group, lie_error *err);
-
-/* Internal to lib/scene: the importer (gltf.cpp) fills the document. */
+/* Internal to lib/scene: the importer (gltf_*.cpp, lib/scene/gltf.h) fills the document. */
 lie_status lie_gltf_import(lie_scene *s, const char *path, const lie_scene_options *opt,
                            lie_error *err);
-/* Internal to lib/scene: the exporter's PNG writer (export_png.c).  `codes`
- * holds height rows of width pixels of `channels` (3 or 4) samples of
- * `bits` (8: uint8_t, 16: uint16_t in host order), row 0 first; `path`
- * names the file in messages. */
-lie_status lie_scene_png_write(FILE *fp, const char *path, int width, int height, int bits, int channels,
-                               const void *codes, lie_error *err);
 
 #ifdef __cplusplus
 }

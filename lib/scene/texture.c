@@ -98,3 +98,9 @@ int lie_scene_solid_at(const lie_scene *s, uint32_t tri, float b1, float b2)
     }
     return a >= m->alpha_cutoff;
 }
+
+float lie_texture_code_value(size_t i, size_t levels, int srgb)
+{
+    double c = (double)i / (double)(levels - 1);
+    return (float)(srgb ? (c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4)) : c);
+}

@@ -911,6 +911,12 @@ lie_status lie_lie_vis_use_silhouette(lie_lie_vis *v, lie_error *err)
     return LIE_OK;
 }
 
+void lie_lie_vis_grow(lie_lie_vis *v, uint32_t longest)
+{
+    if ((int)longest > v->oracle.max_blockers)
+        v->oracle.max_blockers = (int)longest;
+}
+
 void lie_lie_vis_destroy(lie_lie_vis *v)
 {
     if (!v)

@@ -168,6 +168,10 @@ const lie_vis_oracle *lie_lie_vis_oracle(const lie_lie_vis *v);
  * sort of every edge: made here, on request, not by every create.  Until
  * then occluded_sil is NULL and bitmasks are walked blocker by blocker. */
 lie_status lie_lie_vis_use_silhouette(lie_lie_vis *v, lie_error *err);
+/* The env grew lists up to `longest` blockers since the oracle was made (an
+ * env built while it is rendered from, lib/update's lie_ctor): the
+ * oracle's max_blockers follows.  Call while nothing renders from it. */
+void lie_lie_vis_grow(lie_lie_vis *v, uint32_t longest);
 void lie_lie_vis_destroy(lie_lie_vis *v);
 
 /* ---- the renderer ------------------------------------------------------ */

@@ -155,6 +155,104 @@ lie_status lie_update_apply(lie_cache *cache, lie_scene *scene, const lie_edit *
                             const unsigned char *const *texts, const size_t *sizes, int n_edits,
                             const lie_update_options *opt, lie_update_stats *stats, lie_error *err);
 
+
+/* ---- the asynchronous constructor (§4.3, §4.3.1; lib/update/ctor.c) -------
+ *
+ * Local illumination environments built on threads of their own while a
+ * program renders from them: a program opens a scene (or a partial cache),
+ * renders its first frame at once with every unit unbuilt (answered by
+ * Embree, lie_lie_vis), and its frames get faster as units land.  Units
+ * land a triangle at a time, those covering most pixels of the current view
+ * first (mirrors included); a new view reorders the rest.  What lands is
+ * what lie-build --view gives for the same views (every view the program
+ * handed to lie_ctor_view), or lie-build's whole build (whole): a saved
+ * cache (lie_ctor_cache) equals that build byte for byte once nothing is
+ * pending, and is a valid partial cache before (lie-build --resume and
+ * --into continue it).
+ *
+ * Threads.  The constructor borrows the scene and its Embree scene.  A
+ * renderer reads lie_ctor_env between lie_ctor_read_lock and
+ * lie_ctor_read_unlock: the env is changed in place (each landing appends
+ * what landed, never copies the whole env) under the write side of that
+ * lock.  To edit the scene: lie_ctor_hold (builds stop, the unit in
+ * progress is dropped), edit, make the new Embree scene, lie_ctor_edited,
+ * lie_ctor_release. */
+typedef struct lie_ctor lie_ctor;
+
+typedef struct lie_ctor_options {
+    int threads;             /* constructor threads (0: one) */
+    lie_build_params params; /* as lie-build's (params.threads is ignored: one per constructor thread) */
+    int whole;               /* build every unit, as lie-build without --view; the views only order it */
+    int view_width, view_height, max_depth; /* how views are sampled (lie_cache_views) */
+} lie_ctor_options;
+lie_ctor_options lie_ctor_options_default(void);
+
+/* Start building for scene s (borrowed, with rt, until lie_ctor_destroy).
+ * `from` (may be NULL) is a cache of s to go on from: its units are kept,
+ * its views (if any) are the views, its parameters the parameters; the
+ * unbuilt units of a partial one are built. */
+lie_status lie_ctor_create(lie_scene *s, const lie_rt *rt, const lie_ctor_options *opt, const lie_cache *from,
+                           lie_ctor **out, lie_error *err);
+/* Stop the threads (a unit in progress is dropped) and free. */
+void lie_ctor_destroy(lie_ctor *c);
+
+/* The live env, for lie_lie_vis_create and renders (under the read lock). */
+const lie_env *lie_ctor_env(const lie_ctor *c);
+void lie_ctor_read_lock(lie_ctor *c);
+void lie_ctor_read_unlock(lie_ctor *c);
+/* The longest blocker list landed so far (under the read lock). */
+uint32_t lie_ctor_longest(const lie_ctor *c);
+/* Changes whenever units land or go: a frame of an older version used fewer units. */
+uint64_t lie_ctor_version(const lie_ctor *c);
+
+/* The camera now: what it sees is built first, and (unless whole) it is one
+ * of the views the units are built for.  Returns at once; a constructor
+ * thread samples its pixels. */
+void lie_ctor_view(lie_ctor *c, const lie_camera *cam);
+
+/* Hold the constructor: no unit lands until the matching release (holds
+ * nest).  Returns once the threads are idle; a unit in progress is dropped
+ * (and built again after the release), so a hold waits for one unit's
+ * current patch at most, never for the pending work. */
+void lie_ctor_hold(lie_ctor *c);
+void lie_ctor_release(lie_ctor *c);
+
+/* After an edit of the scene (held): rt is the edited scene's Embree scene.
+ * The views are sampled again; every landed triangle whose units the edit
+ * may change is built again: its own triangle moved, its pixels changed, or
+ * a box holding its units' shafts meets the moved triangles before or
+ * after (a superset of what the ray segment trees flag, so update ≡
+ * rebuild holds).  geometry_only: the edit only moved nodes (move, rotate,
+ * scale, set-transform); otherwise every unit is built again.  An edit that
+ * changes the number of triangles or emitter clusters is refused. */
+lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie_error *err);
+
+/* Wait until nothing is pending (seconds < 0: no limit); 1: done, 0: not
+ * yet (or held), -1: the constructor failed (err filled, may be NULL). */
+int lie_ctor_wait(lie_ctor *c, double seconds, lie_error *err);
+
+/* What has landed over time. */
+typedef struct lie_ctor_sample {
+    double seconds;    /* since lie_ctor_create */
+    uint64_t units;    /* units landed by then */
+} lie_ctor_sample;
+typedef struct lie_ctor_stats {
+    uint64_t units, units_pending, units_built;
+    int views;
+    int sampling;      /* a view or an edit is being sampled: more units may be pending */
+    const lie_ctor_sample *samples; /* valid until the next call on c */
+    size_t n_samples;
+} lie_ctor_stats;
+void lie_ctor_get_stats(lie_ctor *c, lie_ctor_stats *st);
+
+/* A cache of what has landed, laid out as one build lays it out (partial
+ * where units are pending: lie-build --resume with the same views finishes
+ * it, lie-build --into adds views to it), with the scene path, scene hash
+ * and edit log of `provenance` and the state of the scene as edited.  Holds
+ * the constructor while it copies (a unit in progress is dropped).
+ * *out: lie_cache_destroy. */
+lie_status lie_ctor_cache(lie_ctor *c, const lie_cache *provenance, lie_cache **out, lie_error *err);
+
 #ifdef __cplusplus
 }
 #endif

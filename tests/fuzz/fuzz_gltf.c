@@ -1,4 +1,4 @@
-/* libFuzzer target for the glTF importer (lib/scene/gltf.cpp over
+/* libFuzzer target for the glTF importer (lib/scene/gltf_*.cpp over
  * tinygltf): .gltf and .glb, by content.  The importer reads files (the
  * scene and the buffers and images it names), so each input is written to
  * a scratch folder in tmpfs (/dev/shm when there is one) that also holds

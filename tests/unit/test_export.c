@@ -1,4 +1,4 @@
-/* lib/scene: the glTF exporter (lie_gltf_export in gltf.cpp).  The property
+/* lib/export: the glTF exporter (lie_gltf_export).  The property
  * pinned: loading an exported scene gives back the world it was written
  * from, the same content hash whenever no node was removed. */
 #include <dirent.h>
@@ -18,6 +18,7 @@
 #include <cmocka.h>
 
 #include "edit/edit.h"
+#include "export/export.h"
 #include "scene/scene.h"
 
 #define SCENES TEST_SCENES "/"

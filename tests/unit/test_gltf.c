@@ -1,4 +1,4 @@
-/* lib/scene: the glTF importer (gltf.cpp) and texture lookup (texture.c),
+/* lib/scene: the glTF importer (gltf_*.cpp) and texture lookup (texture.c),
  * through lie_scene_load.  Fixtures: tests/data/gltf/ (gen_fixtures.py). */
 #include <limits.h>
 #include <math.h>

@@ -5,6 +5,7 @@
 
 #include <SDL.h>
 #include <getopt.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -17,12 +18,19 @@ static void usage(FILE *fp)
     fprintf(fp,
             "usage: %s CACHE|SCENE.gltf [options]\n"
             "\n"
-            "An interactive window on a LIE cache (or a glTF scene, with Embree for every\n"
-            "shadow ray).  Frames come coarse first while the view moves and refine to every\n"
-            "light sample when it is still.  Edits apply at once: the units the ray segment\n"
-            "trees flag are answered by Embree until the constructor thread has rebuilt them.\n"
+            "An interactive window on a LIE cache or a glTF scene.  Frames come coarse first\n"
+            "while the view moves and refine to every light sample when it is still.  On a\n"
+            "scene (or a partial cache) the first frame comes at once, every shadow ray\n"
+            "answered by Embree, while constructor threads build the units of what the view\n"
+            "sees most first, as lie-build --view would for the views looked from (§4.3.1);\n"
+            "frames use each unit as it lands.  Edits apply at once: the units they may\n"
+            "change are answered by Embree until the constructor has rebuilt them.\n"
             "\n"
             "  -s, --size WxH          window and image size (default %dx%d)\n"
+            "      --exposure EV       exposure in stops, as lie-render --exposure (default 0;\n"
+            "                          E and Shift+E step it by a stop)\n"
+            "      --view-size WxH     the image the constructor samples views at, as\n"
+            "                          lie-build --view-size (default 512x512)\n"
             "      --light-samples N   light samples of the refined frame (default %d)\n"
             "      --max-depth D       mirror reflection depth (default %d)\n"
             "      --camera SPEC       start from a scene camera or eye=..,target=..[,up=..][,fov=..]\n"
@@ -33,7 +41,10 @@ static void usage(FILE *fp)
             "      --record EDITS.yaml write the session's edits there (formats/edit.md);\n"
             "                          rst-update CACHE EDITS.yaml (named as here) gives\n"
             "                          the bytes --save writes\n"
-            "      --save OUT.lie      write the cache at exit (and on Ctrl+S)\n"
+            "      --save OUT.lie      write the cache at exit (and on Ctrl+S): what has landed,\n"
+            "                          a partial cache while units are pending (lie-build\n"
+            "                          --resume or --into goes on from it); never waits\n"
+            "                          for the constructor.  SIGINT and SIGTERM quit as Q\n"
             "      --allow-external-uris  let the glTF reference files outside its folder\n"
             "      --stats[=json]      at exit: frames, fps while moving, update times, pending\n"
             "  -q, --quiet             print nothing but errors and what is asked for\n"
@@ -47,14 +58,15 @@ static void usage(FILE *fp)
             "selection (or the scene), C cycles the scene's cameras, M cycles the view\n"
             "(shaded, Figure 10 complexity, patches), B cycles the selection's base colour,\n"
             "[ and ] its roughness, - and = an emitter's strength, Delete removes it,\n"
-            "Ctrl+Z undo, Ctrl+Y redo, P prints the camera as a lie-render --camera spec,\n"
+            "E and Shift+E exposure, Ctrl+Z undo, Ctrl+Y redo, P prints the camera as a lie-render --camera spec,\n"
             "Ctrl+S saves the cache, O toggles the overlay, Q or Escape quits.\n"
             "\n"
             "Script commands: frames N, orbit YAW PITCH, dolly F, select NODE, pick X Y,\n"
             "drag DX DY DZ, rotate AX AY AZ DEG, set-material FIELDS, set-emission FIELDS\n"
             "(FIELDS as in edit files: base-color: [r, g, b], roughness: r, strength: s),\n"
             "remove (the selection), undo, redo, wait (until no unit is pending),\n"
-            "screenshot FILE.png, quit.\n",
+            "pause and resume (units stop landing in between), redraw N (the full frame N\n"
+            "times more, each timed), screenshot FILE.png (of what has landed), quit.\n",
             prog, 512, 512, LIE_LIGHT_SAMPLES_DEFAULT, LIE_MAX_DEPTH_DEFAULT);
 }
 
@@ -62,7 +74,7 @@ static void usage(FILE *fp)
 
 enum {
     OPT_LIGHT_SAMPLES = 256, OPT_MAX_DEPTH, OPT_CAMERA, OPT_CTOR_THREADS, OPT_SCRIPT, OPT_RECORD,
-    OPT_SAVE
+    OPT_SAVE, OPT_EXPOSURE, OPT_VIEW_SIZE
 };
 
 static const struct option long_opts[] = {
@@ -74,22 +86,85 @@ static const struct option long_opts[] = {
     {"script", required_argument, NULL, OPT_SCRIPT},
     {"record", required_argument, NULL, OPT_RECORD},
     {"save", required_argument, NULL, OPT_SAVE},
+    {"exposure", required_argument, NULL, OPT_EXPOSURE},
+    {"view-size", required_argument, NULL, OPT_VIEW_SIZE},
     {NULL, 0, NULL, 0},
 };
 
 /* ---- statistics and overlay ---------------------------------------------------- */
 
-static void print_stats(session *S, int json)
+/* What the renderer's images say: frames per second over the time spent
+ * rendering images (every level: what the window showed), the full frames
+ * before and after the constructor caught up with the view (none pending
+ * at the frame's end, no unit landing during it). */
+typedef struct frame_summary {
+    double fps, first_full_ms, before_ms, after_ms;
+    int n_before, n_after;
+} frame_summary;
+
+static void summarise(const view_frame_time *t, size_t n, frame_summary *f)
+{
+    memset(f, 0, sizeof *f);
+    double busy = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        busy += t[i].ms;
+        if (t[i].level != 2)
+            continue;
+        if (f->first_full_ms == 0.0)
+            f->first_full_ms = t[i].ms;
+        if (t[i].pending == 0 && t[i].clean) {
+            f->after_ms += t[i].ms;
+            f->n_after++;
+        } else {
+            f->before_ms += t[i].ms;
+            f->n_before++;
+        }
+    }
+    f->fps = busy > 0.0 ? 1e3 * (double)n / busy : 0.0;
+    f->before_ms = f->n_before ? f->before_ms / f->n_before : 0.0;
+    f->after_ms = f->n_after ? f->after_ms / f->n_after : 0.0;
+}
+
+static void print_ctor_json(session *S)
+{
+    lie_ctor *c = view_world_ctor(S->w);
+    if (!c)
+        return;
+    lie_ctor_stats cs;
+    lie_ctor_get_stats(c, &cs);
+    fprintf(stderr, ",\"units\":%llu,\"units_pending\":%llu,\"units_built\":%llu,\"views\":%d,\"units_over_time\":[",
+            (unsigned long long)cs.units, (unsigned long long)cs.units_pending, (unsigned long long)cs.units_built,
+            cs.views);
+    for (size_t i = 0; i < cs.n_samples; i++)
+        fprintf(stderr, "%s[%.3f,%llu]", i ? "," : "", cs.samples[i].seconds, (unsigned long long)cs.samples[i].units);
+    fprintf(stderr, "]");
+}
+
+static void print_stats(session *S, const view_frame_time *times, size_t n_times, int json)
 {
     int n;
     const double *ms = view_world_update_ms(S->w, &n);
-    double fps = S->moving_seconds > 0.0 ? (double)S->moving_frames / S->moving_seconds : 0.0;
+    frame_summary fs;
+    summarise(times, n_times, &fs);
+    double fps = fs.fps;
     if (json) {
-        fprintf(stderr, "{\"tool\":\"lie-view\",\"frames\":%llu,\"moving_frames\":%llu,\"fps_mean\":%.3f,\"update_ms\":[",
+        fprintf(stderr, "{\"tool\":\"lie-view\",\"frames\":%llu,\"moving_frames\":%llu,\"fps_mean\":%.3f,",
                 (unsigned long long)S->frames, (unsigned long long)S->moving_frames, fps);
+        fprintf(stderr, "\"first_frame_ms\":%.3f,\"full_frame_first_ms\":%.3f,\"full_frames_before\":%d,"
+                        "\"full_frame_before_ms\":%.3f,\"full_frames_after\":%d,\"full_frame_after_ms\":%.3f,"
+                        "\"full_frames\":[",
+                S->first_image_ms, fs.first_full_ms, fs.n_before, fs.before_ms, fs.n_after, fs.after_ms);
+        int k = 0;
+        for (size_t i = 0; i < n_times; i++)
+            if (times[i].level == 2)
+                fprintf(stderr, "%s[%.3f,%.3f,%lld]", k++ ? "," : "", times[i].end - S->start_t, times[i].ms,
+                        (long long)times[i].pending);
+        fprintf(stderr, "]");
+        print_ctor_json(S);
+        fprintf(stderr, ",\"update_ms\":[");
         for (int i = 0; i < n; i++)
             fprintf(stderr, "%s%.3f", i ? "," : "", ms[i]);
-        fprintf(stderr, "],\"first_frame_ms\":[");
+        fprintf(stderr, "],\"edit_first_frame_ms\":[");
         for (int i = 0; i < S->n_first; i++)
             fprintf(stderr, "%s%.3f", i ? "," : "", S->first_ms[i]);
         fprintf(stderr, "],\"catchup_ms\":[");
@@ -107,8 +182,11 @@ static void print_stats(session *S, int json)
             sum += ms[i];
             mx = ms[i] > mx ? ms[i] : mx;
         }
+        fprintf(stderr, "%s: first image %.0f ms; full frames %.1f ms first, %.1f ms before the constructor caught "
+                        "up (%d), %.1f ms after (%d)\n",
+                prog, S->first_image_ms, fs.first_full_ms, fs.before_ms, fs.n_before, fs.after_ms, fs.n_after);
         fprintf(stderr,
-                "%s: %llu frames, %.1f fps while the view moved (%llu frames)\n"
+                "%s: %llu frames, %.1f fps rendering (%llu while the view moved)\n"
                 "  %d edits, update %.1f ms mean, %.1f ms max; at most %lld units pending\n"
                 "  camera %s\n",
                 prog, (unsigned long long)S->frames, fps, (unsigned long long)S->moving_frames, n,
@@ -165,6 +243,14 @@ static int parse_options(session *S, view_world_options *wo, lie_cli *cli, const
         case OPT_SCRIPT: *script_path = optarg; break;
         case OPT_RECORD: wo->record = optarg; break;
         case OPT_SAVE: S->save = optarg; break;
+        case OPT_EXPOSURE:
+            if (!lie_parse_float(optarg, -64.0f, 64.0f, &S->ro.exposure))
+                return usage_error("--exposure: expected a number of stops, got '%s'", optarg);
+            break;
+        case OPT_VIEW_SIZE:
+            if (!lie_parse_size(optarg, 16384, &wo->view_width, &wo->view_height))
+                return usage_error("--view-size: expected WxH, got '%s'", optarg);
+            break;
         }
     }
     if (c == LIE_CLI_EXIT)
@@ -307,6 +393,10 @@ static void handle_events(session *S, drag_state *D, int *quit)
     while (SDL_PollEvent(&ev)) {
         if (ev.type == SDL_QUIT) {
             *quit = 1;
+        } else if (ev.type == SDL_KEYDOWN && ev.key.keysym.sym == SDLK_e) {
+            /* exposure, a stop a press (Shift: darker) */
+            S->ro.exposure += (ev.key.keysym.mod & KMOD_SHIFT) ? -1.0f : 1.0f;
+            view_render_set_exposure(S->r, S->ro.exposure);
         } else if (ev.type == SDL_KEYDOWN) {
             session_key(S, &ev.key, quit);
         } else if (ev.type == SDL_MOUSEBUTTONDOWN) {
@@ -367,6 +457,24 @@ static void count_frames(session *S, uint64_t images, uint64_t image_version, in
     }
 }
 
+/* The constructor builds for the camera once it has been still a quarter
+ * of a second (and at once for the first): each such camera is a view of
+ * the cache it builds (lie-build --view), what it sees first in the queue. */
+static void look(session *S)
+{
+    double now = lie_time_now();
+    if (S->looked_set && memcmp(&S->looked, &S->cam, sizeof S->cam) == 0) {
+        S->cam_change_t = now;
+        return;
+    }
+    if (S->looked_set && now - S->cam_change_t < 0.25)
+        return;
+    S->looked = S->cam;
+    S->looked_set = 1;
+    S->cam_change_t = now;
+    view_world_look(S->w, &S->cam);
+}
+
 /* One turn of the loop after the events: the drag's edits, the script,
  * the camera, the newest image on screen. */
 static void loop_step(session *S, drag_state *D, script_run *R, window *W, int *quit)
@@ -387,7 +495,10 @@ static void loop_step(session *S, drag_state *D, script_run *R, window *W, int *
     session_camera_update(S);
     view_render_request(S->r, &S->cam, S->mode, S->sel);
     view_render_fetch(S->r, W->image, &images, &S->level_pixels, &idle, &image_version);
+    if (images > 0 && S->first_image_ms < 0.0)
+        S->first_image_ms = 1e3 * (lie_time_now() - S->start_t);
     count_frames(S, images, image_version, idle);
+    look(S);
     memcpy(W->shown, W->image, sizeof *W->shown * (size_t)S->ro.width * (size_t)S->ro.height);
     if (S->overlay)
         draw_overlay(S, W->shown);
@@ -426,14 +537,44 @@ static int finish(session *S, const script_run *R, int stats, int rc)
     lie_error_clear(&err);
     if (R->failed)
         rc = fail_line(&R->err);
+    size_t n_times = 0;
+    view_frame_time *times = S->r ? view_render_times(S->r, &n_times) : NULL;
     view_render_stop(S->r);
+    S->r = NULL;
     if (rc == 0 && view_world_write_record(S->w, &err) != LIE_OK)
         rc = fail_line(&err);
     if (rc == 0 && S->save && view_world_save(S->w, S->save, &err) != LIE_OK)
         rc = fail_line(&err);
     if (rc == 0 && stats)
-        print_stats(S, stats == 2);
+        print_stats(S, times, n_times, stats == 2);
+    free(times);
+    if (R->paused)
+        view_world_release(S->w);
     return rc;
+}
+
+/* SIGINT and SIGTERM end the session as Q does (the record, --save and
+ * --stats are written); a second one ends it at once. */
+static volatile sig_atomic_t quit_signal;
+
+static void on_quit_signal(int sig)
+{
+    if (quit_signal) {
+        signal(sig, SIG_DFL);
+        raise(sig);
+        return;
+    }
+    quit_signal = sig;
+}
+
+static void quit_handlers(void)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sigemptyset(&sa.sa_mask);
+    sa.sa_handler = on_quit_signal;
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
 }
 
 int main(int argc, char **argv)
@@ -445,10 +586,14 @@ int main(int argc, char **argv)
     S.ro.max_depth = LIE_MAX_DEPTH_DEFAULT;
     S.overlay = 1;
     S.sel = -1;
+    S.start_t = lie_time_now();
+    S.first_image_ms = -1.0;
     view_world_options wo;
     memset(&wo, 0, sizeof wo);
     wo.so = lie_scene_options_default();
     wo.threads = 1;
+    wo.view_width = wo.view_height = 512;
+    wo.max_depth = S.ro.max_depth;
     const char *camera = NULL, *script_path = NULL;
     lie_cli cli = {.tool = prog, .usage = usage, .missing = "missing input cache or scene",
                    .takes = LIE_CLI_THREADS | LIE_CLI_EXTERNAL | LIE_CLI_STATS};
@@ -461,10 +606,13 @@ int main(int argc, char **argv)
     R.path = script_path;
     if (script_path && view_script_read(script_path, &R.sc, &err) != LIE_OK)
         return fail_line(&err);
+    wo.max_depth = S.ro.max_depth; /* the views' mirrors are the frames' */
     if (open_display() != 0) {
         view_script_destroy(R.sc);
         return 1;
     }
+    /* after SDL_Init, which installs its own handlers for them */
+    quit_handlers();
     window W;
     memset(&W, 0, sizeof W);
     rc = open_world(&S, &wo, cli.operand, camera);
@@ -479,6 +627,8 @@ int main(int argc, char **argv)
         while (!quit) {
             double loop_start = lie_time_now();
             handle_events(&S, &D, &quit);
+            if (quit_signal)
+                quit = 1;
             loop_step(&S, &D, &R, &W, &quit);
             /* about 120 loops a second: input stays quick, the renderer keeps the cores */
             double spent = lie_time_now() - loop_start;

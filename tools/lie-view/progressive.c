@@ -5,7 +5,16 @@
  * is ready and never waits on a whole frame.  A new request (the camera
  * moved, an edit, a constructor step) abandons the level at the next band.
  * Each band is whole rows of tiles rendered by lie_render_tiles on all
- * workers, so the full level is the very image lie-render makes. */
+ * workers, so the full level is the very image lie-render makes.
+ *
+ * Units the constructor lands (§4.3.1) do not make a frame stale: a
+ * unit not yet landed is answered by Embree, so the image is the same,
+ * only slower.  When the request is done and units have landed since its
+ * full frame began, the full frame is rendered again over the one shown
+ * (no coarse levels): the view refines to full quality at once and its
+ * frames get faster as units land.  A full frame during which no unit
+ * landed is *clean*: the frame lie-render makes from a cache of what had
+ * landed; screenshots hold the constructor and take one. */
 #include "view.h"
 
 #include <stdlib.h>
@@ -32,6 +41,10 @@ struct view_render {
     uint64_t full_gen, full_version; /* the request and world version `full` shows, 0: none */
     uint64_t done_gen, done_version; /* every level of these is finished: idle */
     uint64_t image_version;          /* the world version of the last image finished */
+    uint64_t force, full_force;      /* full frames asked for again (view_render_again), and shown */
+    int full_clean;                  /* no unit landed while `full` was rendered */
+    view_frame_time *times;          /* every full frame's time */
+    size_t n_times, cap_times;
     lie_frame *full;
     /* the render thread's own: a frame per level and view mode (the modes'
      * AOV layers are what lie_render_tiles fills) */
@@ -42,11 +55,12 @@ struct view_render {
 static const int level_div[LEVELS] = {4, 2, 1};
 static const int level_ls_div[LEVELS] = {10, 4, 1};
 
-static uint32_t pack(const float c[3], int srgb)
+static uint32_t pack(const float c[3], int srgb, float scale)
 {
     uint32_t p = 0xff000000u;
     for (int k = 0; k < 3; k++) {
-        float v = srgb ? lie_image_srgb_encode(c[k]) : (c[k] < 0.0f ? 0.0f : c[k] > 1.0f ? 1.0f : c[k]);
+        /* the shaded view is exposed as lie-render --exposure exposes a PNG */
+        float v = srgb ? lie_image_srgb_encode(c[k] * scale) : (c[k] < 0.0f ? 0.0f : c[k] > 1.0f ? 1.0f : c[k]);
         p |= (uint32_t)(v * 255.0f + 0.5f) << (16 - 8 * k);
     }
     return p;
@@ -67,10 +81,11 @@ static void blit(view_render *r, const lie_frame *f, int div, int mode, int y0, 
     }
     int W = r->o.width, H = r->o.height, lw = f->width;
     const uint8_t *m = r->sel_mask;
+    float scale = exp2f(r->o.exposure);
     for (int y = y0; y < y1; y++)
         for (int x = 0; x < lw; x++) {
             size_t i = (size_t)y * (size_t)lw + (size_t)x;
-            uint32_t p = pack(src + 3 * i, srgb);
+            uint32_t p = pack(src + 3 * i, srgb, scale);
             if (m && m[i]) {
                 int edge = x == 0 || !m[i - 1] || x + 1 == lw || !m[i + 1] || y == 0 || !m[i - (size_t)lw];
                 if (edge)
@@ -106,13 +121,33 @@ static void mask_rows(view_render *r, const lie_scene *s, const lie_rt *rt, cons
         }
 }
 
+/* A full frame's time, kept for --stats (m held). */
+static void note_time(view_render *r, int level, double t0, double t1, int clean)
+{
+    if (r->n_times == r->cap_times) {
+        size_t cap = r->cap_times ? 2 * r->cap_times : 64;
+        view_frame_time *t = realloc(r->times, sizeof *t * cap);
+        if (!t)
+            return;
+        r->times = t;
+        r->cap_times = cap;
+    }
+    view_frame_time *t = &r->times[r->n_times++];
+    t->end = t1;
+    t->ms = 1e3 * (t1 - t0);
+    t->clean = clean;
+    t->level = level;
+    t->pending = view_world_pending(r->w);
+}
+
 static void *render_main(void *arg)
 {
     view_render *r = arg;
-    uint64_t done_gen = 0, done_version = 0;
+    uint64_t done_gen = 0, done_version = 0, done_units = 0, done_force = 0;
     for (;;) {
         pthread_mutex_lock(&r->m);
-        while (!r->quit && r->gen == done_gen && view_world_version(r->w) == done_version) {
+        while (!r->quit && r->gen == done_gen && view_world_version(r->w) == done_version &&
+               view_world_units_version(r->w) == done_units && r->force == done_force) {
             struct timespec ts;
             clock_gettime(CLOCK_REALTIME, &ts);
             ts.tv_nsec += 10 * 1000 * 1000; /* the world's version is polled */
@@ -126,13 +161,16 @@ static void *render_main(void *arg)
             pthread_mutex_unlock(&r->m);
             break;
         }
-        uint64_t gen = r->gen;
+        uint64_t gen = r->gen, force = r->force;
         lie_camera cam = r->cam;
         int mode = r->mode, sel = r->sel;
+        /* only units landed (or a frame asked for again): the full level alone */
+        int again = gen == done_gen && view_world_version(r->w) == done_version;
         pthread_mutex_unlock(&r->m);
-        uint64_t version = view_world_version(r->w);
+        uint64_t version = view_world_version(r->w), units = view_world_units_version(r->w);
         int abandoned = 0;
-        for (int lv = 0; lv < LEVELS && !abandoned; lv++) {
+        for (int lv = again ? LEVELS - 1 : 0; lv < LEVELS && !abandoned; lv++) {
+            double t_level = lie_time_now();
             int div = level_div[lv];
             int lw = (r->o.width + div - 1) / div, lh = (r->o.height + div - 1) / div;
             lie_render_options ro = lie_render_options_default();
@@ -164,6 +202,7 @@ static void *render_main(void *arg)
                 int y0 = (int)(t0 / tiles_x) * LIE_TILE;
                 int y1 = y0 + BAND_TILE_ROWS * LIE_TILE < lh ? y0 + BAND_TILE_ROWS * LIE_TILE : lh;
                 view_world_read_lock(r->w);
+                view_world_sync_oracle(r->w);
                 const lie_scene *s = view_world_scene(r->w);
                 ro.oracle = view_world_oracle(r->w);
                 ro.visibility = ro.oracle ? LIE_VIS_LIE : LIE_VIS_FULL;
@@ -203,13 +242,18 @@ static void *render_main(void *arg)
                 r->level[lv][mode] = t;
                 r->full_gen = gen;
                 r->full_version = version;
+                r->full_force = force;
+                r->full_clean = view_world_units_version(r->w) == units;
             }
+            note_time(r, lv, t_level, lie_time_now(), view_world_units_version(r->w) == units);
             pthread_cond_broadcast(&r->cv);
             pthread_mutex_unlock(&r->m);
         }
         if (!abandoned) {
             done_gen = gen;
             done_version = version;
+            done_units = units;
+            done_force = force;
             pthread_mutex_lock(&r->m);
             r->done_gen = gen;
             r->done_version = version;
@@ -258,6 +302,7 @@ void view_render_stop(view_render *r)
         for (int m = 0; m < 3; m++)
             lie_frame_destroy(r->level[lv][m]);
     lie_frame_destroy(r->full);
+    free(r->times);
     free(r->display);
     free(r->sel_mask);
     pthread_mutex_destroy(&r->m);
@@ -300,12 +345,58 @@ int view_render_fetch(view_render *r, uint32_t *argb, uint64_t *images, uint64_t
     return d;
 }
 
-lie_status view_render_screenshot(view_render *r, const char *path, lie_error *err)
+uint64_t view_render_full_count(view_render *r)
 {
     pthread_mutex_lock(&r->m);
-    while (!(r->full_gen == r->gen && r->full_version == view_world_version(r->w) && r->mode == VIEW_MODE_SHADE)) {
+    uint64_t n = 0;
+    for (size_t i = 0; i < r->n_times; i++)
+        n += r->times[i].level == LEVELS - 1;
+    pthread_mutex_unlock(&r->m);
+    return n;
+}
+
+void view_render_set_exposure(view_render *r, float ev)
+{
+    pthread_mutex_lock(&r->m);
+    r->o.exposure = ev;
+    r->force++; /* the full frame again, exposed anew */
+    pthread_cond_broadcast(&r->cv);
+    pthread_mutex_unlock(&r->m);
+}
+
+void view_render_again(view_render *r)
+{
+    pthread_mutex_lock(&r->m);
+    r->force++;
+    pthread_cond_broadcast(&r->cv);
+    pthread_mutex_unlock(&r->m);
+}
+
+view_frame_time *view_render_times(view_render *r, size_t *n)
+{
+    pthread_mutex_lock(&r->m);
+    view_frame_time *t = malloc(sizeof *t * (r->n_times + 1));
+    *n = t ? r->n_times : 0;
+    if (t && r->n_times)
+        memcpy(t, r->times, sizeof *t * r->n_times);
+    pthread_mutex_unlock(&r->m);
+    return t;
+}
+
+lie_status view_render_screenshot(view_render *r, const char *path, lie_error *err)
+{
+    /* Units stop landing (the one in progress is dropped, never the backlog
+     * waited for) and a full frame is rendered from what has landed: the
+     * frame lie-render makes from the cache --save would write now. */
+    view_world_hold(r->w);
+    view_render_again(r);
+    pthread_mutex_lock(&r->m);
+    uint64_t force = r->force;
+    while (!(r->full_gen == r->gen && r->full_version == view_world_version(r->w) && r->full_force >= force &&
+             r->full_clean && r->mode == VIEW_MODE_SHADE)) {
         if (r->mode != VIEW_MODE_SHADE) {
             pthread_mutex_unlock(&r->m);
+            view_world_release(r->w);
             return lie_error_set(err, LIE_ERR_ARG, path, "screenshots are of the shaded view");
         }
         struct timespec ts;
@@ -318,7 +409,11 @@ lie_status view_render_screenshot(view_render *r, const char *path, lie_error *e
         pthread_cond_timedwait(&r->cv, &r->m, &ts);
     }
     /* the frame stays ours while m is held */
-    lie_status st = lie_frame_write(path, r->full, NULL, err);
+    lie_frame_options fo;
+    memset(&fo, 0, sizeof fo);
+    fo.png.exposure = r->o.exposure;
+    lie_status st = lie_frame_write(path, r->full, &fo, err);
     pthread_mutex_unlock(&r->m);
+    view_world_release(r->w);
     return st;
 }

@@ -305,6 +305,17 @@ int session_script_step(session *S, script_run *R, uint64_t images, int idle)
         return 0;
     if (R->waiting == 2 && view_world_busy(S->w))
         return 0;
+    if (R->waiting == 3) {
+        uint64_t n = view_render_full_count(S->r);
+        if (n < R->until_images) {
+            /* one frame at a time: each asked for once the last is done */
+            if (R->redraws > 0 && n + (uint64_t)R->redraws >= R->until_images) {
+                R->redraws--;
+                view_render_again(S->r);
+            }
+            return 0;
+        }
+    }
     R->waiting = 0;
     while (R->next < R->sc->n) {
         const view_cmd *c = &R->sc->cmds[R->next++];
@@ -382,6 +393,22 @@ int session_script_step(session *S, script_run *R, uint64_t images, int idle)
             break;
         case VIEW_CMD_QUIT:
             return 1;
+        case VIEW_CMD_PAUSE: /* units stop landing until resume (or the end) */
+            if (!R->paused)
+                view_world_hold(S->w);
+            R->paused = 1;
+            break;
+        case VIEW_CMD_RESUME:
+            if (R->paused)
+                view_world_release(S->w);
+            R->paused = 0;
+            break;
+        case VIEW_CMD_REDRAW: /* the full frame again, N times, each measured */
+            R->waiting = 3;
+            R->until_images = view_render_full_count(S->r) + (uint64_t)c->v[0];
+            R->redraws = (int)c->v[0] - 1;
+            view_render_again(S->r);
+            return 0;
         }
         if (st != LIE_OK) {
             R->err = err;

@@ -37,6 +37,11 @@ typedef struct session {
     double *first_ms, *catchup_ms, *refine_ms;
     int n_first, n_catchup, n_refine;
     int refining;           /* the camera changed: time until every level is done */
+    double start_t;         /* the program started */
+    double first_image_ms;  /* to the first image on screen (-1: none yet) */
+    lie_camera looked;      /* the camera the constructor last built for */
+    double cam_change_t;
+    int looked_set;
 } session;
 
 
@@ -53,8 +58,10 @@ typedef struct script_run {
     view_script *sc;
     const char *path;
     int next;
-    int waiting;            /* 0 none, 1 frames, 2 pending */
+    int waiting;            /* 0 none, 1 frames, 2 pending, 3 full frames redrawn */
     uint64_t until_images;
+    int paused;             /* the script holds the constructor */
+    int redraws;            /* redraw: frames still to ask for */
     int failed;
     lie_error err;
 } script_run;

@@ -165,12 +165,27 @@ static lie_status prepare(view_world *w, const char *yaml, lie_edit **out, char 
     return st;
 }
 
+/* Whether an edit only moves nodes: the constructor then builds again only
+ * what the moved geometry may reach (lie_ctor_edited). */
+static int moves_only(const lie_edit *e)
+{
+    for (int i = 0; i < e->n_ops; i++) {
+        lie_edit_kind k = e->ops[i].kind;
+        if (k != LIE_EDIT_MOVE_BY && k != LIE_EDIT_MOVE_TO && k != LIE_EDIT_ROTATE && k != LIE_EDIT_SCALE &&
+            k != LIE_EDIT_SET_TRANSFORM)
+            return 0;
+    }
+    return 1;
+}
+
 /* Phase 1 and a new frame's worth of state, under the write lock. */
 static lie_status apply(view_world *w, const lie_edit *e, const char *yaml, lie_error *err)
 {
     double t0 = lie_time_now();
     lie_status st = LIE_OK;
     pthread_rwlock_wrlock(&w->lock);
+    if (w->ctor)
+        lie_ctor_hold(w->ctor); /* the unit in progress is dropped: the scene changes under it */
     if (w->up) {
         st = lie_update_edit(w->up, e, (const unsigned char *)yaml, strlen(yaml), err);
     } else {
@@ -179,11 +194,20 @@ static lie_status apply(view_world *w, const lie_edit *e, const char *yaml, lie_
     if (st == LIE_OK) {
         lie_rt *rt = NULL;
         st = lie_rt_create(w->scene, &rt, err);
+        if (st == LIE_OK && w->ctor)
+            st = lie_ctor_edited(w->ctor, rt, moves_only(e), err);
         if (st == LIE_OK) {
             lie_rt_destroy(w->rt);
             w->rt = rt;
+        } else {
+            lie_rt_destroy(rt);
         }
+        /* the oracle holds the blockers' positions: made again for the edited scene */
+        if (st == LIE_OK && w->ctor)
+            st = world_make_oracle(w, err);
     }
+    if (w->ctor)
+        lie_ctor_release(w->ctor);
     if (st == LIE_OK && w->up) {
         lie_env *snap = NULL;
         st = lie_update_snapshot(w->up, &snap, err);
@@ -354,6 +378,7 @@ void *world_constructor_main(void *arg)
 {
     view_world *w = arg;
     size_t step = 16;
+    double last_publish = 0.0;
     for (;;) {
         pthread_mutex_lock(&w->cm);
         while (!w->quit && ((atomic_load(&w->n_pending) == 0 && !atomic_load(&w->dirty)) || w->failed))
@@ -371,17 +396,25 @@ void *world_constructor_main(void *arg)
         lie_lie_vis *vis = NULL;
         lie_error err;
         lie_status st = lie_update_step(w->up, step, &remaining, &err);
-        if (st == LIE_OK)
+        /* A snapshot copies every environment (lib/update/update.h, Costs):
+         * taken after every step it was most of the catch-up.  Frames keep
+         * the last snapshot (pending pairs answered by Embree) until half a
+         * second of steps has landed, or the update commits. */
+        int publish = remaining == 0 || lie_time_now() - last_publish >= 0.5;
+        if (st == LIE_OK && publish)
             st = lie_update_snapshot(w->up, &snap, &err);
-        if (st == LIE_OK)
+        if (st == LIE_OK && publish)
             st = lie_lie_vis_create(w->scene, snap, &vis, &err);
         pthread_rwlock_unlock(&w->lock);
         pthread_rwlock_wrlock(&w->lock);
         if (st != LIE_OK) {
             w->failed = 1;
             w->ctor_err = err;
+        } else if (epoch == w->epoch && !publish) {
+            atomic_store(&w->n_pending, (int64_t)remaining);
         } else if (epoch == w->epoch) {
             /* no edit came in between: publish */
+            last_publish = lie_time_now();
             lie_env_destroy(w->render_env);
             lie_lie_vis_destroy(w->vis);
             w->render_env = snap;
@@ -397,11 +430,13 @@ void *world_constructor_main(void *arg)
         pthread_rwlock_unlock(&w->lock);
         lie_lie_vis_destroy(vis);
         lie_env_destroy(snap);
-        /* steps of about 20 ms keep edits waiting little */
+        /* Steps of about 100 ms: each re-lays out the whole environments
+         * (lib/update/update.h, Costs), so shorter ones spend the catch-up
+         * on that; an edit waits for one step at most. */
         double dt = lie_time_now() - t0;
-        if (dt < 0.01 && step < 65536)
+        if (dt < 0.05 && step < (1u << 24))
             step *= 2;
-        else if (dt > 0.04 && step > 4)
+        else if (dt > 0.2 && step > 4)
             step /= 2;
         pthread_mutex_lock(&w->cm);
         if ((atomic_load(&w->n_pending) == 0 && !atomic_load(&w->dirty)) || w->failed)
@@ -413,6 +448,10 @@ void *world_constructor_main(void *arg)
 
 void view_world_wait(view_world *w)
 {
+    if (w->ctor) {
+        lie_ctor_wait(w->ctor, -1.0, NULL);
+        return;
+    }
     pthread_mutex_lock(&w->cm);
     while ((atomic_load(&w->n_pending) > 0 || atomic_load(&w->dirty)) && w->ctor_started && !w->failed)
         pthread_cond_wait(&w->ccv, &w->cm);
@@ -436,10 +475,46 @@ lie_status view_world_write_record(view_world *w, lie_error *err)
     return lie_atomic_commit(&af, err);
 }
 
+/* With the constructor: what has landed, now (lie_ctor_cache), a partial
+ * cache where units are pending.  The provenance is the input's: its scene
+ * file and hash, its edit log and the session's edits as one entry. */
+static lie_status save_ctor(view_world *w, const char *path, lie_error *err)
+{
+    lie_cache prov;
+    memset(&prov, 0, sizeof prov);
+    prov.scene_path = w->cache ? w->cache->scene_path : w->input;
+    prov.scene_hash = w->loaded_hash;
+    int n0 = w->cache ? w->n_edits0 : 0;
+    lie_cache_edit *log = malloc(sizeof *log * ((size_t)n0 + 1));
+    if (!log)
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    if (n0)
+        memcpy(log, w->cache->edits, sizeof *log * (size_t)n0);
+    prov.edits = log;
+    prov.n_edits = n0;
+    if (w->n_applied) {
+        log[n0].name = (char *)edit_name(w);
+        log[n0].text = (unsigned char *)w->applied;
+        log[n0].size = w->n_applied;
+        prov.n_edits++;
+    }
+    pthread_rwlock_rdlock(&w->lock);
+    lie_cache *c = NULL;
+    lie_status st = lie_ctor_cache(w->ctor, &prov, &c, err);
+    pthread_rwlock_unlock(&w->lock);
+    free(log);
+    if (st == LIE_OK)
+        st = lie_cache_write(path, c, NULL, err);
+    lie_cache_destroy(c);
+    return st;
+}
+
 lie_status view_world_save(view_world *w, const char *path, lie_error *err)
 {
-    if (!w->cache)
-        return lie_error_set(err, LIE_ERR_UNSUPPORTED, path, "the viewer was started on a scene, not a cache");
+    if (w->failed)
+        return unusable(w, err);
+    if (w->ctor)
+        return save_ctor(w, path, err);
     view_world_wait(w);
     if (w->failed)
         return w->ctor_err.status ? (*err = w->ctor_err, err->status) : unusable(w, err);

@@ -48,6 +48,7 @@ typedef struct view_world view_world;
 
 typedef struct view_world_options {
     int threads;           /* constructor threads (0: one) */
+    int view_width, view_height, max_depth; /* how the constructor samples views (lie-build --view-size) */
     const char *record;    /* --record EDITS.yaml, or NULL */
     lie_scene_options so;
 } view_world_options;
@@ -61,6 +62,19 @@ void view_world_read_unlock(view_world *w);
 const lie_scene *view_world_scene(const view_world *w);
 const lie_rt *view_world_rt(const view_world *w);
 const lie_vis_oracle *view_world_oracle(const view_world *w); /* NULL without a cache */
+/* The renderer, before a band (read lock held): the oracle follows the lists landed. */
+void view_world_sync_oracle(view_world *w);
+/* Changes whenever the constructor lands units (0 without one): frames
+ * stay right, and get faster when rendered again. */
+uint64_t view_world_units_version(const view_world *w);
+/* Stop units landing until the release (screenshots, pause); returns at once
+ * (a unit in progress is dropped). */
+void view_world_hold(view_world *w);
+void view_world_release(view_world *w);
+/* The camera now: the constructor builds what it sees first. */
+void view_world_look(view_world *w, const lie_camera *cam);
+/* The constructor, or NULL (a whole cache: lib/update). */
+lie_ctor *view_world_ctor(const view_world *w);
 /* Changes on every edit and every constructor step: frames older than it are stale. */
 uint64_t view_world_version(const view_world *w);
 int64_t view_world_pending(const view_world *w);   /* units not yet rebuilt */
@@ -102,7 +116,17 @@ typedef struct view_render view_render;
 
 typedef struct view_render_options {
     int width, height, light_samples, max_depth, threads;
+    float exposure;        /* stops, as lie-render --exposure */
 } view_render_options;
+
+/* A full frame: when it ended (lie_time_now), how long it took, whether
+ * no unit landed meanwhile, and the units pending at its end. */
+typedef struct view_frame_time {
+    double end, ms;
+    int level;             /* 0 coarsest .. 2 full */
+    int clean;
+    int64_t pending;
+} view_frame_time;
 
 lie_status view_render_start(view_world *w, const view_render_options *opt, view_render **out, lie_error *err);
 void view_render_stop(view_render *r);
@@ -116,9 +140,18 @@ void view_render_request(view_render *r, const lie_camera *cam, int mode, int se
  * finished image shows. */
 int view_render_fetch(view_render *r, uint32_t *argb, uint64_t *images, uint64_t *level_pixels, int *idle,
                       uint64_t *image_version);
-/* Block until the full-resolution frame of the current request and world
- * version is complete, then write it as lie-render would (by extension). */
+/* Hold the constructor, render the full frame of the current request from
+ * what has landed, and write it as lie-render would (by extension, PNGs
+ * with the exposure): one frame's wait, never the constructor's backlog. */
 lie_status view_render_screenshot(view_render *r, const char *path, lie_error *err);
+/* Render the full frame again (its time is measured: view_render_times). */
+void view_render_again(view_render *r);
+/* Full frames finished so far. */
+uint64_t view_render_full_count(view_render *r);
+/* The shaded view's exposure, in stops. */
+void view_render_set_exposure(view_render *r, float ev);
+/* Every image finished so far, each level (a copy: free it). */
+view_frame_time *view_render_times(view_render *r, size_t *n);
 
 /* ---- overlay text (font.c) -------------------------------------------- */
 
@@ -130,7 +163,7 @@ void view_text(uint32_t *argb, int width, int height, int x, int y, int scale, u
 typedef enum view_cmd_kind {
     VIEW_CMD_FRAMES, VIEW_CMD_ORBIT, VIEW_CMD_DOLLY, VIEW_CMD_SELECT, VIEW_CMD_PICK, VIEW_CMD_DRAG,
     VIEW_CMD_ROTATE, VIEW_CMD_SET_MATERIAL, VIEW_CMD_SET_EMISSION, VIEW_CMD_UNDO, VIEW_CMD_REDO, VIEW_CMD_WAIT,
-    VIEW_CMD_SCREENSHOT, VIEW_CMD_QUIT, VIEW_CMD_REMOVE
+    VIEW_CMD_SCREENSHOT, VIEW_CMD_QUIT, VIEW_CMD_REMOVE, VIEW_CMD_PAUSE, VIEW_CMD_RESUME, VIEW_CMD_REDRAW
 } view_cmd_kind;
 
 typedef struct view_cmd {

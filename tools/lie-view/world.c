@@ -19,6 +19,12 @@ lie_status world_make_oracle(view_world *w, lie_error *err)
 {
     lie_lie_vis_destroy(w->vis);
     w->vis = NULL;
+    if (w->ctor) { /* the live env: landings change it in place (lie_ctor_read_lock) */
+        lie_status st = lie_lie_vis_create(w->scene, lie_ctor_env(w->ctor), &w->vis, err);
+        if (st == LIE_OK)
+            lie_lie_vis_grow(w->vis, lie_ctor_longest(w->ctor));
+        return st;
+    }
     if (!w->render_env)
         return LIE_OK;
     return lie_lie_vis_create(w->scene, w->render_env, &w->vis, err);
@@ -26,16 +32,58 @@ lie_status world_make_oracle(view_world *w, lie_error *err)
 
 /* ---- reading ---------------------------------------------------------- */
 
-void view_world_read_lock(view_world *w) { pthread_rwlock_rdlock(&w->lock); }
-void view_world_read_unlock(view_world *w) { pthread_rwlock_unlock(&w->lock); }
+void view_world_read_lock(view_world *w)
+{
+    pthread_rwlock_rdlock(&w->lock);
+    if (w->ctor)
+        lie_ctor_read_lock(w->ctor);
+}
+void view_world_read_unlock(view_world *w)
+{
+    if (w->ctor)
+        lie_ctor_read_unlock(w->ctor);
+    pthread_rwlock_unlock(&w->lock);
+}
+void view_world_sync_oracle(view_world *w)
+{
+    if (w->ctor && w->vis)
+        lie_lie_vis_grow(w->vis, lie_ctor_longest(w->ctor));
+}
+uint64_t view_world_units_version(const view_world *w) { return w->ctor ? lie_ctor_version(w->ctor) : 0; }
+void view_world_hold(view_world *w)
+{
+    if (w->ctor)
+        lie_ctor_hold(w->ctor);
+}
+void view_world_release(view_world *w)
+{
+    if (w->ctor)
+        lie_ctor_release(w->ctor);
+}
+void view_world_look(view_world *w, const lie_camera *cam)
+{
+    if (w->ctor)
+        lie_ctor_view(w->ctor, cam);
+}
+lie_ctor *view_world_ctor(const view_world *w) { return w->ctor; }
 const lie_scene *view_world_scene(const view_world *w) { return w->scene; }
 const lie_rt *view_world_rt(const view_world *w) { return w->rt; }
 const lie_vis_oracle *view_world_oracle(const view_world *w) { return w->vis ? lie_lie_vis_oracle(w->vis) : NULL; }
 uint64_t view_world_version(const view_world *w) { return atomic_load(&((view_world *)w)->version); }
-int64_t view_world_pending(const view_world *w) { return atomic_load(&((view_world *)w)->n_pending); }
+int64_t view_world_pending(const view_world *w)
+{
+    if (w->ctor) {
+        lie_ctor_stats cs;
+        lie_ctor_get_stats(w->ctor, &cs);
+        return (int64_t)cs.units_pending + cs.sampling;
+    }
+    return atomic_load(&((view_world *)w)->n_pending);
+}
 int view_world_busy(const view_world *w)
 {
     view_world *m = (view_world *)w;
+    if (m->ctor)
+        return !m->failed && lie_ctor_wait(m->ctor, 0.0, NULL) == 0;
     return !m->failed && (atomic_load(&m->n_pending) > 0 || atomic_load(&m->dirty));
 }
 int64_t view_world_pending_max(const view_world *w) { return w->pending_max; }
@@ -160,7 +208,18 @@ lie_status view_world_open(const char *input, const view_world_options *opt, vie
         st = load_base(w, &w->scene, err);
     if (st == LIE_OK)
         st = lie_rt_create(w->scene, &w->rt, err);
-    if (st == LIE_OK && w->cache) {
+    if (st == LIE_OK)
+        w->loaded_hash = w->cache ? w->cache->scene_hash : w->scene->hash;
+    /* a scene, or a partial cache: the asynchronous constructor builds (and
+     * finishes) it; a whole cache: lib/update keeps it through edits */
+    if (st == LIE_OK && (!w->cache || w->cache->env->partial)) {
+        lie_ctor_options co = lie_ctor_options_default();
+        co.threads = opt->threads;
+        co.view_width = opt->view_width;
+        co.view_height = opt->view_height;
+        co.max_depth = opt->max_depth;
+        st = lie_ctor_create(w->scene, w->rt, &co, w->cache, &w->ctor, err);
+    } else if (st == LIE_OK && w->cache) {
         w->n_edits0 = w->cache->n_edits;
         lie_update_options uo = lie_update_options_default();
         uo.threads = opt->threads;
@@ -172,8 +231,8 @@ lie_status view_world_open(const char *input, const view_world_options *opt, vie
     }
     if (st == LIE_OK)
         st = world_make_oracle(w, err);
-    if (st == LIE_OK && w->cache) {
-        if (pthread_create(&w->ctor, NULL, world_constructor_main, w) != 0)
+    if (st == LIE_OK && w->up) {
+        if (pthread_create(&w->ctor_thread, NULL, world_constructor_main, w) != 0)
             st = lie_error_set(err, LIE_ERR_NOMEM, input, "cannot start the constructor thread");
         else
             w->ctor_started = 1;
@@ -201,8 +260,9 @@ void view_world_close(view_world *w)
     if (!w)
         return;
     if (w->ctor_started) {
-        view_thread_quit(&w->cm, &w->ccv, &w->quit, w->ctor);
+        view_thread_quit(&w->cm, &w->ccv, &w->quit, w->ctor_thread);
     }
+    lie_ctor_destroy(w->ctor);
     world_free_session(w);
     free(w->update_ms);
     lie_update_destroy(w->up);

@@ -18,6 +18,10 @@ struct view_world {
     view_world_options opt;
     lie_scene *scene;
     lie_cache *cache;          /* NULL for a glTF input: full visibility, no units */
+    /* the asynchronous constructor (lib/update, lie_ctor) on a glTF input or a
+     * partial cache; NULL where lib/update's §5 update keeps a whole cache */
+    lie_ctor *ctor;
+    uint64_t loaded_hash;      /* the scene as loaded (a saved cache's provenance) */
     int n_edits0;              /* the cache's edit log as loaded */
     lie_update *up;            /* lib/update: the §5 update in two phases */
     lie_rt *rt;                /* Embree over the scene as edited */
@@ -39,7 +43,7 @@ struct view_world {
     char **undone;
     int n_live, n_undone;
     /* the constructor */
-    pthread_t ctor;
+    pthread_t ctor_thread;
     int ctor_started, quit, failed;
     lie_error ctor_err;
     pthread_mutex_t cm;
