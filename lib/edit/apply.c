@@ -506,8 +506,8 @@ static lie_status apply_op(lie_scene *s, const lie_edit *e, const lie_edit_op *o
         int src_node;
         st = lie_edit_find_node(src, op->node, &src_node, file, op->line, op->col, err);
         if (st == LIE_OK) {
-            lie_mat4 local = (op->has & (1u << 8)) ? lie_mat4_identity() : lie_node_world_matrix(src, src_node);
-            if (op->has & (1u << 8))
+            lie_mat4 local = (op->has & LIE_EDIT_HAS_TRANSFORM) ? lie_mat4_identity() : lie_node_world_matrix(src, src_node);
+            if (op->has & LIE_EDIT_HAS_TRANSFORM)
                 memcpy(local.m, op->matrix, sizeof local.m);
             st = add_from(s, src, src_node, op->as, &local, &node, err, file, op->line, op->col);
         }

@@ -41,7 +41,8 @@ enum {
     LIE_EDIT_HAS_COLOR = 1 << 5,     /* set-light */
     LIE_EDIT_HAS_INTENSITY = 1 << 6,
     LIE_EDIT_HAS_RANGE = 1 << 7,
-    LIE_EDIT_HAS_INNER = 1 << 9,     /* (1 << 8: add's transform) */
+    LIE_EDIT_HAS_TRANSFORM = 1 << 8, /* add */
+    LIE_EDIT_HAS_INNER = 1 << 9,
     LIE_EDIT_HAS_OUTER = 1 << 10
 };
 
@@ -65,6 +66,11 @@ typedef struct lie_edit {
     char *name;            /* the edit file's name as given */
     lie_edit_op *ops;
     int n_ops;
+    /* The text it was parsed from (size bytes and a NUL), which a cache's
+     * edit log keeps as it was; NULL for an edit built by the constructors
+     * below, or appended to since. */
+    unsigned char *text;
+    size_t size;
 } lie_edit;
 
 /* Parse an edit file held in memory; `name` is used in messages and to
@@ -72,6 +78,59 @@ typedef struct lie_edit {
 lie_status lie_edit_parse(const unsigned char *text, size_t size, const char *name, lie_edit **out,
                           lie_error *err);
 void lie_edit_destroy(lie_edit *e);
+
+/* ---- edits as data (build.c, write.c, inverse.c) -------------------------- */
+
+/* An empty edit named `name` (messages, and the folder `add` files are
+ * relative to); NULL when out of memory. */
+lie_edit *lie_edit_create(const char *name);
+
+/* One operation of each kind, ready for lie_edit_append.  Nothing is
+ * allocated: the strings and arrays are the caller's, and append copies
+ * them.  `has` says which optional fields are given (LIE_EDIT_HAS_*). */
+lie_edit_op lie_edit_op_move_by(const char *node, double x, double y, double z);
+lie_edit_op lie_edit_op_move_to(const char *node, double x, double y, double z);
+lie_edit_op lie_edit_op_rotate(const char *node, double ax, double ay, double az, double degrees);
+lie_edit_op lie_edit_op_scale(const char *node, double x, double y, double z);
+lie_edit_op lie_edit_op_set_transform(const char *node, const double matrix[16]);
+lie_edit_op lie_edit_op_remove(const char *node);
+lie_edit_op lie_edit_op_restore(const char *node);
+/* matrix NULL: the node keeps its world transform from `file` */
+lie_edit_op lie_edit_op_add(const char *file, const char *node, const char *as, const double *matrix);
+lie_edit_op lie_edit_op_set_material(const char *node, unsigned has, const float base_color[3], float metallic,
+                                     float roughness);
+lie_edit_op lie_edit_op_set_emission(const char *node, unsigned has, const float emissive[3], float strength);
+lie_edit_op lie_edit_op_set_weights(const char *node, const double *weights, int n_weights);
+lie_edit_op lie_edit_op_set_light(const char *node, unsigned has, const float color[3], float intensity, float range,
+                                  float inner_deg, float outer_deg);
+
+/* Append a copy of op to e, checked as an edit file's operation is (the
+ * parser's message on a bad value; LIE_ERR_ARG without a node).  e drops
+ * the text it was parsed from.  On an error e is unchanged. */
+lie_status lie_edit_append(lie_edit *e, const lie_edit_op *op, lie_error *err);
+
+/* A float (a viewer's motion, say) as an edit's double: the value of its
+ * nine significant digits, which is what the edit's written form holds and
+ * reads back as. */
+double lie_edit_float_value(float f);
+
+/* Write e as an edit file (formats/edit.md): one `- KIND: {...}` line per
+ * operation, through libyaml's emitter; no operation gives an empty text.
+ * Parsing the text gives back e's operations, value for value.  *text
+ * (size bytes and a NUL) is the caller's to free. */
+lie_status lie_edit_write(const lie_edit *e, unsigned char **text, size_t *size, lie_error *err);
+/* What a cache's edit log keeps for e: the text it was parsed from, else
+ * its written form.  *text is the caller's to free. */
+lie_status lie_edit_text(const lie_edit *e, unsigned char **text, size_t *size, lie_error *err);
+
+/* The edit that restores what applying e to s (as it is now, before e)
+ * changes: a node's local transform, the first material of each mesh node
+ * of a subtree (colour, metallic, roughness, emission), a removal
+ * (restore), a restoration (remove), a node's morph weights, a light's
+ * fields.  Operations naming no node of s are left out (applying e fails
+ * on them).  LIE_ERR_UNSUPPORTED when e adds an object: formats/edit.md has
+ * no operation taking it out again.  *out is the caller's. */
+lie_status lie_edit_inverse(const lie_scene *s, const lie_edit *e, lie_edit **out, lie_error *err);
 
 /* What an application changed, for lib/update.  Material and emission
  * changes are not listed: they move no blocker list (formats/edit.md). */

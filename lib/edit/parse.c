@@ -283,7 +283,7 @@ static lie_status parse_op(lie_yaml *p, const yaml_node_t *item, int index, lie_
             st = get_string(p, f[2].value, "add.as", &op->as);
         if (st == LIE_OK && f[3].seen) {
             st = get_transform(p, f[3].value, "add.transform", op->matrix);
-            op->has |= 1u << 8; /* a transform was given */
+            op->has |= LIE_EDIT_HAS_TRANSFORM;
         }
     } else if (strcmp(name, "set-material") == 0) {
         field f[] = {{"node", 0, 0, 0}, {"base-color", 0, 0, 0}, {"metallic", 0, 0, 0}, {"roughness", 0, 0, 0}};
@@ -370,6 +370,7 @@ void lie_edit_destroy(lie_edit *e)
     }
     free(e->ops);
     free(e->name);
+    free(e->text);
     free(e);
 }
 
@@ -382,11 +383,16 @@ lie_status lie_edit_parse(const unsigned char *text, size_t size, const char *na
         return lst;
     lie_status st = LIE_OK;
     lie_edit *e = calloc(1, sizeof *e);
-    if (!e || !(e->name = strdup(name))) {
+    if (!e || !(e->name = strdup(name)) || !(e->text = malloc(size + 1))) {
+        if (e)
+            free(e->name);
         free(e);
         lie_yaml_free(&p);
         return lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory");
     }
+    memcpy(e->text, text, size);
+    e->text[size] = 0;
+    e->size = size;
     yaml_node_t *root = yaml_document_get_root_node(&p.doc);
     if (root) {
         if (root->type != YAML_SEQUENCE_NODE) {

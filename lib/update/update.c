@@ -109,23 +109,21 @@ static int push_moved(lie_update *u, int node)
     return 1;
 }
 
-static int push_log(lie_update *u, const char *name, const unsigned char *text, size_t size)
+/* The edit log's entry: the file's text as it was, or a built edit's
+ * written form (lie_edit_text). */
+static int push_log(lie_update *u, const lie_edit *edit)
 {
     lie_cache_edit *nl = realloc(u->log, sizeof *nl * ((size_t)u->n_log + 1));
     if (!nl)
         return 0;
     u->log = nl;
     lie_cache_edit *le = &u->log[u->n_log];
-    le->name = strdup(name);
-    le->text = malloc(size + 1);
-    le->size = size;
-    if (!le->name || !le->text) {
+    lie_error e;
+    le->name = strdup(edit->name);
+    if (!le->name || lie_edit_text(edit, &le->text, &le->size, &e) != LIE_OK) {
         free(le->name);
-        free(le->text);
         return 0;
     }
-    memcpy(le->text, text, size);
-    le->text[size] = 0;
     u->n_log++;
     return 1;
 }
@@ -159,8 +157,7 @@ static lie_status apply_edit(lie_update *u, const lie_edit *edit, lie_error *err
     return st;
 }
 
-lie_status lie_update_edit(lie_update *u, const lie_edit *edit, const unsigned char *text, size_t size,
-                           lie_error *err)
+lie_status lie_update_edit(lie_update *u, const lie_edit *edit, lie_error *err)
 {
     if (u->failed)
         return unusable(u, err);
@@ -189,7 +186,7 @@ lie_status lie_update_edit(lie_update *u, const lie_edit *edit, const unsigned c
     u->rt = NULL;
     double t0 = lie_time_now();
     int first_box = u->n_boxes;
-    if (apply_edit(u, edit, err) != LIE_OK || !push_log(u, edit->name, text, size)) {
+    if (apply_edit(u, edit, err) != LIE_OK || !push_log(u, edit)) {
         u->failed = 1;
         if (!err->status)
             lie_error_set(err, LIE_ERR_NOMEM, edit->name, "out of memory");
@@ -401,14 +398,13 @@ lie_status lie_update_snapshot(const lie_update *u, lie_env **out, lie_error *er
 
 void lie_update_get_stats(const lie_update *u, lie_update_stats *stats) { *stats = u->st; }
 
-lie_status lie_update_apply(lie_cache *cache, lie_scene *scene, const lie_edit *const *edits,
-                            const unsigned char *const *texts, const size_t *sizes, int n_edits,
+lie_status lie_update_apply(lie_cache *cache, lie_scene *scene, const lie_edit *const *edits, int n_edits,
                             const lie_update_options *opt, lie_update_stats *stats, lie_error *err)
 {
     lie_update *u = NULL;
     lie_status st = lie_update_create(cache, scene, opt, &u, err);
     for (int i = 0; st == LIE_OK && i < n_edits; i++)
-        st = lie_update_edit(u, edits[i], texts[i], sizes[i], err);
+        st = lie_update_edit(u, edits[i], err);
     if (st == LIE_OK)
         st = lie_update_step(u, 0, NULL, err);
     if (u && stats)

@@ -121,13 +121,12 @@ lie_status lie_update_create(lie_cache *cache, lie_scene *scene, const lie_updat
  * keeps its last committed state, the scene its edits. */
 void lie_update_destroy(lie_update *u);
 
-/* Phase 1: apply one parsed edit file to the scene and mark the units it
- * may change pending.  `text` (`size` bytes) is the file's full text and
- * edit->name its name, both copied for the edit log.  On an error the
+/* Phase 1: apply one edit to the scene and mark the units it may change
+ * pending.  The edit log gets edit->name and the edit's text (lie_edit_text:
+ * a parsed file's text as it was, a built edit's written form).  On an error the
  * scene may be partly edited and the update is unusable (every later call
  * fails); the cache is untouched. */
-lie_status lie_update_edit(lie_update *u, const lie_edit *edit, const unsigned char *text, size_t size,
-                           lie_error *err);
+lie_status lie_update_edit(lie_update *u, const lie_edit *edit, lie_error *err);
 
 /* Phase 2: recompute up to max_units pending units (0 = all), in unit
  * order; commit when none is left.  *remaining (may be NULL) receives the
@@ -147,12 +146,11 @@ lie_status lie_update_snapshot(const lie_update *u, lie_env **out, lie_error *er
  * committed, until the next edit). */
 void lie_update_get_stats(const lie_update *u, lie_update_stats *stats);
 
-/* All of it: create, every edit file in order (texts[i] of sizes[i] bytes
- * for the log), steps to completion, destroy.  The cache then holds the
+/* All of it: create, every edit in order (lie_update_edit), steps to
+ * completion, destroy.  The cache then holds the
  * edited scene's environments and longer edit log; scene is edited.
  * stats may be NULL. */
-lie_status lie_update_apply(lie_cache *cache, lie_scene *scene, const lie_edit *const *edits,
-                            const unsigned char *const *texts, const size_t *sizes, int n_edits,
+lie_status lie_update_apply(lie_cache *cache, lie_scene *scene, const lie_edit *const *edits, int n_edits,
                             const lie_update_options *opt, lie_update_stats *stats, lie_error *err);
 
 

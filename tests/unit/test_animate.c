@@ -128,7 +128,7 @@ static void test_skin_follows_joints(void **state)
     op.node = "#8";
     lie_mat4 m = lie_node_trs_matrix(p->trs + 10 * 8);
     memcpy(op.matrix, m.m, sizeof op.matrix);
-    lie_edit e = {"unit.yaml", &op, 1};
+    lie_edit e = {"unit.yaml", &op, 1, NULL, 0};
     lie_edit_effect fx;
     memset(&fx, 0, sizeof fx);
     lie_error err;

@@ -210,7 +210,7 @@ static void check_update_split(const char *scene, int clusters, const char *text
     assert_int_equal(lie_update_create(c, s, &o, &u, &err), LIE_OK);
     lie_edit *ed = NULL;
     assert_int_equal(lie_edit_parse((const unsigned char *)text, strlen(text), scene, &ed, &err), LIE_OK);
-    assert_int_equal(lie_update_edit(u, ed, (const unsigned char *)text, strlen(text), &err), LIE_OK);
+    assert_int_equal(lie_update_edit(u, ed, &err), LIE_OK);
     lie_edit_destroy(ed);
     size_t left = 0;
     do

@@ -119,7 +119,7 @@ static void check_update(const char *const *texts, int n, size_t chunk, uint64_t
     lie_update *u = start(&c, &s, 0);
     for (int i = 0; i < n; i++) {
         lie_edit *e = parse(texts[i]);
-        assert_int_equal(lie_update_edit(u, e, (const unsigned char *)texts[i], strlen(texts[i]), &err), LIE_OK);
+        assert_int_equal(lie_update_edit(u, e, &err), LIE_OK);
         lie_edit_destroy(e);
     }
     lie_update_stats st;
@@ -224,7 +224,7 @@ static void test_update_edits_while_pending_and_after_commit(void **state)
     const char *texts[3] = {OPS[0], OPS[1], OPS[2]};
     for (int i = 0; i < 3; i++) {
         lie_edit *e = parse(texts[i]);
-        assert_int_equal(lie_update_edit(u, e, (const unsigned char *)texts[i], strlen(texts[i]), &err), LIE_OK);
+        assert_int_equal(lie_update_edit(u, e, &err), LIE_OK);
         lie_edit_destroy(e);
         size_t left = 0;
         if (i == 0) {
@@ -296,7 +296,7 @@ static void test_update_snapshots_never_show_a_changed_answer(void **state)
     lie_update *u = start(&c, &s, 0);
     lie_env *final = rebuild(&OPS[0], 1, &ref_scene);
     lie_edit *e = parse(OPS[0]);
-    assert_int_equal(lie_update_edit(u, e, (const unsigned char *)OPS[0], strlen(OPS[0]), &err), LIE_OK);
+    assert_int_equal(lie_update_edit(u, e, &err), LIE_OK);
     lie_edit_destroy(e);
     size_t left = lie_update_pending(u);
     assert_true(left > 4);

@@ -187,7 +187,7 @@ static lie_status apply(view_world *w, const lie_edit *e, const char *yaml, lie_
     if (w->ctor)
         lie_ctor_hold(w->ctor); /* the unit in progress is dropped: the scene changes under it */
     if (w->up) {
-        st = lie_update_edit(w->up, e, (const unsigned char *)yaml, strlen(yaml), err);
+        st = lie_update_edit(w->up, e, err); /* e holds yaml as its text (lie_edit_text) */
     } else {
         st = lie_edit_apply(w->scene, e, &w->opt.so, NULL, err);
     }

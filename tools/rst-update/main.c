@@ -64,13 +64,18 @@ static int scene_format_ok(const char *path)
 }
 
 /* Read and parse every edit file first: a bad edit leaves everything untouched. */
-static lie_status read_edits(char **files, int n, lie_edit **edits, unsigned char **texts, size_t *sizes,
-                             lie_error *err)
+static lie_status read_edits(char **files, int n, lie_edit **edits, lie_error *err)
 {
-    for (int i = 0; i < n; i++)
-        if (lie_read_file_max(files[i], LIE_READ_MAX_TEXT, &texts[i], &sizes[i], err) != LIE_OK ||
-            lie_edit_parse(texts[i], sizes[i], files[i], &edits[i], err) != LIE_OK)
-            return err->status;
+    for (int i = 0; i < n; i++) {
+        unsigned char *text = NULL;
+        size_t size = 0;
+        lie_status st = lie_read_file_max(files[i], LIE_READ_MAX_TEXT, &text, &size, err);
+        if (st == LIE_OK)
+            st = lie_edit_parse(text, size, files[i], &edits[i], err);
+        free(text);
+        if (st != LIE_OK)
+            return st;
+    }
     return LIE_OK;
 }
 
@@ -152,14 +157,12 @@ static lie_status run(const char *input, char **files, int n_files, const lie_up
     lie_scene *scene = NULL;
     lie_update *u = NULL;
     lie_edit **edits = calloc((size_t)n_files, sizeof *edits);
-    unsigned char **texts = calloc((size_t)n_files, sizeof *texts);
-    size_t *sizes = calloc((size_t)n_files, sizeof *sizes);
     lie_update_stats ust;
     size_t bytes = 0;
     double t_load = 0;
-    lie_status st = edits && texts && sizes ? LIE_OK : lie_error_set(err, LIE_ERR_NOMEM, input, "out of memory");
+    lie_status st = edits ? LIE_OK : lie_error_set(err, LIE_ERR_NOMEM, input, "out of memory");
     if (st == LIE_OK)
-        st = read_edits(files, n_files, edits, texts, sizes, err);
+        st = read_edits(files, n_files, edits, err);
     if (st == LIE_OK)
         st = lie_cache_read(input, &cache, err);
     if (st == LIE_OK)
@@ -173,7 +176,7 @@ static lie_status run(const char *input, char **files, int n_files, const lie_up
     }
     double tp = lie_phase(prog, ro->verbose && st == LIE_OK, "trees", t0 + t_load);
     for (int i = 0; st == LIE_OK && i < n_files; i++)
-        st = lie_update_edit(u, edits[i], texts[i], sizes[i], err);
+        st = lie_update_edit(u, edits[i], err);
     tp = lie_phase(prog, ro->verbose && st == LIE_OK, "edits", tp);
     if (st == LIE_OK)
         st = run_steps(u, quiet, err);
@@ -188,13 +191,9 @@ static lie_status run(const char *input, char **files, int n_files, const lie_up
         lie_update_get_stats(u, &ust);
         print_stats(input, scene, &ust, t_load, lie_time_now() - ta, bytes, stats == 2);
     }
-    for (int i = 0; edits && i < n_files; i++) {
+    for (int i = 0; edits && i < n_files; i++)
         lie_edit_destroy(edits[i]);
-        free(texts[i]);
-    }
     free(edits);
-    free(texts);
-    free(sizes);
     lie_update_destroy(u);
     lie_scene_destroy(scene);
     lie_cache_destroy(cache);
