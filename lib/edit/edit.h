@@ -81,6 +81,14 @@ void lie_edit_destroy(lie_edit *e);
 
 /* ---- edits as data (build.c, write.c, inverse.c) -------------------------- */
 
+/* One operation of `kind` ("set-material", ...) from its fields as a
+ * program's user gives them, the YAML of formats/edit.md without the node
+ * ("base-color: [0.8, 0.2, 0.1], roughness: 0.5"; braces optional): a
+ * one-operation edit whose node is NULL, for the caller to set before
+ * lie_edit_append.  Errors are the parser's. */
+lie_status lie_edit_parse_fields(const char *kind, const char *fields, const char *name, lie_edit **out,
+                                 lie_error *err);
+
 /* An empty edit named `name` (messages, and the folder `add` files are
  * relative to); NULL when out of memory. */
 lie_edit *lie_edit_create(const char *name);

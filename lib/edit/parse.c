@@ -421,3 +421,35 @@ lie_status lie_edit_parse(const unsigned char *text, size_t size, const char *na
     *out = e;
     return LIE_OK;
 }
+
+lie_status lie_edit_parse_fields(const char *kind, const char *fields, const char *name, lie_edit **out, lie_error *err)
+{
+    *out = NULL;
+    size_t n = strlen(fields);
+    if (n >= 2 && fields[0] == '{' && fields[n - 1] == '}') { /* braces are optional */
+        fields++;
+        n -= 2;
+    }
+    /* the operation with a stand-in node, which the caller replaces */
+    char *text = malloc(strlen(kind) + n + 32);
+    if (!text)
+        return lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory");
+    int len = sprintf(text, "- %s: {node: x, %.*s}\n", kind, (int)n, fields);
+    lie_edit *e = NULL;
+    lie_status st = lie_edit_parse((const unsigned char *)text, (size_t)len, name, &e, err);
+    free(text);
+    if (st == LIE_OK && e->n_ops != 1) {
+        lie_edit_destroy(e);
+        return lie_error_set(err, LIE_ERR_FORMAT, name, "%s: expected the fields of one operation", kind);
+    }
+    if (st != LIE_OK)
+        return st;
+    free(e->ops[0].node);
+    e->ops[0].node = NULL;
+    e->ops[0].line = e->ops[0].col = 0;
+    free(e->text); /* not a file's text */
+    e->text = NULL;
+    e->size = 0;
+    *out = e;
+    return LIE_OK;
+}

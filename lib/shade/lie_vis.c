@@ -33,6 +33,7 @@ struct lie_lie_vis {
      * other triangle n whose edge k' joins the same two points (bit for
      * bit), or -1 (a boundary, or three or more triangles on the edge) */
     int32_t *adj;
+    uint8_t *unbuilt;       /* lie_lie_vis_record_unbuilt's mask, or NULL */
     lie_vis_oracle oracle;
 };
 
@@ -50,6 +51,9 @@ static lie_vis_class classify(void *ctx, const lie_surface *sf, int e, const voi
         *pair = n;
         return LIE_VISCLASS_BLOCKERS;
     case LIE_CLASS_NONE:
+        /* a byte set to 1 by any number of threads: relaxed atomic stores */
+        if (v->unbuilt)
+            __atomic_store_n(&v->unbuilt[sf->tri], (uint8_t)1, __ATOMIC_RELAXED);
         return LIE_VISCLASS_UNBUILT; /* not built: the whole scene answers */
     default:
         return LIE_VISCLASS_TEST_ALL; /* complex */
@@ -910,6 +914,8 @@ lie_status lie_lie_vis_use_silhouette(lie_lie_vis *v, lie_error *err)
     v->oracle.occluded_sil = occluded_sil;
     return LIE_OK;
 }
+
+void lie_lie_vis_record_unbuilt(lie_lie_vis *v, uint8_t *mask) { v->unbuilt = mask; }
 
 void lie_lie_vis_grow(lie_lie_vis *v, uint32_t longest)
 {

@@ -172,6 +172,11 @@ lie_status lie_lie_vis_use_silhouette(lie_lie_vis *v, lie_error *err);
  * env built while it is rendered from, lib/update's lie_ctor): the
  * oracle's max_blockers follows.  Call while nothing renders from it. */
 void lie_lie_vis_grow(lie_lie_vis *v, uint32_t longest);
+/* From now on, set mask[tri] (n_tris bytes, the caller's, not cleared) for
+ * every triangle whose unbuilt (LIE_CLASS_NONE) unit a render asks about:
+ * what a render from an env still being built answered with Embree
+ * (lie-render --cache).  NULL stops it. */
+void lie_lie_vis_record_unbuilt(lie_lie_vis *v, uint8_t *mask);
 void lie_lie_vis_destroy(lie_lie_vis *v);
 
 /* ---- the renderer ------------------------------------------------------ */

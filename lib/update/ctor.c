@@ -71,6 +71,7 @@ struct lie_ctor {
     lie_cache_views views;
     lie_camera want;
     int want_set;
+    int fixed;              /* the views were given at the start: lie_ctor_view orders only */
     int resample;           /* an edit changed the scene: the views are sampled again */
     int resampling;         /* a thread is at it: nothing is built meanwhile */
     uint64_t edits;         /* edits so far (a sampling of an older scene is dropped) */
@@ -309,7 +310,7 @@ static void take_view(lie_ctor *c)
     int known = 0;
     for (int i = 0; i < c->views.n_cams; i++)
         known |= same_camera(&c->views.cams[i], &cam);
-    int add = c->views_mode && !known;
+    int add = c->views_mode && !known && !c->fixed;
     c->busy++;
     pthread_mutex_unlock(&c->m);
     lie_error err;
@@ -623,6 +624,28 @@ static lie_status seed(lie_ctor *c, const lie_cache *from, lie_error *err)
     return LIE_OK;
 }
 
+/* Views given at the start: their pixels, the triangles they see pending. */
+static lie_status fixed_views(lie_ctor *c, const lie_camera *cams, int n, lie_error *err)
+{
+    c->views.cams = malloc(sizeof *c->views.cams * ((size_t)n + 1));
+    if (!c->views.cams)
+        return lie_error_set(err, LIE_ERR_NOMEM, c->s->path, "out of memory");
+    for (int i = 0; i < n; i++) {
+        c->views.cams[i] = cams[i];
+        c->views.cams[i].name = NULL;
+    }
+    c->views.n_cams = n;
+    lie_pixels *px = NULL;
+    lie_status st = lie_camera_pixels(c->s, c->rt, c->views.cams, n, c->o.view_width, c->o.view_height,
+                                      c->o.max_depth, &px, err);
+    if (st == LIE_OK && !(c->px = px_wrap(px)))
+        st = lie_error_set(err, LIE_ERR_NOMEM, c->s->path, "out of memory");
+    c->fixed = 1;
+    if (st == LIE_OK)
+        mark_seen(c);
+    return st;
+}
+
 lie_status lie_ctor_create(lie_scene *s, const lie_rt *rt, const lie_ctor_options *opt, const lie_cache *from,
                            lie_ctor **out, lie_error *err)
 {
@@ -673,8 +696,10 @@ lie_status lie_ctor_create(lie_scene *s, const lie_rt *rt, const lie_ctor_option
             mark_seen(c);
         c->order_dirty = 1;
         sample_stats(c);
-        int n = opt->threads > 0 ? opt->threads : 1;
-        c->tids = calloc((size_t)n, sizeof *c->tids);
+        if (st == LIE_OK && opt->n_views > 0 && !from)
+            st = fixed_views(c, opt->views, opt->n_views, err);
+        int n = opt->manual ? 0 : opt->threads > 0 ? opt->threads : 1;
+        c->tids = calloc((size_t)n + 1, sizeof *c->tids);
         if (!c->tids)
             st = lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
         for (int i = 0; st == LIE_OK && i < n; i++) {
@@ -768,6 +793,97 @@ int lie_ctor_wait(lie_ctor *c, double seconds, lie_error *err)
     int failed = c->failed;
     pthread_mutex_unlock(&c->m);
     return failed ? -1 : done;
+}
+
+/* ---- building in the caller's threads ------------------------------------------------ */
+
+typedef struct build_job {
+    lie_ctor *c;
+    const uint32_t *tris;
+    pxref *px;
+    lie_error err;
+    _Atomic int failed;
+} build_job;
+
+static void build_one(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    build_job *j = ctx;
+    lie_ctor *c = j->c;
+    if (atomic_load(&j->failed))
+        return;
+    uint32_t t = j->tris[item];
+    lie_env_part part;
+    lie_build_stats bs;
+    lie_error err;
+    lie_status st = lie_env_build_units(c->s, c->rt, &c->p, j->px ? j->px->px : NULL, (uint64_t)t * c->ne, c->ne,
+                                        NULL, &part, &bs, &err);
+    if (st == LIE_OK) {
+        pthread_rwlock_wrlock(&c->env_lock);
+        if (!land(c, &part))
+            st = lie_error_set(&err, LIE_ERR_NOMEM, c->s->path, "out of memory for the constructor's environments");
+        pthread_rwlock_unlock(&c->env_lock);
+    }
+    lie_env_part_free(&part);
+    if (st != LIE_OK && !atomic_exchange(&j->failed, 1))
+        j->err = err;
+}
+
+lie_status lie_ctor_build(lie_ctor *c, const uint8_t *mask, const lie_camera *cam, int threads, uint64_t *built,
+                          lie_error *err)
+{
+    if (built)
+        *built = 0;
+    uint8_t *seen = NULL;
+    if (!mask) {
+        seen = calloc((size_t)c->s->n_tris + 1, 1);
+        if (!seen)
+            return lie_error_set(err, LIE_ERR_NOMEM, c->s->path, "out of memory");
+        lie_status st = lie_camera_mark_visible(c->s, c->rt, cam, 1, c->o.view_width, c->o.view_height, c->o.max_depth,
+                                                seen, err);
+        if (st != LIE_OK) {
+            free(seen);
+            return st;
+        }
+        mask = seen;
+    }
+    pthread_mutex_lock(&c->m);
+    uint32_t *tris = malloc(sizeof *tris * ((size_t)c->s->n_tris + 1));
+    size_t n = 0;
+    for (uint32_t t = 0; tris && t < c->s->n_tris; t++)
+        if (mask[t] && c->state[t] == TRI_PENDING) {
+            tris[n++] = t;
+            set_state(c, t, TRI_BUSY);
+        }
+    build_job j = {c, tris, c->px, {0}, 0};
+    if (j.px)
+        j.px->refs++;
+    c->busy++;
+    pthread_mutex_unlock(&c->m);
+    lie_status st = tris ? LIE_OK : lie_error_set(err, LIE_ERR_NOMEM, c->s->path, "out of memory");
+    if (st == LIE_OK && n)
+        st = lie_parallel_for(n, threads, build_one, &j, NULL, NULL);
+    if (st == LIE_OK && atomic_load(&j.failed)) {
+        *err = j.err;
+        st = err->status;
+    }
+    pthread_mutex_lock(&c->m);
+    c->busy--;
+    for (size_t i = 0; i < n; i++)
+        set_state(c, tris[i], st == LIE_OK ? TRI_BUILT : TRI_PENDING);
+    if (st == LIE_OK) {
+        c->units_built += n * c->ne;
+        sample_stats(c);
+        atomic_fetch_add(&c->version, 1);
+    }
+    px_drop(j.px);
+    pthread_cond_broadcast(&c->idle_cv);
+    pthread_mutex_unlock(&c->m);
+    if (built)
+        *built = st == LIE_OK ? n : 0;
+    free(tris);
+    free(seen);
+    return st;
 }
 
 /* ---- edits ------------------------------------------------------------------------- */

@@ -182,6 +182,11 @@ typedef struct lie_ctor_options {
     lie_build_params params; /* as lie-build's (params.threads is ignored: one per constructor thread) */
     int whole;               /* build every unit, as lie-build without --view; the views only order it */
     int view_width, view_height, max_depth; /* how views are sampled (lie_cache_views) */
+    /* The views, all known at the start (a camera path's frames): the
+     * units are built for them, and lie_ctor_view only orders the work. */
+    const lie_camera *views;
+    int n_views;
+    int manual;              /* no constructor threads: units are built by lie_ctor_build only */
 } lie_ctor_options;
 lie_ctor_options lie_ctor_options_default(void);
 
@@ -224,6 +229,14 @@ void lie_ctor_release(lie_ctor *c);
  * scale, set-transform); otherwise every unit is built again.  An edit that
  * changes the number of triangles or emitter clusters is refused. */
 lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie_error *err);
+
+/* Build now, on `threads` workers of the caller (0: all cores), every
+ * pending triangle with mask[t] set (n_tris bytes), or (mask NULL) every
+ * pending triangle the camera `cam` sees in the views' sampling (as
+ * lie_camera_mark_visible).  *built (may be NULL): triangles built.  For a
+ * manual constructor (the caller renders between builds), or a held one. */
+lie_status lie_ctor_build(lie_ctor *c, const uint8_t *mask, const lie_camera *cam, int threads, uint64_t *built,
+                          lie_error *err);
 
 /* Wait until nothing is pending (seconds < 0: no limit); 1: done, 0: not
  * yet (or held), -1: the constructor failed (err filled, may be NULL). */

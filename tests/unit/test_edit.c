@@ -200,6 +200,34 @@ static void test_append_checks_values_as_the_parser_does(void **state)
     lie_edit_destroy(e);
 }
 
+static void test_fields_of_one_operation_parse_without_a_node(void **state)
+{
+    lie_edit *e = NULL;
+    lie_error err;
+    assert_int_equal(lie_edit_parse_fields("set-material", "{base-color: [0.8, 0.2, 0.1], roughness: 0.5}",
+                                           "script.txt", &e, &err),
+                     LIE_OK);
+    assert_int_equal(e->n_ops, 1);
+    assert_null(e->ops[0].node);
+    assert_null(e->text);
+    assert_int_equal(e->ops[0].kind, LIE_EDIT_SET_MATERIAL);
+    assert_int_equal(e->ops[0].has, LIE_EDIT_HAS_BASE_COLOR | LIE_EDIT_HAS_ROUGHNESS);
+    assert_true(e->ops[0].base_color[0] == 0.8f && e->ops[0].roughness == 0.5f);
+    /* with its node set, it is an operation like any other */
+    lie_edit *built = lie_edit_create("script.txt");
+    lie_edit_op op = e->ops[0];
+    op.node = "Chair2";
+    append(built, op);
+    lie_edit_destroy(built);
+    lie_edit_destroy(e);
+    assert_int_equal(lie_edit_parse_fields("set-emission", "strength: 7", "script.txt", &e, &err), LIE_OK);
+    assert_int_equal(e->ops[0].has, LIE_EDIT_HAS_STRENGTH);
+    lie_edit_destroy(e);
+    assert_int_equal(lie_edit_parse_fields("set-material", "metallic: 2", "script.txt", &e, &err), LIE_ERR_FORMAT);
+    assert_non_null(strstr(err.msg, "set-material.metallic: must be in [0, 1]"));
+    assert_null(e);
+}
+
 static lie_scene *load(const char *path)
 {
     lie_scene *s = NULL;
@@ -323,6 +351,7 @@ int main(void)
         cmocka_unit_test(test_written_form_is_one_line_per_operation),
         cmocka_unit_test(test_parsed_edit_keeps_its_text_for_the_log),
         cmocka_unit_test(test_append_checks_values_as_the_parser_does),
+        cmocka_unit_test(test_fields_of_one_operation_parse_without_a_node),
         cmocka_unit_test(test_inverse_after_an_edit_restores_the_scene),
         cmocka_unit_test(test_add_has_no_inverse),
     };

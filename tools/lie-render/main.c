@@ -6,6 +6,7 @@
 #include "common/cli.h"
 #include "dist.h"
 #include "lie.h"
+#include "cached.h"
 #include "output.h"
 
 #include <getopt.h>
@@ -42,6 +43,13 @@ static void usage(FILE *fp)
             "      --frames A-B        with --path: only frames A to B (numbered from the\n"
             "                          path's first-frame)\n"
             "      --skip-existing     leave out frames whose output file exists already\n"
+            "      --cache C.lie       with a scene and --path: build the cache lie-build --path\n"
+            "                          builds as the frames need it (before each frame, the\n"
+            "                          units its view lacks) and keep it in C.lie after each\n"
+            "                          frame: a stopped run goes on from it (with\n"
+            "                          --skip-existing, from the first frame not written).\n"
+            "                          The frames equal lie-build --path + lie-render of C.lie\n"
+            "      --view-size WxH     with --cache: as lie-build --view-size (default 512x512)\n"
             "      --size WxH          image size (default %dx%d)\n"
             "      --spp N             eye rays per pixel, stratified (default %d: pixel centre)\n"
             "      --light-samples N   shadow rays per area emitter per shading point\n"
@@ -100,12 +108,14 @@ enum {
     OPT_CAMERA = 256, OPT_SIZE, OPT_SPP, OPT_LIGHT_SAMPLES, OPT_PATTERN, OPT_VISIBILITY, OPT_RAYS, OPT_LIE_SKIP,
     OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_SCENE,
     OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS, OPT_FRAMES, OPT_SKIP_EXISTING, OPT_FORMAT, OPT_HALF, OPT_BITMASK,
-    OPT_SILHOUETTE
+    OPT_SILHOUETTE, OPT_CACHE, OPT_VIEW_SIZE
 };
 
 static const struct option long_opts[] = {
     {"scene", required_argument, NULL, OPT_SCENE},
     {"path", required_argument, NULL, OPT_PATH},
+    {"cache", required_argument, NULL, OPT_CACHE},
+    {"view-size", required_argument, NULL, OPT_VIEW_SIZE},
     {"frames", required_argument, NULL, OPT_FRAMES},
     {"skip-existing", no_argument, NULL, OPT_SKIP_EXISTING},
     {"emitter", required_argument, NULL, OPT_EMITTER},
@@ -262,7 +272,8 @@ typedef struct args {
     lie_render_options ro;
     lie_scene_options so;
     lie_frame_options fopt;
-    const char *input, *output, *camera, *scene_override, *path_file;
+    const char *input, *output, *camera, *scene_override, *path_file, *cache_file;
+    int view_w, view_h;    /* --view-size */
     long frame_a, frame_b; /* --frames, or -1 */
     int skip_existing, visibility_set;
 } args;
@@ -350,6 +361,11 @@ static int parse_options(args *a, lie_cli *cli, int argc, char **argv)
                 return usage_error("--frames: expected A-B with 0 <= A <= B <= 999999, got '%s'", optarg);
             break;
         case OPT_SKIP_EXISTING: a->skip_existing = 1; break;
+        case OPT_CACHE: a->cache_file = optarg; break;
+        case OPT_VIEW_SIZE:
+            if (!lie_parse_size(optarg, 16384, &a->view_w, &a->view_h))
+                return usage_error("--view-size: expected WxH, got '%s'", optarg);
+            break;
         }
     }
     if (c == LIE_CLI_EXIT)
@@ -377,6 +393,10 @@ static int check_args(args *a)
         return usage_error("%s", "--path and --camera exclude each other");
     if (a->frame_a >= 0 && !a->path_file)
         return usage_error("%s", "--frames needs --path");
+    if (a->cache_file && !a->path_file)
+        return usage_error("%s", "--cache needs --path");
+    if (a->view_w && !a->cache_file)
+        return usage_error("%s", "--view-size needs --cache");
     if (a->ro.light_samples == 0) {
         a->ro.eye_only = 1;
         a->ro.light_samples = 1;
@@ -512,10 +532,18 @@ static int render_all(args *a, run *r, const lie_cli *cli)
     if (st != LIE_OK)
         return st;
     double t1 = lie_phase(prog, cli->verbose, "load", t0);
+    if (a->cache_file && (r->cache || a->visibility_set))
+        return usage_error("%s: --cache takes a scene, and renders with the cache it builds (no --visibility)",
+                           a->input);
+    if (a->cache_file && lie_dist_size() > 1)
+        return usage_error("%s", "--cache: not under mpirun (the frames build as they go, one after another)");
     if (!a->visibility_set)
-        ro->visibility = r->cache ? LIE_VIS_LIE : LIE_VIS_FULL;
-    if (!r->cache && (ro->visibility == LIE_VIS_LIE || (ro->aovs & (LIE_AOV_COMPLEXITY | LIE_AOV_PATCH))))
+        ro->visibility = r->cache || a->cache_file ? LIE_VIS_LIE : LIE_VIS_FULL;
+    if (!r->cache && !a->cache_file &&
+        (ro->visibility == LIE_VIS_LIE || (ro->aovs & (LIE_AOV_COMPLEXITY | LIE_AOV_PATCH))))
         return usage_error("%s: --visibility=lie and the complexity and patch layers need a cache", a->input);
+    if (a->cache_file)
+        ro->visibility = LIE_VIS_FULL; /* until cached_render has its oracle */
     if ((st = prepare(a, r, cli->quiet)) != LIE_OK || (st = lie_rt_create(r->scene, &r->rt, &r->err)) != LIE_OK ||
         (st = lie_dist_check(r->scene->hash, r->cache ? r->cache->state_hash : 0, &r->err)) != LIE_OK)
         return st;
@@ -528,8 +556,17 @@ static int render_all(args *a, run *r, const lie_cli *cli)
     lie_render_stats rs;
     memset(&rs, 0, sizeof rs);
     double t_render = 0.0, t_write = 0.0;
-    frame_out fo = {a->output, a->input, hash, ro, r->cpath != NULL, a->fopt, r->cpath ? r->cpath->first : 0};
-    if (lie_dist_size() > 1) {
+    /* with --cache, the frames say what lie-render of the cache says */
+    frame_out fo = {a->output, a->cache_file ? a->cache_file : a->input, hash, ro, r->cpath != NULL, a->fopt,
+                    r->cpath ? r->cpath->first : 0};
+    if (a->cache_file) {
+        cached_run cr = {a->cache_file, a->input, a->view_w ? a->view_w : 512, a->view_h ? a->view_h : 512, r->scene,
+                         r->rt, r->cpath, ro, cli->quiet, cli->verbose, a->frame_a < 0, 0, 0};
+        st = cached_render(&cr, &fo, todo, n_todo, &rs, &t_render, &t_write, &rendered, &r->err);
+        if (cli->verbose)
+            fprintf(stderr, "%s: --cache: %llu triangles built, %d frames rendered again\n", prog,
+                    (unsigned long long)cr.units_built, cr.rerenders);
+    } else if (lie_dist_size() > 1) {
         lie_dist_bcast(&n_todo, sizeof n_todo);
         lie_dist_bcast(todo, sizeof *todo * (size_t)n_todo);
         double ta = lie_time_now();

@@ -1,5 +1,5 @@
-/* --script FILE: one command a line, '#' comments (the issue's list; see
- * lie-view --help).  Parsing checks everything it can, so a bad script
+/* --script FILE: one command a line, '#' comments (lie-view --help lists
+ * them).  Parsing checks everything it can, so a bad script
  * fails before a window opens. */
 #include "view.h"
 
@@ -27,8 +27,10 @@ void view_script_destroy(view_script *s)
 {
     if (!s)
         return;
-    for (int i = 0; i < s->n; i++)
+    for (int i = 0; i < s->n; i++) {
         free(s->cmds[i].arg);
+        lie_edit_destroy(s->cmds[i].fields);
+    }
     free(s->cmds);
     free(s);
 }
@@ -43,25 +45,15 @@ static char *trim(char *p)
     return p;
 }
 
-/* set-material / set-emission fields, with or without braces, checked by
- * the edit parser on a stand-in node. */
-static lie_status check_fields(const char *path, int line, const char *op, char *fields, lie_error *err)
+/* set-material / set-emission fields, with or without braces: the
+ * operation, parsed by lib/edit, its node set when the command runs. */
+static lie_status parse_fields(const char *path, int line, const char *op, const char *fields, lie_edit **out,
+                               lie_error *err)
 {
-    size_t n = strlen(fields);
-    if (n >= 2 && fields[0] == '{' && fields[n - 1] == '}') {
-        memmove(fields, fields + 1, n - 2);
-        fields[n - 2] = 0;
-    }
-    char text[4096];
-    int len = snprintf(text, sizeof text, "- %s: {node: x, %s}\n", op, fields);
-    if (len < 0 || (size_t)len >= sizeof text)
-        return lie_error_set_at(err, LIE_ERR_ARG, path, line, 1, "%s: too long", op);
-    lie_edit *e = NULL;
     lie_error sub;
     lie_error_clear(&sub);
-    if (lie_edit_parse((const unsigned char *)text, (size_t)len, path, &e, &sub) != LIE_OK)
+    if (lie_edit_parse_fields(op, fields, path, out, &sub) != LIE_OK)
         return lie_error_set_at(err, LIE_ERR_ARG, path, line, 1, "%s: %s", op, sub.msg);
-    lie_edit_destroy(e);
     return LIE_OK;
 }
 
@@ -149,12 +141,13 @@ lie_status view_script_read(const char *path, view_script **out, lie_error *err)
                 break;
             }
             if (c.kind == VIEW_CMD_SET_MATERIAL || c.kind == VIEW_CMD_SET_EMISSION) {
-                st = check_fields(path, line, p, rest, err);
+                st = parse_fields(path, line, p, rest, &c.fields, err);
                 if (st != LIE_OK)
                     break;
             }
             c.arg = strdup(rest);
             if (!c.arg) {
+                lie_edit_destroy(c.fields);
                 st = lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
                 break;
             }
@@ -162,6 +155,7 @@ lie_status view_script_read(const char *path, view_script **out, lie_error *err)
         view_cmd *nc = realloc(s->cmds, sizeof *nc * ((size_t)s->n + 1));
         if (!nc) {
             free(c.arg);
+            lie_edit_destroy(c.fields);
             st = lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
             break;
         }

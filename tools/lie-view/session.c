@@ -71,7 +71,7 @@ void session_camera_update(session *S)
     S->last_change_t = lie_time_now();
 }
 
-/* A node for an edit file: its name when that names it alone, else '#N'. */
+/* A node for an edit: its name when that names it alone, else "#N". */
 static void node_ref(session *S, int node, char *buf, size_t size)
 {
     const lie_scene *s = view_world_scene(S->w);
@@ -85,37 +85,40 @@ static void node_ref(session *S, int node, char *buf, size_t size)
     if (plain && lie_edit_find_node(s, name, &found, "", 0, 0, &err) == LIE_OK && found == node)
         snprintf(buf, size, "%s", name);
     else
-        snprintf(buf, size, "'#%d'", node);
+        snprintf(buf, size, "#%d", node);
 }
 
-static lie_status edit(session *S, int join, lie_error *err, const char *fmt, ...) __attribute__((format(printf, 4, 5)));
-static lie_status edit(session *S, int join, lie_error *err, const char *fmt, ...)
+/* Apply one operation on the selection (its node set here) as an edit. */
+static lie_status edit(session *S, lie_edit_op op, int join, lie_error *err)
 {
-    char text[2048];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(text, sizeof text, fmt, ap);
-    va_end(ap);
+    char ref[64];
+    node_ref(S, S->sel, ref, sizeof ref);
+    op.node = ref;
+    lie_edit *e = view_world_new_edit(S->w);
+    lie_status st = e ? lie_edit_append(e, &op, err) : lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
     double t0 = lie_time_now();
-    lie_status st = view_world_edit(S->w, text, join, err);
+    if (st == LIE_OK)
+        st = view_world_edit(S->w, e, join, err);
+    lie_edit_destroy(e);
     if (st == LIE_OK)
         edited(S, t0);
     return st;
 }
 
+/* A drag's motion and turns are floats: their nine digits are the edit's
+ * values (lie_edit_float_value), what the record holds. */
 static lie_status edit_move(session *S, lie_vec3 d, int join, lie_error *err)
 {
-    char ref[64];
-    node_ref(S, S->sel, ref, sizeof ref);
-    return edit(S, join, err, "- move: {node: %s, by: [%.9g, %.9g, %.9g]}\n", ref, d.x, d.y, d.z);
+    return edit(S, lie_edit_op_move_by(NULL, lie_edit_float_value(d.x), lie_edit_float_value(d.y),
+                                       lie_edit_float_value(d.z)),
+                join, err);
 }
 
 static lie_status edit_rotate(session *S, lie_vec3 axis, float degrees, int join, lie_error *err)
 {
-    char ref[64];
-    node_ref(S, S->sel, ref, sizeof ref);
-    return edit(S, join, err, "- rotate: {node: %s, axis: [%.9g, %.9g, %.9g], degrees: %.9g}\n", ref, axis.x, axis.y,
-                axis.z, degrees);
+    return edit(S, lie_edit_op_rotate(NULL, lie_edit_float_value(axis.x), lie_edit_float_value(axis.y),
+                                      lie_edit_float_value(axis.z), lie_edit_float_value(degrees)),
+                join, err);
 }
 
 /* The first material of the selection's subtree, for the keys that step it. */
@@ -256,27 +259,20 @@ void session_key(session *S, const SDL_KeyboardEvent *k, int *quit)
     } else if (key == SDLK_o) {
         S->overlay = !S->overlay;
     } else if (S->sel >= 0 && (key == SDLK_DELETE || key == SDLK_BACKSPACE)) {
-        char ref[64];
-        node_ref(S, S->sel, ref, sizeof ref);
-        st = edit(S, 0, &err, "- remove: {node: %s}\n", ref);
+        st = edit(S, lie_edit_op_remove(NULL), 0, &err);
         if (st == LIE_OK)
             S->sel = -1;
     } else if (S->sel >= 0 && key == SDLK_b) {
         static const float palette[6][3] = {{0.8f, 0.1f, 0.1f}, {0.1f, 0.6f, 0.15f}, {0.15f, 0.25f, 0.8f},
                                             {0.85f, 0.75f, 0.2f}, {0.9f, 0.9f, 0.9f}, {0.1f, 0.1f, 0.1f}};
         static int next;
-        const float *c = palette[next++ % 6];
-        char ref[64];
-        node_ref(S, S->sel, ref, sizeof ref);
-        st = edit(S, 0, &err, "- set-material: {node: %s, base-color: [%.9g, %.9g, %.9g]}\n", ref, c[0], c[1], c[2]);
+        st = edit(S, lie_edit_op_set_material(NULL, LIE_EDIT_HAS_BASE_COLOR, palette[next++ % 6], 0.0f, 0.0f), 0, &err);
     } else if (S->sel >= 0 && (key == SDLK_LEFTBRACKET || key == SDLK_RIGHTBRACKET)) {
         const lie_material *m = sel_material(S, NULL);
         float r = m ? m->roughness : 1.0f;
         r += key == SDLK_RIGHTBRACKET ? 0.1f : -0.1f;
         r = r < 0.0f ? 0.0f : r > 1.0f ? 1.0f : r;
-        char ref[64];
-        node_ref(S, S->sel, ref, sizeof ref);
-        st = edit(S, 0, &err, "- set-material: {node: %s, roughness: %.9g}\n", ref, r);
+        st = edit(S, lie_edit_op_set_material(NULL, LIE_EDIT_HAS_ROUGHNESS, NULL, 0.0f, r), 0, &err);
         if (st == LIE_OK)
             say(S, "roughness %.2f", r);
     } else if (S->sel >= 0 && (key == SDLK_MINUS || key == SDLK_EQUALS || key == SDLK_PLUS)) {
@@ -286,9 +282,7 @@ void session_key(session *S, const SDL_KeyboardEvent *k, int *quit)
             say(S, "the selection does not emit");
         } else {
             strength *= key == SDLK_MINUS ? 0.5f : 2.0f;
-            char ref[64];
-            node_ref(S, S->sel, ref, sizeof ref);
-            st = edit(S, 0, &err, "- set-emission: {node: %s, strength: %.9g}\n", ref, strength);
+            st = edit(S, lie_edit_op_set_emission(NULL, LIE_EDIT_HAS_STRENGTH, NULL, strength), 0, &err);
             if (st == LIE_OK)
                 say(S, "emission strength %g", strength);
         }
@@ -322,7 +316,6 @@ int session_script_step(session *S, script_run *R, uint64_t images, int idle)
         lie_status st = LIE_OK;
         lie_error err;
         lie_error_clear(&err);
-        char ref[64];
         switch (c->kind) {
         case VIEW_CMD_FRAMES:
             R->waiting = 1;
@@ -363,19 +356,16 @@ int session_script_step(session *S, script_run *R, uint64_t images, int idle)
                 st = lie_error_set_at(&err, LIE_ERR_ARG, R->path, c->line, 1, "nothing is selected");
                 break;
             }
-            node_ref(S, S->sel, ref, sizeof ref);
             if (c->kind == VIEW_CMD_DRAG)
                 st = edit_move(S, lie_v3((float)c->v[0], (float)c->v[1], (float)c->v[2]), 0, &err);
             else if (c->kind == VIEW_CMD_REMOVE) {
-                st = edit(S, 0, &err, "- remove: {node: %s}\n", ref);
+                st = edit(S, lie_edit_op_remove(NULL), 0, &err);
                 if (st == LIE_OK)
                     S->sel = -1;
             } else if (c->kind == VIEW_CMD_ROTATE)
-                st = edit(S, 0, &err, "- rotate: {node: %s, axis: [%.17g, %.17g, %.17g], degrees: %.17g}\n", ref,
-                          c->v[0], c->v[1], c->v[2], c->v[3]);
+                st = edit(S, lie_edit_op_rotate(NULL, c->v[0], c->v[1], c->v[2], c->v[3]), 0, &err);
             else
-                st = edit(S, 0, &err, "- %s: {node: %s, %s}\n",
-                          c->kind == VIEW_CMD_SET_MATERIAL ? "set-material" : "set-emission", ref, c->arg);
+                st = edit(S, c->fields->ops[0], 0, &err);
             break;
         case VIEW_CMD_UNDO:
         case VIEW_CMD_REDO: {

@@ -9,118 +9,16 @@
  * When nothing is pending the update has committed: the cache holds what
  * rst-update would write for the session's edits.
  *
- * Undo applies an edit that restores what a group changed (a node's local
- * transform as it was, its materials as they were), so the record of the
- * session stays a plain edit file that rst-update replays exactly.  A
- * removal is undone by `restore`; an added object has no such inverse in
- * formats/edit.md and is not undone. */
+ * Edits are lie_edit values the session builds (lib/edit).  Undo applies
+ * the edit that restores what a group changed (lie_edit_inverse: a node's
+ * local transform as it was, its materials as they were), so the record of
+ * the session stays a plain edit file (lie_edit_write) that rst-update
+ * replays exactly.  A removal is undone by `restore`; an added object has no
+ * such inverse in formats/edit.md and is not undone. */
 #include "world_internal.h"
 
-#include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
-
-/* ---- text ----------------------------------------------------------------- */
-
-typedef struct buf {
-    char *s;
-    size_t n, cap;
-    int nomem;
-} buf;
-
-static void put(buf *b, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void put(buf *b, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    int k = vsnprintf(NULL, 0, fmt, ap);
-    va_end(ap);
-    if (k < 0 || b->nomem)
-        return;
-    if (b->n + (size_t)k + 1 > b->cap) {
-        size_t cap = (b->n + (size_t)k + 1) * 2;
-        char *s = realloc(b->s, cap);
-        if (!s) {
-            b->nomem = 1;
-            return;
-        }
-        b->s = s;
-        b->cap = cap;
-    }
-    va_start(ap, fmt);
-    vsnprintf(b->s + b->n, (size_t)k + 1, fmt, ap);
-    va_end(ap);
-    b->n += (size_t)k;
-}
-
-/* A node as edit files name it: '#N' always names it alone. */
-static void ref(char *out, size_t size, int node) { snprintf(out, size, "'#%d'", node); }
-
-/* The edit restoring what `e` is about to change, or NULL (*removes set)
- * when it adds a node (edit files have no operation taking an added node
- * out again; a removal is undone by `restore`).  Absolute values, so the order of the restoring
- * operations does not matter: a node's local transform, and per mesh node
- * of a subtree the first material's colour, metallic, roughness and
- * emission (a base colour texture that set-material dropped stays dropped). */
-static char *inverse_of(const lie_scene *s, const lie_edit *e, int *removes)
-{
-    buf b = {0};
-    uint8_t *done_tf = calloc((size_t)s->n_nodes + 1, 1), *done_mat = calloc((size_t)s->n_nodes + 1, 1);
-    uint8_t *in = calloc((size_t)s->n_nodes + 1, 1);
-    *removes = 0;
-    for (int i = 0; done_tf && done_mat && in && i < e->n_ops; i++) {
-        const lie_edit_op *op = &e->ops[i];
-        int node;
-        lie_error err;
-        if (op->kind == LIE_EDIT_ADD) {
-            *removes = 1;
-            break;
-        }
-        if (lie_edit_find_node(s, op->node, &node, e->name, op->line, op->col, &err) != LIE_OK)
-            continue;
-        char r[32];
-        if (op->kind == LIE_EDIT_REMOVE || op->kind == LIE_EDIT_RESTORE) {
-            ref(r, sizeof r, node);
-            put(&b, "- %s: {node: %s}\n", op->kind == LIE_EDIT_REMOVE ? "restore" : "remove", r);
-            continue;
-        }
-        if (op->kind == LIE_EDIT_SET_MATERIAL || op->kind == LIE_EDIT_SET_EMISSION) {
-            view_node_subtree(s, node, in);
-            for (int n = 0; n < s->n_nodes; n++) {
-                if (!in[n] || done_mat[n] || s->nodes[n].mesh < 0 || s->meshes[s->nodes[n].mesh].n_prims == 0)
-                    continue;
-                done_mat[n] = 1;
-                const lie_material *m = lie_scene_material(s, s->meshes[s->nodes[n].mesh].prims[0].material);
-                float peak = fmaxf(m->emissive[0], fmaxf(m->emissive[1], m->emissive[2]));
-                ref(r, sizeof r, n);
-                put(&b, "- set-material: {node: %s, base-color: [%.9g, %.9g, %.9g], metallic: %.9g, roughness: %.9g}\n",
-                    r, m->base_color[0], m->base_color[1], m->base_color[2], m->metallic, m->roughness);
-                if (peak > 0.0f)
-                    put(&b, "- set-emission: {node: %s, emissive: [%.9g, %.9g, %.9g], strength: %.9g}\n", r,
-                        m->emissive[0] / peak, m->emissive[1] / peak, m->emissive[2] / peak, peak);
-                else
-                    put(&b, "- set-emission: {node: %s, emissive: [0, 0, 0]}\n", r);
-            }
-        } else if (!done_tf[node]) {
-            done_tf[node] = 1;
-            const double *m = s->nodes[node].local.m;
-            ref(r, sizeof r, node);
-            put(&b, "- set-transform: {node: %s, matrix: [", r);
-            for (int k = 0; k < 16; k++)
-                put(&b, "%s%.17g", k ? ", " : "", m[k]);
-            put(&b, "]}\n");
-        }
-    }
-    int nomem = !done_tf || !done_mat || !in || b.nomem;
-    free(done_tf);
-    free(done_mat);
-    free(in);
-    if (nomem || *removes) {
-        free(b.s);
-        return NULL;
-    }
-    return b.s ? b.s : strdup("");
-}
 
 /* ---- applying ----------------------------------------------------------------- */
 
@@ -136,32 +34,39 @@ static void note_ms(view_world *w, double t0)
     }
 }
 
-/* Parse, check the nodes, and if `inverse` is given work out the restoring
- * edit first. */
-static lie_status prepare(view_world *w, const char *yaml, lie_edit **out, char **inverse, lie_error *err)
+lie_edit *view_world_new_edit(const view_world *w) { return lie_edit_create(edit_name(w)); }
+
+/* Check the nodes, and if `inverse` is given work out the restoring edit
+ * first (*inverse NULL: e adds an object, which nothing takes out again). */
+static lie_status prepare(view_world *w, const lie_edit *e, lie_edit **inverse, lie_error *err)
 {
-    *out = NULL;
-    lie_status st = lie_edit_parse((const unsigned char *)yaml, strlen(yaml), edit_name(w), out, err);
-    for (int i = 0; st == LIE_OK && i < (*out)->n_ops; i++) {
-        const lie_edit_op *op = &(*out)->ops[i];
+    lie_status st = LIE_OK;
+    for (int i = 0; st == LIE_OK && i < e->n_ops; i++) {
+        const lie_edit_op *op = &e->ops[i];
         int node;
         if (op->kind == LIE_EDIT_ADD)
             continue;
-        st = lie_edit_find_node(w->scene, op->node, &node, (*out)->name, op->line, op->col, err);
+        st = lie_edit_find_node(w->scene, op->node, &node, e->name, op->line, op->col, err);
         if (st == LIE_OK && w->scene->nodes[node].removed && op->kind != LIE_EDIT_RESTORE)
-            st = lie_error_set_at(err, LIE_ERR_ARG, (*out)->name, op->line, op->col, "node '%s' was removed",
-                                  op->node);
+            st = lie_error_set_at(err, LIE_ERR_ARG, e->name, op->line, op->col, "node '%s' was removed", op->node);
     }
     if (st == LIE_OK && inverse) {
-        int removes;
-        *inverse = inverse_of(w->scene, *out, &removes);
-        if (!*inverse && !removes)
-            st = lie_error_set(err, LIE_ERR_NOMEM, w->input, "out of memory");
+        lie_error sub;
+        st = lie_edit_inverse(w->scene, e, inverse, &sub);
+        if (st == LIE_ERR_UNSUPPORTED)
+            st = LIE_OK;
+        else if (st != LIE_OK)
+            *err = sub;
     }
-    if (st != LIE_OK) {
-        lie_edit_destroy(*out);
-        *out = NULL;
-    }
+    return st;
+}
+
+/* Append every operation of `from` to `to`. */
+static lie_status append_all(lie_edit *to, const lie_edit *from, lie_error *err)
+{
+    lie_status st = LIE_OK;
+    for (int i = 0; st == LIE_OK && i < from->n_ops; i++)
+        st = lie_edit_append(to, &from->ops[i], err);
     return st;
 }
 
@@ -179,7 +84,7 @@ static int moves_only(const lie_edit *e)
 }
 
 /* Phase 1 and a new frame's worth of state, under the write lock. */
-static lie_status apply(view_world *w, const lie_edit *e, const char *yaml, lie_error *err)
+static lie_status apply(view_world *w, const lie_edit *e, lie_error *err)
 {
     double t0 = lie_time_now();
     lie_status st = LIE_OK;
@@ -187,7 +92,7 @@ static lie_status apply(view_world *w, const lie_edit *e, const char *yaml, lie_
     if (w->ctor)
         lie_ctor_hold(w->ctor); /* the unit in progress is dropped: the scene changes under it */
     if (w->up) {
-        st = lie_update_edit(w->up, e, err); /* e holds yaml as its text (lie_edit_text) */
+        st = lie_update_edit(w->up, e, err);
     } else {
         st = lie_edit_apply(w->scene, e, &w->opt.so, NULL, err);
     }
@@ -222,17 +127,8 @@ static lie_status apply(view_world *w, const lie_edit *e, const char *yaml, lie_
         if (p > w->pending_max)
             w->pending_max = p;
     }
-    if (st == LIE_OK) {
-        size_t k = strlen(yaml);
-        char *a = realloc(w->applied, w->n_applied + k + 1);
-        if (a) {
-            memcpy(a + w->n_applied, yaml, k + 1);
-            w->applied = a;
-            w->n_applied += k;
-        } else {
-            st = lie_error_set(err, LIE_ERR_NOMEM, w->input, "out of memory");
-        }
-    }
+    if (st == LIE_OK)
+        st = append_all(w->applied, e, err);
     /* a failed phase 1 leaves the update unusable (lib/update): the session ends */
     w->failed |= st != LIE_OK;
     w->epoch++;
@@ -247,13 +143,13 @@ static lie_status apply(view_world *w, const lie_edit *e, const char *yaml, lie_
     return LIE_OK;
 }
 
-static int push_group(view_world *w, char *text, char *inverse)
+static int push_group(view_world *w, lie_edit *edit, lie_edit *inverse)
 {
     view_group *g = realloc(w->live, sizeof *g * ((size_t)w->n_live + 1));
     if (!g)
         return 0;
     w->live = g;
-    g[w->n_live].text = text;
+    g[w->n_live].edit = edit;
     g[w->n_live].inverse = inverse;
     w->n_live++;
     return 1;
@@ -264,39 +160,47 @@ static lie_status unusable(view_world *w, lie_error *err)
     return lie_error_set(err, LIE_ERR_ARG, w->input, "an earlier edit failed: edits are off");
 }
 
-lie_status view_world_edit(view_world *w, const char *yaml, int join, lie_error *err)
+/* A copy of e to keep in a group. */
+static lie_edit *copy_of(const view_world *w, const lie_edit *e, lie_error *err)
+{
+    lie_edit *c = view_world_new_edit(w);
+    if (!c) {
+        lie_error_set(err, LIE_ERR_NOMEM, w->input, "out of memory");
+        return NULL;
+    }
+    if (append_all(c, e, err) != LIE_OK) {
+        lie_edit_destroy(c);
+        return NULL;
+    }
+    return c;
+}
+
+lie_status view_world_edit(view_world *w, const lie_edit *e, int join, lie_error *err)
 {
     if (w->failed)
         return unusable(w, err);
     join = join && w->n_live > 0;
-    lie_edit *e = NULL;
-    char *inverse = NULL;
-    lie_status st = prepare(w, yaml, &e, join ? NULL : &inverse, err);
+    lie_edit *inverse = NULL;
+    lie_status st = prepare(w, e, join ? NULL : &inverse, err);
     if (st == LIE_OK)
-        st = apply(w, e, yaml, err);
-    lie_edit_destroy(e);
+        st = apply(w, e, err);
     if (st != LIE_OK) {
-        free(inverse);
+        lie_edit_destroy(inverse);
         return st;
     }
     /* the group: one drag's steps join; its inverse is from before the first */
+    lie_error sub;
     if (join) {
-        view_group *g = &w->live[w->n_live - 1];
-        size_t a = strlen(g->text), b = strlen(yaml);
-        char *t = realloc(g->text, a + b + 1);
-        if (t) {
-            memcpy(t + a, yaml, b + 1);
-            g->text = t;
-        }
+        append_all(w->live[w->n_live - 1].edit, e, &sub); /* out of memory: redo repeats less */
     } else {
-        char *t = strdup(yaml);
-        if (!t || !push_group(w, t, inverse)) {
-            free(t);
-            free(inverse);
+        lie_edit *c = copy_of(w, e, &sub);
+        if (!c || !push_group(w, c, inverse)) {
+            lie_edit_destroy(c);
+            lie_edit_destroy(inverse);
         }
     }
     for (int i = 0; i < w->n_undone; i++)
-        free(w->undone[i]);
+        lie_edit_destroy(w->undone[i]);
     w->n_undone = 0;
     return LIE_OK;
 }
@@ -312,21 +216,19 @@ lie_status view_world_undo(view_world *w, int *done, lie_error *err)
     if (!g->inverse)
         return lie_error_set(err, LIE_ERR_UNSUPPORTED, w->input,
                              "adding an object cannot be undone (formats/edit.md has no edit that takes it out again)");
-    lie_edit *e = NULL;
-    lie_status st = *g->inverse ? prepare(w, g->inverse, &e, NULL, err) : LIE_OK;
-    if (st == LIE_OK && e)
-        st = apply(w, e, g->inverse, err);
-    lie_edit_destroy(e);
+    lie_status st = g->inverse->n_ops ? prepare(w, g->inverse, NULL, err) : LIE_OK;
+    if (st == LIE_OK && g->inverse->n_ops)
+        st = apply(w, g->inverse, err);
     if (st != LIE_OK)
         return st;
-    char **u = realloc(w->undone, sizeof *u * ((size_t)w->n_undone + 1));
+    lie_edit **u = realloc(w->undone, sizeof *u * ((size_t)w->n_undone + 1));
     if (u) {
         w->undone = u;
-        u[w->n_undone++] = g->text;
+        u[w->n_undone++] = g->edit;
     } else {
-        free(g->text);
+        lie_edit_destroy(g->edit);
     }
-    free(g->inverse);
+    lie_edit_destroy(g->inverse);
     w->n_live--;
     *done = 1;
     return LIE_OK;
@@ -339,21 +241,18 @@ lie_status view_world_redo(view_world *w, int *done, lie_error *err)
         return unusable(w, err);
     if (w->n_undone == 0)
         return LIE_OK;
-    char *text = w->undone[w->n_undone - 1];
-    lie_edit *e = NULL;
-    char *inverse = NULL;
-    lie_status st = prepare(w, text, &e, &inverse, err);
+    lie_edit *e = w->undone[w->n_undone - 1], *inverse = NULL;
+    lie_status st = prepare(w, e, &inverse, err);
     if (st == LIE_OK)
-        st = apply(w, e, text, err);
-    lie_edit_destroy(e);
+        st = apply(w, e, err);
     if (st != LIE_OK) {
-        free(inverse);
+        lie_edit_destroy(inverse);
         return st;
     }
     w->n_undone--;
-    if (!push_group(w, text, inverse)) {
-        free(text);
-        free(inverse);
+    if (!push_group(w, e, inverse)) {
+        lie_edit_destroy(e);
+        lie_edit_destroy(inverse);
     }
     *done = 1;
     return LIE_OK;
@@ -362,14 +261,14 @@ lie_status view_world_redo(view_world *w, int *done, lie_error *err)
 void world_free_session(view_world *w)
 {
     for (int i = 0; i < w->n_live; i++) {
-        free(w->live[i].text);
-        free(w->live[i].inverse);
+        lie_edit_destroy(w->live[i].edit);
+        lie_edit_destroy(w->live[i].inverse);
     }
     for (int i = 0; i < w->n_undone; i++)
-        free(w->undone[i]);
+        lie_edit_destroy(w->undone[i]);
     free(w->live);
     free(w->undone);
-    free(w->applied);
+    lie_edit_destroy(w->applied);
 }
 
 /* ---- the constructor ----------------------------------------------------------- */
@@ -464,15 +363,51 @@ lie_status view_world_write_record(view_world *w, lie_error *err)
 {
     if (!w->opt.record)
         return LIE_OK;
+    unsigned char *text = NULL;
+    size_t size = 0;
+    lie_status st = lie_edit_write(w->applied, &text, &size, err);
     lie_atomic_file af;
-    lie_status st = lie_atomic_open(&af, w->opt.record, err);
+    if (st == LIE_OK)
+        st = lie_atomic_open(&af, w->opt.record, err);
+    if (st == LIE_OK && size && fwrite(text, 1, size, af.fp) != size) {
+        lie_atomic_abort(&af);
+        st = lie_error_set(err, LIE_ERR_IO, w->opt.record, "write failed");
+    } else if (st == LIE_OK) {
+        st = lie_atomic_commit(&af, err);
+    }
+    free(text);
+    return st;
+}
+
+/* The edit log of a saved cache: the input's n0 entries, then the
+ * session's edits as one entry (when there are any), as rst-update CACHE
+ * EDITS.yaml writes it.  *log and *text (the session's written form, which
+ * the last entry points into) are the caller's to free. */
+static lie_status session_log(view_world *w, const lie_cache_edit *edits0, int n0, lie_cache_edit **log, int *n,
+                              unsigned char **text, const char *path, lie_error *err)
+{
+    size_t size = 0;
+    *log = NULL;
+    *text = NULL;
+    lie_status st = lie_edit_write(w->applied, text, &size, err);
     if (st != LIE_OK)
         return st;
-    if (w->n_applied && fwrite(w->applied, 1, w->n_applied, af.fp) != w->n_applied) {
-        lie_atomic_abort(&af);
-        return lie_error_set(err, LIE_ERR_IO, w->opt.record, "write failed");
+    *log = malloc(sizeof **log * ((size_t)n0 + 1));
+    if (!*log) {
+        free(*text);
+        *text = NULL;
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
     }
-    return lie_atomic_commit(&af, err);
+    if (n0)
+        memcpy(*log, edits0, sizeof **log * (size_t)n0);
+    *n = n0;
+    if (w->applied->n_ops) {
+        (*log)[n0].name = (char *)edit_name(w);
+        (*log)[n0].text = *text;
+        (*log)[n0].size = size;
+        (*n)++;
+    }
+    return LIE_OK;
 }
 
 /* With the constructor: what has landed, now (lie_ctor_cache), a partial
@@ -484,25 +419,17 @@ static lie_status save_ctor(view_world *w, const char *path, lie_error *err)
     memset(&prov, 0, sizeof prov);
     prov.scene_path = w->cache ? w->cache->scene_path : w->input;
     prov.scene_hash = w->loaded_hash;
-    int n0 = w->cache ? w->n_edits0 : 0;
-    lie_cache_edit *log = malloc(sizeof *log * ((size_t)n0 + 1));
-    if (!log)
-        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
-    if (n0)
-        memcpy(log, w->cache->edits, sizeof *log * (size_t)n0);
-    prov.edits = log;
-    prov.n_edits = n0;
-    if (w->n_applied) {
-        log[n0].name = (char *)edit_name(w);
-        log[n0].text = (unsigned char *)w->applied;
-        log[n0].size = w->n_applied;
-        prov.n_edits++;
-    }
-    pthread_rwlock_rdlock(&w->lock);
+    unsigned char *text = NULL;
+    lie_status st = session_log(w, w->cache ? w->cache->edits : NULL, w->cache ? w->n_edits0 : 0, &prov.edits,
+                                &prov.n_edits, &text, path, err);
     lie_cache *c = NULL;
-    lie_status st = lie_ctor_cache(w->ctor, &prov, &c, err);
-    pthread_rwlock_unlock(&w->lock);
-    free(log);
+    if (st == LIE_OK) {
+        pthread_rwlock_rdlock(&w->lock);
+        st = lie_ctor_cache(w->ctor, &prov, &c, err);
+        pthread_rwlock_unlock(&w->lock);
+    }
+    free(prov.edits);
+    free(text);
     if (st == LIE_OK)
         st = lie_cache_write(path, c, NULL, err);
     lie_cache_destroy(c);
@@ -523,23 +450,12 @@ lie_status view_world_save(view_world *w, const char *path, lie_error *err)
      * session as one entry, as rst-update CACHE EDITS.yaml writes it. */
     pthread_rwlock_rdlock(&w->lock);
     lie_cache c = *w->cache;
-    lie_cache_edit *log = malloc(sizeof *log * ((size_t)w->n_edits0 + 1));
-    lie_status st = LIE_OK;
-    if (!log) {
-        st = lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
-    } else {
-        memcpy(log, c.edits, sizeof *log * (size_t)w->n_edits0);
-        c.edits = log;
-        c.n_edits = w->n_edits0;
-        if (w->n_applied) {
-            log[c.n_edits].name = (char *)edit_name(w);
-            log[c.n_edits].text = (unsigned char *)w->applied;
-            log[c.n_edits].size = w->n_applied;
-            c.n_edits++;
-        }
+    unsigned char *text = NULL;
+    lie_status st = session_log(w, c.edits, w->n_edits0, &c.edits, &c.n_edits, &text, path, err);
+    if (st == LIE_OK)
         st = lie_cache_write(path, &c, NULL, err);
-    }
     pthread_rwlock_unlock(&w->lock);
-    free(log);
+    free(c.edits);
+    free(text);
     return st;
 }

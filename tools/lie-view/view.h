@@ -83,10 +83,11 @@ int64_t view_world_pending_max(const view_world *w);
 double view_world_last_update_ms(const view_world *w);
 int view_world_has_cache(const view_world *w);
 
-/* An edit as formats/edit.md text (one or more "- op: {...}" lines):
- * applied at once, recorded, and undoable as a group; join: part of the
- * last group (the steps of one drag undo together). */
-lie_status view_world_edit(view_world *w, const char *yaml, int join, lie_error *err);
+/* An empty edit for view_world_edit, named as the session's record. */
+lie_edit *view_world_new_edit(const view_world *w);
+/* An edit (lib/edit): applied at once, recorded, and undoable as a group;
+ * join: part of the last group (the steps of one drag undo together). */
+lie_status view_world_edit(view_world *w, const lie_edit *e, int join, lie_error *err);
 lie_status view_world_undo(view_world *w, int *done, lie_error *err);
 lie_status view_world_redo(view_world *w, int *done, lie_error *err);
 /* update_ms of every edit applied so far (for --stats=json). */
@@ -171,6 +172,7 @@ typedef struct view_cmd {
     int line;
     double v[4];
     char *arg;             /* node name, file, or the edit fields "{...}" minus "node" */
+    lie_edit *fields;      /* set-material, set-emission: the operation, its node unset */
 } view_cmd;
 
 typedef struct view_script {

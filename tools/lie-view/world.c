@@ -195,9 +195,10 @@ lie_status view_world_open(const char *input, const view_world_options *opt, vie
     pthread_cond_init(&w->ccv, NULL);
     w->opt = *opt;
     w->input = strdup(input);
+    w->applied = view_world_new_edit(w);
     unsigned char *data = NULL;
     size_t size = 0;
-    lie_status st = w->input ? lie_read_file(input, &data, &size, err)
+    lie_status st = w->input && w->applied ? lie_read_file(input, &data, &size, err)
                              : lie_error_set(err, LIE_ERR_NOMEM, input, "out of memory");
     if (st == LIE_OK && !looks_like_gltf(data, size))
         st = lie_cache_decode(data, size, input, &w->cache, err);

@@ -6,10 +6,10 @@
 
 #include <time.h>
 
-/* One undoable group of edits: its text, and the edit that restores what
- * it changed (NULL: it removed something, which no edit brings back). */
+/* One undoable group of edits, and the edit that restores what it changed
+ * (NULL: it added an object, which no edit takes out again). */
 typedef struct view_group {
-    char *text, *inverse;
+    lie_edit *edit, *inverse;
 } view_group;
 
 struct view_world {
@@ -37,10 +37,9 @@ struct view_world {
     int n_update_ms;
     /* the session: every edit applied, in order (what --record writes and
      * --save logs); the groups undo pops and redo pops */
-    char *applied;
-    size_t n_applied;
+    lie_edit *applied;
     view_group *live;
-    char **undone;
+    lie_edit **undone;
     int n_live, n_undone;
     /* the constructor */
     pthread_t ctor_thread;

@@ -1,0 +1,201 @@
+/* The asynchronous constructor (lib/update, lie_ctor; §4.3.1): whatever the
+ * order units land in and whatever views came first, the cache it saves is
+ * one build for its views (lie_env_build_views), partial while units are
+ * pending; a held constructor lands nothing; units met unbuilt are built
+ * on request; an edit during construction ends in the build of the edited
+ * scene (update = rebuild); lie_env_compact lays out an env as a build. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "lie.h"
+
+static int same_env(const lie_env *a, const lie_env *b)
+{
+    size_t units = (size_t)a->n_tris * (size_t)a->n_clusters;
+    return a->n_nodes == b->n_nodes && a->n_pool == b->n_pool && a->partial == b->partial &&
+           memcmp(a->root, b->root, sizeof *a->root * units) == 0 &&
+           memcmp(a->nodes, b->nodes, sizeof *a->nodes * a->n_nodes) == 0 &&
+           (a->n_pool == 0 || memcmp(a->pool, b->pool, sizeof *a->pool * a->n_pool) == 0);
+}
+
+typedef struct fixture {
+    lie_scene *s;
+    lie_rt *rt;
+    lie_camera cams[2];
+    lie_ctor_options co;
+} fixture;
+
+static void open_museum(fixture *f)
+{
+    lie_error err;
+    memset(f, 0, sizeof *f);
+    assert_int_equal(lie_scene_load(TEST_SCENES "/museum1.gltf", NULL, &f->s, &err), LIE_OK);
+    assert_int_equal(lie_rt_create(f->s, &f->rt, &err), LIE_OK);
+    assert_int_equal(lie_camera_parse(f->s, "0", &f->cams[0], &err), LIE_OK);
+    assert_int_equal(lie_camera_parse(f->s, "eye=3,2,3,target=0,0.5,0", &f->cams[1], &err), LIE_OK);
+    f->co = lie_ctor_options_default();
+    f->co.params.min_patch = 1e-2f;
+    f->co.view_width = f->co.view_height = 64;
+    f->co.max_depth = 2;
+    f->co.threads = 2;
+}
+
+static void close_fixture(fixture *f)
+{
+    lie_rt_destroy(f->rt);
+    lie_scene_destroy(f->s);
+}
+
+/* One build for the views, as lie-build --view makes it. */
+static lie_env *batch(const fixture *f, int n_views)
+{
+    lie_error err;
+    lie_pixels *px = NULL;
+    lie_env *env = NULL;
+    lie_build_stats st;
+    assert_int_equal(lie_camera_pixels(f->s, f->rt, f->cams, n_views, f->co.view_width, f->co.view_height,
+                                       f->co.max_depth, &px, &err),
+                     LIE_OK);
+    assert_int_equal(lie_env_build_views(f->s, f->rt, &f->co.params, px, NULL, &env, &st, &err), LIE_OK);
+    lie_pixels_destroy(px);
+    return env;
+}
+
+static lie_env *saved(lie_ctor *c, const lie_scene *s)
+{
+    lie_cache prov;
+    memset(&prov, 0, sizeof prov);
+    prov.scene_path = (char *)s->path;
+    prov.scene_hash = s->hash;
+    lie_cache *cache = NULL;
+    lie_error err;
+    assert_int_equal(lie_ctor_cache(c, &prov, &cache, &err), LIE_OK);
+    lie_env *env = cache->env;
+    cache->env = NULL;
+    lie_cache_destroy(cache);
+    return env;
+}
+
+/* Two views, the second while the first is being built: the saved env is
+ * one build for both; a built env compacts to itself. */
+static void test_two_views_end_in_one_build_for_both(void **state)
+{
+    (void)state;
+    fixture f;
+    open_museum(&f);
+    lie_ctor *c = NULL;
+    lie_error err;
+    assert_int_equal(lie_ctor_create(f.s, f.rt, &f.co, NULL, &c, &err), LIE_OK);
+    lie_ctor_stats cs;
+    /* the second view once the first is taken (a view asked for before the
+     * last is taken replaces it), while its units land */
+    lie_ctor_view(c, &f.cams[0]);
+    do {
+        lie_ctor_wait(c, 0.001, NULL);
+        lie_ctor_get_stats(c, &cs);
+    } while (cs.views < 1);
+    lie_ctor_view(c, &f.cams[1]);
+    do {
+        lie_ctor_wait(c, 0.001, NULL);
+        lie_ctor_get_stats(c, &cs);
+    } while (cs.views < 2);
+    lie_ctor_view(c, &f.cams[0]); /* known: reorders only */
+    assert_int_equal(lie_ctor_wait(c, -1.0, &err), 1);
+    lie_ctor_get_stats(c, &cs);
+    assert_int_equal(cs.units_pending, 0);
+    assert_int_equal(cs.views, 2);
+    lie_env *got = saved(c, f.s), *want = batch(&f, 2);
+    assert_true(same_env(got, want));
+    lie_env *again = NULL;
+    assert_int_equal(lie_env_compact(want, &again, &err), LIE_OK);
+    assert_true(same_env(again, want));
+    lie_env_destroy(again);
+    lie_env_destroy(got);
+    lie_env_destroy(want);
+    lie_ctor_destroy(c);
+    close_fixture(&f);
+}
+
+/* Held: nothing lands, the saved env is partial with no unit built; a
+ * manual constructor builds what a camera sees, then what was met unbuilt. */
+static void test_held_and_manual_constructors(void **state)
+{
+    (void)state;
+    fixture f;
+    open_museum(&f);
+    lie_error err;
+    f.co.views = f.cams;
+    f.co.n_views = 1;
+    f.co.manual = 1;
+    lie_ctor *c = NULL;
+    assert_int_equal(lie_ctor_create(f.s, f.rt, &f.co, NULL, &c, &err), LIE_OK);
+    lie_env *none = saved(c, f.s);
+    assert_true(none->partial);
+    size_t units = (size_t)f.s->n_tris * (size_t)f.s->n_clusters;
+    for (size_t u = 0; u < units; u++)
+        assert_int_equal(none->nodes[none->root[u]].cls, LIE_CLASS_NONE);
+    uint64_t built = 0;
+    assert_int_equal(lie_ctor_build(c, NULL, &f.cams[0], 2, &built, &err), LIE_OK);
+    assert_true(built > 0);
+    uint8_t *all = malloc(f.s->n_tris);
+    assert_non_null(all);
+    memset(all, 1, f.s->n_tris);
+    assert_int_equal(lie_ctor_build(c, all, NULL, 2, &built, &err), LIE_OK);
+    assert_int_equal(lie_ctor_wait(c, 0.0, &err), 1);
+    lie_env *got = saved(c, f.s), *want = batch(&f, 1);
+    assert_true(same_env(got, want));
+    free(all);
+    lie_env_destroy(none);
+    lie_env_destroy(got);
+    lie_env_destroy(want);
+    lie_ctor_destroy(c);
+    close_fixture(&f);
+}
+
+/* An edit while units land: the end is the build of the edited scene. */
+static void test_an_edit_during_construction_ends_in_the_edited_build(void **state)
+{
+    (void)state;
+    fixture f;
+    open_museum(&f);
+    lie_error err;
+    lie_ctor *c = NULL;
+    assert_int_equal(lie_ctor_create(f.s, f.rt, &f.co, NULL, &c, &err), LIE_OK);
+    lie_ctor_view(c, &f.cams[0]);
+    lie_ctor_wait(c, 0.05, NULL);
+    static const char text[] = "- move: {node: Cube, by: [0.4, 0, -0.3]}\n";
+    lie_edit *e = NULL;
+    assert_int_equal(lie_edit_parse((const unsigned char *)text, sizeof text - 1, "e.yaml", &e, &err), LIE_OK);
+    lie_ctor_hold(c);
+    assert_int_equal(lie_edit_apply(f.s, e, NULL, NULL, &err), LIE_OK);
+    lie_rt *rt = NULL;
+    assert_int_equal(lie_rt_create(f.s, &rt, &err), LIE_OK);
+    assert_int_equal(lie_ctor_edited(c, rt, 1, &err), LIE_OK);
+    lie_rt_destroy(f.rt);
+    f.rt = rt;
+    lie_ctor_release(c);
+    assert_int_equal(lie_ctor_wait(c, -1.0, &err), 1);
+    lie_env *got = saved(c, f.s), *want = batch(&f, 1);
+    assert_true(same_env(got, want));
+    lie_edit_destroy(e);
+    lie_env_destroy(got);
+    lie_env_destroy(want);
+    lie_ctor_destroy(c);
+    close_fixture(&f);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_two_views_end_in_one_build_for_both),
+        cmocka_unit_test(test_held_and_manual_constructors),
+        cmocka_unit_test(test_an_edit_during_construction_ends_in_the_edited_build),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
