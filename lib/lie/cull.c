@@ -185,15 +185,22 @@ int lie_cull_shaft_empty(const build_ctx *c, worker *w, uint32_t tri, const lie_
 
 /* Sampling finds a blocker's triangles where segments happened to hit it;
  * the rest of the same object inside the shaft blocks other rays.  Add every
- * triangle of an instance already in the list that meets the shaft. */
+ * triangle of an instance already in the list that meets the shaft, until
+ * the list holds more than `limit`: the list decides splits (a leaf gets
+ * its exact list, lib/lie/subdiv.c), and past complex_cap only its being
+ * past counts.  In a corridor whose emitters run its length a shaft holds
+ * most of the scene: expanding those lists whole was nine tenths of a
+ * build (perf, scifi_hallway). */
 #define EXPAND_SCAN_MAX 256 /* instances up to this many triangles are scanned whole */
 
-void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e)
+void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e,
+                     size_t limit)
 {
     const lie_scene *s = c->s;
     size_t n0 = w->n_hits;
-    if (n0 == 0)
+    if (n0 == 0 || n0 > limit)
         return;
+    const uint32_t id = w->stamp_id; /* the list's triangles carry it (lie_sample_pair) */
     int nh = pair_hull(c, w, tri, V, e);
     if (!nh)
         return;
@@ -205,7 +212,7 @@ void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3
      * shaft's bounds, shared by every large instance of the list. */
     int have_box = 0;
     uint32_t last = UINT32_MAX;
-    for (size_t i = 0; i < n0; i++) {
+    for (size_t i = 0; i < n0 && w->n_hits <= limit; i++) {
         uint32_t inst = s->tri_instance[w->hits[i]];
         if (inst == last)
             continue; /* hits are sorted, so an instance's triangles are together */
@@ -219,11 +226,11 @@ void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3
             have_box = 1;
         }
         size_t n_try = scan ? in->n_tris : w->n_cand;
-        for (size_t k = 0; k < n_try; k++) {
+        for (size_t k = 0; k < n_try && w->n_hits <= limit; k++) {
             uint32_t t = scan ? in->first_tri + (uint32_t)k : w->cand[k];
             if (!scan && s->tri_instance[t] != inst)
                 continue;
-            if (t == tri || own_emitter_tri(s, t, e) || !(s->tri_area[t] > 0.0f))
+            if (t == tri || w->stamp[t] == id || own_emitter_tri(s, t, e) || !(s->tri_area[t] > 0.0f))
                 continue;
             if (lie_sat_rejects(&sat, &s->tri_p[3 * (size_t)t]) ||
                 !lie_hull_meets_triangle(w->hull, nh, &s->tri_p[3 * (size_t)t], tol))
@@ -232,6 +239,7 @@ void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3
                 w->nomem = 1;
                 return;
             }
+            w->stamp[t] = id;
         }
     }
     w->n_hits = lie_sort_unique(w->hits, w->n_hits);

@@ -21,8 +21,10 @@ size_t lie_cull_exact(const build_ctx *c, worker *w, uint32_t tri, const lie_vec
  * the pair is visible, proven; stops at the first that does. */
 int lie_cull_shaft_empty(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e);
 /* Add to w->hits every triangle meeting the shaft of an instance already
- * there. */
-void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e);
+ * there, until it holds more than limit (its triangles stamped with
+ * w->stamp_id, as lie_sample_pair leaves them). */
+void lie_cull_expand(const build_ctx *c, worker *w, uint32_t tri, const lie_vec3 V[3], int two_sided, int e,
+                     size_t limit);
 /* Conservative mode: every triangle meeting the pair's hull into w->hits
  * (among parent[0..n_parent) when parent is not NULL).  The search stops
  * once the list holds more than `limit` triangles (SIZE_MAX: never); the

@@ -334,7 +334,7 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
         return shared ? LIE_CLASS_PARTIAL : LIE_CLASS_VISIBLE;
     }
     if (blocked > 0 && blocked < valid)
-        lie_cull_expand(c, w, tri, V, two_sided, e);
+        lie_cull_expand(c, w, tri, V, two_sided, e, c->p->complex_cap);
     *quality = total;
     *n_list = w->n_hits;
     if (valid == 0 || blocked == 0)
