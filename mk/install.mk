@@ -2,11 +2,17 @@
 # installs the tools, liblie.so.MAJOR (SONAME, symlinks) and liblie.a, the public headers
 # under include/lie/, lie.pc, man pages (1: tools, 5: file formats) and bash completion;
 # `make uninstall` removes exactly what install wrote.
+# LIBDIR, INCLUDEDIR and MANDIR may be set apart from PREFIX (Debian's multiarch:
+# `make install PREFIX=/usr LIBDIR=/usr/lib/x86_64-linux-gnu`); lie.pc is written for the
+# values of each install.
 PREFIX      ?= /usr/local
+LIBDIR      ?= $(PREFIX)/lib
+INCLUDEDIR  ?= $(PREFIX)/include
+MANDIR      ?= $(PREFIX)/share/man
 BINDIR_I    := $(PREFIX)/bin
-LIBDIR_I    := $(PREFIX)/lib
-INCDIR_I    := $(PREFIX)/include
-MANDIR_I    := $(PREFIX)/share/man
+LIBDIR_I    := $(LIBDIR)
+INCDIR_I    := $(INCLUDEDIR)
+MANDIR_I    := $(MANDIR)
 COMPDIR_I   := $(PREFIX)/share/bash-completion/completions
 INSTALL     ?= install
 
@@ -21,23 +27,38 @@ MAN1 := $(TOOLS:%=$(BUILD)/man/%.1)
 MAN5 := $(BUILD)/man/lie-cache.5 $(BUILD)/man/lie-edit.5 $(BUILD)/man/lie-camera-path.5
 man: $(MAN1) $(MAN5)
 
-$(BUILD)/man/%.1: $(BINDIR)/% $$(wildcard man/$$*.h2m)
+# The pages carry the date of the commit, not of the build (help2man reads SOURCE_DATE_EPOCH),
+# so the same sources give the same pages.
+MAN_EPOCH := $(shell git log -1 --format=%ct 2>/dev/null || echo 0)
+$(BUILD)/man/%.1: $(BINDIR)/% $$(wildcard man/$$*.h2m) man/common.h2m
 	@mkdir -p $(dir $@)
-	help2man --no-info --section=1 --version-string=$(LIBVERSION) \
+	SOURCE_DATE_EPOCH=$(MAN_EPOCH) help2man --no-info --section=1 --version-string=$(LIBVERSION) \
+	    --manual="LIE toolchain" --source="LIE $(LIBVERSION)" \
 	    $(if $(wildcard man/$*.h2m),--include=man/$*.h2m) --include=man/common.h2m \
 	    --output=$@ $(BINDIR)/$*
-$(BUILD)/man/lie-cache.5: formats/lie-cache.md
-$(BUILD)/man/lie-edit.5: formats/edit.md
-$(BUILD)/man/lie-camera-path.5: formats/camera-path.md
+$(BUILD)/man/lie-cache.5: formats/lie-cache.md mk/install.mk
+$(BUILD)/man/lie-edit.5: formats/edit.md mk/install.mk
+$(BUILD)/man/lie-camera-path.5: formats/camera-path.md mk/install.mk
+# A specification's first heading becomes the page's NAME line (`lie-edit - Scene edit files
+# ...`, which lexgrog, and so apropos and whatis, read), the rest its DESCRIPTION.
 $(MAN5):
 	@mkdir -p $(dir $@)
-	lowdown -s -Tman -M title=$(basename $(notdir $@)) -M section=5 \
-	    -M source="LIE $(LIBVERSION)" -M date="" $< -o $@
+	{ printf '# NAME\n\n%s - ' $(basename $(notdir $@)); sed -n '1s/^# //p' $<; \
+	  printf '\n# DESCRIPTION\n'; sed 1d $<; } | \
+	lowdown -s -Tman -M title=$(shell echo $(basename $(notdir $@)) | tr a-z A-Z) -M section=5 \
+	    -M source="LIE $(LIBVERSION)" -M date="" -o $@
 
-lie.pc: lie.pc.in Makefile mk/install.mk
-	sed -e 's|@PREFIX@|$(PREFIX)|' -e 's|@VERSION@|$(LIBVERSION)|' lie.pc.in > $@.tmp && mv $@.tmp $@
+# lie.pc for this install's directories, rewritten when they change (like commit.txt): a
+# directory under PREFIX is written relative to ${prefix}, as pkg-config's relocation expects.
+pc_rel = $(if $(filter $(PREFIX)/%,$(1)),$${prefix}/$(patsubst $(PREFIX)/%,%,$(1)),$(1))
+$(BUILD)/lie.pc: lie.pc.in FORCE
+	@mkdir -p $(dir $@)
+	@sed -e 's|@PREFIX@|$(PREFIX)|' -e 's|@LIBDIR@|$(call pc_rel,$(LIBDIR_I))|' \
+	    -e 's|@INCLUDEDIR@|$(call pc_rel,$(INCDIR_I))|' -e 's|@VERSION@|$(LIBVERSION)|' \
+	    -e 's|@REQUIRES_PRIVATE@|$(PC_DEPS)|' -e 's|@LIBS_PRIVATE@|$(LIBS_PRIVATE)|' lie.pc.in > $@.tmp
+	@if cmp -s $@.tmp $@; then rm -f $@.tmp; else mv $@.tmp $@; fi
 
-install: $(TOOL_BIN) $(LIB_A) $(LIB_SO) man lie.pc
+install: $(TOOL_BIN) $(LIB_A) $(LIB_SO) man $(BUILD)/lie.pc
 	$(INSTALL) -d $(DESTDIR)$(BINDIR_I) $(DESTDIR)$(LIBDIR_I)/pkgconfig $(DESTDIR)$(MANDIR_I)/man1 \
 	    $(DESTDIR)$(MANDIR_I)/man5 $(DESTDIR)$(COMPDIR_I)
 	$(INSTALL) -m 755 $(TOOL_BIN) $(DESTDIR)$(BINDIR_I)/
@@ -47,7 +68,7 @@ install: $(TOOL_BIN) $(LIB_A) $(LIB_SO) man lie.pc
 	ln -sf liblie.so.$(SOVERSION) $(DESTDIR)$(LIBDIR_I)/liblie.so
 	for h in $(PUB_HDRS); do d=$(DESTDIR)$(INCDIR_I)/lie/$$(dirname $${h#lib/}); \
 	    $(INSTALL) -d $$d && $(INSTALL) -m 644 $$h $$d/ || exit 1; done
-	$(INSTALL) -m 644 lie.pc $(DESTDIR)$(LIBDIR_I)/pkgconfig/lie.pc
+	$(INSTALL) -m 644 $(BUILD)/lie.pc $(DESTDIR)$(LIBDIR_I)/pkgconfig/lie.pc
 	$(INSTALL) -m 644 $(MAN1) $(DESTDIR)$(MANDIR_I)/man1/
 	$(INSTALL) -m 644 $(MAN5) $(DESTDIR)$(MANDIR_I)/man5/
 	for t in $(TOOLS); do $(INSTALL) -m 644 completion/lie.bash $(DESTDIR)$(COMPDIR_I)/$$t || exit 1; done

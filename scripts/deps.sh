@@ -5,7 +5,8 @@ set -e
 PKGS="build-essential pkg-config libembree-dev libopenexr-dev libyaml-dev libtinygltf-dev
 nlohmann-json3-dev libstb-dev libxxhash-dev libpng-dev zlib1g-dev libcmocka-dev
 clang libclang-rt-14-dev valgrind
-libopenmpi-dev openmpi-bin libsdl2-dev xvfb xauth xdotool man-db groff-base openimageio-tools bsdutils help2man lowdown"
+libopenmpi-dev openmpi-bin libsdl2-dev xvfb xauth xdotool man-db groff-base openimageio-tools bsdutils help2man lowdown
+qemu-user"
 missing=""
 for p in $PKGS; do
     status=$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null || true)

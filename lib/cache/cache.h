@@ -13,6 +13,8 @@
 #include "lie/lie.h"
 #include "scene/scene.h"
 
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -106,9 +108,6 @@ lie_status lie_cache_sections(const unsigned char *data, size_t size, const char
  * checked against scene_hash, with the edit log replayed and the result
  * checked against state_hash.  `cache_path` (may be NULL) names the cache
  * in messages. */
-#include "scene/scene.h"
-
-#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
 lie_status lie_cache_load_scene(const lie_cache *c, const char *cache_path, const char *override,
                                 const lie_scene_options *so, lie_scene **out, lie_error *err);
 

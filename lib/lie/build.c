@@ -215,20 +215,44 @@ static void copy_direct(const lie_env *old, uint32_t from, lie_pnode *nd, uint32
     nd[idx] = x;
 }
 
-lie_status lie_env_compact(const lie_env *src, lie_env **out, lie_error *err)
+/* Whether node idx or a node below it is unbuilt. */
+static int holds_unbuilt(const lie_env *env, uint32_t idx)
+{
+    const lie_pnode *x = &env->nodes[idx];
+    if (!x->child)
+        return x->cls == LIE_CLASS_NONE;
+    for (uint32_t k = 0; k < 4; k++)
+        if (holds_unbuilt(env, x->child + k))
+            return 1;
+    return 0;
+}
+
+/* lie_env_compact; with `whole_units`, a unit holding an unbuilt leaf
+ * below its root (an update's pending leaves) is left unbuilt whole. */
+static lie_status compact(const lie_env *src, int whole_units, lie_env **out, lie_error *err)
 {
     *out = NULL;
     size_t n_units = (size_t)src->n_tris * (size_t)src->n_clusters;
+    uint8_t *drop = whole_units ? calloc(n_units + 1, 1) : NULL;
+    if (whole_units && !drop)
+        return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
+    for (size_t u = 0; drop && u < n_units; u++)
+        drop[u] = src->nodes[src->root[u]].child && holds_unbuilt(src, src->root[u]);
     /* the sizes first: a unit's subtree, reachable from its root */
     uint64_t nodes = 0, pool = 0;
     for (size_t u = 0; u < n_units; u++) {
         uint32_t nn = 0, np = 0;
-        lie_subtree_size(src, src->root[u], &nn, &np);
+        if (drop && drop[u])
+            nn = 1;
+        else
+            lie_subtree_size(src, src->root[u], &nn, &np);
         nodes += nn;
         pool += np;
     }
-    if (nodes >= 0xFFFFFFF0u || pool >= 0xFFFFFFF0u)
+    if (nodes >= 0xFFFFFFF0u || pool >= 0xFFFFFFF0u) {
+        free(drop);
         return lie_error_set(err, LIE_ERR_LIMIT, NULL, "the patch trees hold too many nodes for one env");
+    }
     lie_env *env = calloc(1, sizeof *env);
     if (env) {
         *env = *src;
@@ -240,6 +264,7 @@ lie_status lie_env_compact(const lie_env *src, lie_env **out, lie_error *err)
         if (env)
             lie_forest_free(env->root, env->nodes, env->pool);
         free(env);
+        free(drop);
         return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
     }
     /* unit by unit, each subtree as copy_node lays it out: a build's layout */
@@ -247,12 +272,26 @@ lie_status lie_env_compact(const lie_env *src, lie_env **out, lie_error *err)
     for (size_t u = 0; u < n_units; u++) {
         uint32_t idx = next_node++;
         env->root[u] = idx;
+        if (drop && drop[u]) {
+            memset(&env->nodes[idx], 0, sizeof env->nodes[idx]);
+            env->nodes[idx].cls = LIE_CLASS_NONE;
+            env->partial = 1;
+            continue;
+        }
         copy_direct(src, src->root[u], env->nodes, env->pool, idx, &next_node, &next_pool);
     }
     env->n_nodes = next_node;
     env->n_pool = next_pool;
+    free(drop);
     *out = env;
     return LIE_OK;
+}
+
+lie_status lie_env_compact(const lie_env *src, lie_env **out, lie_error *err) { return compact(src, 0, out, err); }
+
+lie_status lie_env_compact_units(const lie_env *src, lie_env **out, lie_error *err)
+{
+    return compact(src, 1, out, err);
 }
 
 /* Concatenate per-triangle unit buffers (of triangles tri_lo + t) into

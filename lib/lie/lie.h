@@ -293,6 +293,10 @@ lie_status lie_env_build_units(const lie_scene *s, const lie_rt *rt, const lie_b
  * were put together in any order and may hold unreachable nodes: the same
  * trees, the bytes one build gives.  *out: lie_env_destroy. */
 lie_status lie_env_compact(const lie_env *src, lie_env **out, lie_error *err);
+/* The same, a unit holding an unbuilt leaf below its root (an update's
+ * pending leaves: lib/update, lie_update_snapshot) left unbuilt whole, and
+ * then partial set: a cache lie-build --resume finishes. */
+lie_status lie_env_compact_units(const lie_env *src, lie_env **out, lie_error *err);
 /* Whether the units of triangle tri, built for the views whose pixels are
  * old_px, differ from what a build for new_px (the old views and more)
  * gives: a unit the new pixels make pay, or a leaf whose split they may

@@ -3,6 +3,7 @@
 #include "rt/boxq.h"
 
 #include <embree3/rtcore.h>
+#include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdbool.h>
@@ -256,6 +257,39 @@ static void init_ray(struct RTCRay *r, lie_vec3 org, lie_vec3 dir, float tnear, 
     r->flags = 0;
 }
 
+/* The hit's distance and barycentrics, computed here from the triangle Embree found rather
+ * than taken from Embree: Embree picks its kernels by the CPU (SSE2, SSE4.2, AVX, AVX2 with
+ * FMA, AVX-512) and their roundings differ, so its t, u and v differ in the last bits from one
+ * CPU to another and every image with them.  This is the Moller-Trumbore solution (Moller and
+ * Trumbore 1997) in double precision, compiled once for every CPU (lib/core/hot.h), clamped to
+ * the triangle as Embree's watertight test keeps it.  A ray nearly parallel to the plane
+ * keeps Embree's values. */
+static void hit_exact(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, lie_hit *hit)
+{
+    const lie_vec3 *P = &rt->s->tri_p[3 * (size_t)hit->tri];
+    const double e1[3] = {(double)P[1].x - P[0].x, (double)P[1].y - P[0].y, (double)P[1].z - P[0].z};
+    const double e2[3] = {(double)P[2].x - P[0].x, (double)P[2].y - P[0].y, (double)P[2].z - P[0].z};
+    const double d[3] = {dir.x, dir.y, dir.z};
+    const double w[3] = {(double)org.x - P[0].x, (double)org.y - P[0].y, (double)org.z - P[0].z};
+    const double p[3] = {d[1] * e2[2] - d[2] * e2[1], d[2] * e2[0] - d[0] * e2[2], d[0] * e2[1] - d[1] * e2[0]};
+    const double det = e1[0] * p[0] + e1[1] * p[1] + e1[2] * p[2];
+    const double len = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]) *
+                       sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]) *
+                       sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    if (!(fabs(det) > 1e-12 * len))
+        return;
+    const double q[3] = {w[1] * e1[2] - w[2] * e1[1], w[2] * e1[0] - w[0] * e1[2], w[0] * e1[1] - w[1] * e1[0]};
+    const double inv = 1.0 / det;
+    double u = (w[0] * p[0] + w[1] * p[1] + w[2] * p[2]) * inv;
+    double v = (d[0] * q[0] + d[1] * q[1] + d[2] * q[2]) * inv;
+    const double t = (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) * inv;
+    u = u < 0.0 ? 0.0 : u > 1.0 ? 1.0 : u;
+    v = v < 0.0 ? 0.0 : v > 1.0 - u ? 1.0 - u : v;
+    hit->t = (float)t;
+    hit->u = (float)u;
+    hit->v = (float)v;
+}
+
 int lie_rt_intersect(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, float tfar,
                      int cull_backfaces, lie_hit *hit)
 {
@@ -278,6 +312,7 @@ int lie_rt_intersect(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, 
     hit->t = rh.ray.tfar;
     hit->u = rh.hit.u;
     hit->v = rh.hit.v;
+    hit_exact(rt, org, dir, hit);
     return 1;
 }
 
@@ -329,6 +364,7 @@ void lie_rt_intersect8(const lie_rt *rt, const lie_vec3 *org, const lie_vec3 *di
         hits[k].t = rh.ray.tfar[k];
         hits[k].u = rh.hit.u[k];
         hits[k].v = rh.hit.v[k];
+        hit_exact(rt, org[k], dir[k], &hits[k]);
     }
 }
 

@@ -5,9 +5,6 @@
 
 #include <stdlib.h>
 #include <string.h>
-#ifdef __AVX2__
-#include <immintrin.h>
-#endif
 
 /* ---- the order ------------------------------------------------------------ */
 
@@ -181,9 +178,6 @@ typedef struct bm_query {
     int depth;
     uint64_t *mask;
     uint32_t unsure;
-#ifdef __AVX2__
-    __m256 va[MAXF], vs[MAXF], vt[MAXF], vtol[MAXF], vntol[MAXF]; /* the forms, broadcast */
-#endif
 } bm_query;
 
 static void query_init(bm_query *q, const lie_bitmask *b, const float *f, int depth, uint64_t *mask);
@@ -203,23 +197,6 @@ static void leaf(bm_query *q, int g)
     const float *ss = q->b->ls.s + 8 * (size_t)g, *ts = q->b->ls.t + 8 * (size_t)g;
     const bm_form *f = q->f;
     unsigned byte = 0, unsure = 0;
-#ifdef __AVX2__
-    const __m256 s = _mm256_loadu_ps(ss), t = _mm256_loadu_ps(ts), zero = _mm256_setzero_ps();
-    __m256 in = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
-    (void)f;
-    for (int j = 0; j < 3; j++) {
-        __m256 e = _mm256_fmadd_ps(t, q->vt[j], _mm256_fmadd_ps(s, q->vs[j], q->va[j]));
-        in = _mm256_and_ps(in, _mm256_cmp_ps(e, zero, _CMP_GE_OQ));
-    }
-    if (q->depth) {
-        __m256 g1 = _mm256_fmadd_ps(t, q->vt[3], _mm256_fmadd_ps(s, q->vs[3], q->va[3]));
-        __m256 g2 = _mm256_fmadd_ps(t, q->vt[4], _mm256_fmadd_ps(s, q->vs[4], q->va[4]));
-        __m256 between = _mm256_and_ps(_mm256_cmp_ps(g1, zero, _CMP_LT_OQ), _mm256_cmp_ps(g2, zero, _CMP_GT_OQ));
-        unsure = (unsigned)_mm256_movemask_ps(_mm256_and_ps(in, between));
-        in = _mm256_and_ps(in, _mm256_cmp_ps(g1, zero, _CMP_GE_OQ));
-    }
-    byte = (unsigned)_mm256_movemask_ps(in);
-#else
     for (int i = 0; i < 8; i++) {
         float s = ss[i], t = ts[i];
         int in = 1;
@@ -232,7 +209,6 @@ static void leaf(bm_query *q, int g)
         }
         byte |= (unsigned)in << i;
     }
-#endif
     q->mask[g >> 3] |= (uint64_t)byte << (8 * (g & 7));
     q->unsure |= unsure;
 }
@@ -258,33 +234,6 @@ static void classify8(const bm_query *q, int l, int g0, unsigned *in, unsigned *
     const size_t st = b->box_stride[l];
     const float *s0 = b->box[l] + g0, *s1 = s0 + st, *t0 = s1 + st, *t1 = t0 + st;
     const int nf = q->depth ? 5 : 3;
-#ifdef __AVX2__
-    const __m256 S0 = _mm256_loadu_ps(s0), S1 = _mm256_loadu_ps(s1), T0 = _mm256_loadu_ps(t0),
-                 T1 = _mm256_loadu_ps(t1);
-    __m256 lo[MAXF], hi[MAXF];
-    for (int j = 0; j < nf; j++) {
-        const __m256 cs = q->vs[j], ct = q->vt[j], a = q->va[j];
-        const __m256 p0 = _mm256_mul_ps(S0, cs), p1 = _mm256_mul_ps(S1, cs);
-        const __m256 r0 = _mm256_mul_ps(T0, ct), r1 = _mm256_mul_ps(T1, ct);
-        lo[j] = _mm256_add_ps(_mm256_add_ps(a, _mm256_min_ps(p0, p1)), _mm256_min_ps(r0, r1));
-        hi[j] = _mm256_add_ps(_mm256_add_ps(a, _mm256_max_ps(p0, p1)), _mm256_max_ps(r0, r1));
-    }
-    __m256 vin = _mm256_cmp_ps(lo[0], q->vtol[0], _CMP_GT_OQ), vout = _mm256_setzero_ps();
-    for (int j = 0; j < 3; j++) {
-        if (j)
-            vin = _mm256_and_ps(vin, _mm256_cmp_ps(lo[j], q->vtol[j], _CMP_GT_OQ));
-        vout = _mm256_or_ps(vout, _mm256_cmp_ps(hi[j], q->vntol[j], _CMP_NGE_UQ));
-    }
-    if (q->depth) {
-        /* inside also short of the hit depth; outside also where g < 0
-         * and g2 < 0 throughout (short of nothing, meeting nothing) */
-        vin = _mm256_and_ps(vin, _mm256_cmp_ps(lo[3], q->vtol[3], _CMP_GT_OQ));
-        vout = _mm256_or_ps(vout, _mm256_and_ps(_mm256_cmp_ps(hi[3], q->vntol[3], _CMP_LT_OQ),
-                                                _mm256_cmp_ps(hi[4], q->vntol[4], _CMP_LT_OQ)));
-    }
-    *in = (unsigned)_mm256_movemask_ps(vin);
-    *out = (unsigned)_mm256_movemask_ps(vout);
-#else
     unsigned bi = 0, bo = 0;
     for (int k = 0; k < 8; k++) {
         float lo[MAXF], hi[MAXF];
@@ -309,7 +258,6 @@ static void classify8(const bm_query *q, int l, int g0, unsigned *in, unsigned *
     }
     *in = bi;
     *out = bo;
-#endif
     *in &= ~*out;
 }
 
@@ -347,7 +295,7 @@ void lie_bitmask_set_group(const lie_bitmask *b, uint64_t *mask, int l, int g)
 
 /* Groups g0 .. g0 + 7 of level l: inside sets their bits, outside is
  * skipped, the rest goes a level down (unless its bits are all set). */
-static void visit(bm_query *q, int l, int g0)
+LIE_HOT static void visit(bm_query *q, int l, int g0)
 {
     unsigned in, out;
     classify8(q, l, g0, &in, &out);
@@ -387,17 +335,10 @@ static void query_init(bm_query *q, const lie_bitmask *b, const float *f, int de
     q->unsure = 0;
     for (int j = 0; j < (depth ? 5 : 3); j++) {
         q->f[j] = form_of(b, f + 3 * j);
-#ifdef __AVX2__
-        q->va[j] = _mm256_set1_ps(q->f[j].a);
-        q->vs[j] = _mm256_set1_ps(q->f[j].s);
-        q->vt[j] = _mm256_set1_ps(q->f[j].t);
-        q->vtol[j] = _mm256_set1_ps(q->f[j].tol);
-        q->vntol[j] = _mm256_set1_ps(-q->f[j].tol);
-#endif
     }
 }
 
-void lie_bitmask_cone(const lie_bitmask *b, const float f[9], uint64_t *mask)
+LIE_HOT void lie_bitmask_cone(const lie_bitmask *b, const float f[9], uint64_t *mask)
 {
     bm_query q;
     query_init(&q, b, f, 0, mask);
@@ -405,7 +346,7 @@ void lie_bitmask_cone(const lie_bitmask *b, const float f[9], uint64_t *mask)
     mask[b->n_words - 1] &= b->last;
 }
 
-int lie_bitmask_cone_depth(const lie_bitmask *b, const float f[15], uint64_t *mask)
+LIE_HOT int lie_bitmask_cone_depth(const lie_bitmask *b, const float f[15], uint64_t *mask)
 {
     bm_query q;
     query_init(&q, b, f, 1, mask);
@@ -422,21 +363,17 @@ int lie_bitmask_all(const lie_bitmask *b, const uint64_t *mask)
     return mask[b->n_words - 1] == b->last;
 }
 
-float lie_bitmask_unblocked_sum(const float *w, const uint64_t *mask, int n)
+/* eight lanes, as unblocked_sum in direct.c: the same order, the same bits */
+LIE_HOT float lie_bitmask_unblocked_sum(const float *w, const uint64_t *mask, int n)
 {
     int i = 0;
-    float sum = 0.0f;
-#ifdef __AVX2__
-    __m256 acc = _mm256_setzero_ps();
-    const __m256i bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128), none = _mm256_setzero_si256();
+    float acc[8] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
     for (; i + 8 <= n; i += 8) {
-        int byte = (int)((mask[i >> 6] >> (i & 63)) & 0xffu);
-        __m256i hit = _mm256_and_si256(_mm256_set1_epi32(byte), bit);
-        __m256 free_ = _mm256_castsi256_ps(_mm256_cmpeq_epi32(hit, none));
-        acc = _mm256_add_ps(acc, _mm256_and_ps(free_, _mm256_loadu_ps(w + i)));
+        const unsigned byte = (unsigned)((mask[i >> 6] >> (i & 63)) & 0xffu);
+        for (int k = 0; k < 8; k++)
+            acc[k] += (byte >> k) & 1u ? 0.0f : w[i + k];
     }
-    sum = lie_sum8_ps(acc);
-#endif
+    float sum = lie_sum8(acc);
     for (; i < n; i++)
         sum += (mask[i >> 6] >> (i & 63)) & 1u ? 0.0f : w[i];
     return sum;
@@ -469,7 +406,7 @@ static float lambert_sum(const lie_bitmask *b, const lie_planar_lambert *P, cons
     return lie_sum8(acc);
 }
 
-double lie_bitmask_lambert(const lie_bitmask *b, const lie_planar_lambert *P, const uint64_t *mask, double omega,
+LIE_HOT double lie_bitmask_lambert(const lie_bitmask *b, const lie_planar_lambert *P, const uint64_t *mask, double omega,
                            double area)
 {
     int blocked = 0;

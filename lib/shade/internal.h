@@ -7,21 +7,14 @@
 #include "shade/polylight.h"
 #include "shade/shade.h"
 
-#ifdef __AVX2__
-#include <immintrin.h>
-#endif
+#include "core/hot.h"
 
 /* Eight partial sums added pairwise, in one fixed order (the shading
- * sums' last step, so every path rounds alike). */
+ * sums' last step, so every path rounds alike).  The sums keep eight lanes
+ * whatever the vector width (8 floats in one AVX register, two SSE ones):
+ * the baseline code and the AVX2 copies of lib/core/hot.h add in the same
+ * order. */
 static inline float lie_sum8(const float l[8]) { return ((l[0] + l[1]) + (l[2] + l[3])) + ((l[4] + l[5]) + (l[6] + l[7])); }
-#ifdef __AVX2__
-static inline float lie_sum8_ps(__m256 acc)
-{
-    float lane[8];
-    _mm256_storeu_ps(lane, acc);
-    return lie_sum8(lane);
-}
-#endif
 
 /* Per-worker buffers, sized once for the largest sample count, so the
  * per-pixel path allocates nothing (CONTRIBUTING.md, Hot paths). */

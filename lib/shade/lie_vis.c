@@ -134,7 +134,7 @@ static float unreached_depth(float D, float eps, float wx, float wy, float wz, c
  * a_u = a.u falls at s = a_u D / l - w.u on the plane, so "every vertex
  * left of s0" is a_u D < (w.u + s0) l for each: no division.  Over the
  * list's vertices side by side, eight blockers at a time. */
-static int select_planar(const lie_lie_vis *v, const lie_pnode *nd, const lie_emitter *em, lie_vec3 o, float eps,
+LIE_HOT static int select_planar(const lie_lie_vis *v, const lie_pnode *nd, const lie_emitter *em, lie_vec3 o, float eps,
                          uint32_t *out)
 {
     const uint32_t *list = v->env->pool + nd->list;
@@ -189,7 +189,7 @@ static int select_planar(const lie_lie_vis *v, const lie_pnode *nd, const lie_em
  * is inside all three edge planes (same sign) and its end is on the other
  * side of the triangle's plane from o.  Four dot products per segment, no
  * division, vectorised over segments. */
-static void blocker_3d(const mt_tri *T, lie_vec3 o, const float *dxs, const float *dys, const float *dzs, int n,
+LIE_HOT static void blocker_3d(const mt_tri *T, lie_vec3 o, const float *dxs, const float *dys, const float *dzs, int n,
                        uint32_t *occ_out)
 {
     const float *restrict dx = dxs, *restrict dy = dys, *restrict dz = dzs;
@@ -257,7 +257,7 @@ enum { W_E0 = 0, W_E1 = 3, W_E2 = 6, W_G = 9, W_G2 = 12 };
 /* The setup pass, over the selected blockers side by side: their vertices
  * are gathered relative to o, then eight at a time each gets its kind and
  * forms. */
-static void setup_2d(const lie_lie_vis *v, const uint32_t *blockers, int nb, lie_vec3 o, const plane_view *pv,
+LIE_HOT static void setup_2d(const lie_lie_vis *v, const uint32_t *blockers, int nb, lie_vec3 o, const plane_view *pv,
                      const lie_light_samples *ls, float *work, size_t stride, uint32_t *kind_out)
 {
     float *restrict W[LIE_BLOCKER_WORK];
@@ -367,7 +367,7 @@ static inline int in_cone(cone c, float s, float t)
     return (e0 >= 0.0f) & (e1 >= 0.0f) & (e2 >= 0.0f);
 }
 
-static void cone_3(const float *f, const lie_light_samples *ls, uint32_t *occ_out)
+LIE_HOT static void cone_3(const float *f, const lie_light_samples *ls, uint32_t *occ_out)
 {
     const cone c = cone_of(f);
     const float *restrict ss = ls->s, *restrict ts = ls->t;
@@ -381,7 +381,7 @@ static void cone_3(const float *f, const lie_light_samples *ls, uint32_t *occ_ou
 /* A blocker reaching the emitter's plane: blocked iff in the cone and the
  * hit is short of hi (g >= 0).  Returns nonzero if some sample's ray meets
  * it between hi and tau = 1 (g < 0 < g2): then the 3D test decides. */
-static uint32_t cone_5(const float *f, const lie_light_samples *ls, uint32_t *occ_out)
+LIE_HOT static uint32_t cone_5(const float *f, const lie_light_samples *ls, uint32_t *occ_out)
 {
     const cone c = cone_of(f);
     const float g0 = f[9], gu = f[10], gv = f[11], k0 = f[12], ku = f[13], kv = f[14];
@@ -407,7 +407,7 @@ static uint32_t cone_5(const float *f, const lie_light_samples *ls, uint32_t *oc
  * lie_solids_find), that solid's faces turned away from o can block
  * nothing more: they are dropped.  A closed column seen from the floor
  * has half its faces in a shadow's lists. */
-static void drop_far_faces(const int32_t *solid, const uint32_t *blockers, int nb, uint32_t *kind)
+LIE_HOT static void drop_far_faces(const int32_t *solid, const uint32_t *blockers, int nb, uint32_t *kind)
 {
     enum { MAX_SOLIDS = 16 };
     int32_t seen[MAX_SOLIDS];
@@ -441,7 +441,7 @@ static void drop_far_faces(const int32_t *solid, const uint32_t *blockers, int n
  * the far faces of convex solids dropped).  Returns 0 when the segments
  * are to be tested in 3D (not a planar emitter, o at its plane), 2 when
  * some blocker blocks every sample, else 1. */
-static int prepare_2d(const lie_lie_vis *v, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
+LIE_HOT static int prepare_2d(const lie_lie_vis *v, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
                       plane_view *pv_out)
 {
     const lie_light_samples *ls = q->ls;

@@ -4,9 +4,6 @@
 
 #include <stdlib.h>
 #include <string.h>
-#ifdef __AVX2__
-#include <immintrin.h>
-#endif
 
 lie_status lie_sil_work_init(lie_sil_work *w, int cap)
 {
@@ -82,25 +79,6 @@ static void leaf(sil_query *q, int g, const int32_t *act, int nact, int base)
     const lie_bitmask *b = q->b;
     const float *ss = b->ls.s + 8 * (size_t)g, *ts = b->ls.t + 8 * (size_t)g;
     unsigned on = 0, susp = 0;
-#ifdef __AVX2__
-    const __m256 s = _mm256_loadu_ps(ss), t = _mm256_loadu_ps(ts), zero = _mm256_setzero_ps();
-    const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
-    __m256i cnt = _mm256_set1_epi32(base);
-    __m256 sus = zero;
-    for (int i = 0; i < nact; i++) {
-        const lie_sil_edge *E = &q->w->edges[act[i]];
-        const __m256 G = _mm256_fmadd_ps(t, _mm256_set1_ps(E->gt), _mm256_fmadd_ps(s, _mm256_set1_ps(E->gs), _mm256_set1_ps(E->g0)));
-        const __m256 in = _mm256_and_ps(_mm256_cmp_ps(s, _mm256_set1_ps(E->a), _CMP_GE_OQ),
-                                        _mm256_cmp_ps(s, _mm256_set1_ps(E->b), _CMP_LT_OQ));
-        const __m256 ext = _mm256_and_ps(_mm256_cmp_ps(s, _mm256_set1_ps(E->ae), _CMP_GE_OQ),
-                                         _mm256_cmp_ps(s, _mm256_set1_ps(E->be), _CMP_LT_OQ));
-        const __m256 hit = _mm256_and_ps(in, _mm256_cmp_ps(G, zero, _CMP_GT_OQ));
-        cnt = _mm256_add_epi32(cnt, _mm256_and_si256(_mm256_castps_si256(hit), _mm256_set1_epi32(E->sigma)));
-        sus = _mm256_or_ps(sus, _mm256_and_ps(ext, _mm256_cmp_ps(_mm256_and_ps(G, absmask), _mm256_set1_ps(E->tol), _CMP_LE_OQ)));
-    }
-    on = (unsigned)_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(cnt, _mm256_setzero_si256())));
-    susp = (unsigned)_mm256_movemask_ps(sus);
-#else
     int cnt[8];
     for (int k = 0; k < 8; k++)
         cnt[k] = base;
@@ -116,7 +94,6 @@ static void leaf(sil_query *q, int g, const int32_t *act, int nact, int base)
     }
     for (int k = 0; k < 8; k++)
         on |= (unsigned)(cnt[k] > 0) << k;
-#endif
     for (unsigned m = susp; m; m &= m - 1) {
         const int k = __builtin_ctz(m);
         on = (on & ~(1u << k)) | (unsigned)any_cone(q->w, ss[k], ts[k]) << k;
@@ -134,22 +111,6 @@ static void leaf(sil_query *q, int g, const int32_t *act, int nact, int base)
 static void classify8(const lie_sil_edge *E, const float *S0, const float *S1, const float *T0, const float *T1,
                       unsigned *keep, unsigned *add, unsigned *part)
 {
-#ifdef __AVX2__
-    const __m256 s0 = _mm256_loadu_ps(S0), s1 = _mm256_loadu_ps(S1), t0 = _mm256_loadu_ps(T0),
-                 t1 = _mm256_loadu_ps(T1);
-    const __m256 gs = _mm256_set1_ps(E->gs), gt = _mm256_set1_ps(E->gt), g0 = _mm256_set1_ps(E->g0);
-    const __m256 p0 = _mm256_mul_ps(s0, gs), p1 = _mm256_mul_ps(s1, gs), r0 = _mm256_mul_ps(t0, gt),
-                 r1 = _mm256_mul_ps(t1, gt);
-    const __m256 lo = _mm256_add_ps(_mm256_add_ps(g0, _mm256_min_ps(p0, p1)), _mm256_min_ps(r0, r1));
-    const __m256 hi = _mm256_add_ps(_mm256_add_ps(g0, _mm256_max_ps(p0, p1)), _mm256_max_ps(r0, r1));
-    const __m256 tol = _mm256_set1_ps(E->tol), ntol = _mm256_set1_ps(-E->tol);
-    const unsigned above = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(hi, ntol, _CMP_LT_OQ));
-    const unsigned apart = (unsigned)_mm256_movemask_ps(_mm256_or_ps(
-        _mm256_cmp_ps(s1, _mm256_set1_ps(E->ae), _CMP_LT_OQ), _mm256_cmp_ps(s0, _mm256_set1_ps(E->be), _CMP_GE_OQ)));
-    const unsigned below = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(lo, tol, _CMP_GT_OQ));
-    const unsigned inside = (unsigned)_mm256_movemask_ps(_mm256_and_ps(
-        _mm256_cmp_ps(s0, _mm256_set1_ps(E->a), _CMP_GE_OQ), _mm256_cmp_ps(s1, _mm256_set1_ps(E->b), _CMP_LT_OQ)));
-#else
     unsigned above = 0, apart = 0, below = 0, inside = 0;
     for (int k = 0; k < 8; k++) {
         float p0 = S0[k] * E->gs, p1 = S1[k] * E->gs, r0 = T0[k] * E->gt, r1 = T1[k] * E->gt;
@@ -160,7 +121,6 @@ static void classify8(const lie_sil_edge *E, const float *S0, const float *S1, c
         below |= (unsigned)(lo > E->tol) << k;
         inside |= (unsigned)((S0[k] >= E->a) & (S1[k] < E->b)) << k;
     }
-#endif
     const unsigned live = ~(above | apart) & 0xffu;
     *add = live & below & inside;
     *part = live & below & ~inside;
@@ -202,7 +162,7 @@ static int steps_constant(const lie_sil_edge *edges, const int32_t *e, int n, fl
  * appended to the lists of the few groups it stays active for).  A group
  * with no active edge is set whole if its count is positive; one with
  * some goes a level down, or to the samples. */
-static void visit(sil_query *q, int l, int g0, const int32_t *act, int nact, int base)
+LIE_HOT static void visit(sil_query *q, int l, int g0, const int32_t *act, int nact, int base)
 {
     const lie_bitmask *b = q->b;
     lie_sil_work *w = q->w;
@@ -256,7 +216,7 @@ static void visit(sil_query *q, int l, int g0, const int32_t *act, int nact, int
     }
 }
 
-int lie_sil_mask(const lie_bitmask *b, lie_sil_work *w, uint64_t *mask)
+LIE_HOT int lie_sil_mask(const lie_bitmask *b, lie_sil_work *w, uint64_t *mask)
 {
     sil_query q = {b, w, mask, 0};
     if (w->n_tris == 0)

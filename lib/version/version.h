@@ -5,7 +5,11 @@
 
 #include <stddef.h>
 
-#pragma GCC visibility push(default)
+#pragma GCC visibility push(default) /* the public API: exported from liblie.so */
+
+#ifdef __cplusplus
+extern "C" {
+#endif
 
 /* The library's version, "MAJOR.MINOR.PATCH" (the same as LIE_VERSION in lie.h). */
 const char *lie_version_string(void);
@@ -20,6 +24,9 @@ const char *lie_version_commit(void);
  * into buf (always NUL-terminated); returns the length it needed, as snprintf does. */
 int lie_version_report(const char *prog, char *buf, size_t size);
 
+#ifdef __cplusplus
+}
+#endif
 #pragma GCC visibility pop
 
 #endif

@@ -30,8 +30,8 @@ command -v "$CLANG" >/dev/null 2>&1 || { echo "fuzz: $CLANG not found (libFuzzer
 echo "fuzz: building the library with $CLANG (libFuzzer, ASan, UBSan) into $OUT/"
 make -s VARIANT=fuzz CC="$CLANG" CXX="$CLANGXX" WERROR= \
     "OPT_fuzz=-O1 -g -fno-omit-frame-pointer -Wno-pass-failed -fsanitize=fuzzer-no-link $SAN" "$OUT/liblie.a" || exit 2
-LDLIBS=$(sed -n 's/^LDLIBS *:= *//p' Makefile)
-CFLAGS="-std=c11 -O1 -g -fno-omit-frame-pointer -march=x86-64-v3 -D_GNU_SOURCE -Ilib -DTEST_SCENES=\"$ROOT/tests/scenes\""
+LDLIBS=$(make -s print-libs)
+CFLAGS="-std=c11 -O1 -g -fno-omit-frame-pointer -D_GNU_SOURCE -Ilib -DTEST_SCENES=\"$ROOT/tests/scenes\""
 
 targets=${FUZZ_TARGETS:-$(for f in tests/fuzz/fuzz_*.c; do basename "$f" .c | sed 's/^fuzz_//'; done)}
 for t in $targets; do

@@ -21,8 +21,8 @@ usage_err() { # TOOL WHAT ARGS...
 for tool in $tools; do
     for h in --help -h; do
         run "$B/$tool" $h
-        if [ "$rc" -eq 0 ] && [ ! -s "$TMP/err" ] && grep -q "^usage: $tool " "$TMP/out" && grep -q -- '--version' "$TMP/out"; then
-            ok "$tool $h: usage on stdout, exit 0"; else not_ok "$tool $h: exit $rc"; fi
+        if [ "$rc" -eq 0 ] && [ ! -s "$TMP/err" ] && grep -q "^Usage: $tool " "$TMP/out" && grep -q -- '--version' "$TMP/out"; then
+            ok "$tool $h: Usage (help2man's SYNOPSIS) on stdout, exit 0"; else not_ok "$tool $h: exit $rc"; fi
     done
     run "$B/$tool" --version
     if [ "$rc" -eq 0 ] && head -1 "$TMP/out" | grep -Eqx "$tool [0-9]+\.[0-9]+\.[0-9]+ \(commit [^ ]+\)" &&

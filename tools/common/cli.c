@@ -90,18 +90,80 @@ int lie_parse_size(const char *s, int max, int *w, int *h)
     return 1;
 }
 
+/* The length of the well-formed UTF-8 sequence at p (RFC 3629: no overlong forms, no
+ * surrogates, nothing past U+10FFFF), or 0. */
+static int utf8_len(const unsigned char *p)
+{
+    int n = p[0] < 0x80 ? 1 : p[0] >= 0xc2 && p[0] <= 0xdf ? 2 : p[0] >= 0xe0 && p[0] <= 0xef ? 3
+                          : p[0] >= 0xf0 && p[0] <= 0xf4 ? 4 : 0;
+    for (int i = 1; i < n; i++)
+        if ((p[i] & 0xc0) != 0x80)
+            return 0;
+    if ((p[0] == 0xe0 && p[1] < 0xa0) || (p[0] == 0xed && p[1] > 0x9f) || (p[0] == 0xf0 && p[1] < 0x90) ||
+        (p[0] == 0xf4 && p[1] > 0x8f))
+        return 0;
+    return n;
+}
+
 void lie_json_string(FILE *fp, const char *s)
 {
     fputc('"', fp);
-    for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
-        if (*p == '"' || *p == '\\')
-            fprintf(fp, "\\%c", *p);
+    for (const unsigned char *p = (const unsigned char *)s; *p;) {
+        int n = utf8_len(p);
+        if (n == 0)
+            fprintf(fp, "\\udc%02x", *p++);
+        else if (*p == '"' || *p == '\\')
+            fprintf(fp, "\\%c", *p++);
         else if (*p < 0x20)
-            fprintf(fp, "\\u%04x", *p);
+            fprintf(fp, "\\u%04x", *p++);
         else
-            fputc(*p, fp);
+            for (; n > 0; n--)
+                fputc(*p++, fp);
     }
     fputc('"', fp);
+}
+
+FILE *lie_stats_json_begin(lie_stats_json *j, const char *tool, const char *input)
+{
+    j->buf = NULL;
+    j->size = 0;
+    j->fp = open_memstream(&j->buf, &j->size);
+    if (!j->fp)
+        return NULL;
+    fprintf(j->fp, "{\"schema\":%d,\"tool\":", LIE_STATS_SCHEMA);
+    lie_json_string(j->fp, tool);
+    if (input) {
+        fputs(",\"input\":", j->fp);
+        lie_json_string(j->fp, input);
+    }
+    return j->fp;
+}
+
+lie_status lie_stats_json_end(const lie_cli *cli, lie_stats_json *j, lie_error *err)
+{
+    const char *name = cli->stats_file ? cli->stats_file : "--stats=json";
+    int ok = j->fp && fclose(j->fp) == 0 && j->buf;
+    j->fp = NULL;
+    lie_status st = LIE_OK;
+    if (!ok) {
+        st = lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory");
+    } else if (!cli->stats_file) {
+        fwrite(j->buf, 1, j->size, stderr);
+        fflush(stderr);
+    } else { /* "-": lie_atomic_open's stdout */
+        lie_atomic_file af;
+        if ((st = lie_atomic_open(&af, cli->stats_file, err)) == LIE_OK) {
+            if (fwrite(j->buf, 1, j->size, af.fp) != j->size) {
+                lie_atomic_abort(&af);
+                st = lie_error_set(err, LIE_ERR_IO, name, "cannot write");
+            } else {
+                st = lie_atomic_commit(&af, err);
+            }
+        }
+    }
+    free(j->buf);
+    j->buf = NULL;
+    return st;
 }
 
 int lie_parse_stats(const char *arg)
@@ -179,6 +241,16 @@ static int shared_option(lie_cli *cli, int c, const char *arg, char *const argv[
     case LIE_OPT_STATS:
         if (!(cli->stats = lie_parse_stats(arg)))
             return lie_usage_error(cli->tool, "--stats: expected --stats or --stats=json, got '%s'", arg);
+        if (cli->stats_file && cli->stats != 2)
+            return lie_usage_error(cli->tool, "%s", "--stats-file writes JSON: not with --stats (text)");
+        return -1;
+    case LIE_OPT_STATS_FILE:
+        if (!arg[0])
+            return lie_usage_error(cli->tool, "%s", "--stats-file: expected a file name");
+        if (cli->stats == 1)
+            return lie_usage_error(cli->tool, "%s", "--stats-file writes JSON: not with --stats (text)");
+        cli->stats_file = arg;
+        cli->stats = 2;
         return -1;
     case LIE_OPT_THREADS:
         if (!lie_cli_long(cli, 0, 4096, &v))
@@ -202,7 +274,7 @@ static int shared_option(lie_cli *cli, int c, const char *arg, char *const argv[
 
 static int is_shared(const lie_cli *cli, int c)
 {
-    return c == LIE_OPT_EXTERNAL || c == LIE_OPT_STATS || c == LIE_OPT_VERSION || c == LIE_OPT_THREADS ||
+    return c == LIE_OPT_EXTERNAL || c == LIE_OPT_STATS || c == LIE_OPT_STATS_FILE || c == LIE_OPT_VERSION || c == LIE_OPT_THREADS ||
            (c == 'o' && (cli->takes & LIE_CLI_OUTPUT)) || c == 'q' || c == 'v' || c == 'h' || c == ':' || c == '?';
 }
 
@@ -220,6 +292,7 @@ static int make_table(lie_cli *cli, const char *shortopts, const struct option *
         {LIE_CLI_THREADS, {"threads", required_argument, NULL, LIE_OPT_THREADS}, ""},
         {LIE_CLI_EXTERNAL, {"allow-external-uris", no_argument, NULL, LIE_OPT_EXTERNAL}, ""},
         {LIE_CLI_STATS, {"stats", optional_argument, NULL, LIE_OPT_STATS}, ""},
+        {LIE_CLI_STATS, {"stats-file", required_argument, NULL, LIE_OPT_STATS_FILE}, ""},
         {LIE_CLI_VERBOSE, {"verbose", no_argument, NULL, 'v'}, "v"},
         {0, {"quiet", no_argument, NULL, 'q'}, "q"},
         {0, {"help", no_argument, NULL, 'h'}, "h"},

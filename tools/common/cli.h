@@ -19,7 +19,10 @@ int lie_parse_float(const char *s, float min, float max, float *out);
 int lie_frame_pattern_ok(const char *s);
 /* "A-B" with min <= A <= B <= max (frame ranges). */
 int lie_parse_range(const char *s, long min, long max, long *a, long *b);
-/* Write s as a JSON string literal (with quotes) to fp. */
+/* Write s as a JSON string literal (with quotes) to fp, valid UTF-8 whatever s holds: a
+ * byte that is not part of a well-formed UTF-8 sequence (a path in another encoding, say)
+ * is written as the escape \udcXX of byte XX, the lone low surrogate of Python's
+ * surrogateescape (PEP 383), so a reader can recover the bytes; the output is ASCII. */
 void lie_json_string(FILE *fp, const char *s);
 
 /* "WxH" with both in [1, max]. */
@@ -34,13 +37,13 @@ int lie_parse_stats(const char *arg);
  * them to the tool's table and handles them. */
 enum {
     LIE_CLI_EXTERNAL = 1, /* --allow-external-uris */
-    LIE_CLI_STATS = 2,    /* --stats[=json] */
+    LIE_CLI_STATS = 2,    /* --stats[=json], --stats-file FILE */
     LIE_CLI_VERBOSE = 4,  /* -v, --verbose */
     LIE_CLI_THREADS = 8,  /* --threads N, 0..4096 (0: all cores) */
     LIE_CLI_OUTPUT = 16,  /* -o, --output FILE */
 };
 /* getopt_long codes of the shared long options, above any tool's own. */
-enum { LIE_OPT_EXTERNAL = 0x1000, LIE_OPT_STATS, LIE_OPT_VERSION, LIE_OPT_THREADS };
+enum { LIE_OPT_EXTERNAL = 0x1000, LIE_OPT_STATS, LIE_OPT_VERSION, LIE_OPT_THREADS, LIE_OPT_STATS_FILE };
 #define LIE_CLI_MAX_OPTIONS 64
 
 /* A tool's command line: what it says about itself, and what the shared
@@ -55,7 +58,8 @@ typedef struct lie_cli {
     const char *operand;     /* that operand */
     int quiet;               /* -q */
     int verbose;             /* -v */
-    int stats;               /* --stats: 1, --stats=json: 2 */
+    int stats;               /* --stats: 1, --stats=json: 2 (also set by --stats-file) */
+    const char *stats_file;  /* --stats-file: the JSON record goes there, not to stderr */
     int external;            /* --allow-external-uris */
     int threads;             /* --threads */
     const char *output;      /* -o */
@@ -96,6 +100,24 @@ typedef struct lie_cli_choice {
     int value;
 } lie_cli_choice;
 int lie_cli_pick(lie_cli *cli, const lie_cli_choice *choices, int *out);
+
+/* ---- --stats=json ------------------------------------------------------ */
+
+/* The version of the JSON records of --stats=json (every tool's "schema"): raised when a
+ * member changes meaning or goes away; new members do not raise it. */
+#define LIE_STATS_SCHEMA 1
+/* A record is written into memory (NULL: out of memory) that starts
+ * `{"schema":1,"tool":TOOL,"input":INPUT` (no input when NULL), the tool adds its members
+ * (each after a comma) and the closing brace, and lie_stats_json_end writes it in one
+ * piece: to stderr as one line no warning can split, or with --stats-file to that file
+ * (atomically; "-" is stdout), or fails with err set (the file could not be written). */
+typedef struct lie_stats_json {
+    FILE *fp; /* where the tool prints its members (NULL: out of memory) */
+    char *buf;
+    size_t size;
+} lie_stats_json;
+FILE *lie_stats_json_begin(lie_stats_json *j, const char *tool, const char *input);
+lie_status lie_stats_json_end(const lie_cli *cli, lie_stats_json *j, lie_error *err);
 
 /* ---- tool messages: one line on stderr (CONTRIBUTING.md) -------------- */
 

@@ -15,7 +15,7 @@ static const char *prog = "lie-animate";
 static void usage(FILE *fp)
 {
     fprintf(fp,
-            "usage: %s SCENE.gltf|SCENE.glb --fps F -o EDITS_%%04d.yaml [options]\n"
+            "Usage: %s SCENE.gltf|SCENE.glb --fps F -o EDITS_%%04d.yaml [options]\n"
             "\n"
             "Sample one of the scene's glTF animations at F frames a second and write,\n"
             "for every frame, an edit file that poses the scene at that time: absolute\n"
@@ -30,10 +30,12 @@ static void usage(FILE *fp)
             "      --animation NAME|N   which animation (default: the first)\n"
             "      --frames A-B         frames A to B (default: 0 to the animation's end)\n"
             "      --camera-path FILE   also write the camera's motion as a camera path with\n"
-            "                           one key per frame (first-frame A)\n"
+            "                           one key per frame (first-frame A); a scene without\n"
+            "                           a camera gets lie-render's default framing, held\n"
             "      --camera NAME        the camera node for --camera-path (default: the first)\n"
             "      --allow-external-uris  let glTF files reference files outside their folder\n"
             "      --stats[=json]       frames, nodes and weights written\n"
+            "      --stats-file FILE    the --stats=json record to FILE, not stderr\n"
             "  -q, --quiet              no warnings\n"
             "  -h, --help               this help\n"
             "      --version            print the version\n",
@@ -207,6 +209,7 @@ typedef struct run {
     double duration; /* the animation's, in seconds */
     targets tg;
     lie_camera_path cp;
+    lie_camera_key fixed; /* a scene without a camera: every key (fixed.frames = 1) */
     lie_error err;
 } run;
 
@@ -277,17 +280,27 @@ static lie_status load(run *r, int quiet)
     return pick_targets(s, r->a, quiet, r->scene_path, &r->tg, err);
 }
 
-/* --camera-path: the camera node, and room for a key per frame. */
-static lie_status camera_path_start(run *r)
+/* --camera-path: the camera node, and room for a key per frame.  A scene without a camera
+ * (an asset such as a character) gets lie-render's default framing of the scene as loaded,
+ * held for every frame: the view stays put while the asset moves in it. */
+static lie_status camera_path_start(run *r, int quiet)
 {
     const lie_scene *s = r->s;
     r->cam = find_camera_node(s, r->camera_name);
-    if (r->cam < 0)
+    if (r->cam < 0 && !r->camera_name) {
+        lie_camera c = lie_scene_default_camera(s);
+        r->fixed.eye = c.eye;
+        r->fixed.target = lie_v3_add(c.eye, c.forward);
+        r->fixed.up = c.up;
+        r->fixed.fov_deg = c.yfov * (float)(180.0 / M_PI);
+        r->fixed.frames = 1;
+        if (!quiet)
+            fprintf(stderr, "%s: %s: warning: the default scene has no camera; the camera path holds "
+                            "lie-render's default framing of the scene as loaded\n", prog, r->scene_path);
+    } else if (r->cam < 0)
         return lie_error_set(&r->err, LIE_ERR_NOT_FOUND, r->scene_path,
-                             r->camera_name ? "camera '%s': no camera node has this name"
-                                            : "%sthe default scene has no camera",
-                             r->camera_name ? r->camera_name : "");
-    if (s->camera_defs[s->nodes[r->cam].camera].yfov <= 0.0f)
+                             "camera '%s': no camera node has this name", r->camera_name);
+    if (r->cam >= 0 && s->camera_defs[s->nodes[r->cam].camera].yfov <= 0.0f)
         return lie_error_set(&r->err, LIE_ERR_UNSUPPORTED, r->scene_path,
                              "camera node #%d is orthographic; camera paths hold perspective cameras", r->cam);
     r->cp.keys = calloc((size_t)(r->fb - r->fa + 1), sizeof *r->cp.keys);
@@ -321,32 +334,38 @@ static lie_status write_frames(run *r)
             for (int k = 0; k < r->tg.n_trs; k++)
                 r->s->nodes[r->tg.trs_nodes[k]].local =
                     lie_node_trs_matrix(pose->trs + 10 * (size_t)r->tg.trs_nodes[k]);
-            r->cp.keys[r->cp.n_keys++] = camera_key(r->s, r->cam);
+            r->cp.keys[r->cp.n_keys++] = r->cam >= 0 ? camera_key(r->s, r->cam) : r->fixed;
         }
     }
     lie_pose_destroy(pose);
     return st;
 }
 
-static void print_stats(const run *r, double secs, int json)
+static lie_status print_stats(run *r, double secs, const lie_cli *cli)
 {
     const targets *tg = &r->tg;
     int channels = r->s->animations[r->a].n_channels;
     long frames = r->fb - r->fa + 1;
-    if (json)
-        fprintf(stderr, "{\"tool\":\"lie-animate\",\"animation\":%d,\"frames\":%ld,\"first\":%ld,\"fps\":%.9g,"
+    if (cli->stats == 2) {
+        lie_stats_json js;
+        FILE *fp = lie_stats_json_begin(&js, prog, r->scene_path);
+        if (fp) {
+            fprintf(fp, ",\"animation\":%d,\"frames\":%ld,\"first\":%ld,\"fps\":%.9g,"
                         "\"duration\":%.9g,\"channels\":%d,\"transforms\":%d,\"weights\":%d,\"outside_scene\":%d,"
                         "\"inert\":%d,\"camera_path\":%d,\"seconds\":%.6f}\n",
                 r->a, frames, r->fa, r->fps, r->duration, channels, tg->n_trs, tg->n_w, tg->outside, tg->inert,
                 r->path_out != NULL, secs);
-    else
-        fprintf(stderr,
+        }
+        return lie_stats_json_end(cli, &js, &r->err);
+    }
+    fprintf(stderr,
                 "%s: %s: animation %d, %d channels, %.3f s at %g fps: frames %ld-%ld\n"
                 "  per frame: %d set-transform, %d set-weights; %d nodes outside the default scene, %d whose "
                 "transform moves nothing%s\n"
                 "  time: %.3f s\n",
                 prog, r->scene_path, r->a, channels, r->duration, r->fps, r->fa, r->fb, tg->n_trs, tg->n_w,
                 tg->outside, tg->inert, r->path_out ? "; camera path written" : "", secs);
+    return LIE_OK;
 }
 
 int main(int argc, char **argv)
@@ -365,7 +384,7 @@ int main(int argc, char **argv)
     double t0 = lie_time_now();
     lie_status st = load(&r, cli.quiet);
     if (st == LIE_OK && r.path_out)
-        st = camera_path_start(&r);
+        st = camera_path_start(&r, cli.quiet);
     if (st == LIE_OK)
         st = write_frames(&r);
     if (st == LIE_OK && r.path_out) {
@@ -375,7 +394,7 @@ int main(int argc, char **argv)
         st = lie_camera_path_write(&r.cp, r.path_out, &r.err);
     }
     if (st == LIE_OK && cli.stats)
-        print_stats(&r, lie_time_now() - t0, cli.stats == 2);
+        st = print_stats(&r, lie_time_now() - t0, &cli);
     rc = st == LIE_OK ? 0 : lie_report_error(prog, &r.err, 1);
     free(r.cp.keys);
     free(r.tg.trs_nodes);

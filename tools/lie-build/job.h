@@ -56,6 +56,8 @@ extern volatile sig_atomic_t job_stop_signal;
 const char *job_signal_name(int sig);
 
 /* --stats (tools/lie-build/stats.c): times are load, bvh, build, write. */
-void job_print_stats(const char *prog, const build_job *j, double cpu_build, const double t[4], int json);
+struct lie_cli;
+/* --stats (text on stderr) or --stats=json (stderr or --stats-file; an error in j->err). */
+lie_status job_print_stats(const struct lie_cli *cli, build_job *j, double cpu_build, const double t[4]);
 
 #endif

@@ -16,7 +16,7 @@ static void usage(FILE *fp)
 {
     lie_build_params d = lie_build_params_default();
     fprintf(fp,
-            "usage: %s SCENE.gltf|SCENE.glb -o CACHE|- [options]\n"
+            "Usage: %s SCENE.gltf|SCENE.glb -o CACHE|- [options]\n"
             "       %s --into CACHE --view CAMERA|--path PATH.yaml [-o OUT] [SCENE]\n"
             "\n"
             "Build local illumination environments (per patch and emitter: visible,\n"
@@ -78,6 +78,7 @@ static void usage(FILE *fp)
             "                        equals an uninterrupted build's, byte for byte\n"
             "      --allow-external-uris  let the glTF reference files outside its folder\n"
             "      --stats[=json]    print statistics to stderr\n"
+            "      --stats-file FILE the --stats=json record to FILE, not stderr\n"
             "  -q, --quiet           no progress bar\n"
             "  -v, --verbose         each phase's time on stderr (load, bvh, build, write)\n"
             "  -h, --help            this help\n"
@@ -321,7 +322,8 @@ static int run(build_job *j, const lie_cli *cli)
         return fail(&j->err);
     if (cli->stats) {
         double dt[4] = {t[1] - t[0], t[2] - t[1], t[3] - t[2], t[4] - t[3]};
-        job_print_stats(prog, j, cpu_build, dt, cli->stats == 2);
+        if (job_print_stats(cli, j, cpu_build, dt) != LIE_OK)
+            return fail(&j->err);
     }
     return job_stop_signal ? report_stop(j->output, j->env->partial, j->st.units_interrupted) : 0;
 }

@@ -1,4 +1,5 @@
 /* lie-build --stats and --stats=json (tools/lie-build/job.h). */
+#include "common/cli.h"
 #include "dist.h"
 #include "job.h"
 
@@ -24,57 +25,58 @@ typedef struct summary {
     size_t bytes;
 } summary;
 
-static void print_json(const summary *m)
+static void print_json(FILE *fp, const summary *m)
 {
-    fprintf(stderr, "{\"tool\":\"lie-build\",\"triangles\":%u,\"emitters\":%d,\"clusters\":%d,\"units\":%llu,"
+    fprintf(fp, ",\"triangles\":%u,\"emitters\":%d,\"clusters\":%d,\"units\":%llu,"
                     "\"patches\":%llu,\"leaf_pairs\":%llu,\"pairs\":{",
             m->s->n_tris, m->s->n_emitters, m->s->n_clusters, (unsigned long long)m->s->n_tris * (unsigned long long)m->s->n_clusters,
             (unsigned long long)m->patches, (unsigned long long)m->leaves);
     for (int k = 0; k < LIE_CLASS_COUNT; k++)
         if (k != LIE_CLASS_SPLIT)
-            fprintf(stderr, "%s\"%s\":%llu", k ? "," : "", lie_class_name((lie_class)k),
+            fprintf(fp, "%s\"%s\":%llu", k ? "," : "", lie_class_name((lie_class)k),
                     (unsigned long long)m->st->pairs[k]);
-    fprintf(stderr, "},\"patches_per_depth\":[");
+    fprintf(fp, "},\"patches_per_depth\":[");
     int maxd = 0;
     for (int d = 0; d <= LIE_PATCH_MAX_DEPTH; d++)
         if (m->st->patches_per_depth[d])
             maxd = d;
     for (int d = 0; d <= maxd; d++)
-        fprintf(stderr, "%s%llu", d ? "," : "", (unsigned long long)m->st->patches_per_depth[d]);
-    fprintf(stderr, "],\"list_histogram\":[");
+        fprintf(fp, "%s%llu", d ? "," : "", (unsigned long long)m->st->patches_per_depth[d]);
+    fprintf(fp, "],\"list_histogram\":[");
     for (int b = 0; b < 18; b++)
-        fprintf(stderr, "%s%llu", b ? "," : "", (unsigned long long)m->st->list_hist[b]);
-    fprintf(stderr,
+        fprintf(fp, "%s%llu", b ? "," : "", (unsigned long long)m->st->list_hist[b]);
+    fprintf(fp,
             "],\"mean_list_length\":%.3f,\"segments\":%llu,\"splits_undone\":%llu,\"splits_kept\":%llu,"
             "\"splits_pixels\":%llu,\"unproven_occluded\":%llu,\"unproven_visible\":%llu,\"nodes\":%u,\"pool\":%u,"
             "\"seconds_load\":%.6f,\"seconds_bvh\":%.6f,\"seconds_build\":%.6f,\"seconds_write\":%.6f,"
             "\"bytes\":%zu",
             m->mean, (unsigned long long)m->st->segments, (unsigned long long)m->st->splits_undone,
             (unsigned long long)m->st->splits_kept, (unsigned long long)m->st->splits_pixels,
-            (unsigned long long)m->st->unproven_occluded, (unsigned long long)m->st->unproven_visible, m->env->n_nodes, m->env->n_pool, m->t[0], m->t[1], m->t[2], m->t[3], m->bytes);
-    fprintf(stderr, ",\"model\":{\"build_cpu_s_predicted\":%.6f,\"build_cpu_s_measured\":%.6f", m->model_build,
+            (unsigned long long)m->st->unproven_occluded, (unsigned long long)m->st->unproven_visible,
+            m->env->n_nodes, m->env->n_pool, m->t[0], m->t[1], m->t[2], m->t[3], m->bytes);
+    fprintf(fp, ",\"model\":{\"build_cpu_s_predicted\":%.6f,\"build_cpu_s_measured\":%.6f", m->model_build,
             m->cpu_build);
     if (m->pred)
-        fprintf(stderr,
+        fprintf(fp,
                 ",\"split_saving_s_predicted\":%.6f,\"split_saving_s_measured\":%.6f,\"view_pixels\":%.0f,"
                 "\"frame_shadow_cpu_s_full\":%.6f,\"frame_shadow_cpu_s_lie\":%.6f,\"frame_full_rays\":%.0f,"
                 "\"frame_list_entries\":%.0f,\"frame_lie_rays\":%.0f",
                 m->sp, m->sm, m->pred->pixels, 1e-9 * m->pred->full_ns, 1e-9 * m->pred->lie_ns, m->pred->full_rays,
                 m->pred->list_entries, m->pred->env_rays);
-    fprintf(stderr, "}");
-    fprintf(stderr,
+    fprintf(fp, "}");
+    fprintf(fp,
             ",\"partial\":%s,\"units_copied\":%llu,\"units_interrupted\":%llu,\"workers\":%d,\"seconds_cpu\":%.6f,"
             "\"seconds_cpu_workers\":%.6f,\"seconds_cpu_worker_max\":%.6f,\"seconds_tail\":%.6f",
             m->env->partial ? "true" : "false", (unsigned long long)m->st->units_copied,
             (unsigned long long)m->st->units_interrupted, m->st->workers, lie_cpu_time(), m->st->seconds_cpu_sum,
             m->st->seconds_cpu_max, m->st->seconds_tail);
     if (m->as)
-        fprintf(stderr, ",\"into\":{\"units_kept\":%llu,\"units_refined\":%llu,\"units_new\":%llu,"
+        fprintf(fp, ",\"into\":{\"units_kept\":%llu,\"units_refined\":%llu,\"units_new\":%llu,"
                         "\"nodes_recomputed\":%llu}",
                 (unsigned long long)m->as->units_kept, (unsigned long long)m->as->units_refined,
                 (unsigned long long)m->as->units_new, (unsigned long long)m->as->nodes_flagged);
-    lie_dist_stats_print(stderr, "units", 1);
-    fprintf(stderr, "}\n");
+    lie_dist_stats_print(fp, "units", 1);
+    fprintf(fp, "}\n");
 }
 
 static void print_text(const char *prog, const summary *m)
@@ -129,8 +131,9 @@ static void print_text(const char *prog, const summary *m)
     lie_dist_stats_print(stderr, "units", 0);
 }
 
-void job_print_stats(const char *prog, const build_job *j, double cpu_build, const double t[4], int json)
+lie_status job_print_stats(const lie_cli *cli, build_job *j, double cpu_build, const double t[4])
 {
+    const char *prog = cli->tool;
     const lie_build_stats *st = &j->st;
     lie_prediction prediction;
     summary m = {.input = j->input, .s = j->scene, .env = j->env, .st = st, .as = j->into ? &j->as : NULL,
@@ -147,8 +150,13 @@ void job_print_stats(const char *prog, const build_job *j, double cpu_build, con
     m.model_build = 1e-9 * (double)st->segments * (double)j->env->params.ns_segment;
     m.sp = 1e-9 * st->split_saving_predicted_ns;
     m.sm = 1e-9 * st->split_saving_measured_ns;
-    if (json)
-        print_json(&m);
-    else
-        print_text(prog, &m);
+    if (cli->stats == 2) {
+        lie_stats_json js;
+        FILE *fp = lie_stats_json_begin(&js, prog, j->input);
+        if (fp)
+            print_json(fp, &m);
+        return lie_stats_json_end(cli, &js, &j->err);
+    }
+    print_text(prog, &m);
+    return LIE_OK;
 }

@@ -17,7 +17,7 @@
 static void usage(FILE *fp)
 {
     fprintf(fp,
-            "usage: %s COMMAND CACHE|- [options]\n"
+            "Usage: %s COMMAND CACHE|- [options]\n"
             "\n"
             "Look inside a LIE cache (formats/lie-cache.md).  CACHE - reads stdin.\n"
             "\n"

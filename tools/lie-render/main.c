@@ -20,7 +20,7 @@ static void usage(FILE *fp)
 {
     lie_render_options d = lie_render_options_default();
     fprintf(fp,
-            "usage: %s CACHE|SCENE.gltf|SCENE.glb|- -o OUT.exr|OUT.png|- [options]\n"
+            "Usage: %s CACHE|SCENE.gltf|SCENE.glb|- -o OUT.exr|OUT.png|- [options]\n"
             "\n"
             "Render direct lighting with soft shadows, from a LIE cache (lie-build) or a\n"
             "scene.  The output format follows the extension: .exr is OpenEXR (RGB, an A\n"
@@ -88,6 +88,7 @@ static void usage(FILE *fp)
             "      --threads N         worker threads (default: all cores)\n"
             "      --allow-external-uris  let the glTF reference files outside its folder\n"
             "      --stats[=json]      print statistics to stderr\n"
+            "      --stats-file FILE   the --stats=json record to FILE, not stderr\n"
             "  -q, --quiet             no progress bar\n"
             "  -v, --verbose           each phase's time on stderr (load, bvh, then render\n"
             "                          and write per frame)\n"
@@ -580,7 +581,7 @@ static int render_all(args *a, run *r, const lie_cli *cli)
     free(todo);
     if (st == LIE_OK && cli->stats) {
         run_stats rst = {a->input, rendered, skipped, t1 - t0, t2 - t1, t_render, t_write};
-        print_stats(prog, cli->stats == 2, &rst, r->scene, ro, &rs);
+        st = print_stats(cli, &rst, r->scene, ro, &rs, &r->err);
     }
     return st;
 }

@@ -69,9 +69,10 @@ lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame 
 }
 
 
-void print_stats(const char *prog, int json, const run_stats *r, const lie_scene *scene, const lie_render_options *ro,
-                        const lie_render_stats *rs)
+lie_status print_stats(const lie_cli *cli, const run_stats *r, const lie_scene *scene, const lie_render_options *ro,
+                       const lie_render_stats *rs, lie_error *err)
 {
+    const char *prog = cli->tool;
     const char *input = r->input;
     int rendered = r->rendered, skipped = r->skipped;
     int threads = ro->threads > 0 ? ro->threads : lie_cpu_count();
@@ -83,10 +84,12 @@ void print_stats(const char *prog, int json, const run_stats *r, const lie_scene
                                          rs->exact_overflows, rs->pairs_bitmask};
     double render = r->t_render;
     double mrays = render > 0.0 ? (double)rs->shadow_rays / render * 1e-6 : 0.0;
-    if (json) {
-        fprintf(stderr, "{\"tool\":\"lie-render\",\"input\":");
-        lie_json_string(stderr, input);
-        fprintf(stderr,
+    if (cli->stats == 2) {
+        lie_stats_json js;
+        FILE *fp = lie_stats_json_begin(&js, prog, input);
+        if (!fp)
+            return lie_stats_json_end(cli, &js, err);
+        fprintf(fp,
                 ",\"frames\":%d,\"frames_skipped\":%d,\"triangles\":%u,\"emitters\":%d,"
                 "\"width\":%d,\"height\":%d,\"spp\":%d,\"light_samples\":%d,\"visibility\":\"%s\","
                 "\"rays\":\"%s\",\"threads\":%d,\"eye_rays\":%llu,\"reflection_rays\":%llu,"
@@ -100,7 +103,7 @@ void print_stats(const char *prog, int json, const run_stats *r, const lie_scene
                 (unsigned long long)rs->shadow_rays, (unsigned long long)rs->shading_points, r->t_load,
                 r->t_bvh, render, r->t_write, mrays, (unsigned long long)rs->shadow_rays_skipped,
                 (unsigned long long)rs->light_samples);
-        fprintf(stderr,
+        fprintf(fp,
                 "\"exact\":\"%s\",\"pairs_occluded\":%llu,\"pairs_analytic\":%llu,\"pairs_exact\":%llu,"
                 "\"pairs_blockers\":%llu,\"pairs_embree\":%llu,\"pairs_unshadowed\":%llu,"
                 "\"exact_overflows\":%llu,\"pairs_unbuilt\":%llu,\"points_unbuilt\":%llu,"
@@ -113,8 +116,9 @@ void print_stats(const char *prog, int json, const run_stats *r, const lie_scene
                 ro->timers ? "true" : "false", rs->t_analytic,
                 rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, pairs[7], rs->t_bitmask,
                 (unsigned long long)rs->pairs_silhouette, rs->t_silhouette);
-        render_dist_stats(stderr, 1);
-        fprintf(stderr, "}\n");
+        render_dist_stats(fp, 1);
+        fprintf(fp, "}\n");
+        return lie_stats_json_end(cli, &js, err);
     } else {
         fprintf(stderr,
                 "%s: %s: %u triangles, %d emitters, %d points and %d lines skipped\n"
@@ -148,4 +152,5 @@ void print_stats(const char *prog, int json, const run_stats *r, const lie_scene
                     rs->t_silhouette);
         render_dist_stats(stderr, 0);
     }
+    return LIE_OK;
 }

@@ -2,6 +2,7 @@
 #ifndef LIE_RENDER_OUTPUT_H
 #define LIE_RENDER_OUTPUT_H
 
+#include "common/cli.h"
 #include "lie.h"
 
 /* What every frame's file is written with. */
@@ -24,7 +25,8 @@ typedef struct run_stats {
     double t_load, t_bvh, t_render, t_write;
 } run_stats;
 
-void print_stats(const char *prog, int json, const run_stats *r, const lie_scene *scene, const lie_render_options *ro,
-                 const lie_render_stats *rs);
+/* --stats (text on stderr) or --stats=json (lie_stats_json_end: stderr or --stats-file). */
+lie_status print_stats(const lie_cli *cli, const run_stats *r, const lie_scene *scene, const lie_render_options *ro,
+                       const lie_render_stats *rs, lie_error *err);
 
 #endif

@@ -16,7 +16,7 @@ const char *view_prog = "lie-view";
 static void usage(FILE *fp)
 {
     fprintf(fp,
-            "usage: %s CACHE|SCENE.gltf [options]\n"
+            "Usage: %s CACHE|SCENE.gltf [options]\n"
             "\n"
             "An interactive window on a LIE cache or a glTF scene.  Frames come coarse first\n"
             "while the view moves and refine to every light sample when it is still.  On a\n"
@@ -47,6 +47,7 @@ static void usage(FILE *fp)
             "                          for the constructor.  SIGINT and SIGTERM quit as Q\n"
             "      --allow-external-uris  let the glTF reference files outside its folder\n"
             "      --stats[=json]      at exit: frames, fps while moving, update times, pending\n"
+            "      --stats-file FILE   the --stats=json record to FILE, not stderr\n"
             "  -q, --quiet             print nothing but errors and what is asked for\n"
             "  -h, --help              this help\n"
             "      --version           print the version\n"
@@ -65,8 +66,9 @@ static void usage(FILE *fp)
             "drag DX DY DZ, rotate AX AY AZ DEG, set-material FIELDS, set-emission FIELDS\n"
             "(FIELDS as in edit files: base-color: [r, g, b], roughness: r, strength: s),\n"
             "remove (the selection), undo, redo, wait (until no unit is pending),\n"
-            "pause and resume (units stop landing in between), redraw N (the full frame N\n"
-            "times more, each timed), screenshot FILE.png (of what has landed), quit.\n",
+            "wait-at-most S (as wait, S seconds at most), pause and resume (units stop\n"
+            "landing in between), redraw N (the full frame N times more, each timed),\n"
+            "screenshot FILE.png (of what has landed), quit.\n",
             prog, 512, 512, LIE_LIGHT_SAMPLES_DEFAULT, LIE_MAX_DEPTH_DEFAULT);
 }
 
@@ -125,57 +127,63 @@ static void summarise(const view_frame_time *t, size_t n, frame_summary *f)
     f->after_ms = f->n_after ? f->after_ms / f->n_after : 0.0;
 }
 
-static void print_ctor_json(session *S)
+static void print_ctor_json(FILE *fp, session *S)
 {
     lie_ctor *c = view_world_ctor(S->w);
     if (!c)
         return;
     lie_ctor_stats cs;
     lie_ctor_get_stats(c, &cs);
-    fprintf(stderr, ",\"units\":%llu,\"units_pending\":%llu,\"units_built\":%llu,\"views\":%d,\"units_over_time\":[",
+    fprintf(fp, ",\"units\":%llu,\"units_pending\":%llu,\"units_built\":%llu,\"views\":%d,\"units_over_time\":[",
             (unsigned long long)cs.units, (unsigned long long)cs.units_pending, (unsigned long long)cs.units_built,
             cs.views);
     for (size_t i = 0; i < cs.n_samples; i++)
-        fprintf(stderr, "%s[%.3f,%llu]", i ? "," : "", cs.samples[i].seconds, (unsigned long long)cs.samples[i].units);
-    fprintf(stderr, "]");
+        fprintf(fp, "%s[%.3f,%llu]", i ? "," : "", cs.samples[i].seconds, (unsigned long long)cs.samples[i].units);
+    fprintf(fp, "]");
 }
 
-static void print_stats(session *S, const view_frame_time *times, size_t n_times, int json)
+static lie_status print_stats(session *S, const view_frame_time *times, size_t n_times, const lie_cli *cli,
+                              lie_error *err)
 {
     int n;
     const double *ms = view_world_update_ms(S->w, &n);
     frame_summary fs;
     summarise(times, n_times, &fs);
     double fps = fs.fps;
-    if (json) {
-        fprintf(stderr, "{\"tool\":\"lie-view\",\"frames\":%llu,\"moving_frames\":%llu,\"fps_mean\":%.3f,",
+    if (cli->stats == 2) {
+        lie_stats_json js;
+        FILE *fp = lie_stats_json_begin(&js, prog, NULL);
+        if (!fp)
+            return lie_stats_json_end(cli, &js, err);
+        fprintf(fp, ",\"frames\":%llu,\"moving_frames\":%llu,\"fps_mean\":%.3f,",
                 (unsigned long long)S->frames, (unsigned long long)S->moving_frames, fps);
-        fprintf(stderr, "\"first_frame_ms\":%.3f,\"full_frame_first_ms\":%.3f,\"full_frames_before\":%d,"
+        fprintf(fp, "\"first_frame_ms\":%.3f,\"full_frame_first_ms\":%.3f,\"full_frames_before\":%d,"
                         "\"full_frame_before_ms\":%.3f,\"full_frames_after\":%d,\"full_frame_after_ms\":%.3f,"
                         "\"full_frames\":[",
                 S->first_image_ms, fs.first_full_ms, fs.n_before, fs.before_ms, fs.n_after, fs.after_ms);
         int k = 0;
         for (size_t i = 0; i < n_times; i++)
             if (times[i].level == 2)
-                fprintf(stderr, "%s[%.3f,%.3f,%lld]", k++ ? "," : "", times[i].end - S->start_t, times[i].ms,
+                fprintf(fp, "%s[%.3f,%.3f,%lld]", k++ ? "," : "", times[i].end - S->start_t, times[i].ms,
                         (long long)times[i].pending);
-        fprintf(stderr, "]");
-        print_ctor_json(S);
-        fprintf(stderr, ",\"update_ms\":[");
+        fprintf(fp, "]");
+        print_ctor_json(fp, S);
+        fprintf(fp, ",\"update_ms\":[");
         for (int i = 0; i < n; i++)
-            fprintf(stderr, "%s%.3f", i ? "," : "", ms[i]);
-        fprintf(stderr, "],\"edit_first_frame_ms\":[");
+            fprintf(fp, "%s%.3f", i ? "," : "", ms[i]);
+        fprintf(fp, "],\"edit_first_frame_ms\":[");
         for (int i = 0; i < S->n_first; i++)
-            fprintf(stderr, "%s%.3f", i ? "," : "", S->first_ms[i]);
-        fprintf(stderr, "],\"catchup_ms\":[");
+            fprintf(fp, "%s%.3f", i ? "," : "", S->first_ms[i]);
+        fprintf(fp, "],\"catchup_ms\":[");
         for (int i = 0; i < S->n_catchup; i++)
-            fprintf(stderr, "%s%.3f", i ? "," : "", S->catchup_ms[i]);
-        fprintf(stderr, "],\"refine_ms\":[");
+            fprintf(fp, "%s%.3f", i ? "," : "", S->catchup_ms[i]);
+        fprintf(fp, "],\"refine_ms\":[");
         for (int i = 0; i < S->n_refine; i++)
-            fprintf(stderr, "%s%.3f", i ? "," : "", S->refine_ms[i]);
-        fprintf(stderr, "],\"pending_max\":%lld,\"camera\":", (long long)view_world_pending_max(S->w));
-        lie_json_string(stderr, S->spec);
-        fprintf(stderr, "}\n");
+            fprintf(fp, "%s%.3f", i ? "," : "", S->refine_ms[i]);
+        fprintf(fp, "],\"pending_max\":%lld,\"camera\":", (long long)view_world_pending_max(S->w));
+        lie_json_string(fp, S->spec);
+        fprintf(fp, "}\n");
+        return lie_stats_json_end(cli, &js, err);
     } else {
         double sum = 0.0, mx = 0.0;
         for (int i = 0; i < n; i++) {
@@ -192,6 +200,7 @@ static void print_stats(session *S, const view_frame_time *times, size_t n_times
                 prog, (unsigned long long)S->frames, fps, (unsigned long long)S->moving_frames, n,
                 n ? sum / n : 0.0, mx, (long long)view_world_pending_max(S->w), S->spec);
     }
+    return LIE_OK;
 }
 
 static void draw_overlay(session *S, uint32_t *argb)
@@ -458,11 +467,13 @@ static void count_frames(session *S, uint64_t images, uint64_t image_version, in
 }
 
 /* The constructor builds for the camera once it has been still a quarter
- * of a second (and at once for the first): each such camera is a view of
+ * of a second (and for the first, once the first image is on screen): each such camera is a view of
  * the cache it builds (lie-build --view), what it sees first in the queue. */
 static void look(session *S)
 {
     double now = lie_time_now();
+    if (S->first_image_ms < 0.0)
+        return; /* the first image first: sampling the view would take the cores from it */
     if (S->looked_set && memcmp(&S->looked, &S->cam, sizeof S->cam) == 0) {
         S->cam_change_t = now;
         return;
@@ -531,7 +542,7 @@ static int open_world(session *S, const view_world_options *wo, const char *inpu
 }
 
 /* At exit: the script's error, the record, --save, --stats. */
-static int finish(session *S, const script_run *R, int stats, int rc)
+static int finish(session *S, const script_run *R, const lie_cli *cli, int rc)
 {
     lie_error err;
     lie_error_clear(&err);
@@ -545,8 +556,8 @@ static int finish(session *S, const script_run *R, int stats, int rc)
         rc = fail_line(&err);
     if (rc == 0 && S->save && view_world_save(S->w, S->save, &err) != LIE_OK)
         rc = fail_line(&err);
-    if (rc == 0 && stats)
-        print_stats(S, times, n_times, stats == 2);
+    if (rc == 0 && cli->stats && print_stats(S, times, n_times, cli, &err) != LIE_OK)
+        rc = fail_line(&err);
     free(times);
     if (R->paused)
         view_world_release(S->w);
@@ -635,7 +646,7 @@ int main(int argc, char **argv)
             if (spent < 0.008)
                 SDL_Delay((Uint32)((0.008 - spent) * 1000.0) + 1);
         }
-        rc = finish(&S, &R, cli.stats, rc);
+        rc = finish(&S, &R, &cli, rc);
     }
     free(S.first_ms);
     free(S.catchup_ms);

@@ -297,8 +297,9 @@ int session_script_step(session *S, script_run *R, uint64_t images, int idle)
 {
     if (R->waiting == 1 && images < R->until_images && !idle)
         return 0;
-    if (R->waiting == 2 && view_world_busy(S->w))
+    if (R->waiting == 2 && view_world_busy(S->w) && (R->deadline == 0.0 || lie_time_now() < R->deadline))
         return 0;
+    R->deadline = 0.0;
     if (R->waiting == 3) {
         uint64_t n = view_render_full_count(S->r);
         if (n < R->until_images) {
@@ -374,7 +375,9 @@ int session_script_step(session *S, script_run *R, uint64_t images, int idle)
             break;
         }
         case VIEW_CMD_WAIT:
+        case VIEW_CMD_WAIT_AT_MOST: /* until no unit is pending (or S seconds) */
             R->waiting = 2;
+            R->deadline = c->kind == VIEW_CMD_WAIT_AT_MOST ? lie_time_now() + c->v[0] : 0.0;
             return 0;
         case VIEW_CMD_SCREENSHOT:
             session_camera_update(S);

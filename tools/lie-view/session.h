@@ -62,6 +62,7 @@ typedef struct script_run {
     uint64_t until_images;
     int paused;             /* the script holds the constructor */
     int redraws;            /* redraw: frames still to ask for */
+    double deadline;        /* wait-at-most: when waiting ends anyway (0: never) */
     int failed;
     lie_error err;
 } script_run;

@@ -436,12 +436,51 @@ static lie_status save_ctor(view_world *w, const char *path, lie_error *err)
     return st;
 }
 
+/* A whole cache while the update is pending: the last snapshot (finished
+ * units hold their final content), every unit with a pending leaf left
+ * unbuilt, as a partial cache of the edited scene (lie-build --resume with
+ * the edit files finishes it to rst-update's bytes).  Never waits for the
+ * constructor. */
+static lie_status save_partial(view_world *w, const char *path, lie_error *err)
+{
+    pthread_rwlock_rdlock(&w->lock);
+    lie_cache c = *w->cache;
+    lie_cache_edit *log = malloc(sizeof *log * ((size_t)w->n_edits0 + 1));
+    lie_env *env = NULL;
+    lie_status st = log ? lie_env_compact_units(w->render_env, &env, err)
+                        : lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    if (st == LIE_OK) {
+        env->partial = 1;
+        memcpy(log, c.edits, sizeof *log * (size_t)w->n_edits0);
+        c.edits = log;
+        c.n_edits = w->n_edits0;
+        if (w->n_applied) {
+            log[c.n_edits].name = (char *)edit_name(w);
+            log[c.n_edits].text = (unsigned char *)w->applied;
+            log[c.n_edits].size = w->n_applied;
+            c.n_edits++;
+        }
+        c.env = env;
+        c.emitters = NULL;
+        st = lie_cache_set_state(&c, w->scene, err);
+    }
+    if (st == LIE_OK)
+        st = lie_cache_write(path, &c, NULL, err);
+    pthread_rwlock_unlock(&w->lock);
+    free(c.emitters != w->cache->emitters ? c.emitters : NULL);
+    lie_env_destroy(env);
+    free(log);
+    return st;
+}
+
 lie_status view_world_save(view_world *w, const char *path, lie_error *err)
 {
     if (w->failed)
         return unusable(w, err);
     if (w->ctor)
         return save_ctor(w, path, err);
+    if (view_world_busy(w))
+        return save_partial(w, path, err);
     view_world_wait(w);
     if (w->failed)
         return w->ctor_err.status ? (*err = w->ctor_err, err->status) : unusable(w, err);

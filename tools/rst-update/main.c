@@ -14,7 +14,7 @@ static const char *prog = "rst-update";
 static void usage(FILE *fp)
 {
     fprintf(fp,
-            "usage: %s CACHE|- EDIT.yaml [EDIT.yaml ...] -o CACHE|- [options]\n"
+            "Usage: %s CACHE|- EDIT.yaml [EDIT.yaml ...] -o CACHE|- [options]\n"
             "\n"
             "Apply scene edits (formats/edit.md) to the scene of a LIE cache, find the\n"
             "blocker lists they may change through ray segment trees, recompute only\n"
@@ -33,6 +33,7 @@ static void usage(FILE *fp)
             "      --threads N       worker threads (default: all cores)\n"
             "      --allow-external-uris  let glTF files reference files outside their folder\n"
             "      --stats[=json]    pairs flagged, pairs really changed, time per phase\n"
+            "      --stats-file FILE the --stats=json record to FILE, not stderr\n"
             "  -q, --quiet           no progress bar, no warnings\n"
             "  -v, --verbose         each phase's time on stderr (load, update, write)\n"
             "  -h, --help            this help\n"
@@ -95,14 +96,18 @@ static lie_status run_steps(lie_update *u, int quiet, lie_error *err)
     return st;
 }
 
-static void print_stats(const char *input, const lie_scene *s, const lie_update_stats *st, double t_load,
-                        double t_write, size_t bytes, int json)
+static lie_status print_stats(const lie_cli *cli, const char *input, const lie_scene *s, const lie_update_stats *st,
+                              double t_load, double t_write, size_t bytes, lie_error *err)
 {
     const lie_rst_stats *rs = &st->rst;
     double precision = st->units_flagged ? (double)st->units_changed / (double)st->units_flagged : 1.0;
-    if (json) {
-        fprintf(stderr,
-                "{\"tool\":\"rst-update\",\"edits\":%d,\"units\":%llu,\"units_rebuilt\":%llu,\"units_views\":%llu,"
+    if (cli->stats == 2) {
+        lie_stats_json js;
+        FILE *fp = lie_stats_json_begin(&js, prog, input);
+        if (!fp)
+            return lie_stats_json_end(cli, &js, err);
+        fprintf(fp,
+                ",\"edits\":%d,\"units\":%llu,\"units_rebuilt\":%llu,\"units_views\":%llu,"
                 "\"units_flagged\":%llu,\"units_changed\":%llu,\"precision\":%.4f,\"nodes_flagged_5d\":%llu,\"nodes_flagged\":%llu,"
                 "\"nodes_recomputed\":%llu,\"rst_regions\":%llu,\"rst_fallback\":%llu,\"rst_tree_nodes\":%llu,"
                 "\"rst_bytes\":%zu,\"seconds_load\":%.6f,\"seconds_rst\":%.6f,\"seconds_edit\":%.6f,"
@@ -118,7 +123,7 @@ static void print_stats(const char *input, const lie_scene *s, const lie_update_
                 st->seconds_rst, st->seconds_edit, st->seconds_query, st->seconds_bvh, st->seconds_views,
                 st->seconds_update, t_write, bytes, lie_cpu_time(), st->seconds_cpu_workers, st->seconds_cpu_worker_max,
                 st->seconds_tail);
-        return;
+        return lie_stats_json_end(cli, &js, err);
     }
     fprintf(stderr,
             "%s: %s: %d edit file%s, %llu units (%u triangles x %d emitters)\n"
@@ -138,6 +143,7 @@ static void print_stats(const char *input, const lie_scene *s, const lie_update_
             st->seconds_bvh, st->seconds_update, t_write);
     fprintf(stderr, "  cpu: %.3f s in all; the recomputation's workers %.3f s, the busiest %.3f s, cores idle %.3f s\n",
             lie_cpu_time(), st->seconds_cpu_workers, st->seconds_cpu_worker_max, st->seconds_tail);
+    return LIE_OK;
 }
 
 /* Read the cache and its scene, update them (lib/update), write the cache. */
@@ -146,6 +152,7 @@ typedef struct run_opts {
     const char *output, *scene_out;
     lie_gltf_export_options scene_opt;
     int quiet, verbose, stats;
+    const lie_cli *cli; /* --stats=json's destination */
 } run_opts;
 
 static lie_status run(const char *input, char **files, int n_files, const lie_update_options *uo, const run_opts *ro,
@@ -189,7 +196,7 @@ static lie_status run(const char *input, char **files, int n_files, const lie_up
     lie_phase(prog, ro->verbose && st == LIE_OK, "write", ta);
     if (st == LIE_OK && stats) {
         lie_update_get_stats(u, &ust);
-        print_stats(input, scene, &ust, t_load, lie_time_now() - ta, bytes, stats == 2);
+        st = print_stats(ro->cli, input, scene, &ust, t_load, lie_time_now() - ta, bytes, err);
     }
     for (int i = 0; edits && i < n_files; i++)
         lie_edit_destroy(edits[i]);
@@ -203,7 +210,7 @@ static lie_status run(const char *input, char **files, int n_files, const lie_up
 int main(int argc, char **argv)
 {
     lie_update_options uo = lie_update_options_default();
-    run_opts ro = {NULL, NULL, lie_gltf_export_options_default(), 0, 0, 0};
+    run_opts ro = {NULL, NULL, lie_gltf_export_options_default(), 0, 0, 0, NULL};
     int c;
     lie_cli cli = {.tool = prog, .usage = usage,
                    .takes = LIE_CLI_OUTPUT | LIE_CLI_THREADS | LIE_CLI_EXTERNAL | LIE_CLI_STATS | LIE_CLI_VERBOSE};
@@ -220,6 +227,7 @@ int main(int argc, char **argv)
     uo.threads = cli.threads;
     ro.output = cli.output;
     ro.stats = cli.stats;
+    ro.cli = &cli;
     ro.quiet = cli.quiet;
     ro.verbose = cli.verbose;
     if (optind >= argc)

@@ -886,6 +886,12 @@ def animated():
         change(b)
         write(name, b)
 
+    # an animated asset with no camera (a character, say): examples/animate frames it as
+    # lie-render frames a scene without a camera
+    def no_camera(b):
+        del b["cameras"]
+        del b["nodes"][11]["camera"]
+    bad("animated_nocamera.gltf", no_camera)
     bad("anim_bad_count.gltf", lambda b: b["animations"][0]["samplers"][7].update(input=t3))
     bad("anim_bad_node.gltf", lambda b: b["animations"][0]["channels"][0]["target"].update(node=99))
     bad("anim_bad_path.gltf", lambda b: b["animations"][0]["channels"][0]["target"].update(path="position"))
