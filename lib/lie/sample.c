@@ -320,10 +320,14 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
         *n_list = w->n_hits;
         return LIE_CLASS_PARTIAL;
     }
-    if (shared && forced && blocked == 0) {
-        /* a cluster's share of the segments found nothing in a shaft of
-         * many triangles: they are its list, which lie_subdiv narrows to
-         * the exact one at a leaf (past complex_cap: complex, or split) */
+    if (forced && blocked == 0) {
+        /* The segments found nothing in a shaft of many triangles.  That
+         * proves nothing (thin parts, small triangles between them): the
+         * pair is visible with the shaft as its list, which lie_subdiv
+         * replaces at a leaf by the exact one (lib/lie/subdiv.c,
+         * complete_leaf).  A cluster of a shared sampling, which saw only
+         * its share of the segments, takes them as a partial list instead,
+         * so that its patch splits while the list is long. */
         if (!LIE_GROW(w->hits, w->cap_hits, n_forced)) {
             w->nomem = 1;
             return LIE_CLASS_VISIBLE;
@@ -331,10 +335,10 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
         memcpy(w->hits, w->cand, n_forced * sizeof *w->hits);
         *quality = total;
         *n_list = n_forced;
-        return LIE_CLASS_PARTIAL;
+        return shared ? LIE_CLASS_PARTIAL : LIE_CLASS_VISIBLE;
     }
     if (blocked > 0 && blocked < valid)
-        lie_cull_expand(c, w, tri, V, two_sided, e);
+        lie_cull_expand(c, w, tri, V, two_sided, e, c->p->complex_cap);
     *quality = total;
     *n_list = w->n_hits;
     if (valid == 0 || blocked == 0)
