@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # make bench, the equal-quality table: for each scene, per method and
 # setting, the render time and the per-pixel error over lit pixels against
 # a converged image (full visibility at 4096 rotated samples, rendered once

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # bash completion for the LIE tools (lie-build, lie-render, rst-update, lie-inspect, ...).
 # Options are read from the tool's own --help, so completion follows the tool's version.
 _lie_tool()

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Direct lighting: for each emitter, the unshadowed contribution of every
  * light sample is computed in one branch-free loop over structure-of-arrays
  * samples (vectorised by the compiler), then visibility is answered by the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to lib/shade: per-worker scratch and the direct-lighting entry. */
 #ifndef LIE_SHADE_INTERNAL_H
 #define LIE_SHADE_INTERNAL_H

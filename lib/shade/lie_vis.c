@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Shadow rays answered by local illumination environments (§4.2). */
 #include "lie/lie.h"
 #include "shade/bitmask.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Emitter sample patterns.  The paper (§6.1) uses "the same sample points on
  * the emitters every time": banding instead of pixel noise.  We use a
  * Hammersley set per emitter, shifted by a hash of the emitter's index, and

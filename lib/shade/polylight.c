@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Polygonal lights in closed form (polylight.h): Lambert's edge sum over
  * the convex pieces of an emitter's planes, and the visible pieces left by
  * back-projected blockers (the pieces are built in polybuild.c).  Double precision throughout: the pieces are

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Polygonal lights: an area emitter of one radiance, as convex polygons
  * in each of its planes, lighting Lambert receivers in closed form.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The renderer: eye rays through pixel centres (or stratified sub-pixel
  * positions), direct lighting at the first hit, perfect mirrors traced
  * recursively, in 16x16 tiles over worker threads.  Each pixel's value

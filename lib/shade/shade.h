@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/shade: BRDFs (Lambert; GGX as glTF's metallic-roughness BRDF; perfect
  * mirror), emitter sample patterns and the direct-lighting renderer.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Silhouette counting over the hierarchical sample groups (silhouette.h). */
 #include "shade/silhouette.h"
 #include "shade/internal.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Silhouette counting: a pair's blocked samples as a bitmask from the
  * silhouette edges of its blockers (after Laine, Aila, Assarsson, Lehtinen,
  * Akenine-Moeller 2005, "Soft shadow volumes for ray tracing"), so that the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/update: updating a cache's local illumination environments after
  * scene edits (§5), in two phases so that an interactive program can show
  * an edit at once and refine its frames while the environments catch up.

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # lie-build: caches from the bundled scenes, determinism across thread
 # counts and runs, stdout, statistics, bad input.
 . "$ROOT/tests/tools/lib.sh"

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # All light samples at once (lib/shade/bitmask.h): a LIE image whose
 # partial pairs are answered as bitmasks, at 16k fixed samples, against
 # full visibility at 1k and 16k rotated samples.  The reference's noise

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Baseline x86-64: the tools run on a CPU without AVX (qemu-user emulating a Nehalem, SSE4.2
 # at most), and give there the same bytes as here, where the hot kernels run their AVX2
 # copies (lib/core/hot.h) and Embree its AVX2 kernels: a cache built on each, and renders

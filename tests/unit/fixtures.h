@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Scenes built in memory that several unit test files share. */
 #ifndef LIE_TEST_FIXTURES_H
 #define LIE_TEST_FIXTURES_H

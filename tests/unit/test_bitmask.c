@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/shade bitmask: all samples at once (bitmask.h) against testing every
  * sample one by one: the same bits, on random and degenerate forms, and
  * through the LIE oracle on scenes holding the degenerate blockers any

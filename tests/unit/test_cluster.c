@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Clusters of emitter triangles (lib/scene/cluster.c): the partition, the
  * per-cluster shapes lib/lie asks for, and that LIEs build per cluster,
  * round-trip through the cache and update as they rebuild.  Fixtures

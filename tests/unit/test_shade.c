@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/shade: radiometry against closed forms, BRDF properties, and the
  * renderer's determinism.  Scenes are built in memory. */
 #include <setjmp.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/shade silhouette counting (silhouette.h) against the per-sample
  * test, bit for bit, through the LIE oracle: meshes with shared vertices
  * (a closed sphere, a folded sheet whose facing changes across it, a box),

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-inspect image CACHE -o OUT.png: the paper's Figure 10, a false-colour
  * picture of the local illumination environments seen from a camera.  The
  * colours come from the renderer's complexity layer (lie_complexity_colour:

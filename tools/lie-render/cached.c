@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-render SCENE --path PATH.yaml --cache C.lie: lie-build --path and
  * lie-render in one run that builds as it goes.  The cache is built for the
  * path's frames as views, as lie-build --path builds it; before a frame is

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-render: render frames with direct lighting.
  *   lie-render CACHE|SCENE.gltf|SCENE.glb|- -o OUT.exr|OUT.png|- [options]
  * From a cache (lie-build), shadow rays are answered by the local
@@ -85,6 +86,9 @@ static void usage(FILE *fp)
             "                          rle (several times faster to write than zip, files a\n"
             "                          little larger) or none\n"
             "      --exposure EV       PNG exposure in stops (default 0)\n"
+            "      --default-light L   a scene without emitters: headlight (a point light at\n"
+            "                          the camera, 1 lux at the scene's centre) or sun (1 lux\n"
+            "                          from above); a scene input only\n"
             "      --threads N         worker threads (default: all cores)\n"
             "      --allow-external-uris  let the glTF reference files outside its folder\n"
             "      --stats[=json]      print statistics to stderr\n"
@@ -107,7 +111,7 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 
 enum {
     OPT_CAMERA = 256, OPT_SIZE, OPT_SPP, OPT_LIGHT_SAMPLES, OPT_PATTERN, OPT_VISIBILITY, OPT_RAYS, OPT_LIE_SKIP,
-    OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_SCENE,
+    OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_SCENE, OPT_DEFAULT_LIGHT,
     OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS, OPT_FRAMES, OPT_SKIP_EXISTING, OPT_FORMAT, OPT_HALF, OPT_BITMASK,
     OPT_SILHOUETTE, OPT_CACHE, OPT_VIEW_SIZE
 };
@@ -138,6 +142,7 @@ static const struct option long_opts[] = {
     {"format", required_argument, NULL, OPT_FORMAT},
     {"half", no_argument, NULL, OPT_HALF},
     {"exposure", required_argument, NULL, OPT_EXPOSURE},
+    {"default-light", required_argument, NULL, OPT_DEFAULT_LIGHT},
     {NULL, 0, NULL, 0},
 };
 
@@ -274,6 +279,7 @@ typedef struct args {
     lie_scene_options so;
     lie_frame_options fopt;
     const char *input, *output, *camera, *scene_override, *path_file, *cache_file;
+    int default_light;     /* --default-light: lie_default_light, 0 none */
     int view_w, view_h;    /* --view-size */
     long frame_a, frame_b; /* --frames, or -1 */
     int skip_existing, visibility_set;
@@ -356,6 +362,13 @@ static int parse_options(args *a, lie_cli *cli, int argc, char **argv)
                 return usage_error("--exposure: expected a number of stops, got '%s'", optarg);
             break;
         case OPT_SCENE: a->scene_override = optarg; break;
+        case OPT_DEFAULT_LIGHT: {
+            static const lie_cli_choice lights[] = {
+                {"headlight", LIE_DEFAULT_LIGHT_HEADLIGHT}, {"sun", LIE_DEFAULT_LIGHT_SUN}, {NULL, 0}};
+            if (!lie_cli_pick(cli, lights, &a->default_light))
+                return cli->status;
+            break;
+        }
         case OPT_PATH: a->path_file = optarg; break;
         case OPT_FRAMES:
             if (!lie_parse_range(optarg, 0, 999999, &a->frame_a, &a->frame_b))
@@ -438,13 +451,22 @@ static lie_status prepare(args *a, run *r, int quiet)
     ro->oracle = r->lv ? lie_lie_vis_oracle(r->lv) : NULL;
     if (!quiet)
         lie_print_scene_warnings(prog, r->scene, a->input);
-    if (r->scene->n_emitters == 0 && !quiet)
+    st = a->path_file ? LIE_OK : lie_camera_parse(r->scene, a->camera, &r->cam, &r->err);
+    if (st == LIE_OK && a->default_light && r->scene->n_emitters == 0) {
+        /* the headlight stays where the camera (a path's first frame) is */
+        lie_camera at = r->cpath ? lie_camera_path_frame(r->cpath, 0) : r->cam;
+        st = lie_scene_add_default_light(r->scene, (lie_default_light)a->default_light, &at, &r->err);
+    } else if (st == LIE_OK && r->scene->n_emitters == 0 && !quiet) {
         fprintf(stderr, "%s: %s: warning: no emitters (no emissive material, no KHR_lights_punctual light): "
-                        "the image shows emission only\n", prog, a->input);
+                        "the image shows emission only; --default-light headlight or sun lights the geometry\n",
+                prog, a->input);
+    }
+    if (st != LIE_OK)
+        goto done;
     if (ro->aov_emitter >= r->scene->n_emitters)
         return lie_error_set(&r->err, LIE_ERR_ARG, a->input, "--emitter %d: the scene has %d emitters",
                              ro->aov_emitter, r->scene->n_emitters);
-    st = a->path_file ? LIE_OK : lie_camera_parse(r->scene, a->camera, &r->cam, &r->err);
+done:
     if (st != LIE_OK && !r->err.file[0])
         snprintf(r->err.file, sizeof r->err.file, "%s", a->input);
     return st;
@@ -535,6 +557,9 @@ static int render_all(args *a, run *r, const lie_cli *cli)
     double t1 = lie_phase(prog, cli->verbose, "load", t0);
     if (a->cache_file && (r->cache || a->visibility_set))
         return usage_error("%s: --cache takes a scene, and renders with the cache it builds (no --visibility)",
+                           a->input);
+    if (a->default_light && (r->cache || a->cache_file))
+        return usage_error("%s: --default-light renders a scene: a cache holds no environments of its light",
                            a->input);
     if (a->cache_file && lie_dist_size() > 1)
         return usage_error("%s", "--cache: not under mpirun (the frames build as they go, one after another)");

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-render's frames on disk (the EXR header's provenance and camera
  * attributes) and its --stats (tools/lie-render/output.h). */
 #include "output.h"

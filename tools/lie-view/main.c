@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-view: look at a scene through its LIE cache, move through it and
  * edit it, with soft shadows that are correct in every frame (§3).
  *   lie-view CACHE|SCENE.gltf [options] */

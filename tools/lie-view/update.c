@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Edits in the viewer, through lib/update (§5), and the asynchronous
  * constructor (§4.3.1).
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The viewer's world: the scene, its cache, the ray tracer, and the edits
  * made in the session, with the asynchronous constructor of §4.3.1.
  *

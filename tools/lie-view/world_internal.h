@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to lie-view's world.c and update.c. */
 #ifndef LIE_VIEW_WORLD_INTERNAL_H
 #define LIE_VIEW_WORLD_INTERNAL_H

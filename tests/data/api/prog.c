@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* A program of the library's users, built by tests/tools/t0600-install.sh as C11 (prog.c)
  * and as C++17 (the same text as prog.cpp) against the installed headers and liblie.so
  * through `pkg-config --cflags --libs lie`: it reads a cache, loads the scene it describes,
