@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* atrium-gen DIR: a Sponza-class bench scene for make bench-build (issue
- * 14's 250k-triangle target), generated, never committed.
+/* atrium-gen DIR: a Sponza-class bench scene for make bench-build (its
+ * 250k-triangle row, bench/build.sh), generated, never committed.
  *
  * A two-storey atrium open to the sky: a court with a finely tiled floor,
  * arcades of turned columns and round arches on both long sides, corridors
@@ -198,6 +198,8 @@ static int material(gen_gltf *g, const char *name, float r, float gr, float b, i
     return gen_gltf_add_material(g, &mt);
 }
 
+/* The atrium's parts, one after another, in the order of its nodes: one
+ * piece, as a scene description is (each part is a call or a loop). */
 static int write_atrium(const char *dir, char *err, size_t n_err)
 {
     gen_gltf *g = gen_gltf_create();

@@ -15,12 +15,12 @@
 # whose area lights an edit file adds, built for its camera only.
 #
 # BIN (default bin) names the binaries, so that two trees can be set side by
-# side; CLUSTERS=K builds with --emitter-clusters K (README, "Emitters of many
-# triangles"); PAPER=0 skips the paper-rule builds, ONE=0 the 1-thread ones.
+# side; CLUSTERS=K builds with --emitter-clusters K (docs/measurements.md,
+# "Emitters in clusters"); PAPER=0 skips the paper-rule builds, ONE=0 the 1-thread ones.
 # make bench-build-scenes runs the third-party scenes of ../shared/scenes
 # alone, scifi_hallway among them, which takes minutes.
 #
-# Targets (issue 14): build <= 5 full frames on every scene with a light and
+# Targets: build <= 5 full frames on every scene with a light and
 # <= 2 on museum1; cache <= 16 MB under 50k triangles; LIE frame <= half the
 # full frame; the atrium built in <= 60 s.  Writes out/bench-build.json.
 # Then the views table (out/bench-build-views.json) and the many-lights row
@@ -103,7 +103,7 @@ for scene in $SCENES; do
     [ -f "$scene" ] || { echo "  $scene: missing, skipped"; continue; }
     bench_scene "$(basename "$(dirname "$scene")")/$(basename "$scene")" "$scene" 1
 done
-# issue 14's 250k-triangle target: a generated Sponza-class atrium (bench/atrium.c),
+# the 250k-triangle target: a generated Sponza-class atrium (bench/atrium.c),
 # its area lights added by an edit file, built for one view: <= 60 s
 if [ "${ATRIUM:-1}" = 1 ]; then
     make -s build/release/atrium-gen >/dev/null
@@ -204,8 +204,8 @@ printf '  (units: --view 0 --frames 0, the views choose units; pixels: --view 0 
 printf '   frame cpu: one frame less an eye-rays-only frame, measured / the model (lie-build --stats=json);\n'
 printf '   ns measured: build CPU / segments, full shadow CPU / rays, LIE shadow CPU less its rays / list entries)\n'
 
-# ---- many lights (issue 14: "a build with 20 lights must not cost 20
-# single-light builds"): museum1 with 20 small panels under its ceiling
+# ---- many lights (a build with 20 lights must not cost more than 20
+# single-light builds): museum1 with 20 small panels under its ceiling
 # (bench/museum1-20lights.yaml: its light shrunk to 0.6 x 0.3 and copied on
 # a 5 x 4 grid) against the 20 builds of one such panel at each of those
 # points, on 1 thread, CPU seconds and segments side by side; the

@@ -49,7 +49,7 @@ ratio() { awk -v a="$1" -v b="$2" 'BEGIN { if (b > 0) printf "%.1f", a / b; else
 # The bundled scenes are built with --complex-cap 1024: their lists of up
 # to 1024 blockers cost less as bitmasks than Embree's rays (museum3 at
 # 1024 samples: 10,266 complex pairs at the default cap of 128, 1,181 at
-# 1024, and a frame 1.5 times faster; README.md, "Complex pairs").
+# 1024, and a frame 1.5 times faster; docs/measurements.md, "Complex pairs").
 SCENES=${SCENES:-"museum1|tests/scenes/museum1.gltf|||--blockers conservative --complex-cap 1024
 museum3|tests/scenes/museum3.gltf|||--blockers conservative --complex-cap 1024
 cornell|tests/scenes/cornell.gltf|||--blockers conservative --complex-cap 1024

@@ -1,7 +1,7 @@
 #!/bin/sh
 # SPDX-License-Identifier: Apache-2.0
-# make bench-view: lie-view's interactive loop under Xvfb (issue 16's
-# targets, 512x512 museum1, 100 light samples): frames per second while the
+# make bench-view: lie-view's interactive loop under Xvfb (its targets below,
+# 512x512 museum1, 100 light samples): frames per second while the
 # view orbits (progressive: each orbit step shows at least its coarse
 # level), the first image of an edit's world after each drag, and how long
 # the constructor takes to catch up after the last edit.  Writes

@@ -109,7 +109,9 @@ static lie_status check_cache(const lie_cache *c, const char *name, lie_error *e
     return lie_cache_check_env(env, LIE_ERR_ARG, name, "refusing to write an invalid env: ", err);
 }
 
-/* `name` (the output path, or NULL) is used in messages. */
+/* `name` (the output path, or NULL) is used in messages.  One piece: the
+ * sections in the order formats/lie-cache.md specifies them, each a few
+ * lines, share one running offset and the header that records them. */
 static lie_status encode(const lie_cache *c, const char *name, unsigned char **data, size_t *size, lie_error *err)
 {
     *data = NULL;

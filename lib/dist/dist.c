@@ -1,5 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The tools' MPI layer (lib/dist/dist.h). */
+/* The tools' MPI layer (lib/dist/dist.h).
+ * Size: one job, the MPI layer: start, broadcast, the setup check and the work
+ * sharing share the communicator state. */
 #include "common/cli.h" /* lie_report_error: lib/dist is linked into tools only */
 #include "dist/dist.h"
 #include "lie.h"

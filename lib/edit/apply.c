@@ -3,7 +3,9 @@
  * node transforms (in world space, about the node's own origin); material
  * changes give the node's subtree its own copies of meshes and materials,
  * so other instances sharing them are untouched; removal keeps triangle
- * slots; additions append new roots, so their triangles come last. */
+ * slots; additions append new roots, so their triangles come last.
+ * Size: just past the size CONTRIBUTING.md asks: every operation's effect,
+ * and the copies (materials, meshes, lights) some need, in one place. */
 #include "edit/edit.h"
 
 #include <stdlib.h>
@@ -409,6 +411,11 @@ int lie_edit_add_path(const lie_edit *e, const lie_edit_op *op, char *path, size
     return n >= 0 && (size_t)n < cap;
 }
 
+/* Apply one operation.  One piece: the checks every operation shares (the
+ * node found, not removed, a transform that moves something), one case per
+ * operation of formats/edit.md, and the effect they share (the subtree's
+ * nodes for the update, `geometry` unless the case cleared it); the cases
+ * that grew (set-weights, set-light, add's copy) are functions of their own. */
 static lie_status apply_op(lie_scene *s, const lie_edit *e, const lie_edit_op *op, const lie_scene_options *opt,
                            lie_edit_effect *fx, lie_error *err)
 {

@@ -178,6 +178,10 @@ static lie_status parse_set_light(lie_yaml *p, const yaml_node_t *vn, const char
     return LIE_OK;
 }
 
+/* One operation, item `index` of the file.  One piece: one branch per
+ * operation, each collecting its fields and checking them in the order
+ * formats/edit.md gives them; set-weights and set-light, the longest, are
+ * functions of their own. */
 static lie_status parse_op(lie_yaml *p, const yaml_node_t *item, int index, lie_edit_op *op)
 {
     char key[64];

@@ -174,6 +174,100 @@ void export_materials(Export &ex, const std::map<int, int> &gl_texture)
         ex.m.extensionsUsed.push_back("KHR_texture_transform");
 }
 
+/* The cameras kept nodes use (camera_map[i] >= 0), in their order;
+ * camera_map[i] becomes the glTF index. */
+static void export_cameras(Export &ex, std::vector<int> &camera_map)
+{
+    const lie_scene &s = ex.s;
+    tinygltf::Model &m = ex.m;
+    for (int i = 0; i < s.n_camera_defs; i++) {
+        if (camera_map[size_t(i)] < 0)
+            continue;
+        const lie_camera_def &c = s.camera_defs[i];
+        tinygltf::Camera g;
+        if (c.name)
+            g.name = c.name;
+        if (c.ymag > 0.0f) {
+            g.type = "orthographic";
+            g.orthographic.xmag = short_float(c.xmag);
+            g.orthographic.ymag = short_float(c.ymag);
+            g.orthographic.znear = short_float(c.znear);
+            g.orthographic.zfar = short_float(c.zfar);
+        } else {
+            g.type = "perspective";
+            g.perspective.yfov = short_float(c.yfov);
+            g.perspective.aspectRatio = short_float(c.aspect);
+            g.perspective.znear = short_float(c.znear);
+            g.perspective.zfar = 0.0; /* infinite: taken out of the JSON below */
+        }
+        camera_map[size_t(i)] = int(m.cameras.size());
+        m.cameras.push_back(g);
+    }
+}
+
+/* The KHR_lights_punctual lights kept nodes use, as export_cameras. */
+static void export_lights(Export &ex, std::vector<int> &light_map)
+{
+    const lie_scene &s = ex.s;
+    tinygltf::Model &m = ex.m;
+    for (int i = 0; i < s.n_light_defs; i++) {
+        if (light_map[size_t(i)] < 0)
+            continue;
+        const lie_light_def &l = s.light_defs[i];
+        tinygltf::Light g;
+        if (l.name)
+            g.name = l.name;
+        g.type = l.type == LIE_LIGHT_SPOT ? "spot" : l.type == LIE_LIGHT_DIRECTIONAL ? "directional" : "point";
+        g.color.assign(3, 0.0);
+        for (int c = 0; c < 3; c++)
+            g.color[size_t(c)] = short_float(l.color[c]);
+        g.intensity = short_float(l.intensity);
+        g.range = short_float(l.range);
+        if (l.type == LIE_LIGHT_SPOT) {
+            g.spot.innerConeAngle = short_float(l.inner_cone);
+            g.spot.outerConeAngle = short_float(l.outer_cone);
+        }
+        light_map[size_t(i)] = int(m.lights.size());
+        m.lights.push_back(g);
+    }
+}
+
+/* Skins of kept skinned nodes (order: the kept nodes, new_index: their
+ * glTF indices); every joint must be kept too. */
+static void export_skins(Export &ex, const std::vector<int> &order, const std::vector<int> &new_index)
+{
+    const lie_scene &s = ex.s;
+    tinygltf::Model &m = ex.m;
+    std::vector<int> skin_map(size_t(s.n_skins), -1);
+    for (size_t k = 0; k < order.size(); k++) {
+        const lie_node &n = s.nodes[order[k]];
+        if (n.skin < 0 || n.skin >= s.n_skins || m.nodes[k].mesh < 0)
+            continue;
+        if (skin_map[size_t(n.skin)] < 0) {
+            const lie_skin &sk = s.skins[n.skin];
+            tinygltf::Skin g;
+            if (sk.name)
+                g.name = sk.name;
+            std::vector<float> ibm(size_t(sk.n_joints) * 16);
+            for (int j = 0; j < sk.n_joints; j++) {
+                int nj = sk.joints[j] >= 0 && sk.joints[j] < s.n_nodes ? new_index[size_t(sk.joints[j])] : -1;
+                if (nj < 0)
+                    throw ExportError{LIE_ERR_UNSUPPORTED, "skin " + std::to_string(n.skin) + ": joint node " +
+                                                               std::to_string(sk.joints[j]) +
+                                                               " is not in the written scene"};
+                g.joints.push_back(nj);
+                for (int c = 0; c < 16; c++) /* read as floats: exact */
+                    ibm[size_t(j) * 16 + size_t(c)] = float(sk.inverse_bind[j].m[c]);
+            }
+            g.inverseBindMatrices = add_accessor(ex, ibm.data(), size_t(sk.n_joints), TINYGLTF_TYPE_MAT4,
+                                                 TINYGLTF_COMPONENT_TYPE_FLOAT, 0);
+            skin_map[size_t(n.skin)] = int(m.skins.size());
+            m.skins.push_back(g);
+        }
+        m.nodes[k].skin = skin_map[size_t(n.skin)];
+    }
+}
+
 void export_document(Export &ex)
 {
     const lie_scene &s = ex.s;
@@ -227,49 +321,8 @@ void export_document(Export &ex)
         mesh_map[size_t(i)] = int(m.meshes.size());
         m.meshes.push_back(g);
     }
-    for (int i = 0; i < s.n_camera_defs; i++) {
-        if (camera_map[size_t(i)] < 0)
-            continue;
-        const lie_camera_def &c = s.camera_defs[i];
-        tinygltf::Camera g;
-        if (c.name)
-            g.name = c.name;
-        if (c.ymag > 0.0f) {
-            g.type = "orthographic";
-            g.orthographic.xmag = short_float(c.xmag);
-            g.orthographic.ymag = short_float(c.ymag);
-            g.orthographic.znear = short_float(c.znear);
-            g.orthographic.zfar = short_float(c.zfar);
-        } else {
-            g.type = "perspective";
-            g.perspective.yfov = short_float(c.yfov);
-            g.perspective.aspectRatio = short_float(c.aspect);
-            g.perspective.znear = short_float(c.znear);
-            g.perspective.zfar = 0.0; /* infinite: taken out of the JSON below */
-        }
-        camera_map[size_t(i)] = int(m.cameras.size());
-        m.cameras.push_back(g);
-    }
-    for (int i = 0; i < s.n_light_defs; i++) {
-        if (light_map[size_t(i)] < 0)
-            continue;
-        const lie_light_def &l = s.light_defs[i];
-        tinygltf::Light g;
-        if (l.name)
-            g.name = l.name;
-        g.type = l.type == LIE_LIGHT_SPOT ? "spot" : l.type == LIE_LIGHT_DIRECTIONAL ? "directional" : "point";
-        g.color.assign(3, 0.0);
-        for (int c = 0; c < 3; c++)
-            g.color[size_t(c)] = short_float(l.color[c]);
-        g.intensity = short_float(l.intensity);
-        g.range = short_float(l.range);
-        if (l.type == LIE_LIGHT_SPOT) {
-            g.spot.innerConeAngle = short_float(l.inner_cone);
-            g.spot.outerConeAngle = short_float(l.outer_cone);
-        }
-        light_map[size_t(i)] = int(m.lights.size());
-        m.lights.push_back(g);
-    }
+    export_cameras(ex, camera_map);
+    export_lights(ex, light_map);
 
     const lie_mat4 identity = lie_mat4_identity();
     for (int nd : order) {
@@ -296,35 +349,7 @@ void export_document(Export &ex)
         }
         m.nodes.push_back(g);
     }
-    /* skins of kept skinned nodes; every joint must be kept too */
-    std::vector<int> skin_map(size_t(s.n_skins), -1);
-    for (size_t k = 0; k < order.size(); k++) {
-        const lie_node &n = s.nodes[order[k]];
-        if (n.skin < 0 || n.skin >= s.n_skins || m.nodes[k].mesh < 0)
-            continue;
-        if (skin_map[size_t(n.skin)] < 0) {
-            const lie_skin &sk = s.skins[n.skin];
-            tinygltf::Skin g;
-            if (sk.name)
-                g.name = sk.name;
-            std::vector<float> ibm(size_t(sk.n_joints) * 16);
-            for (int j = 0; j < sk.n_joints; j++) {
-                int nj = sk.joints[j] >= 0 && sk.joints[j] < s.n_nodes ? new_index[size_t(sk.joints[j])] : -1;
-                if (nj < 0)
-                    throw ExportError{LIE_ERR_UNSUPPORTED, "skin " + std::to_string(n.skin) + ": joint node " +
-                                                               std::to_string(sk.joints[j]) +
-                                                               " is not in the written scene"};
-                g.joints.push_back(nj);
-                for (int c = 0; c < 16; c++) /* read as floats: exact */
-                    ibm[size_t(j) * 16 + size_t(c)] = float(sk.inverse_bind[j].m[c]);
-            }
-            g.inverseBindMatrices = add_accessor(ex, ibm.data(), size_t(sk.n_joints), TINYGLTF_TYPE_MAT4,
-                                                 TINYGLTF_COMPONENT_TYPE_FLOAT, 0);
-            skin_map[size_t(n.skin)] = int(m.skins.size());
-            m.skins.push_back(g);
-        }
-        m.nodes[k].skin = skin_map[size_t(n.skin)];
-    }
+    export_skins(ex, order, new_index);
     tinygltf::Scene scene;
     for (int r = 0; r < s.n_roots; r++)
         if (s.roots[r] >= 0 && s.roots[r] < s.n_nodes && new_index[size_t(s.roots[r])] >= 0)

@@ -1,7 +1,9 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* OpenEXR through OpenEXRCore's C API: the file is assembled in memory by
  * a custom stream (so the output can be written atomically, or to stdout)
- * and read back from memory the same way. */
+ * and read back from memory the same way.
+ * Size: one job, EXR through OpenEXRCore, in one file: the writer and the
+ * reader share the stream callbacks and the attribute tables. */
 #include "image/image.h"
 
 #include <OpenEXR/openexr.h>

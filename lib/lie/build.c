@@ -10,7 +10,9 @@
  * This file runs a build or an update and assembles its result; the parts
  * are pair geometry (pair.c), sampling (sample.c), shaft culling (cull.c),
  * the patch tree (subdiv.c), the update memo (memo.c), and parameters and
- * statistics (params.c).  lib/lie/internal.h holds their shared state. */
+ * statistics (params.c).  lib/lie/internal.h holds their shared state.
+ * Size: just past the size CONTRIBUTING.md asks: running a build and an
+ * update share the worker setup and the assembly. */
 #include "lie/internal.h"
 #include "lie/memo.h"
 #include "lie/sample.h"

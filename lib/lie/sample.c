@@ -160,7 +160,9 @@ static int all_blocked_to_max(const pair_sampler *ps, uint32_t from, uint64_t do
  *   already past complex_cap: such a list is never stored (the node splits
  *   or is complex), so it is not expanded to whole instances.  Where the
  *   emitter has more than complex_cap triangles and the patch may split,
- *   sampling goes on: the emitter's own triangles decide the split. */
+ *   sampling goes on: the emitter's own triangles decide the split.
+ * One piece: the rounds, the probe and these stops share the pair's
+ * segments, counters and list, in the order the list's bytes depend on. */
 lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch_path path, const lie_vec3 V[3],
                           int two_sided, int e, uint32_t *quality, size_t *n_list)
 {

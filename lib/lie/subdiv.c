@@ -1,7 +1,9 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* The patch tree of one unit (§4.1.1): classify a patch-emitter pair, split
  * a patch whose list is too long while it is large, and in an update copy
- * what no edit reached (lib/lie/subdiv.h). */
+ * what no edit reached (lib/lie/subdiv.h).
+ * Size: just past the size CONTRIBUTING.md asks: classification, the split's
+ * lookahead and the update's copy share one node walk. */
 #include "lie/subdiv.h"
 #include "lie/cull.h"
 #include "lie/memo.h"
@@ -293,7 +295,10 @@ static int split_pays(const build_ctx *c, worker *w, uint32_t tri, lie_patch_pat
  * is the old env's node for the same patch (or -1): when both old and new
  * split, children whose regions no edit touched are copied.  `pre`, when
  * not NULL, is the node's classification, already made by its parent's
- * lookahead. */
+ * lookahead.  One piece: the classification, the lookahead that decides
+ * the split and the copy of untouched children share the node's list, its
+ * old twin and its children's classifications, in an order the cache's
+ * bytes depend on. */
 static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx, uint32_t tri,
                        lie_patch_path path, int e, int two_sided, const uint32_t *parent,
                        size_t n_parent, int64_t old, const node_class *pre)

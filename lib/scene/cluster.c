@@ -27,17 +27,16 @@
 /* Lit triangles (textured or not: clusters change visibility only) are
  * split while a part's extent passes this share of the scene's, into at
  * most CLUSTER_SPLIT_MAX parts, or lie_scene_options.emitter_clusters.
- * 1: no spatial split by default, as measured (README, "Emitters of many
- * triangles"): with the sampling shared between an emitter's clusters
- * (lib/lie/sample.c) bedroom_corner's emitter in 8 clusters still builds
- * 19x slower than whole, for a slower frame.
+ * 1: no spatial split by default, as measured (docs/measurements.md,
+ * "Emitters in clusters"): with the sampling shared between an emitter's
+ * clusters (lib/lie/sample.c) bedroom_corner's emitter in 8 clusters still
+ * builds 19x slower than whole, for a slower frame.
  * (With the split on, tests/data/gltf/light_strip.gltf's strip in 2
- * clusters updates as it rebuilds for moves, rotations and removals; an
- * update removing its beam differed from the rebuild in one unit on a tree
- * before the merges of c48d079, and no longer does.) */
+ * clusters updates as it rebuilds for moves, rotations and removals;
+ * tests/unit/test_cluster.c checks it.) */
 /* 0: only an emitter dark as a whole becomes a dark cluster.  Measured
- * (the closing note of issue 14), splitting the dark triangles off a
- * partly lit emitter cost more than it saved: the lit cluster's segments,
+ * (docs/measurements.md, "Emitters in clusters"), splitting the dark
+ * triangles off a partly lit emitter cost more than it saved: the lit cluster's segments,
  * aimed at the lit part only, find more partial pairs than the whole
  * emitter's did, so bedroom_corner's build took 2.2x and
  * LightsPunctualLamp's 1.5x the CPU time, for no faster frame (dark samples

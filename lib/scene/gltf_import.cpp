@@ -1,7 +1,9 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* lib/scene: the glTF importer's document (lib/scene/gltf.h): materials and
  * their textures, nodes, cameras, lights and the default scene, then
- * lie_gltf_import, which runs every part of the import in order. */
+ * lie_gltf_import, which runs every part of the import in order.
+ * Size: the document's parts in import order; materials and textures are
+ * the longest, and share the Import state with the rest. */
 #include "scene/gltf.h"
 
 #include <algorithm>
@@ -491,6 +493,11 @@ void import_lights(const tinygltf::Model &m, lie_scene *s)
 
 /* ---- the whole document ----------------------------------------------------- */
 
+/* The document: its version and required extensions, every primitive
+ * planned and the totals checked against the limits before anything is
+ * read, then nodes and roots, the instancing limit, and the primitives read
+ * and morphed per node weights.  One piece: the plans made first are what
+ * every later step reads. */
 void import_document(const tinygltf::Model &m, lie_scene *s, const lie_scene_options &opt)
 {
     if (m.asset.version.compare(0, 2, "2.") != 0 && m.asset.version != "2")

@@ -235,7 +235,9 @@ void plan_skin_attributes(const tinygltf::Model &m, const tinygltf::Primitive &p
     pl.has_skin = true;
 }
 
-/* Check a primitive and count its triangles; nothing is allocated yet. */
+/* Check a primitive and count its triangles; nothing is allocated yet.
+ * One piece: the checks of every attribute (glTF 2.0 §3.7.2.1) and of its
+ * morph targets fill one plan, which read_primitive then trusts. */
 PrimPlan plan_primitive(const tinygltf::Model &m, int mi, int pi, lie_scene *s)
 {
     const tinygltf::Primitive &p = m.meshes[size_t(mi)].primitives[size_t(pi)];

@@ -1,7 +1,9 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* The scene: loading (through the glTF importer), flattening the node
  * hierarchy into world-space triangles, emitters and cameras, and the
- * content hash that caches refer to. */
+ * content hash that caches refer to.
+ * Size: one job, the world made from the document: loading, flattening and
+ * hashing share the fill context and the per-triangle arrays. */
 #include "scene/internal.h"
 
 #include <stdlib.h>
@@ -295,6 +297,11 @@ static int skin_vertices(const lie_scene *s, const lie_skin *sk, const lie_primi
     return 1;
 }
 
+/* Flatten node nd (world: its world transform; dead: removed, itself or an
+ * ancestor) into the world arrays at fill_ctx's cursor.  One piece: every
+ * per-triangle array (positions, normals, texture coordinates, colours,
+ * materials, removal) is written in one pass over the node's primitives, so
+ * that each triangle's slot is the same in all of them. */
 static void fill_node(lie_scene *s, int nd, const lie_mat4 *world, int dead, void *p)
 {
     fill_ctx *f = p;

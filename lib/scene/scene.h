@@ -335,8 +335,8 @@ typedef struct lie_scene_options {
     lie_file_set *files;
     /* Clusters an area emitter's lit triangles may be split into in space
      * (lib/scene/cluster.c), 1..LIE_CLUSTER_MAX; 0 means the default, 1:
-     * measured, a spatial split costs more than it saves (README, "Emitters
-     * of many triangles").  lie-build --emitter-clusters sets it; a cache
+     * measured, a spatial split costs more than it saves
+     * (docs/measurements.md, "Emitters in clusters").  lie-build --emitter-clusters sets it; a cache
      * records each emitter's cluster count, and lie_cache_load_scene loads
      * with the largest of them when this is 0, which reproduces the
      * partition (its digest is checked). */

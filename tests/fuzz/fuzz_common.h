@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* What every fuzz target asks of an error: a message, on one line, with no
  * control byte left in it or in the file name (lib/core escapes them, as
- * git does, since names from files reach terminals: issue 19). */
+ * git does, since names from files reach terminals). */
 #ifndef LIE_FUZZ_COMMON_H
 #define LIE_FUZZ_COMMON_H
 

@@ -2,7 +2,7 @@
 /* ltc-bench (`make ltc-bench`): the accuracy of lib/shade/ltc against the
  * Monte Carlo reference of tests/unit/ltc_mc.h, per roughness and view
  * angle over a fixed set of polygons, and the cost of one polygon in ns.
- * Not a test: it prints tables (for README.md and reports). */
+ * Not a test: it prints tables (for docs/measurements.md and reports). */
 #include <stdio.h>
 #include <time.h>
 

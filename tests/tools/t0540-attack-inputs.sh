@@ -1,6 +1,7 @@
 #!/bin/sh
 # SPDX-License-Identifier: Apache-2.0
-# Issue 19, the input classes of an outsider's attack, each refused with one
+# The input classes of an outsider's attack (docs/tools.md, "Hostile inputs
+# and outputs"), each refused with one
 # line and exit 1, quickly, and never a crash:
 #   1. glTF JSON nested 20,000 deep (extras, extensions, any array) and in a GLB
 #   3. a URI whose text stays in the scene's folder but whose symlink leads out

@@ -1,6 +1,7 @@
 #!/bin/sh
 # SPDX-License-Identifier: Apache-2.0
-# Issue 19, the output classes of an outsider's attack:
+# The output classes of an outsider's attack (docs/tools.md, "Hostile inputs
+# and outputs"):
 #   2. -o naming a character device, a FIFO or a symlink must not replace it
 #      with a regular file: devices and FIFOs are written in place, a symlink
 #      is followed and its target replaced atomically in the target's folder

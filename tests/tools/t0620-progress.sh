@@ -1,6 +1,6 @@
 #!/bin/sh
 # SPDX-License-Identifier: Apache-2.0
-# Progress (issue 18): on a terminal (script -qc gives the tool one) a bar
+# Progress (docs/tools.md, "Progress and timings"): on a terminal (script -qc gives the tool one) a bar
 # with elapsed time, rate and ETA, "frame N/M" on camera paths, progress in
 # lie-build and rst-update; nothing when stderr is not a terminal; -v prints
 # each phase's time (lie-render, lie-build, rst-update).

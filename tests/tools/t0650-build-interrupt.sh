@@ -1,6 +1,6 @@
 #!/bin/sh
 # SPDX-License-Identifier: Apache-2.0
-# lie-build --partial and --resume (issue 14, throughput): SIGINT in the
+# lie-build --partial and --resume (docs/tools.md, lie-build): SIGINT in the
 # middle of a build writes a valid partial cache atomically, exits 130 with
 # one line; lie-inspect calls it partial, lie-render completes it with the
 # whole scene; --resume finishes it into the bytes of an uninterrupted

@@ -192,7 +192,7 @@ static void test_bitmask_depth_forms_match_every_sample(void **state)
 
 /* ---- through the oracle, on scenes ----------------------------------------- */
 
-/* The degenerate blockers of issue 12, one scene:
+/* The degenerate blockers of shadow tests, one scene:
  *  - a square at y = 1 of half the light's size, two triangles sharing an
  *    edge and two vertices: from points on the axis its shadow's edges lie
  *    on the light's edges;

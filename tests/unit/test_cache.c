@@ -2,7 +2,9 @@
 /* lib/cache: round trips, byte-exact determinism, an independent encoder
  * written from formats/lie-cache.md, and rejection of every damaged,
  * truncated, misplaced, newer or structurally invalid file — without
- * crashing and without allocating what the file does not hold. */
+ * crashing and without allocating what the file does not hold.
+ * Size: long as the format is: one test per field and section a reader must
+ * check (CONTRIBUTING.md, Tests: one file per module). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>

@@ -255,10 +255,10 @@ static void test_update_equals_rebuild_with_clusters(void **state)
 }
 
 /* ---- spatial clusters (lie_scene_options.emitter_clusters) ----------------
- * Off by default (measured: README, "Clusters"), but a real path: the strip
- * split in space must partition its triangles, build per cluster the same
- * for any thread count, render as full visibility does, refuse a cache of
- * another partition, and update as it rebuilds. */
+ * Off by default (docs/measurements.md, "Emitters in clusters"), but a
+ * real path: the strip split in space must partition its triangles, build
+ * per cluster the same for any thread count, render as full visibility
+ * does, refuse a cache of another partition, and update as it rebuilds. */
 
 /* The strip in up to 4 clusters: a partition of its triangles in
  * ascending order, each a connected stretch along the corridor, with the

@@ -1,6 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* lib/scene: the glTF importer (gltf_*.cpp) and texture lookup (texture.c),
- * through lie_scene_load.  Fixtures: tests/data/gltf/ (gen_fixtures.py). */
+ * through lie_scene_load.  Fixtures: tests/data/gltf/ (gen_fixtures.py).
+ * Size: long as the importer's trust boundary is wide: one test per class of
+ * bad input, one file per module (CONTRIBUTING.md, Tests). */
 #include <limits.h>
 #include <math.h>
 #include <setjmp.h>

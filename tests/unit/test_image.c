@@ -1,5 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* lib/image: frames, sRGB curves, EXR and PNG writers and the EXR reader. */
+/* lib/image: frames, sRGB curves, EXR and PNG writers and the EXR reader.
+ * Size: long as one file per module is (CONTRIBUTING.md, Tests): each writer
+ * and the reader have their own group of tests below. */
 #include <fcntl.h>
 #include <ftw.h>
 #include <math.h>

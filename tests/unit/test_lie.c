@@ -1,7 +1,9 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* lib/lie and lib/patch: blocker lists on scenes whose answer is known,
  * subdivision limits, conservative lists containing sampled ones,
- * determinism, unit rebuilds, and the patch quad-tree's geometry. */
+ * determinism, unit rebuilds, and the patch quad-tree's geometry.
+ * Size: one file per module (CONTRIBUTING.md, Tests): lib/lie's behaviours
+ * and lib/patch's, in groups below. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>

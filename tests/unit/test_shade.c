@@ -1,6 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* lib/shade: radiometry against closed forms, BRDF properties, and the
- * renderer's determinism.  Scenes are built in memory. */
+ * renderer's determinism.  Scenes are built in memory.
+ * Size: one file per module (CONTRIBUTING.md, Tests): radiometry, BRDFs and
+ * the renderer in groups below. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>

@@ -243,6 +243,9 @@ static void item_json(const diff_ctx *d, const diff_item *it)
     putchar('}');
 }
 
+/* lie-inspect diff A B: load both, compare units and nodes, print the
+ * report (text or JSON) and the provenance notes.  One piece: the counts
+ * the comparison gathers are what the report prints, in its order. */
 int inspect_diff(const char *pa, const char *pb, const inspect_options *o)
 {
     inspect_cache la, lb;

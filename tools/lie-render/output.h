@@ -16,7 +16,7 @@ typedef struct frame_out {
 } frame_out;
 
 /* Write frame fi (the path's frame first + fi) of camera fc to its file,
- * its header saying how it was made (README.md, lie-render); EXR chunks
+ * its header saying how it was made (docs/tools.md, lie-render); EXR chunks
  * are compressed on the render's --threads.  *bytes (may be NULL): the
  * file's size (0 for stdout). */
 lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame, uint64_t *bytes, lie_error *err);

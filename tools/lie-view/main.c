@@ -1,7 +1,9 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* lie-view: look at a scene through its LIE cache, move through it and
  * edit it, with soft shadows that are correct in every frame (§3).
- *   lie-view CACHE|SCENE.gltf [options] */
+ *   lie-view CACHE|SCENE.gltf [options]
+ * Size: long for a tool's main: options, the window loop and its event
+ * dispatch, and the statistics, which share the session. */
 #include "session.h"
 
 #include <SDL.h>

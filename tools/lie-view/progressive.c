@@ -141,6 +141,10 @@ static void note_time(view_render *r, int level, double t0, double t1, int clean
     t->pending = view_world_pending(r->w);
 }
 
+/* The render thread: pick the level to draw (coarse while the view moves,
+ * then finer), draw it band by band, publish each band.  One piece: the
+ * generations it compares (camera, world version, units, forced redraws)
+ * decide together what is drawn next. */
 static void *render_main(void *arg)
 {
     view_render *r = arg;

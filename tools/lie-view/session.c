@@ -293,7 +293,8 @@ void session_key(session *S, const SDL_KeyboardEvent *k, int *quit)
 
 /* ---- scripts ----------------------------------------------------------------- */
 
-
+/* One case per script command (lie-view --help), each a few lines: one
+ * piece, as the commands share the run's waiting state. */
 int session_script_step(session *S, script_run *R, uint64_t images, int idle)
 {
     if (R->waiting == 1 && images < R->until_images && !idle)

@@ -1,6 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* A small glTF 2.0 writer: geometry helpers, the builder, and the JSON,
- * binary and PNG output.  See gen_gltf.h for the contract. */
+ * binary and PNG output.  See gen_gltf.h for the contract.
+ * Size: one job, writing glTF for the generator; its geometry helpers are
+ * the builder's, kept beside it. */
 #include "gen_gltf.h"
 
 #include <errno.h>

@@ -7,7 +7,9 @@
  * is the Cornell box with its published dimensions.  Conventions: +Y up,
  * metres, counter-clockwise = front; rooms face inward, solids outward;
  * area lights are one-sided emissive rectangles facing down.  The defaults
- * produce the committed files byte for byte. */
+ * produce the committed files byte for byte.
+ * Size: long because it describes four scenes object by object: each scene
+ * is one function, and they share the furniture. */
 #include "gen_gltf.h"
 
 #include <getopt.h>
