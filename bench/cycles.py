@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Blender Cycles as the equal-quality bench's peer (bench/quality.sh).
 #
 #   blender -b --factory-startup -noaudio -P bench/cycles.py -- SCENE.glb \

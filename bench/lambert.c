@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* bench-lambert IN.gltf|IN.glb OUT.glb: the scene with every material made
  * Lambertian (metallic 0, roughness 1, no metallic-roughness texture; base
  * colour, its texture, emission and alpha kept), written as one binary glTF

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # make bench, the equal-quality table on third-party scenes (run at the end
 # of bench/quality.sh; REAL=0 there leaves it out, or run it alone).
 #

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Building a polygonal light (polylight.h): an emitter's triangles grouped
  * by plane into parts, each part's triangles merged into convex pieces.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Arvo's sampling of spherical triangles (spherical.h). */
 #include "shade/spherical.h"
 

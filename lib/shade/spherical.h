@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Sampling a triangle by the solid angle it subtends (Arvo 1995,
  * "Stratified sampling of spherical triangles", SIGGRAPH '95).
  *

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # rst-update equals a fresh lie-build of the scene it writes (--write-scene),
 # in sampled and conservative modes, where a unit's content could depend on
 # more than its own patch and emitter: emitters renumbered (an emitter that

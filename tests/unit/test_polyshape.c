@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/shade polylight on emitters that are not one convex polygon: a strip
  * of 1,000 triangles, an L-shaped panel with a hole, a panel seen edge-on,
  * an emitter of two planes that shadows itself.  Each against a quadrature

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/shade spherical.c: Arvo's solid-angle sampling of triangles, against
  * quadrature over the triangle and the closed-form solid angle. */
 #include <setjmp.h>
