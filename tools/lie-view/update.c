@@ -448,20 +448,21 @@ static lie_status save_partial(view_world *w, const char *path, lie_error *err)
     unsigned char *text = NULL;
     lie_env *env = NULL;
     lie_status st = session_log(w, c.edits, w->n_edits0, &c.edits, &c.n_edits, &text, path, err);
+    lie_cache_edit *log = st == LIE_OK ? c.edits : NULL;
     if (st == LIE_OK)
         st = lie_env_compact_units(w->render_env, &env, err);
+    c.emitters = NULL;
     if (st == LIE_OK) {
         env->partial = 1;
         c.env = env;
-        c.emitters = NULL;
         st = lie_cache_set_state(&c, w->scene, err);
     }
     if (st == LIE_OK)
         st = lie_cache_write(path, &c, NULL, err);
     pthread_rwlock_unlock(&w->lock);
-    free(c.emitters != w->cache->emitters ? c.emitters : NULL);
+    free(c.emitters);
     lie_env_destroy(env);
-    free(c.edits);
+    free(log);
     free(text);
     return st;
 }
