@@ -24,6 +24,13 @@ static const char *rays_name(lie_ray_mode m)
     return m == LIE_RAYS_SINGLE ? "single" : m == LIE_RAYS_PACKET ? "packet" : "stream";
 }
 
+void frame_name(const frame_out *o, int fi, char *name, size_t size)
+{
+    if (o->path)
+        snprintf(name, size, o->output, o->first + fi);
+    else
+        snprintf(name, size, "%s", o->output);
+}
 
 lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame, uint64_t *bytes, lie_error *err)
 {
@@ -31,10 +38,7 @@ lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame 
     const lie_render_options *ro = o->ro;
     char name[4096];
     int number = o->first + fi;
-    if (o->path)
-        snprintf(name, sizeof name, o->output, number);
-    else
-        snprintf(name, sizeof name, "%s", o->output);
+    frame_name(o, fi, name, sizeof name);
     float yfov_deg = fc->yfov * 180.0f / (float)M_PI;
     lie_attr attrs[] = {
         {.name = "software", .type = LIE_ATTR_STRING, .s = "lie-render " LIE_VERSION},
