@@ -16,6 +16,8 @@ _lie_tool()
             return ;;
         --visibility)
             COMPREPLY=($(compgen -W "lie full" -- "$cur")); return ;;
+        --light-sampler)
+            COMPREPLY=($(compgen -W "tree power uniform per-emitter" -- "$cur")); return ;;
         --blockers)
             COMPREPLY=($(compgen -W "sampled conservative" -- "$cur")); return ;;
         --compression)

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # A second outside attack, the input classes:
 #   coordinates past the range (core.h, LIE_COORD_MAX) from a file, an edit,
 #     a camera, a camera path or an animation frame: one line, exit 1, never

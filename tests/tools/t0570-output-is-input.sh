@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # An output that is an input of the run, or another of its outputs, is
 # refused before anything is written, for every tool and output option
 # (lib/core lie_file_set_claim): by name, through a symlink or a hard link,

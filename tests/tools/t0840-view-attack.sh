@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # lie-view against the second attack: undo of set-material restores each
 # primitive's own material (the screenshot equals lie-render of the unedited
 # cache); navigation and drags of any size are clamped to the coordinate

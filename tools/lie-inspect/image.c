@@ -22,7 +22,7 @@ int inspect_image(const char *path, const inspect_options *o)
     so.allow_external_uris = o->external;
     lie_scene *s = NULL;
     lie_rt *rt = NULL;
-    lie_lie_vis *lv = NULL;
+    lie_env_shadows *lv = NULL;
     lie_frame *frame = NULL;
     uint8_t *rgb = NULL;
     lie_camera cam;
@@ -43,7 +43,7 @@ int inspect_image(const char *path, const inspect_options *o)
             snprintf(err.file, sizeof err.file, "%s", path);
     }
     if (st == LIE_OK)
-        st = lie_lie_vis_create(s, l.cache->env, &lv, &err);
+        st = lie_env_shadows_create(s, l.cache->env, &lv, &err);
     if (st == LIE_OK)
         st = lie_rt_create(s, &rt, &err);
     if (st == LIE_OK) {
@@ -52,7 +52,7 @@ int inspect_image(const char *path, const inspect_options *o)
         ro.height = o->height;
         ro.threads = o->threads;
         ro.visibility = LIE_VIS_LIE;
-        ro.oracle = lie_lie_vis_oracle(lv);
+        ro.oracle = lie_env_shadows_oracle(lv);
         ro.aovs = LIE_AOV_COMPLEXITY;
         ro.aov_emitter = o->emitter;
         ro.eye_only = 1;
@@ -79,7 +79,7 @@ int inspect_image(const char *path, const inspect_options *o)
     free(rgb);
     lie_frame_destroy(frame);
     lie_rt_destroy(rt);
-    lie_lie_vis_destroy(lv);
+    lie_env_shadows_destroy(lv);
     lie_scene_destroy(s);
     lie_file_set_destroy(files);
     inspect_unload(&l);
