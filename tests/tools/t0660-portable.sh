@@ -29,7 +29,7 @@ run $Q "$B/lie-build" -q "$S/cornell.gltf" -o "$TMP/q.lie"
 expect_rc 0 "lie-build under Nehalem"
 run "$B/lie-build" -q "$S/cornell.gltf" -o "$TMP/n.lie"
 expect_same "$TMP/q.lie" "$TMP/n.lie" "the caches are the same bytes"
-for opt in "" "--visibility=full" "--exact=off" "--bitmask=only"; do
+for opt in "" "--visibility=full" "--exact=off" "--light-sampler=per-emitter --bitmask=only"; do
     run $Q "$B/lie-render" "$TMP/n.lie" -q --size 24x20 --light-samples 24 $opt -o "$TMP/q.exr"
     expect_rc 0 "lie-render $opt under Nehalem"
     run "$B/lie-render" "$TMP/n.lie" -q --size 24x20 --light-samples 24 $opt -o "$TMP/n.exr"
