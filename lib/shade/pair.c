@@ -315,30 +315,6 @@ static void closed_colour(const lie_polylight *pl, const lie_surface *sf, float 
         k[c] = pl->radiance[c] * sf->diffuse[c] * (float)M_1_PI;
 }
 
-/* Other BRDFs: radiance x the LTC integral (ltc.h) over each piece that
- * lie_polylight_unshadowed or lie_polylight_visible left in w, the pieces
- * mapped from the emitter plane's (s, t) to directions from o. */
-static void closed_ltc(const lie_polylight *pl, const lie_ltc_shading *sh, lie_vec3 o, const lie_polylight_work *w,
-                       float out[3])
-{
-    const double wx = pl->po[0] - o.x, wy = pl->po[1] - o.y, wz = pl->po[2] - o.z;
-    float acc[3] = {0.0f, 0.0f, 0.0f};
-    for (int k = 0; k < w->n; k++) {
-        const lie_poly2 *p = &w->a[k];
-        lie_vec3 v[LIE_POLY_MAXV];
-        for (int i = 0; i < p->n; i++) {
-            double s = p->s[i], t = p->t[i];
-            v[i] = lie_v3((float)(wx + s * pl->pu[0] + t * pl->pv[0]), (float)(wy + s * pl->pu[1] + t * pl->pv[1]),
-                          (float)(wz + s * pl->pu[2] + t * pl->pv[2]));
-        }
-        float f[3];
-        lie_ltc_polygon(sh, v, p->n, f);
-        acc[0] += f[0], acc[1] += f[1], acc[2] += f[2];
-    }
-    for (int c = 0; c < 3; c++)
-        out[c] = pl->radiance[c] * acc[c];
-}
-
 /* (answer.h) */
 int lie_pair_embree(const lie_shade_ctx *c, lie_vec3 o, int n, lie_shade_scratch *sc, const uint32_t *want)
 {
@@ -396,7 +372,7 @@ void lie_pair_colour(lie_pair *p)
     }
 }
 
-void lie_pair_ltc(const lie_pair *p, float kl[3]) { closed_ltc(p->pl, p->ltc, p->o, &p->sc->poly, kl); }
+void lie_pair_ltc(const lie_pair *p, float kl[3]) { lie_polylight_ltc(p->pl, p->ltc, p->o, &p->sc->poly, kl); }
 
 void lie_pair_closed(lie_pair *p)
 {
@@ -407,7 +383,7 @@ void lie_pair_closed(lie_pair *p)
     lie_pair_colour(p);
     p->omega = lie_polylight_unshadowed(p->pl, p->o, p->sf->n, p->sf->ng, &p->sc->poly);
     if (!p->sf->lambert)
-        closed_ltc(p->pl, p->ltc, p->o, &p->sc->poly, p->kl);
+        lie_polylight_ltc(p->pl, p->ltc, p->o, &p->sc->poly, p->kl);
     if (timers)
         p->sc->stats.t_analytic += lie_time_now() - t0;
     p->have_closed = 1;

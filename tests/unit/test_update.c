@@ -233,7 +233,7 @@ static void test_set_material_of_one_primitive(void **state)
     uint64_t flagged = 0;
     check_update(texts, 2, 0, &flagged);
     lie_error err;
-    lie_scene *s = load();
+    lie_scene *s = load(&CORNELL);
     lie_scene_options so = lie_scene_options_default();
     lie_edit *e = parse(texts[0]);
     assert_int_equal(lie_edit_apply(s, e, &so, NULL, &err), LIE_OK);
