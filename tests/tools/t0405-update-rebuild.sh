@@ -5,7 +5,7 @@
 # more than its own patch and emitter: emitters renumbered (an emitter that
 # appears or goes before others), the scene's extent and bounds growing
 # (shaft tolerances; how far a directional light's shafts reach), and
-# coordinates pushed out to 1e30 by morph weights.
+# coordinates pushed far out by morph weights.
 . "$ROOT/tests/tools/lib.sh"
 
 # same_as_build SCENE EDIT WHAT [lie-build options]: in both modes, the
@@ -62,11 +62,20 @@ for e in cubex addfar cubeup cubein; do
     same_as_build "$TMP/msun.gltf" "$TMP/$e.yaml" "museum1 in the sun: $e" --min-patch 1e-2
 done
 
-# (c) morph weights that push a sheet out to 1e30
+# (c) morph weights that push a sheet far out (the scene's extent grows a
+# billionfold, still inside the coordinate range), and past the range (1e30:
+# the edit is refused with one line, and no cache is written)
+edit w9 '- set-weights: {node: Half, weights: [1e9, 0]}'
+edit w9b '- set-weights: {node: Rest, weights: [0, 1e9]}'
+same_as_build "$ROOT/tests/data/gltf/morph_lit.gltf" "$TMP/w9.yaml" "morph_lit: a sheet lifted to 1e9"
+same_as_build "$ROOT/tests/data/gltf/morph_lit.gltf" "$TMP/w9b.yaml" "morph_lit: a corner pushed to 1e9"
 edit w30 '- set-weights: {node: Half, weights: [1e30, 0]}'
-edit w30b '- set-weights: {node: Rest, weights: [0, 1e30]}'
-same_as_build "$ROOT/tests/data/gltf/morph_lit.gltf" "$TMP/w30.yaml" "morph_lit: a sheet lifted to 1e30"
-same_as_build "$ROOT/tests/data/gltf/morph_lit.gltf" "$TMP/w30b.yaml" "morph_lit: a corner pushed to 1e30"
+"$B/lie-build" "$ROOT/tests/data/gltf/morph_lit.gltf" -q -o "$TMP/m30.lie" || not_ok "morph_lit: build"
+rm -f "$TMP/u30.lie"
+run "$B/rst-update" "$TMP/m30.lie" "$TMP/w30.yaml" -q -o "$TMP/u30.lie"
+expect_rc 1 "morph_lit: a sheet lifted to 1e30 is refused"
+expect_one_error_line "rst-update: " "morph_lit: one line for the sheet at 1e30"
+expect_no_file "$TMP/u30.lie" "morph_lit: no cache written for the sheet at 1e30"
 
 # a cache whose log holds an `add` loads from any directory: the added
 # file resolves relative to the edit file, whose name the log records
