@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-render under mpirun: frames cut into items handed out dynamically
  * (lib/dist).  A camera path is shared out by whole frames while at least
  * as many frames remain as ranks, and each rank encodes and writes the
