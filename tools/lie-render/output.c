@@ -77,7 +77,6 @@ lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame 
     opt.exr.screen_window_width = ve.screen_window_width;
     opt.exr.attrs = attrs;
     opt.exr.n_attrs = (int)(sizeof attrs / sizeof attrs[0]);
-    opt.exr.threads = ro->threads; /* the chunks compressed on --threads workers; the bytes do not depend on it */
     lie_status st = lie_frame_write(name, frame, &opt, err);
     struct stat sb;
     if (bytes)
