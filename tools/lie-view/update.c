@@ -445,31 +445,25 @@ static lie_status save_partial(view_world *w, const char *path, lie_error *err)
 {
     pthread_rwlock_rdlock(&w->lock);
     lie_cache c = *w->cache;
-    lie_cache_edit *log = malloc(sizeof *log * ((size_t)w->n_edits0 + 1));
+    unsigned char *text = NULL;
     lie_env *env = NULL;
-    lie_status st = log ? lie_env_compact_units(w->render_env, &env, err)
-                        : lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    lie_status st = session_log(w, c.edits, w->n_edits0, &c.edits, &c.n_edits, &text, path, err);
+    lie_cache_edit *log = st == LIE_OK ? c.edits : NULL;
+    if (st == LIE_OK)
+        st = lie_env_compact_units(w->render_env, &env, err);
+    c.emitters = NULL;
     if (st == LIE_OK) {
         env->partial = 1;
-        memcpy(log, c.edits, sizeof *log * (size_t)w->n_edits0);
-        c.edits = log;
-        c.n_edits = w->n_edits0;
-        if (w->n_applied) {
-            log[c.n_edits].name = (char *)edit_name(w);
-            log[c.n_edits].text = (unsigned char *)w->applied;
-            log[c.n_edits].size = w->n_applied;
-            c.n_edits++;
-        }
         c.env = env;
-        c.emitters = NULL;
         st = lie_cache_set_state(&c, w->scene, err);
     }
     if (st == LIE_OK)
         st = lie_cache_write(path, &c, NULL, err);
     pthread_rwlock_unlock(&w->lock);
-    free(c.emitters != w->cache->emitters ? c.emitters : NULL);
+    free(c.emitters);
     lie_env_destroy(env);
     free(log);
+    free(text);
     return st;
 }
 
