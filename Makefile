@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # The LIE toolchain.  `make demo` and `make test` are the two commands;
 # see README.md.  Objects go to build/<variant>/, binaries to bin/.
 #

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # make bench: what the portable build costs.  The tools are built for baseline x86-64 with
 # AVX2 copies of the hot kernels chosen at run time (lib/core/hot.h); this builds the same
 # sources the way they were built before, whole at -march=x86-64-v3 (`make VARIANT=v3`, tools

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* atrium-gen DIR: a Sponza-class bench scene for make bench-build (issue
  * 14's 250k-triangle target), generated, never committed.
  *

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # make bench-build (also run by make bench): what a lie-build costs against the
 # frames it serves, per scene, measured side by side in one run.
 #

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # make bench-mpi: lie-render and lie-build under mpirun against one process,
 # measured side by side in one run on this machine: 1 process x 2 threads
 # against 2 ranks x 1 thread, a 12-frame camera path and a build, with the

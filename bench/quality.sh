@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # make bench, the equal-quality table: for each scene, per method and
 # setting, the render time and the per-pixel error over lit pixels against
 # a converged image (full visibility at 4096 rotated samples, rendered once
@@ -19,8 +20,10 @@
 # example an older commit's bin/) renders every LIE row with those too, in
 # the same run, row by row: the table gains "before" columns (its own
 # cache, built with BASE_BUILD if set, else the scene's options).  Full
-# visibility is rendered once, by this tree.  Method lie-silhouette
-# (--bitmask only --silhouette only) is measured when listed in METHODS.
+# visibility is rendered once, by this tree.  Bitmasks answer the
+# per-emitter sampler's fixed pattern: lie-bitmask runs with
+# --light-sampler per-emitter (BASE's build, older, takes it as its only
+# meaning).
 # REPS=R renders each row R times and keeps the fastest (a loaded machine).
 set -e
 cd "$(dirname "$0")/.."
@@ -109,14 +112,13 @@ echo "$SCENES" | while IFS='|' read -r name scene cam size build; do
             case $method in
             full) r=$(one "$scene" --visibility=full --light-samples "$n" "$@") ;;
             lie-sampled) r=$(one "$TMP/c.lie" --exact off --light-samples "$n" "$@") ;;
-            lie-bitmask) r=$(one "$TMP/c.lie" --bitmask only --light-samples "$n" "$@") ;;
+            lie-bitmask) r=$(one "$TMP/c.lie" --light-sampler per-emitter --bitmask only --light-samples "$n" "$@") ;;
             lie-auto) r=$(one "$TMP/c.lie" --light-samples "$n" "$@") ;;
             lie-exact) r=$(one "$TMP/c.lie" --light-samples exact "$@") ;;
-            lie-silhouette) r=$(one "$TMP/c.lie" --bitmask only --silhouette only --light-samples "$n" "$@") ;;
             esac
             t=${r%% *}; rest=${r#* }; rmse=${rest%% *}; rest=${rest#* }; p99=${rest%% *}; over=${rest#* }
             base=""
-            if [ -n "$BASE" ] && [ "$method" != full ] && [ "$method" != lie-silhouette ]; then
+            if [ -n "$BASE" ] && [ "$method" != full ]; then
                 cp "$TMP/last.json" "$TMP/keep.json"
                 case $method in
                 lie-sampled) b=$(RENDER=$BASE/lie-render one "$TMP/b.lie" --exact off --light-samples "$n" "$@") ;;

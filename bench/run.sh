@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # make bench: the paper's Tables 1 and 2, measured here side by side in one
 # run — LIE against full Embree visibility, same threads, same light samples,
 # same frame — plus where a frame's time goes.  Figures are the best of

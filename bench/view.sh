@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # make bench-view: lie-view's interactive loop under Xvfb (issue 16's
 # targets, 512x512 museum1, 100 light samples): frames per second while the
 # view orbits (progressive: each orbit step shows at least its coarse

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # bash completion for the LIE tools (lie-build, lie-render, rst-update, lie-inspect, ...).
 # Options are read from the tool's own --help, so completion follows the tool's version.
 _lie_tool()
@@ -15,6 +16,8 @@ _lie_tool()
             return ;;
         --visibility)
             COMPREPLY=($(compgen -W "lie full" -- "$cur")); return ;;
+        --light-sampler)
+            COMPREPLY=($(compgen -W "tree power uniform per-emitter" -- "$cur")); return ;;
         --blockers)
             COMPREPLY=($(compgen -W "sampled conservative" -- "$cur")); return ;;
         --compression)

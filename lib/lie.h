@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The umbrella header for the tools: everything the library offers. */
 #ifndef LIE_H
 #define LIE_H

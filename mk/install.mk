@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Installation (included by the Makefile): `make install PREFIX=/usr/local DESTDIR=...`
 # installs the tools, liblie.so.MAJOR (SONAME, symlinks) and liblie.a, the public headers
 # under include/lie/, lie.pc, man pages (1: tools, 5: file formats) and bash completion;

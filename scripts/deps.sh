@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Install the Debian packages this project needs, only those missing.
 # Runs `apt-get update` once before installing anything.
 set -e

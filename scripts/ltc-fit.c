@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* scripts/ltc-fit.c: fits the linearly transformed cosine tables of
  * lib/shade/ltc.h and writes them as data (lib/shade/ltc_table.dat, by
  * `make ltc-tables`), which scripts/ltc-table.awk turns into C at build

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # scripts/ltc-table.awk: the LTC tables' data (lib/shade/ltc_table.dat,
 # written by scripts/ltc-fit.c) as the C source the library compiles
 # (the Makefile runs it into build/VARIANT/gen/ltc_table.c).  The format

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Run the tool tests under tests/tools (t[0-9]*.sh), git t/ style: each
 # prints "ok N - ..." or "not ok N - ..." lines and exits non-zero on failure.
 # Scripts run JOBS at a time (default: the number of cores); their reports

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Run every cmocka unit-test binary given; print a summary line.
 pass=0; fail=0; failed=""
 for t in "$@"; do

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # make test-valgrind: the tools under valgrind's memcheck, release builds
 # (bin/), on small settings: the pipeline lie-build | rst-update | lie-render
 # through pipes, then each tool on its own (files, lie-inspect's commands,

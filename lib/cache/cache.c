@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Writing caches (formats/lie-cache.md): a header, a section table, the
  * sections in a fixed order, each 8-byte aligned with zero padding, and a
  * trailing XXH3-64 over everything before it.  Every byte is a function of

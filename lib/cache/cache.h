@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/cache: the versioned cache file (.lie) that lie-build writes and the
  * other tools read.  Byte layout: formats/lie-cache.md.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The structural rules a cache's patch trees must keep (formats/lie-cache.md,
  * "What a reader must reject", 15).  The decoder runs them on every file
  * before handing out an env; the encoder runs them too, so that nothing is

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Reading caches (formats/lie-cache.md, "What a reader must reject"): first
  * the container — magic, file checksum, version, flags, the section table
  * and every section's place and checksum — then each section's counts

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/cache internals shared by the encoder and the decoder: section ids,
  * little-endian field access, the layout arithmetic of formats/lie-cache.md
  * and the structural check of an env. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The scene a cache was built for: its glTF file plus the edit log. */
 #include "cache/cache.h"
 #include "edit/edit.h"

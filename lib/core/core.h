@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/core: status codes and error messages, small vector math, deterministic
  * hashing and sampling, a parallel-for over worker threads, timers, progress
  * bars and atomic file output.  Everything else in lib/ stands on this. */

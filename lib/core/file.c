@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Inputs and outputs that respect what is there.
  *
  * Inputs: opened non-blocking (a FIFO or a device cannot hang the open),

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* File sets: inputs held in memory by the path they were read from
  * (core.h).  A handful of files per load, so lookups are linear. */
 #include "core/core.h"

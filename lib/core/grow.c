@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Growable arrays (lib/core/core.h). */
 #include "core/core.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Deterministic hashing (XXH3-64 from libxxhash) and sampling helpers.
  * Every random number in the project is a hash of stable identities. */
 #include "core/core.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Hot kernels: the library is compiled for baseline x86-64 (SSE2, every CPU Debian supports),
  * and the few loops where the shading time goes carry a second copy for x86-64-v3 (AVX2, FMA),
  * chosen once when the library is loaded by the CPU it runs on (GCC's function multi-versioning,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Small linear algebra: bases, 4x4 transforms in glTF's column-major order. */
 #include "core/core.h"
 

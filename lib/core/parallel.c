@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* A parallel-for over POSIX threads.  Items are handed out in order (or in
  * a caller's order: the costliest first, so that no long item starts last
  * and leaves the other workers idle) from an atomic counter; callers write

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Progress bars on a terminal only (CONTRIBUTING.md, Tools). */
 #include "core/core.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Status codes and one-line error messages (CONTRIBUTING.md, Errors and Tools). */
 #include "core/core.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* YAML documents with positions for messages (see yaml_doc.h). */
 #include "core/yaml_doc.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Reading YAML files with libyaml's document API, which keeps a line and
  * column for every node, so every error names FILE:LINE:COL and the key.
  * Shared by the edit-file and camera-path readers. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The tools' MPI layer (lib/dist/dist.h). */
 #include "common/cli.h" /* lie_report_error: lib/dist is linked into tools only */
 #include "dist/dist.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/dist: the tools' layer over MPI (Open MPI), for lie-render and
  * lie-build started by mpirun.  It is not part of liblie.a: the Makefile
  * builds it into its own archive, linked into those two tools only, so the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Applying edit operations to a scene's document.  Geometry changes edit
  * node transforms (in world space, about the node's own origin); material
  * changes give the node's subtree its own copies of meshes and materials,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Building edits as data: an empty edit, one constructor per operation,
  * and appending.  An appended operation goes through the writer and the
  * parser (write.c, parse.c), so an edit built here passes exactly the

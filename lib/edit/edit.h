@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/edit: scene edit files (formats/edit.md), read with libyaml, and
  * their application to a scene's document.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to lib/edit. */
 #ifndef LIE_EDIT_INTERNAL_H
 #define LIE_EDIT_INTERNAL_H

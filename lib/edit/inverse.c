@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The inverse of an edit: the operations restoring what it is about to
  * change, in absolute values, so that their order does not matter:
  *   - move, rotate, scale, set-transform: the node's local transform

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Reading edit files (formats/edit.md) with libyaml's document API, which
  * keeps a line and column for every node: each error names file:line:col
  * and the key. */

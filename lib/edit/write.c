@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Writing edits (formats/edit.md) with libyaml's emitter: one line per
  * operation, `- KIND: {FIELD: VALUE, ...}`, fields in the order of
  * formats/edit.md, only those the operation holds.  Numbers read back as

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/export: a scene's document as a tinygltf::Model (lib/export/internal.h):
  * meshes, materials, cameras, lights, nodes in the order lie_scene_flatten
  * walks them, and skins. */

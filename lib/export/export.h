@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/export: writing a scene's document as glTF 2.0 (.gltf with its side
  * files, or one .glb).  It sits above lib/scene and lib/image: texture
  * pixels go back to their code values (lie_texture_code_value) and out

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to lib/export: what the glTF exporter's files share.
  *
  * lie_gltf_export builds a tinygltf::Model from the document, lets tinygltf

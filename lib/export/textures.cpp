@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/export: the textures a material uses, as PNG files of the code values
  * the importer decoded them from (lib/export/internal.h). */
 #include "export/internal.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/export: the glTF JSON and the GLB container, the side files of a
  * .gltf, atomic output, and the public functions (lib/export/internal.h). */
 #include "export/internal.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* OpenEXR through OpenEXRCore's C API: the file is assembled in memory by
  * a custom stream (so the output can be written atomically, or to stdout)
  * and read back from memory the same way. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Frame buffers, the sRGB transfer curves and writing by extension. */
 #include "image/image.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/image: frame buffers, OpenEXR output through OpenEXR's C API
  * (openexr.h) with extra channels for AOVs and header attributes, PNG
  * previews through libpng.  Every writer is atomic (lib/core). */

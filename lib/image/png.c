@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* PNG through libpng: encoded in memory (lie_png_encode), previews written
  * atomically.  No tIME or text chunks: the bytes are a function of the
  * pixels. */

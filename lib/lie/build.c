@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Building local illumination environments (§4.1, §4.1.1, §4.3.2).
  *
  * One unit = (triangle, emitter).  A unit is built by a depth-first walk of

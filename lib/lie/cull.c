@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Shaft culling (§4.1.2): the triangles that meet a patch-emitter pair's
  * hull, for conservative lists and for completing sampled ones
  * (lib/lie/cull.h). */

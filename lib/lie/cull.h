@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to lib/lie: shaft culling (§4.1.2; lib/lie/cull.c). */
 #ifndef LIE_CULL_H
 #define LIE_CULL_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to lib/lie: the shared state of a build (lib/lie/build.c) and
  * the helpers every part of it uses. */
 #ifndef LIE_INTERNAL_H

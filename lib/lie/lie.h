@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/lie: local illumination environments (§4).
  *
  * For every triangle t and emitter cluster c (lie_cluster: an emitter, or a

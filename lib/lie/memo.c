@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The update memo (§5): the nodes an update recomputes, computed in
  * parallel before the build proper takes them (lib/lie/memo.h). */
 #include "lie/memo.h"

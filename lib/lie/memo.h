@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to lib/lie: the update memo (lib/lie/memo.c). */
 #ifndef LIE_MEMO_H
 #define LIE_MEMO_H

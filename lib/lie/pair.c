@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Pair geometry: what lie-build, the ray segment trees (lib/rst) and the
  * renderer agree a patch-emitter pair is (lib/lie/pair.h). */
 #include "lie/pair.h"

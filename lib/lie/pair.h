@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Pair geometry (lib/lie/pair.c): what a patch-emitter pair is, as
  * lie-build, the ray segment trees (lib/rst) and the renderer must all see
  * it for the LIE image to equal the reference.  The emitter side of a pair

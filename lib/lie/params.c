@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Build parameters, class names and statistics of local illumination
  * environments (lib/lie/lie.h). */
 #include "lie/internal.h"

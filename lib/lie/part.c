@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Joining parts of an env built apart (lie_env_build_range): a build lays
  * units out in unit order, each unit's nodes and blocker lists contiguous,
  * so the env of one build is the parts' arrays concatenated, each part's

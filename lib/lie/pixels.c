@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Screen pixels per patch (§4.3.3: the constructor picks patches "in
  * proportion to the number of pixels the patch occupies on the screen"),
  * and the cost model that turns them into subdivision decisions and into

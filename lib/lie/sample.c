@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Sampled blocker lists (§4.1, §4.3.2): shadow segments between a patch
  * and an emitter, in adaptive rounds (lib/lie/sample.h). */
 #include "lie/sample.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to lib/lie: sampled blocker lists (§4.1, §4.3.2; lib/lie/sample.c). */
 #ifndef LIE_SAMPLE_H
 #define LIE_SAMPLE_H

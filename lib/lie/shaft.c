@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* §4.1.2 shaft culling, made exact: a triangle is in a pair's conservative
  * blocker list iff it meets the convex hull of the (offset) patch and the
  * emitter.  The test is GJK on the Minkowski difference hull - triangle

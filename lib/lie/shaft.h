@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to lib/lie: the exact shaft test of conservative mode. */
 #ifndef LIE_SHAFT_H
 #define LIE_SHAFT_H

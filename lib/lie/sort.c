@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Sorting blocker and candidate lists (lib/lie/internal.h). */
 #include "lie/internal.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The patch tree of one unit (§4.1.1): classify a patch-emitter pair, split
  * a patch whose list is too long while it is large, and in an update copy
  * what no edit reached (lib/lie/subdiv.h). */

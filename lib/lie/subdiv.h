@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to lib/lie: the patch tree of one unit (§4.1.1; lib/lie/subdiv.c). */
 #ifndef LIE_SUBDIV_H
 #define LIE_SUBDIV_H

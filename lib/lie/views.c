@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Adding views to an env built for views (lie-build --into): the units the
  * new pixels need are built or refined, every other unit is kept as it is,
  * and the result is the env one build for all the views gives

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Patch geometry and names. */
 #include "patch/patch.h"
 

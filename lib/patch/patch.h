@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/patch: patch trees (§4.1.1).  One quad-tree per triangle in
  * barycentric space: a split cuts a triangle into four at its edge
  * midpoints.  Child 0, 1, 2 keep corner 0, 1, 2 of the parent; child 3 is

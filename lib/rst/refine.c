@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Exact refinement of ray-segment-tree answers: the hull of a flagged
  * unit root's patch and emitter against the edit's boxes, then down its
  * patch tree while the hulls meet them. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Ray segment trees (§5.1–5.3). */
 #include "rst/rst.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/rst: ray segment trees (§5).
  *
  * Every node of every patch tree depends on the region of space its

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Box queries over the triangles' bounding boxes (lib/rt/boxq.h).
  *
  * Shaft culling (§4.1.2, lib/lie/cull.c) asks for the triangles whose

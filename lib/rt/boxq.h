@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to lib/rt: a bounding-volume hierarchy over the triangles'
  * bounding boxes, for box queries (lib/rt/boxq.c). */
 #ifndef LIE_RT_BOXQ_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Embree 3 device and scene, and the queries the renderer and lie-build ask. */
 #include "rt/rt.h"
 #include "rt/boxq.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/rt: Embree 3 over the scene's world triangles.  One Embree geometry
  * holds every triangle, so Embree's primID is the global triangle index.
  * Queries: closest hit (optionally skipping back faces of single-sided

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Evaluating glTF animations (glTF 2.0 §3.11 and Appendix C): a pose per
  * time, which lie-animate turns into edit operations. */
 #include "scene/scene.h"

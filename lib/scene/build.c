@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Building a scene's document in memory: for tests, and for edits that
  * add objects. */
 #include "scene/scene.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Clusters of emitter triangles (lie_cluster, lib/scene/scene.h): a
  * visibility-only partition of a large emitter, so that the hull of each
  * pair lie-build classifies spans a part of the emitter rather than all of

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The emitter interface (lib/scene/scene.h): each call looks up the
  * emitter type's table (lib/scene/internal.h) and runs its operation.  This
  * is the one place that chooses by lie_emitter_type; the types themselves

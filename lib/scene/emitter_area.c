@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Area emitters: emissive triangles of one glTF primitive instance, the
  * emitter type of the paper (§3).  Their shapes for shaft tests (an
  * oriented box, a plane frame), points on them by area, and their part of

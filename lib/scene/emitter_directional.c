@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Directional lights (KHR_lights_punctual): a delta in direction, from
  * infinitely far away; shadow segments end `far` from the point
  * (lie_pair_ray_far, lib/lie/pair.h).  Their part of the emitter interface

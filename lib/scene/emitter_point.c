@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Point and spot lights (KHR_lights_punctual): a delta in position, with
  * an optional cone and range.  Their part of the emitter interface
  * (lib/scene/scene.h, lib/scene/internal.h). */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to lib/scene: what the files of the glTF 2.0 importer share.
  *
  * The importer (.gltf and .glb, built on tinygltf) fills the *document*

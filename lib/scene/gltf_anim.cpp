@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/scene: the glTF importer's skins and animations (lib/scene/gltf.h). */
 #include "scene/gltf.h"
 

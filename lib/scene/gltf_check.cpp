@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/scene: reading a glTF file and the checks around tinygltf (lib/scene/gltf.h).
  *
  * tinygltf trusts more than the trust boundary may: its GLB check lets a

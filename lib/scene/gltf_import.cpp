@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/scene: the glTF importer's document (lib/scene/gltf.h): materials and
  * their textures, nodes, cameras, lights and the default scene, then
  * lie_gltf_import, which runs every part of the import in order. */

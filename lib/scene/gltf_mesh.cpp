@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/scene: the glTF importer's accessors and meshes (lib/scene/gltf.h).
  * An accessor is checked whole before any element is read; a primitive is
  * planned (checked, its triangles counted) before anything is allocated. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/scene: what tinygltf may open and decode (lib/scene/gltf.h): the URI
  * policy, as tinygltf's file-system callbacks, and the image loader that
  * checks an image's range and size before stb decodes it. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to lib/scene. */
 #ifndef LIE_SCENE_INTERNAL_H
 #define LIE_SCENE_INTERNAL_H

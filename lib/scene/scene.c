@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The scene: loading (through the glTF importer), flattening the node
  * hierarchy into world-space triangles, emitters and cameras, and the
  * content hash that caches refer to. */

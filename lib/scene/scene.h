@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/scene: the in-memory scene.
  *
  * Two layers live in one lie_scene:
@@ -570,6 +571,13 @@ int lie_scene_add_light_def(lie_scene *s, const lie_light_def *l);
 /* parent -1 makes a root of the default scene. */
 int lie_scene_add_node(lie_scene *s, const char *name, int parent, const lie_mat4 *local, int mesh,
                        int camera, int light);
+/* A light for a scene without emitters (lie-render --default-light), added to the document
+ * as a root node named "lie-default-light" and the world flattened again:
+ * HEADLIGHT a point light at cam's eye giving 1 lux at the bounds' centre; SUN a directional
+ * light of 1 lux from above (+y, tilted 30 degrees toward +z).  The scene's content hash
+ * changes with it, so a cache of the scene without it does not match. */
+typedef enum lie_default_light { LIE_DEFAULT_LIGHT_HEADLIGHT = 1, LIE_DEFAULT_LIGHT_SUN = 2 } lie_default_light;
+lie_status lie_scene_add_default_light(lie_scene *s, lie_default_light kind, const lie_camera *cam, lie_error *err);
 /* A material with glTF's defaults (white, metallic 1, roughness 1). */
 lie_material lie_material_default(void);
 

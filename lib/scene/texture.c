@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/scene: bilinear texture lookup with glTF's sampler wrap modes.
  *
  * Texel (i, j) has its centre at ((i + 0.5) / w, (j + 0.5) / h); row 0 is

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Light samples as bitmasks, decided exactly through boxes of compact
  * sample groups (bitmask.h). */
 #include "shade/bitmask.h"

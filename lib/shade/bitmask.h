@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* All light samples of an emitter at once: blocked samples as bitmasks
  * (the idea of Schwarz & Stamminger 2007, "Bitmask soft shadows": a pixel's
  * shadow is the OR over its blockers of the samples each covers, one bit

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Camera paths: keyframes read from YAML (libyaml's document API, which
  * keeps line and column marks for every node), interpolated linearly or
  * with a uniform Catmull-Rom spline. */

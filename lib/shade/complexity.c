@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The paper's Figure 10 false colours for local illumination environments. */
 #include "lie/lie.h"
 #include "shade/shade.h"

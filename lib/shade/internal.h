@@ -1,9 +1,12 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to lib/shade: per-worker scratch and the direct-lighting entry. */
 #ifndef LIE_SHADE_INTERNAL_H
 #define LIE_SHADE_INTERNAL_H
 
 #include "shade/bitmask.h"
-#include "shade/silhouette.h"
+#include "shade/cost.h"
+#include "shade/sampler.h"
+#include "shade/texlight.h"
 #include "shade/polylight.h"
 #include "shade/shade.h"
 
@@ -20,25 +23,29 @@ static inline float lie_sum8(const float l[8]) { return ((l[0] + l[1]) + (l[2] +
  * per-pixel path allocates nothing (CONTRIBUTING.md, Hot paths). */
 typedef struct lie_shade_scratch {
     _Alignas(128) int cap; /* one per worker, on its own cache lines: no false sharing */
-    float *wr, *wg, *wb;       /* unshadowed contribution per sample */
-    int scalar;                /* 1: wr holds a scalar weight, colour is `scale` */
+    float *contrib_r, *contrib_g, *contrib_b; /* unshadowed contribution per sample */
+    int scalar;                /* 1: contrib_r holds a scalar weight, colour is `scale` */
     float scale[3];
     float *dx, *dy, *dz, *dist;
-    uint32_t *occ;             /* per sample: ~0 blocked, 0 free */
-    uint32_t *occ2;            /* the same, for one cluster's blockers */
-    /* per cluster of the emitter at hand (lie_cluster) */
-    int ccls[LIE_CLUSTER_MAX];
-    const void *cpair[LIE_CLUSTER_MAX];
+    uint32_t *blocked;         /* per sample: ~0 blocked, 0 free */
+    uint32_t *blocked_part;    /* the same, for one cluster's samples against its blockers */
+    /* per cluster of the emitter at hand (lie_cluster): its pair's class and pair */
+    int cluster_class[LIE_CLUSTER_MAX];
+    const void *cluster_pair[LIE_CLUSTER_MAX];
     uint64_t *mask;            /* the same as bits (bitmask.h) */
     uint32_t *blockers;        /* the oracle's selected blockers */
-    float *bwork;              /* lie_shadow_query.work */
-    uint32_t *bkind;
-    size_t bstride;
+    float *blocker_work;       /* lie_shadow_query.work, .kind and .work_stride */
+    uint32_t *blocker_kind;
+    size_t blocker_stride;
     int *idx;                  /* batch slot -> sample */
     lie_ray_batch batch;
     lie_light_samples rotated; /* --pattern rotated: this point's samples */
     lie_polylight_work poly;   /* closed-form shading's pieces */
-    lie_sil_work sil;          /* silhouette counting's (silhouette.h) */
+    /* the budgeted samplers' per-point lists, one entry per emitter at most */
+    lie_light_pick *picks;
+    float *weights;
+    int *ids;
+    int depth;                 /* the mirror bounce of the point at hand */
     lie_render_stats stats;
 } lie_shade_scratch;
 
@@ -88,7 +95,12 @@ static inline int lie_planar_lambert_setup(const lie_light_samples *ls, lie_vec3
     return P->ce > 0.0f;
 }
 
-lie_status lie_shade_scratch_init(lie_shade_scratch *sc, int cap, int max_blockers);
+/* lie_light_samples_generate, the points drawn by the emitter's texture
+ * (tl; NULL: by area). */
+void lie_light_samples_generate_with(const lie_scene *s, int e, int n, float su, float sv, const lie_texlight *tl,
+                                     lie_light_samples *out);
+
+lie_status lie_shade_scratch_init(lie_shade_scratch *sc, int cap, int max_blockers, int n_emitters);
 void lie_shade_scratch_free(lie_shade_scratch *sc);
 
 typedef struct lie_shade_ctx {
@@ -101,6 +113,11 @@ typedef struct lie_shade_ctx {
     int analytic;                   /* this frame shades Lambert receivers of poly[e] in closed form */
     int exact;                      /* ... and answers their partial pairs by back-projection */
     lie_bitmask **bits;             /* per emitter, NULL where partial pairs are not answered as bitmasks */
+    int sampler_on;                 /* a budgeted sampler (not LIE_SAMPLER_PER_EMITTER) */
+    lie_light_sampler sampler;      /* ... and it */
+    const lie_light_bounds *bounds; /* per emitter (sampler.h) */
+    int guided;                     /* the LIE's classes share the budget (lie_shade_direct) */
+    lie_texlight **texlights;       /* per emitter, NULL where its texture does not guide its samples */
 } lie_shade_ctx;
 
 /* Per triangle, the instance it belongs to if that instance is a closed
@@ -108,8 +125,9 @@ typedef struct lie_shade_ctx {
  * out of memory. */
 int32_t *lie_solids_find(const lie_scene *s);
 
-/* Direct lighting at sf from every emitter, added to rgb.  `pixel` seeds the
- * rotated pattern. */
+/* Direct lighting at sf from every emitter, added to rgb.  `pixel` (the
+ * pixel's index, and the eye sample's above bit 40) seeds the rotated
+ * patterns. */
 void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uint64_t pixel, int depth,
                       lie_shade_scratch *sc, float rgb[3]);
 

@@ -1,8 +1,8 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Shadow rays answered by local illumination environments (§4.2). */
 #include "lie/lie.h"
 #include "shade/bitmask.h"
 #include "shade/internal.h"
-#include "shade/silhouette.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -17,7 +17,7 @@ typedef struct sphere {
     float x, y, z, r;
 } sphere;
 
-struct lie_lie_vis {
+struct lie_env_shadows {
     const lie_scene *s;
     const lie_env *env;
     mt_tri *tris;
@@ -29,34 +29,30 @@ struct lie_lie_vis {
     float *soa_sphere[4];
     float *soa_vert[9];
     int32_t *solid;         /* per triangle: its convex solid (lie_solids_find) or -1 */
-    /* per triangle edge k (from vertex k to k + 1): 3 n + k' for the one
-     * other triangle n whose edge k' joins the same two points (bit for
-     * bit), or -1 (a boundary, or three or more triangles on the edge) */
-    int32_t *adj;
-    uint8_t *unbuilt;       /* lie_lie_vis_record_unbuilt's mask, or NULL */
+    uint8_t *unbuilt;       /* lie_env_shadows_record_unbuilt's mask, or NULL */
     lie_vis_oracle oracle;
 };
 
-static lie_vis_class classify(void *ctx, const lie_surface *sf, int e, const void **pair)
+static lie_class classify(void *ctx, const lie_surface *sf, int e, const void **pair)
 {
-    const lie_lie_vis *v = ctx;
+    const lie_env_shadows *v = ctx;
     const lie_pnode *n = lie_env_find_leaf(v->env, sf->tri, e, sf->b1, sf->b2);
     switch (n->cls) {
     case LIE_CLASS_VISIBLE:
-        return LIE_VISCLASS_VISIBLE;
+        return LIE_CLASS_VISIBLE;
     case LIE_CLASS_UNLIT:
     case LIE_CLASS_OCCLUDED:
-        return LIE_VISCLASS_OCCLUDED;
+        return LIE_CLASS_OCCLUDED;
     case LIE_CLASS_PARTIAL:
         *pair = n;
-        return LIE_VISCLASS_BLOCKERS;
+        return LIE_CLASS_PARTIAL;
     case LIE_CLASS_NONE:
         /* a byte set to 1 by any number of threads: relaxed atomic stores */
         if (v->unbuilt)
             __atomic_store_n(&v->unbuilt[sf->tri], (uint8_t)1, __ATOMIC_RELAXED);
-        return LIE_VISCLASS_UNBUILT; /* not built: the whole scene answers */
+        return LIE_CLASS_NONE; /* not built: the whole scene answers */
     default:
-        return LIE_VISCLASS_TEST_ALL; /* complex */
+        return LIE_CLASS_COMPLEX; /* complex */
     }
 }
 
@@ -66,12 +62,12 @@ static lie_vis_class classify(void *ctx, const lie_surface *sf, int e, const voi
  * needs fewer, often none).  The spheres of each list lie side by side
  * (soa_sphere), so the test runs over eight blockers at a time; the
  * flags go to out[] and are compacted in place. */
-static int select_planar(const lie_lie_vis *v, const lie_pnode *nd, const lie_emitter *em, lie_vec3 o, float eps,
+static int select_planar(const lie_env_shadows *v, const lie_pnode *nd, const lie_emitter *em, lie_vec3 o, float eps,
                          uint32_t *out);
 
 static int select_blockers(void *ctx, const void *pair, int e, lie_vec3 o, float eps, uint32_t *out)
 {
-    const lie_lie_vis *v = ctx;
+    const lie_env_shadows *v = ctx;
     const lie_pnode *nd = pair;
     const lie_emitter *em = &v->s->emitters[v->s->clusters[e].emitter];
     if (em->planar) /* a cluster lies in its emitter's plane, within its extent */
@@ -134,7 +130,7 @@ static float unreached_depth(float D, float eps, float wx, float wy, float wz, c
  * a_u = a.u falls at s = a_u D / l - w.u on the plane, so "every vertex
  * left of s0" is a_u D < (w.u + s0) l for each: no division.  Over the
  * list's vertices side by side, eight blockers at a time. */
-LIE_HOT static int select_planar(const lie_lie_vis *v, const lie_pnode *nd, const lie_emitter *em, lie_vec3 o, float eps,
+LIE_HOT static int select_planar(const lie_env_shadows *v, const lie_pnode *nd, const lie_emitter *em, lie_vec3 o, float eps,
                          uint32_t *out)
 {
     const uint32_t *list = v->env->pool + nd->list;
@@ -257,7 +253,7 @@ enum { W_E0 = 0, W_E1 = 3, W_E2 = 6, W_G = 9, W_G2 = 12 };
 /* The setup pass, over the selected blockers side by side: their vertices
  * are gathered relative to o, then eight at a time each gets its kind and
  * forms. */
-LIE_HOT static void setup_2d(const lie_lie_vis *v, const uint32_t *blockers, int nb, lie_vec3 o, const plane_view *pv,
+LIE_HOT static void setup_2d(const lie_env_shadows *v, const uint32_t *blockers, int nb, lie_vec3 o, const plane_view *pv,
                      const lie_light_samples *ls, float *work, size_t stride, uint32_t *kind_out)
 {
     float *restrict W[LIE_BLOCKER_WORK];
@@ -441,7 +437,7 @@ LIE_HOT static void drop_far_faces(const int32_t *solid, const uint32_t *blocker
  * the far faces of convex solids dropped).  Returns 0 when the segments
  * are to be tested in 3D (not a planar emitter, o at its plane), 2 when
  * some blocker blocks every sample, else 1. */
-LIE_HOT static int prepare_2d(const lie_lie_vis *v, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
+LIE_HOT static int prepare_2d(const lie_env_shadows *v, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
                       plane_view *pv_out)
 {
     const lie_light_samples *ls = q->ls;
@@ -491,7 +487,7 @@ static int next_blocker(const lie_shadow_query *q, int n_blockers, int j, uint32
  * emitter is planar and the blocker lies between (prepare_2d), else in 3D. */
 static void occluded(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q, uint32_t *occ)
 {
-    const lie_lie_vis *v = ctx;
+    const lie_env_shadows *v = ctx;
     const int n = q->n;
     memset(occ, 0, sizeof *occ * (size_t)n);
     const lie_light_samples *ls = q->ls;
@@ -525,7 +521,7 @@ static void occluded(void *ctx, const uint32_t *blockers, int n_blockers, lie_sh
  * answers the pair). */
 /* The set-up both bitmask answers share: prepare_2d, then the mask full
  * (2: some blocker blocks every sample) or empty (1), or 0 (3D tests). */
-static int mask_start(const lie_lie_vis *v, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
+static int mask_start(const lie_env_shadows *v, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
                       const lie_bitmask *bm, uint64_t *mask, plane_view *pv)
 {
     const int words = lie_bitmask_words(bm);
@@ -559,245 +555,14 @@ static int occluded_mask(void *ctx, const uint32_t *blockers, int n_blockers, li
     return 1;
 }
 
-/* ---- silhouette counting (silhouette.h) ---------------------------------- */
-
-/* A triangle's slot in the pair's hash (w->slot: its index among the
- * counted triangles, -1 if none). */
-static inline uint32_t sil_hash(uint32_t t, int n_slots) { return (t * 2654435761u) & (uint32_t)(n_slots - 1); }
-
-static int sil_find(const lie_sil_work *w, int n_slots, uint32_t t)
-{
-    for (uint32_t h = sil_hash(t, n_slots);; h = (h + 1) & (uint32_t)(n_slots - 1)) {
-        if (w->slot[h] < 0)
-            return -1;
-        if (w->slot_tri[h] == t)
-            return w->slot[h];
-    }
-}
-
-/* A projected vertex into w's vertex hash (its s and t bits): 1 if it
- * was there already. */
-#define SIL_NO_VERTEX (~0ull)
-static int sil_vertex_seen(lie_sil_work *w, float vs, float vt)
-{
-    uint32_t a, b;
-    memcpy(&a, &vs, 4);
-    memcpy(&b, &vt, 4);
-    const uint64_t key = (uint64_t)a << 32 | b; /* never SIL_NO_VERTEX: that is two NaNs */
-    for (uint32_t h = (uint32_t)((key * 0x9e3779b97f4a7c15ull) >> 40) & (uint32_t)(w->n_vused - 1);;
-         h = (h + 1) & (uint32_t)(w->n_vused - 1)) {
-        if (w->vkey[h] == key)
-            return 1;
-        if (w->vkey[h] == SIL_NO_VERTEX) {
-            w->vkey[h] = key;
-            return 0;
-        }
-    }
-}
-
-/* The same answer as occluded_mask, the blockers wholly in front of o
- * (cones whose vertices all lie at least eps deep) counted through their
- * silhouette edges, the rest walked one by one as there. */
-static int occluded_sil(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q, const lie_bitmask *bm,
-                        uint64_t *mask)
-{
-    const lie_lie_vis *v = ctx;
-    lie_sil_work *w = q->sil;
-    if (!w || !v->adj || n_blockers > w->cap)
-        return occluded_mask(ctx, blockers, n_blockers, q, bm, mask);
-    plane_view pv;
-    const int planar = mask_start(v, blockers, n_blockers, q, bm, mask, &pv);
-    if (planar != 1)
-        return planar != 0;
-    const lie_light_samples *ls = q->ls;
-    const float ux = ls->pu[0], uy = ls->pu[1], uz = ls->pu[2], vx = ls->pv[0], vy = ls->pv[1], vz = ls->pv[2];
-    const float wu = pv.wx * ux + pv.wy * uy + pv.wz * uz, wv = pv.wx * vx + pv.wy * vy + pv.wz * vz;
-    int n_slots = 8;
-    while (n_slots < 2 * n_blockers)
-        n_slots *= 2;
-    for (int h = 0; h < n_slots; h++)
-        w->slot[h] = -1;
-    w->n_tris = 0;
-    w->n_edges = 0;
-    w->counted = 0;
-    int32_t *idx = (int32_t *)q->kind; /* reused below: blocker j's triangle index, or -1 */
-    uint32_t kind = B_NONE;
-    float f[LIE_BLOCKER_WORK] = {0.0f};
-    for (int j = 0; (j = next_blocker(q, n_blockers, j, &kind, f)) < n_blockers; j++) {
-        if (kind == B_CONE) {
-            const mt_tri *T = &v->tris[blockers[j]];
-            const float P[9] = {T->ax - q->o.x, T->ay - q->o.y, T->az - q->o.z, T->bx - q->o.x, T->by - q->o.y,
-                                T->bz - q->o.z, T->cx - q->o.x, T->cy - q->o.y, T->cz - q->o.z};
-            int front = 1;
-            float ps[3], pt[3];
-            for (int c = 0; c < 3; c++) {
-                const float *p = P + 3 * c;
-                float l = p[0] * pv.kx + p[1] * pv.ky + p[2] * pv.kz;
-                front &= l > q->eps;
-                float r = pv.D / l;
-                ps[c] = (p[0] * ux + p[1] * uy + p[2] * uz) * r - wu;
-                pt[c] = (p[0] * vx + p[1] * vy + p[2] * vz) * r - wv;
-            }
-            if (front && w->n_tris < w->cap) {
-                const int i = w->n_tris++;
-                memcpy(w->forms + 9 * (size_t)i, f + W_E0, sizeof(float) * 9);
-                memcpy(w->ps + 3 * (size_t)i, ps, sizeof ps);
-                memcpy(w->pt + 3 * (size_t)i, pt, sizeof pt);
-                uint32_t h = sil_hash(blockers[j], n_slots);
-                while (w->slot[h] >= 0)
-                    h = (h + 1) & (uint32_t)(n_slots - 1);
-                w->slot[h] = i;
-                w->slot_tri[h] = blockers[j];
-                idx[w->n_tris - 1] = (int32_t)blockers[j];
-                continue;
-            }
-            lie_bitmask_cone(bm, f, mask);
-        } else if (lie_bitmask_cone_depth(bm, f, mask)) {
-            return 0;
-        }
-        if (lie_bitmask_all(bm, mask))
-            return 1; /* as occluded_mask: the rest can add nothing */
-    }
-    if (w->n_tris == 0 || lie_bitmask_all(bm, mask)) {
-        mask[lie_bitmask_words(bm) - 1] &= bm->last;
-        return 1;
-    }
-    /* the edges: an edge whose neighbour across it is counted too, with
-     * the same form negated (it lies on the other side, so the two add
-     * opposite terms everywhere) is dropped; the rest are the silhouette */
-    const float s_abs = bm->s_abs, t_abs = bm->t_abs;
-    int n_cand = 0;
-    w->n_vused = 8; /* at least twice the triangles' corners */
-    while (w->n_vused < 6 * w->n_tris)
-        w->n_vused *= 2;
-    for (int h = 0; h < w->n_vused; h++)
-        w->vkey[h] = SIL_NO_VERTEX;
-    for (int i = 0; i < w->n_tris; i++) {
-        const uint32_t t = (uint32_t)idx[i];
-        const float *fi = w->forms + 9 * (size_t)i;
-        for (int k = 0; k < 3; k++) {
-            const float *fe = fi + 3 * k;
-            const int sigma = signbit(fe[2]) ? 1 : -1;
-            const float g0 = (float)sigma * fe[0], gs = (float)sigma * fe[1], gt = (float)sigma * fe[2];
-            const int32_t nb = v->adj[3 * (size_t)t + (size_t)k];
-            if (nb >= 0) {
-                int o = sil_find(w, n_slots, (uint32_t)nb / 3);
-                if (o >= 0) {
-                    const float *fo = w->forms + 9 * (size_t)o + 3 * (size_t)(nb % 3);
-                    const int so = signbit(fo[2]) ? 1 : -1;
-                    if (so != sigma && (float)so * fo[0] == g0 && (float)so * fo[1] == gs && (float)so * fo[2] == gt) {
-                        /* interior: opposite terms; its ends may be
-                         * interior vertices (once per edge) */
-                        if (i < o) {
-                            w->cand[n_cand++] = 3 * i + k;
-                            w->cand[n_cand++] = 3 * i + (k + 1) % 3;
-                        }
-                        continue;
-                    }
-                }
-            }
-            lie_sil_edge *E = &w->edges[w->n_edges++];
-            const float sa = w->ps[3 * (size_t)i + (size_t)k], sb = w->ps[3 * (size_t)i + (size_t)(k + 1) % 3];
-            E->a = lie_minf(sa, sb);
-            E->b = lie_maxf(sa, sb);
-            const float delta = 1e-5f * (fabsf(sa) + fabsf(sb) + fabsf(wu) + s_abs);
-            E->ae = E->a - delta;
-            E->be = E->b + delta;
-            E->g0 = g0, E->gs = gs, E->gt = gt;
-            E->tol = lie_sil_tol(g0, gs, gt, s_abs, t_abs);
-            E->sigma = sigma;
-            sil_vertex_seen(w, w->ps[3 * (size_t)i + (size_t)k], w->pt[3 * (size_t)i + (size_t)k]);
-            sil_vertex_seen(w, sb, w->pt[3 * (size_t)i + (size_t)(k + 1) % 3]);
-        }
-    }
-    /* the interior vertices: ends of interior edges on no silhouette edge */
-    for (int c = 0; c < n_cand; c++) {
-        const float vs = w->ps[w->cand[c]], vt = w->pt[w->cand[c]];
-        if (sil_vertex_seen(w, vs, vt))
-            continue;
-        lie_sil_edge *E = &w->edges[w->n_edges++];
-        const float ds = 1e-5f * (fabsf(vs) + fabsf(wu) + s_abs), dt = 1e-5f * (fabsf(vt) + fabsf(wv) + t_abs);
-        E->a = E->b = vs;
-        E->ae = vs - ds;
-        E->be = vs + ds;
-        E->g0 = -vt, E->gs = 0.0f, E->gt = 1.0f;
-        E->tol = dt;
-        E->sigma = 0;
-    }
-    if (lie_sil_pays(w->n_tris, w->n_edges)) {
-        lie_sil_mask(bm, w, mask);
-        w->counted = 1;
-    } else {
-        /* too few interior edges: the triangles one by one */
-        for (int i = 0; i < w->n_tris && !lie_bitmask_all(bm, mask); i++)
-            lie_bitmask_cone(bm, w->forms + 9 * (size_t)i, mask);
-    }
-    return 1;
-}
-
 static void describe(void *ctx, const lie_surface *sf, int e, int *cls, uint32_t *count, uint64_t *patch_id)
 {
-    const lie_lie_vis *v = ctx;
+    const lie_env_shadows *v = ctx;
     lie_patch_path path;
     const lie_pnode *n = lie_env_find_leaf_path(v->env, sf->tri, e, sf->b1, sf->b2, &path);
     *cls = (int)n->cls;
     *count = n->count;
     *patch_id = lie_hash_u64x4(sf->tri, path.digits, (uint64_t)path.depth, (uint64_t)e);
-}
-
-/* Edge adjacency (lie_lie_vis.adj), once per scene and only for
- * lie_lie_vis_use_silhouette: every triangle edge
- * keyed by its two end points in a fixed order, sorted, and the keys held
- * by exactly two edges linked. */
-typedef struct edge_key {
-    uint32_t k[6];
-    uint32_t te; /* 3 t + k */
-} edge_key;
-
-static int edge_key_cmp(const void *a, const void *b)
-{
-    const edge_key *p = a, *q = b;
-    for (int i = 0; i < 6; i++)
-        if (p->k[i] != q->k[i])
-            return p->k[i] < q->k[i] ? -1 : 1;
-    return (p->te > q->te) - (p->te < q->te);
-}
-
-static int32_t *edge_adjacency(const lie_scene *s)
-{
-    const size_t n = 3 * (size_t)s->n_tris;
-    int32_t *adj = malloc(sizeof *adj * (n + 1));
-    edge_key *e = malloc(sizeof *e * (n + 1));
-    if (!adj || !e) {
-        free(adj);
-        free(e);
-        return NULL;
-    }
-    for (size_t i = 0; i < n; i++) {
-        const lie_vec3 *P = &s->tri_p[3 * (i / 3)];
-        lie_vec3 a = P[i % 3], b = P[(i % 3 + 1) % 3];
-        uint32_t ka[3], kb[3];
-        memcpy(&ka[0], &a.x, 4), memcpy(&ka[1], &a.y, 4), memcpy(&ka[2], &a.z, 4);
-        memcpy(&kb[0], &b.x, 4), memcpy(&kb[1], &b.y, 4), memcpy(&kb[2], &b.z, 4);
-        int swap = memcmp(ka, kb, sizeof ka) > 0;
-        memcpy(e[i].k, swap ? kb : ka, sizeof ka);
-        memcpy(e[i].k + 3, swap ? ka : kb, sizeof ka);
-        e[i].te = (uint32_t)i;
-        adj[i] = -1;
-    }
-    qsort(e, n, sizeof *e, edge_key_cmp);
-    for (size_t i = 0; i < n;) {
-        size_t j = i + 1;
-        while (j < n && memcmp(e[j].k, e[i].k, sizeof e[i].k) == 0)
-            j++;
-        if (j == i + 2 && e[i].te / 3 != e[i + 1].te / 3) {
-            adj[e[i].te] = (int32_t)e[i + 1].te;
-            adj[e[i + 1].te] = (int32_t)e[i].te;
-        }
-        i = j;
-    }
-    free(e);
-    return adj;
 }
 
 /* A sphere around points (lie_bound_sphere). */
@@ -809,14 +574,14 @@ static sphere bounding_sphere(const lie_vec3 *p, uint32_t n)
     return b;
 }
 
-lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vis **out, lie_error *err)
+lie_status lie_env_shadows_create(const lie_scene *s, const lie_env *env, lie_env_shadows **out, lie_error *err)
 {
     *out = NULL;
     if (env->n_tris != s->n_tris || env->n_clusters != s->n_clusters)
         return lie_error_set(err, LIE_ERR_ARG, s->path,
                              "the cache has %u triangles and %d emitter clusters, the scene %u and %d", env->n_tris,
                              env->n_clusters, s->n_tris, s->n_clusters);
-    lie_lie_vis *v = calloc(1, sizeof *v);
+    lie_env_shadows *v = calloc(1, sizeof *v);
     if (!v)
         return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
     v->tris = malloc(sizeof *v->tris * ((size_t)s->n_tris + 1));
@@ -832,7 +597,7 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
     v->tri_sphere = malloc(sizeof *v->tri_sphere * ((size_t)s->n_tris + 1));
     v->emitter_sphere = malloc(sizeof *v->emitter_sphere * ((size_t)s->n_clusters + 1));
     if (!v->tri_sphere || !v->emitter_sphere) {
-        lie_lie_vis_destroy(v);
+        lie_env_shadows_destroy(v);
         return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
     }
     for (uint32_t t = 0; t < s->n_tris; t++)
@@ -845,7 +610,7 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
         } else {
             lie_vec3 *pts = malloc(sizeof *pts * 3 * ((size_t)cl->n_tris + 1));
             if (!pts) {
-                lie_lie_vis_destroy(v);
+                lie_env_shadows_destroy(v);
                 return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
             }
             for (uint32_t k = 0; k < cl->n_tris; k++)
@@ -863,7 +628,7 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
         v->soa_vert[k] = malloc(sizeof(float) * nt);
     for (int k = 0; k < 13; k++)
         if (!(k < 4 ? v->soa_sphere[k] : v->soa_vert[k - 4])) {
-            lie_lie_vis_destroy(v);
+            lie_env_shadows_destroy(v);
             return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
         }
     for (uint32_t t = 0; t < s->n_tris; t++) {
@@ -881,7 +646,7 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
     }
     v->solid = lie_solids_find(s);
     if (!v->solid) {
-        lie_lie_vis_destroy(v);
+        lie_env_shadows_destroy(v);
         return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
     }
     v->s = s;
@@ -902,28 +667,17 @@ lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vi
     return LIE_OK;
 }
 
-const lie_vis_oracle *lie_lie_vis_oracle(const lie_lie_vis *v) { return &v->oracle; }
+const lie_vis_oracle *lie_env_shadows_oracle(const lie_env_shadows *v) { return &v->oracle; }
 
-lie_status lie_lie_vis_use_silhouette(lie_lie_vis *v, lie_error *err)
-{
-    if (v->adj)
-        return LIE_OK;
-    v->adj = edge_adjacency(v->s);
-    if (!v->adj)
-        return lie_error_set(err, LIE_ERR_NOMEM, v->s->path, "out of memory");
-    v->oracle.occluded_sil = occluded_sil;
-    return LIE_OK;
-}
+void lie_env_shadows_record_unbuilt(lie_env_shadows *v, uint8_t *mask) { v->unbuilt = mask; }
 
-void lie_lie_vis_record_unbuilt(lie_lie_vis *v, uint8_t *mask) { v->unbuilt = mask; }
-
-void lie_lie_vis_grow(lie_lie_vis *v, uint32_t longest)
+void lie_env_shadows_grow(lie_env_shadows *v, uint32_t longest)
 {
     if ((int)longest > v->oracle.max_blockers)
         v->oracle.max_blockers = (int)longest;
 }
 
-void lie_lie_vis_destroy(lie_lie_vis *v)
+void lie_env_shadows_destroy(lie_env_shadows *v)
 {
     if (!v)
         return;
@@ -935,6 +689,5 @@ void lie_lie_vis_destroy(lie_lie_vis *v)
     for (int k = 0; k < 9; k++)
         free(v->soa_vert[k]);
     free(v->solid);
-    free(v->adj);
     free(v);
 }

@@ -1,8 +1,9 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Emitter sample patterns.  The paper (§6.1) uses "the same sample points on
  * the emitters every time": banding instead of pixel noise.  We use a
  * Hammersley set per emitter, shifted by a hash of the emitter's index, and
  * map it onto the emitter's triangles in proportion to their area. */
-#include "shade/shade.h"
+#include "shade/internal.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -51,6 +52,12 @@ void lie_light_samples_free(lie_light_samples *ls)
 void lie_light_samples_generate(const lie_scene *s, int e, int n, float su, float sv,
                                 lie_light_samples *out)
 {
+    lie_light_samples_generate_with(s, e, n, su, sv, NULL, out);
+}
+
+void lie_light_samples_generate_with(const lie_scene *s, int e, int n, float su, float sv, const lie_texlight *tl,
+                                     lie_light_samples *out)
+{
     const lie_emitter *em = &s->emitters[e];
     lie_emitter_sample q;
     if (lie_emitter_is_delta(em)) {
@@ -86,7 +93,10 @@ void lie_light_samples_generate(const lie_scene *s, int e, int n, float su, floa
     for (int i = 0; i < n; i++) {
         float u1 = wrap01(((float)i + 0.5f) / (float)n + su);
         float u2 = wrap01(lie_radical_inverse2((uint32_t)i) + sv);
-        lie_emitter_sample_point(s, e, u1, u2, &q);
+        if (tl)
+            lie_texlight_sample(s, e, tl, u1, u2, &q);
+        else
+            lie_emitter_sample_point(s, e, u1, u2, &q);
         lie_vec3 p = q.p;
         /* Le / (pdf n): the estimate is the plain sum of weight x G x f x V */
         float w = q.inv_pdf / (float)n;

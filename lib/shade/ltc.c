@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Linearly transformed cosines over polygons (Heitz, Dupuy, Hill, Neubelt
  * 2016): map the polygon by the fitted M^-1, clip it to the upper
  * hemisphere, and take the clamped cosine's closed form over a spherical

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/shade/ltc.h: the glTF metallic-roughness BRDF integrated over a
  * polygon of constant radiance with linearly transformed cosines (Heitz,
  * Dupuy, Hill, Neubelt, "Real-Time Polygonal-Light Shading with Linearly

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Polygonal lights in closed form (polylight.h): Lambert's edge sum over
  * convex pieces of a planar emitter, and the visible pieces left by
  * back-projected blockers.  Double precision throughout: the pieces are

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Polygonal lights: a planar area emitter of one radiance, as convex
  * polygons in its plane, lighting Lambert receivers in closed form.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The renderer: eye rays through pixel centres (or stratified sub-pixel
  * positions), direct lighting at the first hit, perfect mirrors traced
  * recursively, in 16x16 tiles over worker threads.  Each pixel's value
@@ -5,6 +6,7 @@
 #include "lie/lie.h"
 #include "shade/internal.h"
 
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -12,6 +14,7 @@ lie_render_options lie_render_options_default(void)
 {
     lie_render_options o;
     memset(&o, 0, sizeof o);
+    o.size = sizeof o;
     o.width = LIE_RENDER_WIDTH_DEFAULT;
     o.height = LIE_RENDER_HEIGHT_DEFAULT;
     o.spp = 1;
@@ -37,7 +40,6 @@ void lie_render_stats_add(lie_render_stats *acc, const lie_render_stats *w)
     acc->pairs_analytic += w->pairs_analytic;
     acc->pairs_exact += w->pairs_exact;
     acc->pairs_bitmask += w->pairs_bitmask;
-    acc->pairs_silhouette += w->pairs_silhouette;
     acc->pairs_blockers += w->pairs_blockers;
     acc->pairs_embree += w->pairs_embree;
     acc->pairs_unshadowed += w->pairs_unshadowed;
@@ -47,7 +49,6 @@ void lie_render_stats_add(lie_render_stats *acc, const lie_render_stats *w)
     acc->t_analytic += w->t_analytic;
     acc->t_exact += w->t_exact;
     acc->t_bitmask += w->t_bitmask;
-    acc->t_silhouette += w->t_silhouette;
     acc->t_blockers += w->t_blockers;
     acc->t_embree += w->t_embree;
     acc->t_sampled_shading += w->t_sampled_shading;
@@ -208,10 +209,12 @@ static void render_tile(void *ctx, size_t item, int worker)
                 first.tri = LIE_NO_HIT;
                 float c[3] = {0.0f, 0.0f, 0.0f};
                 sc->stats.eye_rays++;
+                /* the pixel and the eye sample seed the light patterns */
+                const uint64_t key = pixel | (uint64_t)k << 40;
                 if (spp == 1) {
                     /* the row's packet has traced it */
                     if (row_hits[x - x0].tri != LIE_NO_HIT)
-                        shade_hit(j, &row_hits[x - x0], row_dirs[x - x0], 0, pixel, sc, c, &first);
+                        shade_hit(j, &row_hits[x - x0], row_dirs[x - x0], 0, key, sc, c, &first);
                 } else {
                     /* Stratified: a Hammersley set shifted per pixel. */
                     float sx = ((float)k + 0.5f) / (float)spp + shx;
@@ -220,7 +223,7 @@ static void render_tile(void *ctx, size_t item, int worker)
                     sy -= floorf(sy);
                     lie_vec3 org, d;
                     lie_view_ray(&j->view, (float)x + sx, (float)y + sy, f->width, f->height, &org, &d);
-                    trace(j, org, d, 0, pixel, sc, c, &first);
+                    trace(j, org, d, 0, key, sc, c, &first);
                 }
                 for (int q = 0; q < 3; q++)
                     acc[q] += c[q];
@@ -310,11 +313,120 @@ static void render_range_tile(void *ctx, size_t item, int worker)
     render_tile(r->j, r->first + item, worker);
 }
 
+/* The options as this library knows them: a caller's struct of an older,
+ * smaller size gets the defaults for the fields it lacks. */
+static lie_status options_of(const lie_scene *s, const lie_render_options *opt, lie_render_options *out,
+                             lie_error *err)
+{
+    *out = lie_render_options_default();
+    if (opt->size < offsetof(lie_render_options, bitmask) || opt->size > sizeof *out)
+        return lie_error_set(err, LIE_ERR_ARG, s->path ? s->path : "",
+                             "render options of size %zu: not made by lie_render_options_default", opt->size);
+    memcpy(out, opt, opt->size);
+    out->size = sizeof *out;
+    return LIE_OK;
+}
+
+/* What a frame shares among its workers besides the scratch: the fixed
+ * patterns and bitmasks of the per-emitter sampler, the closed forms, the
+ * textured emitters' distributions, the emitters' bounds and the light
+ * sampler. */
+static lie_status frame_setup(render_job *j, const lie_scene *s, const lie_render_options *opt)
+{
+    lie_shade_ctx *c = &j->sc;
+    lie_status st = LIE_OK;
+    const int ne = s->n_emitters;
+    c->sampler_on = opt->sampler != LIE_SAMPLER_PER_EMITTER;
+    if (!c->sampler_on) {
+        lie_light_samples *fixed = calloc((size_t)ne + 1, sizeof *fixed);
+        c->fixed = fixed;
+        st = fixed ? LIE_OK : LIE_ERR_NOMEM;
+        for (int e = 0; st == LIE_OK && e < ne; e++) {
+            int n = lie_emitter_sample_count(&s->emitters[e], opt->light_samples);
+            st = lie_light_samples_alloc(&fixed[e], n);
+            if (st == LIE_OK) {
+                float su, sv;
+                lie_light_pattern_shift(e, &su, &sv);
+                if (opt->seed) {
+                    uint64_t h = lie_hash_u64x4((uint64_t)e, opt->seed, 0x66697865ull, 0);
+                    su = lie_hash_to_unit(h), sv = lie_hash_to_unit(h << 24);
+                }
+                lie_light_samples_generate(s, e, n, su, sv, &fixed[e]);
+            }
+        }
+    } else {
+        c->texlights = calloc((size_t)ne + 1, sizeof *c->texlights);
+        float *scale = malloc(sizeof *scale * ((size_t)ne + 1));
+        st = c->texlights && scale ? lie_texlight_create_all(s, c->texlights) : LIE_ERR_NOMEM;
+        for (int e = 0; st == LIE_OK && e < ne; e++)
+            scale[e] = lie_texlight_power_scale(c->texlights[e]);
+        lie_light_bounds *bounds = NULL;
+        if (st == LIE_OK)
+            st = lie_light_bounds_all(s, scale, &bounds);
+        c->bounds = bounds;
+        free(scale);
+        if (st == LIE_OK)
+            st = lie_light_sampler_create(s, opt->sampler, bounds, &c->sampler);
+        /* the LIE's classes share the budget, except in the oracle's mode
+         * (the same samples as full visibility) */
+        c->guided = opt->visibility == LIE_VIS_LIE && opt->oracle && opt->exact != LIE_EXACT_OFF;
+    }
+    /* closed forms from LIE_ANALYTIC_MIN_SAMPLES on: below, a few samples
+     * cost less than an edge sum */
+    c->analytic = opt->exact == LIE_EXACT_ONLY || opt->light_samples >= LIE_ANALYTIC_MIN_SAMPLES;
+    c->exact = opt->visibility == LIE_VIS_LIE && opt->exact != LIE_EXACT_OFF;
+    if (st == LIE_OK && c->analytic) {
+        c->poly = calloc((size_t)ne + 1, sizeof *c->poly);
+        st = c->poly ? LIE_OK : LIE_ERR_NOMEM;
+        for (int e = 0; st == LIE_OK && e < ne; e++)
+            st = lie_polylight_create(s, e, &c->poly[e]);
+    }
+    /* all samples at once (bitmask.h): the fixed pattern of each planar
+     * emitter in mask order */
+    if (st == LIE_OK && !c->sampler_on && opt->visibility == LIE_VIS_LIE && opt->oracle && opt->oracle->occluded_mask &&
+        (opt->bitmask == LIE_BITMASK_ONLY || (opt->bitmask == LIE_BITMASK_AUTO && opt->exact == LIE_EXACT_AUTO)) &&
+        opt->exact != LIE_EXACT_ONLY && opt->pattern == LIE_PATTERN_FIXED &&
+        opt->light_samples >= LIE_BITMASK_MIN_SAMPLES) {
+        c->bits = calloc((size_t)ne + 1, sizeof *c->bits);
+        st = c->bits ? LIE_OK : LIE_ERR_NOMEM;
+        for (int e = 0; st == LIE_OK && e < ne; e++)
+            if (!lie_emitter_is_delta(&s->emitters[e]))
+                st = lie_bitmask_create(&c->fixed[e], &c->bits[e]);
+    }
+    return st;
+}
+
+static void frame_free(render_job *j, const lie_scene *s)
+{
+    lie_shade_ctx *c = &j->sc;
+    for (int e = 0; e < s->n_emitters; e++) {
+        if (c->fixed)
+            lie_light_samples_free((lie_light_samples *)&c->fixed[e]);
+        if (c->poly)
+            lie_polylight_destroy(c->poly[e]);
+        if (c->bits)
+            lie_bitmask_destroy(c->bits[e]);
+        if (c->texlights)
+            lie_texlight_destroy(c->texlights[e]);
+    }
+    free((void *)c->fixed);
+    free(c->poly);
+    free(c->bits);
+    free(c->texlights);
+    free((void *)c->bounds);
+    lie_light_sampler_destroy(&c->sampler);
+}
+
 lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_camera *cam,
-                            const lie_render_options *opt, lie_frame *f, size_t first, size_t count,
+                            const lie_render_options *user_opt, lie_frame *f, size_t first, size_t count,
                             lie_render_stats *stats, lie_error *err)
 {
     const char *path = s->path ? s->path : "";
+    lie_render_options frame_opt;
+    lie_status st = options_of(s, user_opt, &frame_opt, err);
+    if (st != LIE_OK)
+        return st;
+    const lie_render_options *opt = &frame_opt;
     if (opt->width != f->width || opt->height != f->height)
         return lie_error_set(err, LIE_ERR_ARG, path, "frame %dx%d does not match image size %dx%d", f->width,
                              f->height, opt->width, opt->height);
@@ -330,17 +442,18 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
     if (opt->aov_emitter >= s->n_emitters)
         return lie_error_set(err, LIE_ERR_ARG, path, "emitter %d: the scene has %d", opt->aov_emitter,
                              s->n_emitters);
+    if ((unsigned)opt->sampler > LIE_SAMPLER_PER_EMITTER)
+        return lie_error_set(err, LIE_ERR_ARG, path, "unknown light sampler %d", (int)opt->sampler);
     double t0 = lie_time_now();
     render_job j;
     memset(&j, 0, sizeof j);
     j.sc.s = s;
     j.sc.rt = rt;
-    /* a frame of very few light samples is cheaper with full visibility
-     * (LIE_LIE_MIN_SAMPLES); the oracle still serves the AOVs */
-    lie_render_options frame_opt = *opt;
-    if (opt->visibility == LIE_VIS_LIE && opt->light_samples < LIE_LIE_MIN_SAMPLES && opt->exact != LIE_EXACT_ONLY)
+    /* a per-emitter frame of very few light samples is cheaper with full
+     * visibility (LIE_ENV_MIN_SAMPLES); the oracle still serves the AOVs */
+    if (opt->sampler == LIE_SAMPLER_PER_EMITTER && opt->visibility == LIE_VIS_LIE &&
+        opt->light_samples < LIE_ENV_MIN_SAMPLES && opt->exact != LIE_EXACT_ONLY)
         frame_opt.visibility = LIE_VIS_FULL;
-    opt = &frame_opt;
     j.sc.opt = opt;
     j.sc.ray_far = lie_pair_ray_far(s);
     if (!isfinite(j.sc.ray_far))
@@ -355,45 +468,13 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
     j.patch = aov_data(f, "patch");
     j.coverage = aov_data(f, "");
     int threads = opt->threads > 0 ? opt->threads : lie_cpu_count();
-    lie_light_samples *fixed = calloc((size_t)s->n_emitters + 1, sizeof *fixed);
     j.scratch = aligned_alloc(128, sizeof *j.scratch * (size_t)threads);
     if (j.scratch)
         memset(j.scratch, 0, sizeof *j.scratch * (size_t)threads);
-    lie_status st = fixed && j.scratch ? LIE_OK : LIE_ERR_NOMEM;
-    for (int e = 0; st == LIE_OK && e < s->n_emitters; e++) {
-        int n = lie_emitter_sample_count(&s->emitters[e], opt->light_samples);
-        st = lie_light_samples_alloc(&fixed[e], n);
-        if (st == LIE_OK) {
-            float su, sv;
-            lie_light_pattern_shift(e, &su, &sv);
-            lie_light_samples_generate(s, e, n, su, sv, &fixed[e]);
-        }
-    }
+    st = j.scratch ? frame_setup(&j, s, opt) : LIE_ERR_NOMEM;
     for (int t = 0; st == LIE_OK && t < threads; t++)
-        st = lie_shade_scratch_init(&j.scratch[t], opt->light_samples, opt->oracle ? opt->oracle->max_blockers : 0);
-    j.sc.fixed = fixed;
-    /* closed forms from LIE_ANALYTIC_MIN_SAMPLES on: below, a few samples
-     * cost less than an edge sum */
-    j.sc.analytic = opt->exact == LIE_EXACT_ONLY || opt->light_samples >= LIE_ANALYTIC_MIN_SAMPLES;
-    j.sc.exact = opt->visibility == LIE_VIS_LIE && opt->exact != LIE_EXACT_OFF;
-    if (st == LIE_OK && j.sc.analytic) {
-        j.sc.poly = calloc((size_t)s->n_emitters + 1, sizeof *j.sc.poly);
-        st = j.sc.poly ? LIE_OK : LIE_ERR_NOMEM;
-        for (int e = 0; st == LIE_OK && e < s->n_emitters; e++)
-            st = lie_polylight_create(s, e, &j.sc.poly[e]);
-    }
-    /* all samples at once (bitmask.h): the fixed pattern of each planar
-     * emitter in mask order */
-    if (st == LIE_OK && opt->visibility == LIE_VIS_LIE && opt->oracle && opt->oracle->occluded_mask &&
-        (opt->bitmask == LIE_BITMASK_ONLY || (opt->bitmask == LIE_BITMASK_AUTO && opt->exact == LIE_EXACT_AUTO)) &&
-        opt->exact != LIE_EXACT_ONLY && opt->pattern == LIE_PATTERN_FIXED &&
-        opt->light_samples >= LIE_BITMASK_MIN_SAMPLES) {
-        j.sc.bits = calloc((size_t)s->n_emitters + 1, sizeof *j.sc.bits);
-        st = j.sc.bits ? LIE_OK : LIE_ERR_NOMEM;
-        for (int e = 0; st == LIE_OK && e < s->n_emitters; e++)
-            if (!lie_emitter_is_delta(&s->emitters[e]))
-                st = lie_bitmask_create(&fixed[e], &j.sc.bits[e]);
-    }
+        st = lie_shade_scratch_init(&j.scratch[t], opt->light_samples, opt->oracle ? opt->oracle->max_blockers : 0,
+                                    s->n_emitters);
     if (st == LIE_OK) {
         j.tiles_x = (opt->width + LIE_TILE - 1) / LIE_TILE;
         tile_range r = {&j, first};
@@ -412,15 +493,7 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
     for (int t = 0; j.scratch && t < threads; t++)
         lie_shade_scratch_free(&j.scratch[t]);
     free(j.scratch);
-    for (int e = 0; fixed && e < s->n_emitters; e++)
-        lie_light_samples_free(&fixed[e]);
-    free(fixed);
-    for (int e = 0; j.sc.poly && e < s->n_emitters; e++)
-        lie_polylight_destroy(j.sc.poly[e]);
-    free(j.sc.poly);
-    for (int e = 0; j.sc.bits && e < s->n_emitters; e++)
-        lie_bitmask_destroy(j.sc.bits[e]);
-    free(j.sc.bits);
+    frame_free(&j, s);
     if (st != LIE_OK)
         return lie_error_set(err, st, path, "%s", lie_status_str(st));
     return LIE_OK;

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/shade: BRDFs (Lambert; GGX as glTF's metallic-roughness BRDF; perfect
  * mirror), emitter sample patterns and the direct-lighting renderer.
  *
@@ -89,14 +90,12 @@ typedef enum lie_visibility_mode {
     LIE_VIS_NONE = 2       /* no shadows at all (benchmarks: shading cost alone) */
 } lie_visibility_mode;
 
-/* How a (shading point, emitter) pair is to be answered. */
-typedef enum lie_vis_class {
-    LIE_VISCLASS_TEST_ALL = 0,   /* cast every shadow ray against the whole scene */
-    LIE_VISCLASS_VISIBLE = 1,    /* no ray needed: fully visible */
-    LIE_VISCLASS_OCCLUDED = 2,   /* no contribution */
-    LIE_VISCLASS_BLOCKERS = 3,   /* test rays against a blocker list only */
-    LIE_VISCLASS_UNBUILT = 4     /* as TEST_ALL: the pair's unit was not built (lie-build --view) */
-} lie_vis_class;
+/* A pair's class is lib/lie's lie_class (lie/lie.h), one enum for the
+ * cache and the renderer: classify() answers VISIBLE, OCCLUDED (or unlit:
+ * no light either way), PARTIAL (test the blocker list), COMPLEX (ask the
+ * whole scene) or NONE (not built: the whole scene too); the renderer
+ * calls an emitter of several clusters SPLIT (each cluster's own pair
+ * answers its samples). */
 
 /* One shading point's shadow segments toward one emitter: o -> o + d_i,
  * d_i the vector to sample i shortened by eps.  For an area emitter the
@@ -117,15 +116,12 @@ typedef struct lie_shadow_query {
     float *work;
     uint32_t *kind;
     size_t work_stride;
-    /* silhouette counting's workspace (lib/shade/silhouette.h), for
-     * occluded_sil; NULL: that answer is the bitmask's */
-    struct lie_sil_work *sil;
 } lie_shadow_query;
 #define LIE_BLOCKER_WORK 15
 void lie_shadow_query_segments(lie_shadow_query *q);
 
 /* A visibility oracle other than Embree-over-everything.  classify() looks
- * up the pair; for LIE_VISCLASS_BLOCKERS, select() keeps the pair's
+ * up the pair; for LIE_CLASS_PARTIAL, select() keeps the pair's
  * blockers that can matter to segments from origin o shortened by eps
  * (lie_shadow_query) (writing at most max_blockers
  * triangle indices; none left means the point sees the emitter whole) and
@@ -135,7 +131,7 @@ typedef struct lie_bitmask lie_bitmask; /* lib/shade/bitmask.h */
 typedef struct lie_vis_oracle {
     void *ctx;
     int max_blockers;
-    lie_vis_class (*classify)(void *ctx, const lie_surface *sf, int emitter, const void **pair);
+    lie_class (*classify)(void *ctx, const lie_surface *sf, int emitter, const void **pair);
     int (*select)(void *ctx, const void *pair, int emitter, lie_vec3 o, float eps, uint32_t *out);
     void (*occluded)(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
                      uint32_t *occ);
@@ -144,10 +140,6 @@ typedef struct lie_vis_oracle {
      * answer (then occluded() does). */
     int (*occluded_mask)(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
                          const lie_bitmask *bm, uint64_t *mask);
-    /* Optional: the same mask through silhouette counting
-     * (lib/shade/silhouette.h), bit for bit; q->sil its workspace. */
-    int (*occluded_sil)(void *ctx, const uint32_t *blockers, int n_blockers, lie_shadow_query *q,
-                        const lie_bitmask *bm, uint64_t *mask);
     /* For AOVs: the pair's class (lie_class), list length and a patch id. */
     void (*describe)(void *ctx, const lie_surface *sf, int emitter, int *cls, uint32_t *count,
                      uint64_t *patch_id);
@@ -161,23 +153,19 @@ typedef struct lie_vis_oracle {
  * precomputed triangles, a loop the compiler vectorises over rays), and
  * complex pairs ask Embree.  `env` must match the scene. */
 typedef struct lie_env lie_env;
-typedef struct lie_lie_vis lie_lie_vis;
-lie_status lie_lie_vis_create(const lie_scene *s, const lie_env *env, lie_lie_vis **out, lie_error *err);
-const lie_vis_oracle *lie_lie_vis_oracle(const lie_lie_vis *v);
-/* Silhouette counting (occluded_sil) needs the scene's edge adjacency, a
- * sort of every edge: made here, on request, not by every create.  Until
- * then occluded_sil is NULL and bitmasks are walked blocker by blocker. */
-lie_status lie_lie_vis_use_silhouette(lie_lie_vis *v, lie_error *err);
+typedef struct lie_env_shadows lie_env_shadows;
+lie_status lie_env_shadows_create(const lie_scene *s, const lie_env *env, lie_env_shadows **out, lie_error *err);
+const lie_vis_oracle *lie_env_shadows_oracle(const lie_env_shadows *v);
 /* The env grew lists up to `longest` blockers since the oracle was made (an
  * env built while it is rendered from, lib/update's lie_ctor): the
  * oracle's max_blockers follows.  Call while nothing renders from it. */
-void lie_lie_vis_grow(lie_lie_vis *v, uint32_t longest);
+void lie_env_shadows_grow(lie_env_shadows *v, uint32_t longest);
 /* From now on, set mask[tri] (n_tris bytes, the caller's, not cleared) for
  * every triangle whose unbuilt (LIE_CLASS_NONE) unit a render asks about:
  * what a render from an env still being built answered with Embree
  * (lie-render --cache).  NULL stops it. */
-void lie_lie_vis_record_unbuilt(lie_lie_vis *v, uint8_t *mask);
-void lie_lie_vis_destroy(lie_lie_vis *v);
+void lie_env_shadows_record_unbuilt(lie_env_shadows *v, uint8_t *mask);
+void lie_env_shadows_destroy(lie_env_shadows *v);
 
 /* ---- the renderer ------------------------------------------------------ */
 
@@ -201,84 +189,71 @@ void lie_complexity_colour(int cls, uint32_t count, float rgb[3]);
 void lie_complexity_colour_all(const int *cls, const uint32_t *count, int n, float rgb[3]);
 
 /* Lambert receivers under planar emitters of one radiance are shaded in
- * closed form (Lambert's edge sum) from LIE_ANALYTIC_MIN_SAMPLES light
- * samples on, with any visibility: a pair seen whole takes no samples, a
- * pair whose visibility is sampled is scaled by the ratio of its visible
- * samples' weight to all its samples' (Heitz, Hill, McGuire 2018).  With
- * LIE visibility, a partial pair's visible part can be found exactly by
- * back-projecting its blockers: LIE_EXACT_ONLY always, LIE_EXACT_AUTO when
- * that costs less than testing its samples (lie_render_exact_pays). */
+ * closed form (Lambert's edge sum) with any visibility: a pair seen whole
+ * takes no samples, a pair whose visibility is sampled is scaled by the
+ * ratio of its visible samples' weight to all its samples' (Heitz, Hill,
+ * McGuire 2018).  With LIE visibility, a partial pair's visible part can
+ * be found exactly by back-projecting its blockers: LIE_EXACT_ONLY always,
+ * LIE_EXACT_AUTO when that costs less than testing its samples (the cost
+ * model of lib/shade/cost.h). */
 typedef enum lie_exact_mode {
     LIE_EXACT_AUTO = 0,
     LIE_EXACT_OFF = 1,     /* partial pairs sampled (the oracle: LIE image = full image) */
     LIE_EXACT_ONLY = 2     /* closed forms and exact visibility wherever they apply */
 } lie_exact_mode;
-#define LIE_ANALYTIC_MIN_SAMPLES 16
-/* Below this many light samples a LIE frame is answered by full
- * visibility: one or two rays cost less than the leaf lookup and the
- * classes (museum1 at 1 sample: 40 ms against 33 ms). */
-#define LIE_LIE_MIN_SAMPLES 4
-/* The cost model of LIE_EXACT_AUTO, in tenths of a nanosecond.  Fitted
- * (least squares on relative error) to --timers of museum1, museum3 and
- * cornell with conservative caches, 256x256, one thread, 256, 1024 and
- * 4096 samples, each path forced in turn, best of 2 (2026-12-01, on 2
- * cores shared with other jobs): testing n samples against b selected
- * blockers costs about n (4 + 2 b), the exact shadow 1400 + 2700 b.  So
- * exact shadows pay from about 1350 samples on.  The fits are within a
- * factor of 1.5 of the measured totals per scene (the cost of a blocker
- * depends on how early it is culled, which b does not see). */
-static inline int lie_render_exact_pays(int n, int b)
-{
-    return (double)n * (4.0 + 2.0 * b) >= 1400.0 + 2700.0 * b;
-}
 /* Partial pairs toward a planar emitter may also be answered with all
  * samples at once (lib/shade/bitmask.h): LIE_BITMASK_AUTO where the cost
- * model below says it is the cheapest of samples, bitmask and exact;
+ * model says it is the cheapest of samples, bitmask and exact;
  * LIE_BITMASK_ONLY wherever it applies (not with LIE_EXACT_ONLY, whose
  * exact shadows win); LIE_BITMASK_OFF never.  AUTO is off under
  * LIE_EXACT_OFF, the oracle's mode (the same samples in the same order as
- * full visibility).  It needs the fixed pattern and LIE_BITMASK_MIN_SAMPLES
- * samples. */
+ * full visibility).  It needs the per-emitter sampler's fixed pattern. */
 typedef enum lie_bitmask_mode {
     LIE_BITMASK_AUTO = 0,
     LIE_BITMASK_OFF = 1,
     LIE_BITMASK_ONLY = 2
 } lie_bitmask_mode;
-#define LIE_BITMASK_MIN_SAMPLES 64
-/* Its cost in the units of lie_render_exact_pays, fitted the same way: a
- * set-up and the sum over the fewer of the blocked and the visible
- * samples, 500, and per blocker a walk whose cost grows with its shadow's
- * perimeter in groups of 8 samples, 600 + 20 sqrt(n).  A receiver that is
- * not Lambert's still shades every sample (shade_all), 4 n. */
-static inline double lie_render_bitmask_cost(int n, int b, int shade_all)
-{
-    return 500.0 + (shade_all ? 4.0 * n : 0.0) + (double)b * (600.0 + 20.0 * __builtin_sqrt((double)n));
-}
-static inline double lie_render_samples_cost(int n, int b) { return (double)n * (4.0 + 2.0 * b); }
-/* Partial pairs answered as bitmasks may count their blockers through
- * silhouette edges instead (lib/shade/silhouette.h): LIE_SILHOUETTE_ONLY
- * for every bitmask pair; OFF (the default) never.  Measured, it lost to
- * the walk of every blocker on museum1, museum3 and cornell (README.md,
- * "Silhouette counting"), so no cost model chooses it. */
-typedef enum lie_silhouette_mode {
-    LIE_SILHOUETTE_OFF = 0,
-    LIE_SILHOUETTE_ONLY = 1
-} lie_silhouette_mode;
-/* Embree's rays over the whole scene, in the same units: the complex
- * pairs' rays of museum1 and museum3 (--timers, fitted as above), 800 a
- * ray, 70 to 120 ns each on this machine.  (The last fit, 160, sent lists
- * of more than about 230 blockers to Embree at 1024 samples, where the
- * lists cost less: museum3 built with --complex-cap 1024 took 0.68 CPU s
- * a frame at 256 samples with it, 0.49 s with 800.)  A pair whose list
- * answers cost more (hundreds of blockers) asks Embree instead, so that no pair is slower than full visibility (with
- * the default modes; --exact off and --bitmask only keep the lists). */
-static inline double lie_render_embree_cost(int n) { return 800.0 * n; }
-static inline double lie_render_exact_cost(int b) { return 1400.0 + 2700.0 * b; }
 
+/* How a shading point's light samples are shared among the emitters
+ * (lib/shade/sampler.h; chosen by name, lie_light_sampler_parse):
+ *  - LIE_SAMPLER_TREE (the default): `light_samples` is a budget per
+ *    shading point, each sample going to an emitter picked through a
+ *    light BVH with orientation bounds (Conty Estevez and Kulla 2018), in
+ *    O(log emitters).  Under LIE visibility (not LIE_EXACT_OFF) the
+ *    pair's classes guide it instead: unlit and occluded pairs take
+ *    nothing, visible ones their closed form, and the budget goes to the
+ *    partial pairs in proportion to their unshadowed light;
+ *  - LIE_SAMPLER_POWER, LIE_SAMPLER_UNIFORM: the same budget, emitters in
+ *    proportion to their power (the emissive texture's included), or all
+ *    alike (pbrt-v4's PowerLightSampler and UniformLightSampler);
+ *  - LIE_SAMPLER_PER_EMITTER: the paper's meaning, `light_samples` of
+ *    every emitter at every point, from one fixed pattern per emitter
+ *    (§6.1) or a rotated one (`pattern`).
+ * The budgeted samplers take a fresh pattern per pixel, rotated by hashes
+ * of the pixel, the emitter and `seed` (Cranley and Patterson 1976):
+ * their error is noise, not structure. */
+typedef enum lie_light_sampler_kind {
+    LIE_SAMPLER_TREE = 0,
+    LIE_SAMPLER_POWER = 1,
+    LIE_SAMPLER_UNIFORM = 2,
+    LIE_SAMPLER_PER_EMITTER = 3
+} lie_light_sampler_kind;
+/* The sampler named `name` ("tree", "power", "uniform", "per-emitter"):
+ * 1 and *out set, or 0.  lie_light_sampler_name is the inverse. */
+int lie_light_sampler_parse(const char *name, lie_light_sampler_kind *out);
+const char *lie_light_sampler_name(lie_light_sampler_kind k);
+
+/* Options of a render.  `size` is sizeof(lie_render_options) as the caller
+ * was compiled (lie_render_options_default sets it): a library built with
+ * more fields takes the defaults for those a smaller struct lacks
+ * (OpenEXRCore's exr_context_initializer_t), so callers built against an
+ * older header keep working. */
 typedef struct lie_render_options {
+    size_t size;
     int width, height;
     int spp;               /* eye rays per pixel, stratified; 1 = pixel centre */
-    int light_samples;     /* shadow rays per area emitter per shading point */
+    int light_samples;     /* light samples per shading point, shared among the emitters
+                              (LIE_SAMPLER_PER_EMITTER: per area emitter) */
     int max_depth;         /* mirror bounces */
     int threads;           /* 0 = all cores */
     lie_pattern pattern;
@@ -288,19 +263,15 @@ typedef struct lie_render_options {
     unsigned aovs;         /* LIE_AOV_* bits */
     int aov_emitter;       /* complexity/patch AOVs for this emitter; -1 = all */
     int eye_only;          /* trace eye rays only (benchmark baseline) */
-    unsigned lie_skip;     /* LIE_SKIP_*: benchmark ablations (wrong images) */
+    unsigned ablate;       /* benchmark ablations, wrong images (lib/shade/cost.h); 0 */
     int progress;          /* progress bar on stderr if a terminal */
     const char *progress_label; /* its label (NULL: "render"), e.g. "frame 3/20" */
     lie_exact_mode exact;  /* closed-form shading and exact visibility (polylight.h) */
     int timers;            /* per-worker timers of each path into the stats (costs a clock read per pair) */
     lie_bitmask_mode bitmask; /* all samples at once for partial pairs (bitmask.h) */
-    lie_silhouette_mode silhouette; /* bitmasks through silhouette edges (silhouette.h) */
+    lie_light_sampler_kind sampler; /* how light samples are shared among emitters */
+    uint64_t seed;         /* mixed into every per-pixel pattern: renders with two seeds are independent */
 } lie_render_options;
-
-/* Benchmark ablations of --visibility=lie: answer partial pairs (their
- * blocker tests) or complex pairs (their Embree rays) as unshadowed, so
- * that side-by-side runs show where a LIE frame's time goes. */
-enum { LIE_SKIP_BLOCKERS = 1u << 0, LIE_SKIP_FALLBACK = 1u << 1 };
 
 #define LIE_RENDER_WIDTH_DEFAULT 512
 #define LIE_RENDER_HEIGHT_DEFAULT 512
@@ -320,12 +291,11 @@ typedef struct lie_render_stats {
     uint64_t pairs_embree;    /* samples against the whole scene */
     uint64_t pairs_unshadowed; /* seen whole, sampled shading */
     uint64_t pairs_bitmask;   /* partial, all samples at once as a bitmask (bitmask.h) */
-    uint64_t pairs_silhouette; /* partial, the same bitmask through silhouette edges (silhouette.h) */
     uint64_t exact_overflows; /* exact pairs that fell back to samples */
     uint64_t pairs_unbuilt;   /* of pairs_embree: units lie-build left out (--view, --path) */
     uint64_t points_unbuilt;  /* shading points with such a pair: pixels, at 1 spp without mirrors */
     /* with lie_render_options.timers: seconds summed over workers */
-    double t_analytic, t_exact, t_blockers, t_embree, t_sampled_shading, t_bitmask, t_silhouette;
+    double t_analytic, t_exact, t_blockers, t_embree, t_sampled_shading, t_bitmask;
     double seconds;
 } lie_render_stats;
 /* acc += w, field by field */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Convex solids among the scene's instances: a shadow segment that starts
  * and ends outside a closed convex mesh and crosses it enters through a face
  * that faces its start, so the faces turned away from a shading point that

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Surfaces at ray hits, and the glTF metallic-roughness BRDF in scalar form
  * (the vectorised form used for shading lives in direct.c; tests hold the
  * two to each other). */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The triangles a camera sees, directly or in mirrors, and where on them
  * (lie-build --view, §4.3.1 and §4.3.3). */
 #include "shade/shade.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The asynchronous constructor (§4.3, §4.3.1): local illumination
  * environments built while a program renders from them, those its current
  * view sees first (lib/update/update.h, lie_ctor).

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/update's private state, shared by its files (see update.h). */
 #ifndef LIE_UPDATE_INTERNAL_H
 #define LIE_UPDATE_INTERNAL_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Phase 1 of an update (§5.3): which units continue, which nodes the
  * edits' boxes reach, and the work env those answers shape. */
 #include "update/internal.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Updating local illumination environments after edits (§5): the update's
  * life — create, edits (phase 1, mark.c), steps (phase 2), commit. */
 #include "update/internal.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/update: updating a cache's local illumination environments after
  * scene edits (§5), in two phases so that an interactive program can show
  * an edit at once and refine its frames while the environments catch up.
@@ -16,7 +17,7 @@
  * Pending units in a render: lie_update_snapshot gives an env for the
  * edited scene in which every leaf still to be recomputed, and the root of
  * every unit still to be rebuilt, has class LIE_CLASS_NONE; the renderer
- * (lib/shade, lie_lie_vis) already answers those pairs with Embree over
+ * (lib/shade, lie_env_shadows) already answers those pairs with Embree over
  * the whole scene, so a frame rendered from a snapshot equals a frame
  * rendered with full visibility wherever a unit is pending, and with the
  * finished update everywhere else (unflagged leaves are exactly what the
@@ -30,7 +31,7 @@
  * lie_cache_load_scene loaded) from create to destroy.
  *   - lie_update_edit writes the scene and the update: nothing may read
  *     either meanwhile (no render, no step, no snapshot).  After it, the
- *     caller's Embree scene and lie_lie_vis for the old scene are stale:
+ *     caller's Embree scene and lie_env_shadows for the old scene are stale:
  *     rebuild them (from a snapshot) before rendering again.
  *   - lie_update_step and lie_update_snapshot only read the scene, so
  *     rendering may run concurrently with them, from a snapshot or any
@@ -159,7 +160,7 @@ lie_status lie_update_apply(lie_cache *cache, lie_scene *scene, const lie_edit *
  * Local illumination environments built on threads of their own while a
  * program renders from them: a program opens a scene (or a partial cache),
  * renders its first frame at once with every unit unbuilt (answered by
- * Embree, lie_lie_vis), and its frames get faster as units land.  Units
+ * Embree, lie_env_shadows), and its frames get faster as units land.  Units
  * land a triangle at a time, those covering most pixels of the current view
  * first (mirrors included); a new view reorders the rest.  What lands is
  * what lie-build --view gives for the same views (every view the program
@@ -199,7 +200,7 @@ lie_status lie_ctor_create(lie_scene *s, const lie_rt *rt, const lie_ctor_option
 /* Stop the threads (a unit in progress is dropped) and free. */
 void lie_ctor_destroy(lie_ctor *c);
 
-/* The live env, for lie_lie_vis_create and renders (under the read lock). */
+/* The live env, for lie_env_shadows_create and renders (under the read lock). */
 const lie_env *lie_ctor_env(const lie_ctor *c);
 void lie_ctor_read_lock(lie_ctor *c);
 void lie_ctor_read_unlock(lie_ctor *c);

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* --version for every tool: our version and commit, and the libraries we were built with. */
 #include "version/version.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* What this build of the library is: its version, the commit it was built from, and the
  * versions of the libraries it renders and writes with.  Used by every tool's --version. */
 #ifndef LIE_VERSION_VERSION_H

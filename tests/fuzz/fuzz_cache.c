@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* libFuzzer target for the cache reader (lib/cache).  Each input is decoded
  * twice: as is, and with every section checksum and the file checksum
  * recomputed, so that mutations reach the checks behind the checksums.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* libFuzzer target for camera paths (lib/shade, formats/camera-path.md):
  * any input must parse or fail with one line; a parsed path's first, middle
  * and last frames are evaluated, and must be finite cameras when the keys

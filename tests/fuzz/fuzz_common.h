@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* What every fuzz target asks of an error: a message, on one line, with no
  * control byte left in it or in the file name (lib/core escapes them, as
  * git does, since names from files reach terminals: issue 19). */

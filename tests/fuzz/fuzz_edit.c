@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* libFuzzer target for edit files (lib/edit, formats/edit.md): any input
  * must parse or fail with one line carrying line:column; what parses is
  * applied to the Cornell box (lie_edit_apply, then the world is

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* libFuzzer target for packed file sets (lib/core/fileset.c), the bytes
  * lib/dist broadcasts under mpirun.  Any input must either fail with one
  * line, or unpack to a set whose packing unpacks again and packs to the

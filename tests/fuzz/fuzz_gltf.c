@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* libFuzzer target for the glTF importer (lib/scene/gltf_*.cpp over
  * tinygltf): .gltf and .glb, by content.  The importer reads files (the
  * scene and the buffers and images it names), so each input is written to

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # make fuzz: build every reader's libFuzzer target with clang and run each
 # for a bounded time, reporting executions and crashes.
 #

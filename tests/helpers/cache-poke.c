@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* cache-poke: damage caches on purpose, for the hardening tests.
  *
  *   cache-poke sections CACHE

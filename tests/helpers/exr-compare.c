@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* exr-compare A.exr B.exr MAX_ANY MAX_2PCT: the share of pixels that differ
  * at all, and by more than 2% (in any channel, relative to the larger value,
  * values under 0.01 counting as 0.01), between two EXR images; exit 0 when

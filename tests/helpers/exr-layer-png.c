@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* exr-layer-png IN.exr LAYER OUT.png: write an EXR layer's R, G, B channels
  * as an 8-bit PNG, values in [0, 1] scaled to 255 without a transfer curve
  * (as lie-inspect image writes its false colours), so that tests can

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* ltc-bench (`make ltc-bench`): the accuracy of lib/shade/ltc against the
  * Monte Carlo reference of tests/unit/ltc_mc.h, per roughness and view
  * angle over a fixed set of polygons, and the cost of one polygon in ns.

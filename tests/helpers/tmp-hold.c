@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tmp-hold PATH: open PATH for atomic output (lie_atomic_open), write a
  * little, print the temporary's name and wait for a signal, as a tool does
  * in the middle of writing a large output.  For tests/tools/t0550: SIGINT

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Helpers for tool tests (sourced).  Each check prints "ok N - what" or
 # "not ok N - what" with the evidence; the script exits 1 if any failed.
 set -u

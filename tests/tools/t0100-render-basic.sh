@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # lie-render --visibility=full on the bundled scenes: outputs, formats,
 # determinism across thread counts, the command-line contract.
 . "$ROOT/tests/tools/lib.sh"

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # lie-render on bad input: one line "lie-render: FILE: what is wrong", exit 1,
 # no output file; usage errors exit 2.
 . "$ROOT/tests/tools/lib.sh"

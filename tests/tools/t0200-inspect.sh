@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # lie-inspect verify and summary on caches from lie-build: valid caches,
 # scene checks, damaged and foreign files, stdin, the command-line contract.
 . "$ROOT/tests/tools/lib.sh"

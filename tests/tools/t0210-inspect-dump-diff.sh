@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # lie-inspect dump, patch, diff and image: the canonical text is stable and
 # sorted, diff compares content by identity (provenance is a note), patch
 # shows one patch's trees, image equals lie-render's complexity layer.

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # lie-render from caches: the oracle (conservative caches give the reference
 # image; sampled ones within the stated tolerance), thread-count
 # determinism, stdin, --scene, complexity layers, camera paths, errors.

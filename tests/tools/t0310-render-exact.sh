@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Exact shadows (lib/shade/polylight.h): a LIE image with exact visibility
 # against full visibility at 1k and 16k rotated samples.  The reference's
 # noise falls as 1/sqrt(N), so the difference must shrink with it (by 4x

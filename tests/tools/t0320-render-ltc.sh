@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # GGX receivers in closed form (lib/shade/ltc.h) under --light-samples exact:
 # a Cornell box whose floor, back wall and short block are made glossy
 # (rst-update set-material) rendered from its cache with exact shadows and

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # rst-update: update equals rebuild (byte for byte) for every operation,
 # chains of edits and random moves; edited caches render; bad edits leave
 # everything untouched.

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # rst-update --write-scene: the edited scene as glTF (.gltf with side files,
 # or one .glb), which lie-build and lie-render take; building it gives the
 # updated cache's blocker lists and scene state.  A bad path fails with one

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Damaged caches against every tool that reads caches (lie-inspect verify,
 # lie-render, rst-update): bit flips in every region, truncation at every
 # section boundary, sizes, counts and offsets pointing outside the file,

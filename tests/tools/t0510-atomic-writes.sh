@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Atomic outputs: a writer killed with SIGKILL leaves the previous output
 # byte for byte (and creates nothing where there was nothing); a full disk
 # is an error (exit 1, one line), not a short file.

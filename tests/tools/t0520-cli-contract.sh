@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # The command-line contract (CONTRIBUTING.md, Tools), for every tool in bin/:
 # --help and -h to stdout with exit 0 and nothing on stderr, --version as
 # "TOOL VERSION (commit C)" then the libraries it was built with, usage errors exit 2 with one line and a hint to --help,

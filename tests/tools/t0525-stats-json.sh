@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # --stats=json: every tool's record starts {"schema":1,"tool":...; --stats-file FILE writes it
 # there (atomically, "-" stdout) and leaves stderr to the warnings; strings are valid UTF-8
 # whatever the bytes of a path (an invalid byte becomes \udcXX, PEP 383's surrogateescape).

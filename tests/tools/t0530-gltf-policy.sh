@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Scene files from elsewhere, through the tools: URIs that leave the scene's
 # folder are refused unless --allow-external-uris (lie-build, lie-render,
 # and the tools that reload a cache's scene), remote schemes always; a glTF

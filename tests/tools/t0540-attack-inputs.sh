@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Issue 19, the input classes of an outsider's attack, each refused with one
 # line and exit 1, quickly, and never a crash:
 #   1. glTF JSON nested 20,000 deep (extras, extensions, any array) and in a GLB

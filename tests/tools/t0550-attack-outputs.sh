@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Issue 19, the output classes of an outsider's attack:
 #   2. -o naming a character device, a FIFO or a symlink must not replace it
 #      with a regular file: devices and FIFOs are written in place, a symlink

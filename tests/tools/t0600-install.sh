@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # make install / uninstall into a private DESTDIR: tools, liblie.so (SONAME, symlinks,
 # only lie_ symbols exported), liblie.a, headers, pkg-config, man pages, bash completion;
 # every declared function exported; C and C++ programs through pkg-config; lie.pc per install.

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # lie-build and lie-render under mpirun (Open MPI): the same bytes as one
 # process for builds, frames and paths, for any ranks and threads; inputs
 # read on rank 0 only and broadcast (ranks 1 and 2 run in an empty folder,

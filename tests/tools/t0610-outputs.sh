@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Output formats (issue 18): -o refuses extensions it cannot write,
 # --format streams PNG, EXR carries OpenEXR's standard camera attributes,
 # an A channel of coverage and --half colour.

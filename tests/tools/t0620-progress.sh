@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Progress (issue 18): on a terminal (script -qc gives the tool one) a bar
 # with elapsed time, rate and ETA, "frame N/M" on camera paths, progress in
 # lie-build and rst-update; nothing when stderr is not a terminal; -v prints

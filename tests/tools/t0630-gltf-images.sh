@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # glTF images the decoder cannot read (issue 18): a warning naming the image,
 # one line per tool run (every tool that loads a scene: lie-render, lie-build,
 # rst-update, lie-inspect, lie-animate, lie-view), and the texture slot falls back to its factor (as

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # lie-build --partial and --resume (issue 14, throughput): SIGINT in the
 # middle of a build writes a valid partial cache atomically, exits 130 with
 # one line; lie-inspect calls it partial, lie-render completes it with the

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Baseline x86-64: the tools run on a CPU without AVX (qemu-user emulating a Nehalem, SSE4.2
 # at most), and give there the same bytes as here, where the hot kernels run their AVX2
 # copies (lib/core/hot.h) and Embree its AVX2 kernels: a cache built on each, and renders
@@ -28,7 +29,7 @@ run $Q "$B/lie-build" -q "$S/cornell.gltf" -o "$TMP/q.lie"
 expect_rc 0 "lie-build under Nehalem"
 run "$B/lie-build" -q "$S/cornell.gltf" -o "$TMP/n.lie"
 expect_same "$TMP/q.lie" "$TMP/n.lie" "the caches are the same bytes"
-for opt in "" "--visibility=full" "--exact=off" "--bitmask=only"; do
+for opt in "" "--visibility=full" "--exact=off" "--light-sampler=per-emitter --bitmask=only"; do
     run $Q "$B/lie-render" "$TMP/n.lie" -q --size 24x20 --light-samples 24 $opt -o "$TMP/q.exr"
     expect_rc 0 "lie-render $opt under Nehalem"
     run "$B/lie-render" "$TMP/n.lie" -q --size 24x20 --light-samples 24 $opt -o "$TMP/n.exr"

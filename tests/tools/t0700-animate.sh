@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # lie-animate: an animated glTF (translation, rotation, scale; LINEAR, STEP,
 # CUBICSPLINE; morph weights; a skin; a moving light and camera) becomes
 # per-frame edits whose update equals a rebuild, from the base cache and

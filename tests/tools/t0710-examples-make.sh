@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # The example makefiles follow their inputs: the tools and the settings are prerequisites,
 # `make -n` lists exactly what would run and `make -q` agrees; every documented variable
 # changes what it should; lie-animate's files are one grouped target; an animated asset

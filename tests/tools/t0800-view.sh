@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # lie-view under a real X server (Xvfb): a scripted session moves an object,
 # waits for the constructor and takes a screenshot, which must equal
 # lie-render of the recorded edits replayed by rst-update, from the printed

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # lie-build --view: patches as fine as the views' pixels need (§4.3.3), a
 # view added to a cache with --into equals one build for both views (and
 # keeps the units it had), rst-update of a view-built cache equals its

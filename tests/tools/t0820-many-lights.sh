@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Many lights (issue 14): museum1 lit by six small panels an edit file adds.
 # The build is the same for any thread count, its image agrees with full
 # visibility, and rst-update of a moved light equals a rebuild.  The pairs of the six panels are each proven visible by a

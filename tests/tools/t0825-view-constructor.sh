@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # lie-view on a glTF scene, under a real X server (Xvfb): the asynchronous
 # constructor (§4.3.1).  Its saved cache equals lie-build --view for the
 # same camera, byte for byte, whether it caught up (wait) or not (pause:

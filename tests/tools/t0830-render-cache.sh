@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # lie-render SCENE --path P.yaml --cache C.lie: the cache is built as the
 # frames need it and kept on disk; the frames and the cache equal lie-build
 # --path + lie-render of that cache, byte for byte, whether the run goes

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Scenes built in memory that several unit test files share. */
 #ifndef LIE_TEST_FIXTURES_H
 #define LIE_TEST_FIXTURES_H
@@ -56,7 +57,7 @@ static inline lie_render_options test_render_options(int w, int h, int light_sam
 typedef struct test_oracle {
     lie_rt *rt;
     lie_env *env;
-    lie_lie_vis *lv;
+    lie_env_shadows *lv;
     const lie_vis_oracle *orc;
 } test_oracle;
 
@@ -70,14 +71,13 @@ static inline void test_oracle_make(const lie_scene *s, float min_patch, test_or
     lie_build_params bp = test_params(min_patch);
     lie_build_stats bst;
     assert_int_equal(lie_env_build(s, t->rt, &bp, NULL, &t->env, &bst, &err), LIE_OK);
-    assert_int_equal(lie_lie_vis_create(s, t->env, &t->lv, &err), LIE_OK);
-    assert_int_equal(lie_lie_vis_use_silhouette(t->lv, &err), LIE_OK);
-    t->orc = lie_lie_vis_oracle(t->lv);
+    assert_int_equal(lie_env_shadows_create(s, t->env, &t->lv, &err), LIE_OK);
+    t->orc = lie_env_shadows_oracle(t->lv);
 }
 
 static inline void test_oracle_free(test_oracle *t)
 {
-    lie_lie_vis_destroy(t->lv);
+    lie_env_shadows_destroy(t->lv);
     lie_env_destroy(t->env);
     lie_rt_destroy(t->rt);
 }
@@ -164,8 +164,8 @@ static inline lie_scene *square_light_and_blockers(float a, float h, int two_sid
 #ifdef LIE_SHADE_BITMASK_H
 /* The LIE oracle over scene s (built with patches of 0.5: lists that
  * hold every blocker), and emitter 0's fixed pattern of n samples as a
- * bitmask, for tests that ask the oracle directly (test_bitmask,
- * test_silhouette).  oracle_fixture_free destroys the scene too. */
+ * bitmask, for tests that ask the oracle directly (test_bitmask).
+ * oracle_fixture_free destroys the scene too. */
 typedef struct oracle_fixture {
     lie_scene *s;
     test_oracle t;

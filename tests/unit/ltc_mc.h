@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The Monte Carlo reference for lib/shade/ltc (tests/unit/test_ltc.c and
  * tests/helpers/ltc-bench.c): int_P f(wi, wo) cos dwi over a planar convex
  * polygon with lib/shade's own BRDF (lie_brdf_eval_cos), by multiple

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/scene animations (animate.c, glTF 2.0 §3.11 and Appendix C), skins
  * in lie_scene_flatten (§3.7.3) and the set-weights / set-light edits.
  * Fixture: tests/data/gltf/animated.gltf (gen_fixtures.py). */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/cache: round trips, byte-exact determinism, an independent encoder
  * written from formats/lie-cache.md, and rejection of every damaged,
  * truncated, misplaced, newer or structurally invalid file — without

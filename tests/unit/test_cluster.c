@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Clusters of emitter triangles (lib/scene/cluster.c): the partition, the
  * per-cluster shapes lib/lie asks for, and that LIEs build per cluster,
  * round-trip through the cache and update as they rebuild.  Fixtures
@@ -312,17 +313,17 @@ static lie_frame *render_strip(const lie_scene *s, const lie_env *env, int threa
     lie_camera cam = lie_scene_default_camera(s);
     lie_render_options o = test_render_options(48, 32, 24, threads);
     o.exact = LIE_EXACT_OFF; /* sampled partial pairs: the oracle's image is full visibility's */
-    lie_lie_vis *lv = NULL;
+    lie_env_shadows *lv = NULL;
     if (env) {
-        assert_int_equal(lie_lie_vis_create(s, env, &lv, &err), LIE_OK);
+        assert_int_equal(lie_env_shadows_create(s, env, &lv, &err), LIE_OK);
         o.visibility = LIE_VIS_LIE;
-        o.oracle = lie_lie_vis_oracle(lv);
+        o.oracle = lie_env_shadows_oracle(lv);
     } else {
         o.visibility = LIE_VIS_FULL;
     }
     lie_frame *f = NULL;
     assert_int_equal(lie_render(s, rt, &cam, &o, &f, NULL, &err), LIE_OK);
-    lie_lie_vis_destroy(lv);
+    lie_env_shadows_destroy(lv);
     lie_rt_destroy(rt);
     return f;
 }

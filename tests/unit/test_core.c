@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/core: growable arrays (LIE_GROW, LIE_PUSH) and the shadow-ray
  * conventions of lib/rt/rt.h that lib/lie, lib/rst and lib/shade share. */
 #include <setjmp.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The asynchronous constructor (lib/update, lie_ctor; §4.3.1): whatever the
  * order units land in and whatever views came first, the cache it saves is
  * one build for its views (lie_env_build_views), partial while units are

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/edit: edits as data.  Every operation built by its constructor,
  * written (libyaml's emitter) and parsed again is the same operation; the
  * written form is the one lie-view's records hold; a parsed edit keeps its

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The emitter interface (lib/scene/scene.h): each type's sampling,
  * radiance, closed-form light, polygon and power, against the values the
  * glTF and the geometry give by hand. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/export: the glTF exporter (lie_gltf_export).  The property
  * pinned: loading an exported scene gives back the world it was written
  * from, the same content hash whenever no node was removed. */

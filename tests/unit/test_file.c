@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/core's inputs, outputs and messages (issue 19): control bytes are
  * escaped, inputs are regular files within a limit, a group of outputs
  * appears together or not at all, stale temporaries are found by name. */

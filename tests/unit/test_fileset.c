@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/core file sets (fileset.c) and loading a scene from one: what lib/dist
  * broadcasts under mpirun.  A scene recorded on one load loads again from
  * the set alone, with the same content hash, and the URI policy still

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Every input under tests/fuzz/regressions/TARGET/ (crashes the fuzzers
  * found, kept once fixed) replayed through the same checks as its fuzz
  * target, so that `make test`, and its ASan + UBSan run, keep them fixed.

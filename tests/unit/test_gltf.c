@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/scene: the glTF importer (gltf_*.cpp) and texture lookup (texture.c),
  * through lie_scene_load.  Fixtures: tests/data/gltf/ (gen_fixtures.py). */
 #include <limits.h>

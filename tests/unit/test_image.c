@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/image: frames, sRGB curves, EXR and PNG writers and the EXR reader. */
 #include <fcntl.h>
 #include <ftw.h>

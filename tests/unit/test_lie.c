@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/lie and lib/patch: blocker lists on scenes whose answer is known,
  * subdivision limits, conservative lists containing sampled ones,
  * determinism, unit rebuilds, and the patch quad-tree's geometry. */

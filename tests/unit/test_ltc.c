@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/shade/ltc: polygon integrals of the glTF BRDF by linearly transformed
  * cosines, against closed forms and against Monte Carlo of lib/shade's own
  * BRDF (tests/unit/ltc_mc.h).

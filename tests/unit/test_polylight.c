@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/shade polylight: Lambert's edge sum and exact back-projected
  * shadows, against closed forms and a fine brute-force quadrature, in the
  * degenerate cases any exact method must survive. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/rst: the ray segment trees (§5.1–5.3) against brute force.  On a
  * scene of random boxes under two lights, for random query boxes: a query
  * never misses a unit root whose exact region (the hull of patch and

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/shade: radiometry against closed forms, BRDF properties, and the
  * renderer's determinism.  Scenes are built in memory. */
 #include <setjmp.h>
@@ -500,9 +501,9 @@ static void planar_case(uint64_t seed, float tilt, int two_sided, planar_tally *
             for (int gz = 0; gz < 9; gz++) {
                 lie_vec3 o = lie_v3(-1.6f + 0.4f * (float)gx, heights[gy], -1.6f + 0.4f * (float)gz);
                 const float eps = 1e-4f;
-                lie_shadow_query q2 = {o, eps, &ls, n, 0, dx, dy, dz, work, kind, STRIDE, NULL};
+                lie_shadow_query q2 = {o, eps, &ls, n, 0, dx, dy, dz, work, kind, STRIDE};
                 orc->occluded(orc->ctx, blockers, NALL, &q2, occ2);
-                lie_shadow_query q3 = {o, eps, &ls3, n, 0, dx, dy, dz, work, kind, STRIDE, NULL};
+                lie_shadow_query q3 = {o, eps, &ls3, n, 0, dx, dy, dz, work, kind, STRIDE};
                 orc->occluded(orc->ctx, blockers, NALL, &q3, occ3);
                 lie_shadow_query_segments(&q3);
                 for (int i = 0; i < n; i++) {

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lib/update (§5): an update equals a rebuild of the edited scene for each
  * of the eight edit operations of formats/edit.md, whatever the chunking of
  * its steps; edits that arrive while units are pending, and after a

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Views in lib/lie (§4.3.3): pixel keys name the patch that holds a hit,
  * counts per patch add up, the hits' order does not matter, the pixel rule
  * refines what many pixels see, and adding views to an env equals

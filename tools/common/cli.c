@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Strict parsing of command-line values ("12x" or "" is an error, never 12
  * or 0) and the tools' messages (tools/common/cli.h). */
 #include "common/cli.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/common: what every tool's main shares and the library must not do
  * (it never prints): strict parsing of command-line values and the one-line
  * messages of the tool contract (CONTRIBUTING.md).  Linked into every tool

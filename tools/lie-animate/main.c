@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-animate: turn a glTF animation (glTF 2.0 §3.11) into one absolute
  * edit file per frame (formats/edit.md) and the animated camera's motion
  * into a camera path (formats/camera-path.md) whose frames match.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-build under mpirun: the units (triangle, emitter) in ranges handed
  * out dynamically, so they balance by their measured cost (a rank that
  * finishes early takes more).  Ranges shrink as the work runs out (guided

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-build under mpirun (tools/lie-build/dist.c). */
 #ifndef LIE_BUILD_DIST_H
 #define LIE_BUILD_DIST_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-build's steps (tools/lie-build/job.h): the library does the work,
  * these put its calls in order and keep what they make in the job. */
 #include "job.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-build's run, step by step (tools/lie-build/job.c): what the command
  * line asks for, what is loaded and made, released by job_free.  main
  * (tools/lie-build/main.c) parses into it and calls the steps in order;

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-build: build the local illumination environments of a scene and write
  * them to a cache.
  *   lie-build SCENE.gltf|SCENE.glb -o CACHE|- [options]

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-build --stats and --stats=json (tools/lie-build/job.h). */
 #include "common/cli.h"
 #include "dist.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-inspect clean DIR: remove stale temporaries of the tools' own naming
  * (lie_tmp_clean in lib/core does the work), one line per file. */
 #include "inspect.h"

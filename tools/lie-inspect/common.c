@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-inspect: output helpers, loading, tree walks. */
 #include "inspect.h"
 

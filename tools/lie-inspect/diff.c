@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-inspect diff A B: compare two caches by content, not bytes.  Units
  * are matched by (triangle, emitter), nodes by patch path, blocker lists as
  * sets.  Provenance that cannot change an image (the scene's path as

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-inspect dump: the canonical text of a cache (formats/lie-cache.md,
  * "Canonical text").  Everything is printed by content, never by storage:
  * nodes by patch name, not index, so that two caches with the same LIEs

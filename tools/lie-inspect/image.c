@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-inspect image CACHE -o OUT.png: the paper's Figure 10, a false-colour
  * picture of the local illumination environments seen from a camera.  The
  * colours come from the renderer's complexity layer (lie_complexity_colour:
@@ -21,7 +22,7 @@ int inspect_image(const char *path, const inspect_options *o)
     so.allow_external_uris = o->external;
     lie_scene *s = NULL;
     lie_rt *rt = NULL;
-    lie_lie_vis *lv = NULL;
+    lie_env_shadows *lv = NULL;
     lie_frame *frame = NULL;
     uint8_t *rgb = NULL;
     lie_camera cam;
@@ -37,7 +38,7 @@ int inspect_image(const char *path, const inspect_options *o)
             snprintf(err.file, sizeof err.file, "%s", path);
     }
     if (st == LIE_OK)
-        st = lie_lie_vis_create(s, l.cache->env, &lv, &err);
+        st = lie_env_shadows_create(s, l.cache->env, &lv, &err);
     if (st == LIE_OK)
         st = lie_rt_create(s, &rt, &err);
     if (st == LIE_OK) {
@@ -46,7 +47,7 @@ int inspect_image(const char *path, const inspect_options *o)
         ro.height = o->height;
         ro.threads = o->threads;
         ro.visibility = LIE_VIS_LIE;
-        ro.oracle = lie_lie_vis_oracle(lv);
+        ro.oracle = lie_env_shadows_oracle(lv);
         ro.aovs = LIE_AOV_COMPLEXITY;
         ro.aov_emitter = o->emitter;
         ro.eye_only = 1;
@@ -73,7 +74,7 @@ int inspect_image(const char *path, const inspect_options *o)
     free(rgb);
     lie_frame_destroy(frame);
     lie_rt_destroy(rt);
-    lie_lie_vis_destroy(lv);
+    lie_env_shadows_destroy(lv);
     lie_scene_destroy(s);
     inspect_unload(&l);
     return st == LIE_OK ? 0 : inspect_fail(&err, 1);

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-inspect: what its commands share (one command per file). */
 #ifndef LIE_INSPECT_H
 #define LIE_INSPECT_H

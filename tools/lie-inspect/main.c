@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-inspect: look inside caches.
  *   lie-inspect verify CACHE [--scene S]
  *   lie-inspect summary CACHE [--json]

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-inspect patch CACHE TRI[/PATH]: one patch's local illumination
  * environment.  Per emitter, the unit's tree is followed along the path:
  * if it ends at a node, that node and its subtree are shown; if a leaf is

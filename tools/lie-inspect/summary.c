@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-inspect verify and summary: the library validates, this prints. */
 #include "inspect.h"
 

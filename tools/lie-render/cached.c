@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-render SCENE --path PATH.yaml --cache C.lie: lie-build --path and
  * lie-render in one run that builds as it goes.  The cache is built for the
  * path's frames as views, as lie-build --path builds it; before a frame is
@@ -55,7 +56,7 @@ lie_status cached_render(cached_run *cr, frame_out *fo, const int *todo, int n_t
     uint8_t *met = calloc((size_t)cr->scene->n_tris + 1, 1);
     lie_cache *old = NULL;
     lie_ctor *c = NULL;
-    lie_lie_vis *lv = NULL;
+    lie_env_shadows *lv = NULL;
     lie_status st = cams && met ? LIE_OK : lie_error_set(err, LIE_ERR_NOMEM, cr->cache_file, "out of memory");
     for (int i = 0; st == LIE_OK && i < cp->n_frames; i++) {
         cams[i] = lie_camera_path_frame(cp, i);
@@ -78,12 +79,10 @@ lie_status cached_render(cached_run *cr, frame_out *fo, const int *todo, int n_t
         st = lie_ctor_create(cr->scene, cr->rt, &co, old, &c, err);
     }
     if (st == LIE_OK)
-        st = lie_lie_vis_create(cr->scene, lie_ctor_env(c), &lv, err);
-    if (st == LIE_OK && cr->ro->silhouette == LIE_SILHOUETTE_ONLY)
-        st = lie_lie_vis_use_silhouette(lv, err);
+        st = lie_env_shadows_create(cr->scene, lie_ctor_env(c), &lv, err);
     if (st == LIE_OK) {
-        lie_lie_vis_record_unbuilt(lv, met);
-        cr->ro->oracle = lie_lie_vis_oracle(lv);
+        lie_env_shadows_record_unbuilt(lv, met);
+        cr->ro->oracle = lie_env_shadows_oracle(lv);
         cr->ro->visibility = LIE_VIS_LIE;
     }
     for (int k = 0; k < n_todo && st == LIE_OK; k++) {
@@ -94,7 +93,7 @@ lie_status cached_render(cached_run *cr, frame_out *fo, const int *todo, int n_t
         lie_render_stats fs;
         st = lie_ctor_build(c, NULL, &cams[fi], cr->ro->threads, &built, err);
         for (int pass = 0; st == LIE_OK; pass++) {
-            lie_lie_vis_grow(lv, lie_ctor_longest(c));
+            lie_env_shadows_grow(lv, lie_ctor_longest(c));
             memset(met, 0, cr->scene->n_tris);
             lie_frame_destroy(frame);
             frame = NULL;
@@ -133,7 +132,7 @@ lie_status cached_render(cached_run *cr, frame_out *fo, const int *todo, int n_t
         cr->units_built += built;
     }
     cr->ro->oracle = NULL;
-    lie_lie_vis_destroy(lv);
+    lie_env_shadows_destroy(lv);
     lie_ctor_destroy(c);
     lie_cache_destroy(old);
     free(met);

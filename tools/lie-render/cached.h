@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-render SCENE --path PATH.yaml --cache C.lie (tools/lie-render/cached.c):
  * the camera path's frames, each rendered once the units its view lacks
  * are built (lib/update, lie_ctor), the cache kept on disk between frames. */

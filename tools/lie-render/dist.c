@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-render under mpirun: frames cut into items handed out dynamically
  * (lib/dist), rank 0 assembling and writing.  A camera path is shared out
  * by whole frames while at least as many frames remain as ranks; the last

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-render under mpirun (tools/lie-render/dist.c). */
 #ifndef LIE_RENDER_DIST_H
 #define LIE_RENDER_DIST_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-render: render frames with direct lighting.
  *   lie-render CACHE|SCENE.gltf|SCENE.glb|- -o OUT.exr|OUT.png|- [options]
  * From a cache (lie-build), shadow rays are answered by the local
@@ -8,7 +9,9 @@
 #include "lie.h"
 #include "cached.h"
 #include "output.h"
+#include "shade/cost.h" /* --lie-skip: the benchmark ablations, not part of the API */
 
+#include <errno.h>
 #include <getopt.h>
 #include <stdlib.h>
 #include <string.h>
@@ -52,22 +55,33 @@ static void usage(FILE *fp)
             "      --view-size WxH     with --cache: as lie-build --view-size (default 512x512)\n"
             "      --size WxH          image size (default %dx%d)\n"
             "      --spp N             eye rays per pixel, stratified (default %d: pixel centre)\n"
-            "      --light-samples N   shadow rays per area emitter per shading point\n"
-            "                          (default %d; 0 = eye rays only), or 'exact': surfaces\n"
-            "                          under planar lights of one colour in closed form (LTC\n"
-            "                          for glossy ones) with exact shadows, the default count\n"
-            "                          elsewhere\n"
+            "      --light-samples N   light samples per shading point, shared among the\n"
+            "                          emitters by the light sampler (default %d; 0 = eye\n"
+            "                          rays only; per-emitter: N of every area emitter), or\n"
+            "                          'exact': surfaces under planar lights of one colour in\n"
+            "                          closed form (LTC for glossy ones) with exact shadows,\n"
+            "                          the default count elsewhere\n"
+            "      --light-sampler S   how the samples are shared: tree (default: a light\n"
+            "                          BVH by power, distance and orientation; from a cache\n"
+            "                          the LIE's classes guide it: no sample to occluded or\n"
+            "                          unlit emitters, closed forms where seen whole, the rest\n"
+            "                          to partial pairs by their unshadowed light) | power |\n"
+            "                          uniform | per-emitter (N samples of every emitter from\n"
+            "                          a fixed pattern: the paper's meaning, before 0.2)\n"
+            "      --seed S            seed of the per-pixel sample patterns (default 0);\n"
+            "                          renders with two seeds are independent\n"
             "      --exact MODE        auto (default: closed forms, and from a cache exact\n"
             "                          shadows where they cost less than the samples)\n"
             "                          | off (shadows from the samples: the oracle's mode)\n"
-            "      --bitmask MODE      partial pairs toward planar emitters with all samples at\n"
-            "                          once: auto (default: where cheaper, not under --exact\n"
-            "                          off) | off | only (the same image, samples in another order)\n"
-            "      --silhouette MODE   off (default) | only: bitmasks counted through the\n"
-            "                          blockers' silhouette edges (the same image; measured slower)\n"
+            "      --bitmask MODE      per-emitter sampler, partial pairs toward planar emitters\n"
+            "                          with all samples at once: auto (default: where cheaper,\n"
+            "                          not under --exact off) | off | only (the same image,\n"
+            "                          samples in another order)\n"
+
             "      --timers            --stats also reports per-path times (benchmarks)\n"
-            "      --pattern P         fixed (default: the same emitter samples everywhere)\n"
-            "                          | rotated (a per-pixel rotation of the pattern)\n"
+            "      --pattern P         per-emitter sampler: fixed (default: the same emitter\n"
+            "                          samples everywhere) | rotated (a per-pixel rotation);\n"
+            "                          the other samplers always rotate per pixel\n"
             "      --visibility MODE   lie (default with a cache: blocker lists only)\n"
             "                          | full (default with a scene: Embree over the whole scene)\n"
             "                          | none (no shadows: measures shading alone)\n"
@@ -85,6 +99,9 @@ static void usage(FILE *fp)
             "                          rle (several times faster to write than zip, files a\n"
             "                          little larger) or none\n"
             "      --exposure EV       PNG exposure in stops (default 0)\n"
+            "      --default-light L   a scene without emitters: headlight (a point light at\n"
+            "                          the camera, 1 lux at the scene's centre) or sun (1 lux\n"
+            "                          from above); a scene input only\n"
             "      --threads N         worker threads (default: all cores)\n"
             "      --allow-external-uris  let the glTF reference files outside its folder\n"
             "      --stats[=json]      print statistics to stderr\n"
@@ -107,9 +124,9 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 
 enum {
     OPT_CAMERA = 256, OPT_SIZE, OPT_SPP, OPT_LIGHT_SAMPLES, OPT_PATTERN, OPT_VISIBILITY, OPT_RAYS, OPT_LIE_SKIP,
-    OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_SCENE,
+    OPT_MAX_DEPTH, OPT_AOV, OPT_COMPRESSION, OPT_EXPOSURE, OPT_SCENE, OPT_DEFAULT_LIGHT,
     OPT_EMITTER, OPT_PATH, OPT_EXACT, OPT_TIMERS, OPT_FRAMES, OPT_SKIP_EXISTING, OPT_FORMAT, OPT_HALF, OPT_BITMASK,
-    OPT_SILHOUETTE, OPT_CACHE, OPT_VIEW_SIZE
+    OPT_LIGHT_SAMPLER, OPT_SEED, OPT_CACHE, OPT_VIEW_SIZE
 };
 
 static const struct option long_opts[] = {
@@ -128,7 +145,8 @@ static const struct option long_opts[] = {
     {"exact", required_argument, NULL, OPT_EXACT},
     {"timers", no_argument, NULL, OPT_TIMERS},
     {"bitmask", required_argument, NULL, OPT_BITMASK},
-    {"silhouette", required_argument, NULL, OPT_SILHOUETTE},
+    {"light-sampler", required_argument, NULL, OPT_LIGHT_SAMPLER},
+    {"seed", required_argument, NULL, OPT_SEED},
     {"visibility", required_argument, NULL, OPT_VISIBILITY},
     {"rays", required_argument, NULL, OPT_RAYS},
     {"lie-skip", required_argument, NULL, OPT_LIE_SKIP},
@@ -138,6 +156,7 @@ static const struct option long_opts[] = {
     {"format", required_argument, NULL, OPT_FORMAT},
     {"half", no_argument, NULL, OPT_HALF},
     {"exposure", required_argument, NULL, OPT_EXPOSURE},
+    {"default-light", required_argument, NULL, OPT_DEFAULT_LIGHT},
     {NULL, 0, NULL, 0},
 };
 
@@ -146,12 +165,15 @@ static const struct option long_opts[] = {
 static const lie_cli_choice exact_modes[] = {{"auto", LIE_EXACT_AUTO}, {"off", LIE_EXACT_OFF}, {NULL, 0}};
 static const lie_cli_choice bitmask_modes[] = {
     {"auto", LIE_BITMASK_AUTO}, {"off", LIE_BITMASK_OFF}, {"only", LIE_BITMASK_ONLY}, {NULL, 0}};
-static const lie_cli_choice silhouette_modes[] = {
-    {"off", LIE_SILHOUETTE_OFF}, {"only", LIE_SILHOUETTE_ONLY}, {NULL, 0}};
+static const lie_cli_choice samplers[] = {{"tree", LIE_SAMPLER_TREE},
+                                          {"power", LIE_SAMPLER_POWER},
+                                          {"uniform", LIE_SAMPLER_UNIFORM},
+                                          {"per-emitter", LIE_SAMPLER_PER_EMITTER},
+                                          {NULL, 0}};
 static const lie_cli_choice patterns[] = {{"fixed", LIE_PATTERN_FIXED}, {"rotated", LIE_PATTERN_ROTATED}, {NULL, 0}};
-static const lie_cli_choice lie_skips[] = {{"blockers", LIE_SKIP_BLOCKERS},
-                                           {"fallback", LIE_SKIP_FALLBACK},
-                                           {"both", LIE_SKIP_BLOCKERS | LIE_SKIP_FALLBACK},
+static const lie_cli_choice lie_skips[] = {{"blockers", LIE_ABLATE_BLOCKERS},
+                                           {"fallback", LIE_ABLATE_FALLBACK},
+                                           {"both", LIE_ABLATE_BLOCKERS | LIE_ABLATE_FALLBACK},
                                            {NULL, 0}};
 static const lie_cli_choice visibilities[] = {
     {"full", LIE_VIS_FULL}, {"lie", LIE_VIS_LIE}, {"none", LIE_VIS_NONE}, {NULL, 0}};
@@ -169,14 +191,14 @@ static int pick_mode(lie_cli *cli, int c, lie_render_options *ro)
     } modes[] = {
         {OPT_EXACT, exact_modes, offsetof(lie_render_options, exact)},
         {OPT_BITMASK, bitmask_modes, offsetof(lie_render_options, bitmask)},
-        {OPT_SILHOUETTE, silhouette_modes, offsetof(lie_render_options, silhouette)},
+        {OPT_LIGHT_SAMPLER, samplers, offsetof(lie_render_options, sampler)},
         {OPT_PATTERN, patterns, offsetof(lie_render_options, pattern)},
-        {OPT_LIE_SKIP, lie_skips, offsetof(lie_render_options, lie_skip)},
+        {OPT_LIE_SKIP, lie_skips, offsetof(lie_render_options, ablate)},
         {OPT_VISIBILITY, visibilities, offsetof(lie_render_options, visibility)},
         {OPT_RAYS, ray_modes, offsetof(lie_render_options, rays)},
     };
     _Static_assert(sizeof(lie_exact_mode) == sizeof(int) && sizeof(lie_bitmask_mode) == sizeof(int) &&
-                       sizeof(lie_silhouette_mode) == sizeof(int) &&
+                       sizeof(lie_light_sampler_kind) == sizeof(int) &&
                        sizeof(lie_pattern) == sizeof(int) && sizeof(lie_visibility_mode) == sizeof(int) &&
                        sizeof(lie_ray_mode) == sizeof(int) && sizeof(unsigned) == sizeof(int),
                    "the modes are stored as ints");
@@ -274,9 +296,10 @@ typedef struct args {
     lie_scene_options so;
     lie_frame_options fopt;
     const char *input, *output, *camera, *scene_override, *path_file, *cache_file;
+    int default_light;     /* --default-light: lie_default_light, 0 none */
     int view_w, view_h;    /* --view-size */
     long frame_a, frame_b; /* --frames, or -1 */
-    int skip_existing, visibility_set;
+    int skip_existing, visibility_set, pattern_set;
 } args;
 
 /* A render option of the command line, not a mode (pick_mode): 1 when it
@@ -313,6 +336,18 @@ static int render_option(lie_cli *cli, int c, lie_render_options *ro)
             ro->exact = LIE_EXACT_AUTO;
         return 1;
     case OPT_TIMERS: ro->timers = 1; return 1;
+    case OPT_SEED: {
+        unsigned long long seed;
+        char *end;
+        errno = 0;
+        seed = strtoull(optarg, &end, 10);
+        if (errno || end == optarg || *end || optarg[0] == '-') {
+            cli->status = usage_error("--seed: expected a non-negative integer, got '%s'", optarg);
+            return -1;
+        }
+        ro->seed = (uint64_t)seed;
+        return 1;
+    }
     case OPT_AOV:
         if (parse_aovs(optarg, &ro->aovs))
             return 1;
@@ -338,6 +373,7 @@ static int parse_options(args *a, lie_cli *cli, int argc, char **argv)
             if (taken < 0)
                 return cli->status;
             a->visibility_set |= c == OPT_VISIBILITY;
+            a->pattern_set |= c == OPT_PATTERN;
             continue;
         }
         switch (c) {
@@ -356,6 +392,13 @@ static int parse_options(args *a, lie_cli *cli, int argc, char **argv)
                 return usage_error("--exposure: expected a number of stops, got '%s'", optarg);
             break;
         case OPT_SCENE: a->scene_override = optarg; break;
+        case OPT_DEFAULT_LIGHT: {
+            static const lie_cli_choice lights[] = {
+                {"headlight", LIE_DEFAULT_LIGHT_HEADLIGHT}, {"sun", LIE_DEFAULT_LIGHT_SUN}, {NULL, 0}};
+            if (!lie_cli_pick(cli, lights, &a->default_light))
+                return cli->status;
+            break;
+        }
         case OPT_PATH: a->path_file = optarg; break;
         case OPT_FRAMES:
             if (!lie_parse_range(optarg, 0, 999999, &a->frame_a, &a->frame_b))
@@ -394,6 +437,11 @@ static int check_args(args *a)
         return usage_error("%s", "--path and --camera exclude each other");
     if (a->frame_a >= 0 && !a->path_file)
         return usage_error("%s", "--frames needs --path");
+    /* the fixed pattern and its bitmasks are the per-emitter sampler's
+     * (the others rotate theirs per pixel) */
+    int fixed = a->pattern_set && a->ro.pattern == LIE_PATTERN_FIXED;
+    if (a->ro.sampler != LIE_SAMPLER_PER_EMITTER && (fixed || a->ro.bitmask == LIE_BITMASK_ONLY))
+        return usage_error("%s needs --light-sampler per-emitter", fixed ? "--pattern fixed" : "--bitmask only");
     if (a->cache_file && !a->path_file)
         return usage_error("%s", "--cache needs --path");
     if (a->view_w && !a->cache_file)
@@ -410,7 +458,7 @@ typedef struct run {
     lie_scene *scene;
     lie_cache *cache;
     lie_camera_path *cpath;
-    lie_lie_vis *lv;
+    lie_env_shadows *lv;
     lie_rt *rt;
     lie_camera cam; /* without --path */
     lie_error err;
@@ -420,7 +468,7 @@ static void run_free(run *r)
 {
     lie_camera_path_destroy(r->cpath);
     lie_rt_destroy(r->rt);
-    lie_lie_vis_destroy(r->lv);
+    lie_env_shadows_destroy(r->lv);
     lie_cache_destroy(r->cache);
     lie_scene_destroy(r->scene);
 }
@@ -431,20 +479,27 @@ static lie_status prepare(args *a, run *r, int quiet)
 {
     lie_render_options *ro = &a->ro;
     lie_status st = LIE_OK;
-    if (r->cache && (st = lie_lie_vis_create(r->scene, r->cache->env, &r->lv, &r->err)) != LIE_OK)
+    if (r->cache && (st = lie_env_shadows_create(r->scene, r->cache->env, &r->lv, &r->err)) != LIE_OK)
         return st;
-    if (r->lv && ro->silhouette == LIE_SILHOUETTE_ONLY && (st = lie_lie_vis_use_silhouette(r->lv, &r->err)) != LIE_OK)
-        return st;
-    ro->oracle = r->lv ? lie_lie_vis_oracle(r->lv) : NULL;
+    ro->oracle = r->lv ? lie_env_shadows_oracle(r->lv) : NULL;
     if (!quiet)
         lie_print_scene_warnings(prog, r->scene, a->input);
-    if (r->scene->n_emitters == 0 && !quiet)
+    st = a->path_file ? LIE_OK : lie_camera_parse(r->scene, a->camera, &r->cam, &r->err);
+    if (st == LIE_OK && a->default_light && r->scene->n_emitters == 0) {
+        /* the headlight stays where the camera (a path's first frame) is */
+        lie_camera at = r->cpath ? lie_camera_path_frame(r->cpath, 0) : r->cam;
+        st = lie_scene_add_default_light(r->scene, (lie_default_light)a->default_light, &at, &r->err);
+    } else if (st == LIE_OK && r->scene->n_emitters == 0 && !quiet) {
         fprintf(stderr, "%s: %s: warning: no emitters (no emissive material, no KHR_lights_punctual light): "
-                        "the image shows emission only\n", prog, a->input);
+                        "the image shows emission only; --default-light headlight or sun lights the geometry\n",
+                prog, a->input);
+    }
+    if (st != LIE_OK)
+        goto done;
     if (ro->aov_emitter >= r->scene->n_emitters)
         return lie_error_set(&r->err, LIE_ERR_ARG, a->input, "--emitter %d: the scene has %d emitters",
                              ro->aov_emitter, r->scene->n_emitters);
-    st = a->path_file ? LIE_OK : lie_camera_parse(r->scene, a->camera, &r->cam, &r->err);
+done:
     if (st != LIE_OK && !r->err.file[0])
         snprintf(r->err.file, sizeof r->err.file, "%s", a->input);
     return st;
@@ -535,6 +590,9 @@ static int render_all(args *a, run *r, const lie_cli *cli)
     double t1 = lie_phase(prog, cli->verbose, "load", t0);
     if (a->cache_file && (r->cache || a->visibility_set))
         return usage_error("%s: --cache takes a scene, and renders with the cache it builds (no --visibility)",
+                           a->input);
+    if (a->default_light && (r->cache || a->cache_file))
+        return usage_error("%s: --default-light renders a scene: a cache holds no environments of its light",
                            a->input);
     if (a->cache_file && lie_dist_size() > 1)
         return usage_error("%s", "--cache: not under mpirun (the frames build as they go, one after another)");

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-render's frames on disk (the EXR header's provenance and camera
  * attributes) and its --stats (tools/lie-render/output.h). */
 #include "output.h"
@@ -34,13 +35,19 @@ lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame 
     else
         snprintf(name, sizeof name, "%s", o->output);
     float yfov_deg = fc->yfov * 180.0f / (float)M_PI;
+    char seed[24];
+    snprintf(seed, sizeof seed, "%llu", (unsigned long long)ro->seed);
     lie_attr attrs[] = {
         {.name = "software", .type = LIE_ATTR_STRING, .s = "lie-render " LIE_VERSION},
         {.name = "lie.input", .type = LIE_ATTR_STRING, .s = o->input},
         {.name = "lie.sceneHash", .type = LIE_ATTR_STRING, .s = o->hash},
         {.name = "lie.visibility", .type = LIE_ATTR_STRING, .s = vis_name(ro->visibility)},
-        {.name = "lie.pattern", .type = LIE_ATTR_STRING, .s = ro->pattern == LIE_PATTERN_FIXED ? "fixed" : "rotated"},
+        {.name = "lie.pattern",
+         .type = LIE_ATTR_STRING,
+         .s = ro->pattern == LIE_PATTERN_FIXED && ro->sampler == LIE_SAMPLER_PER_EMITTER ? "fixed" : "rotated"},
         {.name = "lie.lightSamples", .type = LIE_ATTR_INT, .i = ro->eye_only ? 0 : ro->light_samples},
+        {.name = "lie.lightSampler", .type = LIE_ATTR_STRING, .s = lie_light_sampler_name(ro->sampler)},
+        {.name = "lie.seed", .type = LIE_ATTR_STRING, .s = seed},
         {.name = "lie.spp", .type = LIE_ATTR_INT, .i = ro->spp},
         {.name = "lie.maxDepth", .type = LIE_ATTR_INT, .i = ro->max_depth},
         {.name = "lie.frame", .type = LIE_ATTR_INT, .i = number},
@@ -110,12 +117,12 @@ lie_status print_stats(const lie_cli *cli, const run_stats *r, const lie_scene *
                 "\"timers\":%s,\"cpu_seconds_analytic\":%.6f,"
                 "\"cpu_seconds_exact\":%.6f,\"cpu_seconds_blockers\":%.6f,\"cpu_seconds_embree\":%.6f,"
                 "\"cpu_seconds_sampled_shading\":%.6f,\"pairs_bitmask\":%llu,\"cpu_seconds_bitmask\":%.6f,"
-                "\"pairs_silhouette\":%llu,\"cpu_seconds_silhouette\":%.6f",
+                "\"light_sampler\":\"%s\"",
                 exact_name(ro), pairs[0], pairs[1], pairs[2], pairs[3], pairs[4], pairs[5], pairs[6],
                 (unsigned long long)rs->pairs_unbuilt, (unsigned long long)rs->points_unbuilt,
                 ro->timers ? "true" : "false", rs->t_analytic,
                 rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, pairs[7], rs->t_bitmask,
-                (unsigned long long)rs->pairs_silhouette, rs->t_silhouette);
+                lie_light_sampler_name(ro->sampler));
         render_dist_stats(fp, 1);
         fprintf(fp, "}\n");
         return lie_stats_json_end(cli, &js, err);
@@ -136,10 +143,10 @@ lie_status print_stats(const lie_cli *cli, const run_stats *r, const lie_scene *
         fprintf(stderr,
                 "  pairs (exact %s): %llu occluded, %llu seen whole in closed form, %llu partial exact,\n"
                 "    %llu partial sampled against blockers, %llu sampled against the scene (Embree),\n"
-                "    %llu seen whole and sampled, %llu partial as bitmasks (and %llu through silhouettes);\n"
-                "    %llu exact pairs fell back to samples\n",
-                exact_name(ro), pairs[0], pairs[1], pairs[2], pairs[3], pairs[4], pairs[5], pairs[7],
-                (unsigned long long)rs->pairs_silhouette, pairs[6]);
+                "    %llu seen whole and sampled, %llu partial as bitmasks;\n"
+                "    %llu exact pairs fell back to samples; light sampler %s\n",
+                exact_name(ro), pairs[0], pairs[1], pairs[2], pairs[3], pairs[4], pairs[5], pairs[7], pairs[6],
+                lie_light_sampler_name(ro->sampler));
         if (rs->pairs_unbuilt)
             fprintf(stderr, "  not built in the cache (lie-build --view/--path): %llu pairs at %llu shading points, "
                             "answered by Embree\n",
@@ -147,9 +154,8 @@ lie_status print_stats(const lie_cli *cli, const run_stats *r, const lie_scene *
         if (ro->timers)
             fprintf(stderr,
                     "  worker seconds: closed form %.3f, exact shadows %.3f, blocker samples %.3f,\n"
-                    "    Embree %.3f, sampled shading %.3f, bitmasks %.3f, silhouettes %.3f\n",
-                    rs->t_analytic, rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, rs->t_bitmask,
-                    rs->t_silhouette);
+                    "    Embree %.3f, sampled shading %.3f, bitmasks %.3f\n",
+                    rs->t_analytic, rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, rs->t_bitmask);
         render_dist_stats(stderr, 0);
     }
     return LIE_OK;

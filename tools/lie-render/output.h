@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-render's frames on disk and its statistics (tools/lie-render/output.c). */
 #ifndef LIE_RENDER_OUTPUT_H
 #define LIE_RENDER_OUTPUT_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The viewer's orbit camera: yaw and pitch about a target, world up +y. */
 #include "view.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The overlay's text: a built-in 5x7 bitmap font for printable ASCII
  * (lower case drawn as upper case), so the viewer needs no font library. */
 #include "view.h"

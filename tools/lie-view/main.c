@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-view: look at a scene through its LIE cache, move through it and
  * edit it, with soft shadows that are correct in every frame (§3).
  *   lie-view CACHE|SCENE.gltf [options] */
@@ -31,7 +32,8 @@ static void usage(FILE *fp)
             "                          E and Shift+E step it by a stop)\n"
             "      --view-size WxH     the image the constructor samples views at, as\n"
             "                          lie-build --view-size (default 512x512)\n"
-            "      --light-samples N   light samples of the refined frame (default %d)\n"
+            "      --light-samples N   light samples per shading point of the refined frame,\n"
+            "                          shared among the emitters (default %d)\n"
             "      --max-depth D       mirror reflection depth (default %d)\n"
             "      --camera SPEC       start from a scene camera or eye=..,target=..[,up=..][,fov=..]\n"
             "      --threads N         render threads (default: all cores)\n"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Progressive rendering: a thread renders the current request coarse first
  * (a quarter of the resolution and a tenth of the light samples, then half
  * and a quarter), then the full image with every light sample, each level

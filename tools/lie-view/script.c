@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* --script FILE: one command a line, '#' comments (lie-view --help lists
  * them).  Parsing checks everything it can, so a bad script
  * fails before a window opens. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-view's session: the camera, the selection, edits from keys, drags
  * and script lines (tools/lie-view/session.h). */
 #include "session.h"

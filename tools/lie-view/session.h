@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-view's session (tools/lie-view/session.c): the camera, the
  * selection, the edits a key, a drag or a script line makes, and the
  * statistics --stats prints.  The window loop is main.c's. */

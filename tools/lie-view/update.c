@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Edits in the viewer, through lib/update (§5), and the asynchronous
  * constructor (§4.3.1).
  *
@@ -292,7 +293,7 @@ void *world_constructor_main(void *arg)
         uint64_t epoch = w->epoch;
         size_t remaining = 0;
         lie_env *snap = NULL;
-        lie_lie_vis *vis = NULL;
+        lie_env_shadows *vis = NULL;
         lie_error err;
         lie_status st = lie_update_step(w->up, step, &remaining, &err);
         /* A snapshot copies every environment (lib/update/update.h, Costs):
@@ -303,7 +304,7 @@ void *world_constructor_main(void *arg)
         if (st == LIE_OK && publish)
             st = lie_update_snapshot(w->up, &snap, &err);
         if (st == LIE_OK && publish)
-            st = lie_lie_vis_create(w->scene, snap, &vis, &err);
+            st = lie_env_shadows_create(w->scene, snap, &vis, &err);
         pthread_rwlock_unlock(&w->lock);
         pthread_rwlock_wrlock(&w->lock);
         if (st != LIE_OK) {
@@ -315,7 +316,7 @@ void *world_constructor_main(void *arg)
             /* no edit came in between: publish */
             last_publish = lie_time_now();
             lie_env_destroy(w->render_env);
-            lie_lie_vis_destroy(w->vis);
+            lie_env_shadows_destroy(w->vis);
             w->render_env = snap;
             w->vis = vis;
             snap = NULL;
@@ -327,7 +328,7 @@ void *world_constructor_main(void *arg)
                 atomic_store(&w->dirty, 0); /* committed */
         }
         pthread_rwlock_unlock(&w->lock);
-        lie_lie_vis_destroy(vis);
+        lie_env_shadows_destroy(vis);
         lie_env_destroy(snap);
         /* Steps of about 100 ms: each re-lays out the whole environments
          * (lib/update/update.h, Costs), so shorter ones spend the catch-up

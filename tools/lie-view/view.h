@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* lie-view: the paper's interactive loop (§3): navigate, move objects and
  * see correct soft shadows at once, while an asynchronous constructor
  * (§4.3.1) catches up with the edits (§5).

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The viewer's world: the scene, its cache, the ray tracer, and the edits
  * made in the session, with the asynchronous constructor of §4.3.1.
  *
@@ -17,17 +18,17 @@
 
 lie_status world_make_oracle(view_world *w, lie_error *err)
 {
-    lie_lie_vis_destroy(w->vis);
+    lie_env_shadows_destroy(w->vis);
     w->vis = NULL;
     if (w->ctor) { /* the live env: landings change it in place (lie_ctor_read_lock) */
-        lie_status st = lie_lie_vis_create(w->scene, lie_ctor_env(w->ctor), &w->vis, err);
+        lie_status st = lie_env_shadows_create(w->scene, lie_ctor_env(w->ctor), &w->vis, err);
         if (st == LIE_OK)
-            lie_lie_vis_grow(w->vis, lie_ctor_longest(w->ctor));
+            lie_env_shadows_grow(w->vis, lie_ctor_longest(w->ctor));
         return st;
     }
     if (!w->render_env)
         return LIE_OK;
-    return lie_lie_vis_create(w->scene, w->render_env, &w->vis, err);
+    return lie_env_shadows_create(w->scene, w->render_env, &w->vis, err);
 }
 
 /* ---- reading ---------------------------------------------------------- */
@@ -47,7 +48,7 @@ void view_world_read_unlock(view_world *w)
 void view_world_sync_oracle(view_world *w)
 {
     if (w->ctor && w->vis)
-        lie_lie_vis_grow(w->vis, lie_ctor_longest(w->ctor));
+        lie_env_shadows_grow(w->vis, lie_ctor_longest(w->ctor));
 }
 uint64_t view_world_units_version(const view_world *w) { return w->ctor ? lie_ctor_version(w->ctor) : 0; }
 void view_world_hold(view_world *w)
@@ -68,7 +69,7 @@ void view_world_look(view_world *w, const lie_camera *cam)
 lie_ctor *view_world_ctor(const view_world *w) { return w->ctor; }
 const lie_scene *view_world_scene(const view_world *w) { return w->scene; }
 const lie_rt *view_world_rt(const view_world *w) { return w->rt; }
-const lie_vis_oracle *view_world_oracle(const view_world *w) { return w->vis ? lie_lie_vis_oracle(w->vis) : NULL; }
+const lie_vis_oracle *view_world_oracle(const view_world *w) { return w->vis ? lie_env_shadows_oracle(w->vis) : NULL; }
 uint64_t view_world_version(const view_world *w) { return atomic_load(&((view_world *)w)->version); }
 int64_t view_world_pending(const view_world *w)
 {
@@ -268,7 +269,7 @@ void view_world_close(view_world *w)
     free(w->update_ms);
     lie_update_destroy(w->up);
     lie_env_destroy(w->render_env);
-    lie_lie_vis_destroy(w->vis);
+    lie_env_shadows_destroy(w->vis);
     lie_rt_destroy(w->rt);
     lie_scene_destroy(w->scene);
     lie_cache_destroy(w->cache);

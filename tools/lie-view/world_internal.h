@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to lie-view's world.c and update.c. */
 #ifndef LIE_VIEW_WORLD_INTERNAL_H
 #define LIE_VIEW_WORLD_INTERNAL_H
@@ -26,7 +27,7 @@ struct view_world {
     lie_update *up;            /* lib/update: the §5 update in two phases */
     lie_rt *rt;                /* Embree over the scene as edited */
     lie_env *render_env;       /* the update's latest snapshot: pending units are LIE_CLASS_NONE */
-    lie_lie_vis *vis;          /* over render_env */
+    lie_env_shadows *vis;          /* over render_env */
     _Atomic int64_t n_pending;
     _Atomic int dirty;         /* edited since the update last committed */
     int64_t pending_max;

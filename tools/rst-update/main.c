@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* rst-update: apply edit files to a cache's scene and recompute only the
  * local illumination environments the edits can have changed (§5).
  *   rst-update CACHE|- EDIT.yaml [EDIT.yaml ...] -o CACHE|- [options] */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* A program of the library's users, built by tests/tools/t0600-install.sh as C11 (prog.c)
  * and as C++17 (the same text as prog.cpp) against the installed headers and liblie.so
  * through `pkg-config --cflags --libs lie`: it reads a cache, loads the scene it describes,
@@ -23,7 +24,7 @@ int main(int argc, char **argv)
     lie_cache *c = NULL;
     lie_scene *s = NULL;
     lie_rt *rt = NULL;
-    lie_lie_vis *vis = NULL;
+    lie_env_shadows *vis = NULL;
     lie_frame *f = NULL;
     int rc = 1;
     lie_scene_options so = lie_scene_options_default();
@@ -32,7 +33,7 @@ int main(int argc, char **argv)
     lie_camera cam;
     lie_error_clear(&err);
     if (lie_cache_read(argv[1], &c, &err) != LIE_OK || lie_cache_load_scene(c, argv[1], NULL, &so, &s, &err) != LIE_OK ||
-        lie_rt_create(s, &rt, &err) != LIE_OK || lie_lie_vis_create(s, c->env, &vis, &err) != LIE_OK ||
+        lie_rt_create(s, &rt, &err) != LIE_OK || lie_env_shadows_create(s, c->env, &vis, &err) != LIE_OK ||
         lie_scene_camera(s, NULL, &cam, &err) != LIE_OK) {
         rc = fail(&err);
         goto done;
@@ -42,7 +43,7 @@ int main(int argc, char **argv)
     ro.light_samples = 16;
     ro.threads = 2;
     ro.visibility = LIE_VIS_LIE;
-    ro.oracle = lie_lie_vis_oracle(vis);
+    ro.oracle = lie_env_shadows_oracle(vis);
     if (lie_render(s, rt, &cam, &ro, &f, &st, &err) != LIE_OK || lie_frame_write(argv[2], f, NULL, &err) != LIE_OK ||
         lie_cache_write(argv[3], c, NULL, &err) != LIE_OK) {
         rc = fail(&err);
@@ -53,7 +54,7 @@ int main(int argc, char **argv)
     rc = 0;
 done:
     lie_frame_destroy(f);
-    lie_lie_vis_destroy(vis);
+    lie_env_shadows_destroy(vis);
     lie_rt_destroy(rt);
     lie_scene_destroy(s);
     lie_cache_destroy(c);

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Writes the glTF fixtures of tests/unit/test_gltf.c into this folder.
 
 The outputs are committed; run this only to change them:

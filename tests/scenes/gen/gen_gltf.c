@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* A small glTF 2.0 writer: geometry helpers, the builder, and the JSON,
  * binary and PNG output.  See gen_gltf.h for the contract. */
 #include "gen_gltf.h"

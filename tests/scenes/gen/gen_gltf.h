@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tests/scenes/gen: a small glTF 2.0 writer for the bundled test scenes.
  *
  * Two parts:

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* gen_scenes: write the bundled test scenes (tests/scenes/README.md).
  *
  *   gen_scenes OUTDIR [--only NAME] [--detail N] [--seed N] [-q]

@@ -1,0 +1,84 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/* Private to lib/shade: light samplers, which share a shading point's
+ * budget of light samples among the emitters (lie_light_sampler_kind in
+ * shade.h).  pbrt-v4's LightSampler is the model: one interface, a file per
+ * kind (sampler.c: uniform and power; lighttree.c: the light BVH).
+ *
+ * A sampler distributes n samples at once, systematically: the n points
+ * (k + u) / n, k = 0 .. n - 1, fall into consecutive intervals of [0, 1),
+ * one per emitter, as long as the emitter's probability.  So an emitter of
+ * probability p takes floor(n p) or ceil(n p) samples, never a random
+ * number of them, and a pick costs O(log emitters) however many samples it
+ * takes. */
+#ifndef LIE_SHADE_SAMPLER_H
+#define LIE_SHADE_SAMPLER_H
+
+#include "shade/shade.h"
+
+/* One emitter's share of a point's samples: `count` of the n, chosen with
+ * probability `pmf` each.  Its estimate is weighed by count / (n pmf). */
+typedef struct lie_light_pick {
+    int emitter;
+    int count;
+    float pmf;
+} lie_light_pick;
+
+/* What the samplers know of an emitter (pbrt-v4's LightBounds): its power
+ * (the luminance of lie_emitter_power, times the mean of an emissive
+ * texture), a box around it, and the cone of its normals: every point
+ * emits within theta_e of a normal that lies within theta_o of `axis`.
+ * `infinite`: a directional light (no box). */
+typedef struct lie_light_bounds {
+    float lo[3], hi[3];
+    float axis[3];
+    float cos_o, cos_e;
+    float phi;
+    int two_sided;
+    int infinite;
+} lie_light_bounds;
+
+/* Every emitter's bounds; `texture_power` (NULL: none) scales emitter e's
+ * power by the mean of its emissive texture (lib/shade/texlight.h).
+ * *out: free(). */
+lie_status lie_light_bounds_all(const lie_scene *s, const float *texture_power, lie_light_bounds **out);
+/* A bound on the light of b at point p with normal n (NULL: any
+ * direction), in the units of phi / distance^2 (pbrt-v4's
+ * LightBounds::Importance); 0 only where nothing of b can reach p. */
+float lie_light_importance(const lie_light_bounds *b, lie_vec3 p, const lie_vec3 *n);
+
+typedef struct lie_light_sampler lie_light_sampler;
+typedef struct lie_light_sampler_class {
+    const char *name;
+    lie_status (*create)(const lie_scene *s, const lie_light_bounds *bounds, void **state);
+    void (*destroy)(void *state);
+    /* n samples at point p with normal n_ among the emitters, from the
+     * rotation u in [0, 1): picks in out (room for min(n, emitters)),
+     * returns how many */
+    int (*distribute)(const void *state, lie_vec3 p, lie_vec3 n_, int n, double u, lie_light_pick *out);
+} lie_light_sampler_class;
+
+struct lie_light_sampler {
+    const lie_light_sampler_class *cls;
+    void *state;
+};
+
+extern const lie_light_sampler_class lie_light_sampler_uniform, lie_light_sampler_power, lie_light_sampler_tree;
+
+/* The sampler of kind k (not LIE_SAMPLER_PER_EMITTER) over s. */
+lie_status lie_light_sampler_create(const lie_scene *s, lie_light_sampler_kind k, const lie_light_bounds *bounds,
+                                    lie_light_sampler *out);
+void lie_light_sampler_destroy(lie_light_sampler *ls);
+
+/* How many of the points (k + u) / n, k = 0 .. n - 1, lie in [0, x):
+ * the systematic count that every sampler shares. */
+static inline int lie_systematic_below(double x, int n, double u)
+{
+    double k = ceil(x * (double)n - u);
+    return k < 0.0 ? 0 : k > (double)n ? n : (int)k;
+}
+
+/* Systematic picks over weights w[0 .. m) (summing to `total` > 0), ids
+ * their emitters: out gets the entries with a count; returns how many. */
+int lie_light_pick_weights(const float *w, const int *ids, int m, double total, int n, double u, lie_light_pick *out);
+
+#endif
