@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* blocker-scenes: write the fixtures that sampled blocker lists get wrong
  * when nothing completes them (lib/lie/sample.c, lib/lie/subdiv.c): real
  * meshes' thin parts and many small triangles between a light and what it
