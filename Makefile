@@ -29,7 +29,7 @@ OPT      := $(OPT_$(VARIANT))
 # The libraries, from pkg-config where Debian ships a module (lie.pc's Requires.private names
 # the same ones); Embree 3 has none in Debian, so -lembree3 stays a bare flag.  OpenEXR's module
 # lists its C++ libraries too: --as-needed keeps only OpenEXRCore, the one lib/image calls.
-PC_DEPS  := OpenEXR yaml-0.1 libpng zlib libxxhash tinygltf
+PC_DEPS  := OpenEXR yaml-0.1 libpng zlib libxxhash tinygltf stb
 PC_CFLAGS := $(shell pkg-config --cflags $(PC_DEPS))
 PC_LIBS  := $(shell pkg-config --libs $(PC_DEPS))
 LIBS_PRIVATE := -lembree3 -lpthread -lm -lstdc++

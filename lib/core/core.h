@@ -110,6 +110,23 @@ static inline void lie_box3_grow(lie_box3 *b, lie_vec3 p)
     b->hi = lie_v3_max(b->hi, p);
 }
 static inline int lie_box3_is_empty(const lie_box3 *b) { return !(b->lo.x <= b->hi.x); }
+/* The coordinate range.  Every world-space position of a scene (a vertex,
+ * a light) lies within +-LIE_COORD_MAX, every camera's eye and target within
+ * +-LIE_CAMERA_COORD_MAX; scenes, edits, cameras and camera paths are
+ * checked where they enter the library (lie_scene_flatten, lie_camera_check),
+ * and the viewer clamps its navigation to them.  Why these: Embree works in
+ * single precision and stops (an assertion, exit 134) on rays and bounds past
+ * about 1.8e18 (its FLT_LARGE); the library multiplies up to three
+ * coordinates (areas, plane offsets, determinants), which stay finite in
+ * float (3.4e38) below 1e12; a camera may stand a hundred scene sizes away
+ * (the default camera of a scene that fills the range stands at 4.5e12). */
+#define LIE_COORD_MAX 1e12f
+#define LIE_CAMERA_COORD_MAX 1e14f
+/* Every coordinate of v within +-max (NaN is not). */
+static inline int lie_v3_within(lie_vec3 v, float max)
+{
+    return fabsf(v.x) <= max && fabsf(v.y) <= max && fabsf(v.z) <= max;
+}
 /* A sphere around n points, as x, y, z, r: their box's centre and the
  * farthest point's distance, enlarged so rounding never leaves a point out
  * (culling tests may trust it). */
@@ -258,26 +275,40 @@ void lie_progress_cb(void *pctx, size_t done, size_t total);
  * replaced in the target's folder; an existing device or FIFO is written in
  * place, without a temporary.  Temporaries are removed on SIGINT, SIGTERM
  * and SIGHUP (where those still have their default action: a handler is
- * installed on first use, unlinks, then re-raises); SIGKILL leaves them, see
- * lie_tmp_clean.  Owns the FILE. */
+ * installed on first use, unlinks, then re-raises); a signal that comes while
+ * a commit renames waits until the commit is done.  SIGKILL leaves them, see
+ * lie_tmp_clean.  A replaced file keeps its mode, owner and group; when
+ * the owner cannot be kept (another user's file, and we are not root) the
+ * open fails.  Owns the FILE. */
 typedef struct lie_atomic_group lie_atomic_group;
 typedef struct lie_atomic_file {
     FILE *fp;
     char path[4096];   /* as given, for messages */
     char target[4096]; /* the file replaced: path with symlinks followed */
     char tmp[4096];
-    int is_stdout, in_place, slot;
+    int is_stdout, in_place, slot, no_replace;
     lie_atomic_group *group;
 } lie_atomic_file;
 lie_status lie_atomic_open(lie_atomic_file *af, const char *path, lie_error *err);
+/* LIE_ATOMIC_NO_REPLACE: create the file, never replace one: the open fails
+ * with "exists" when the target exists, and the commit (renameat2's
+ * RENAME_NOREPLACE, or link and unlink) fails the same way, replacing
+ * nothing, when one appeared meanwhile.  `group` may be NULL. */
+enum { LIE_ATOMIC_NO_REPLACE = 1 };
+lie_status lie_atomic_open_flags(lie_atomic_file *af, const char *path, lie_atomic_group *group, unsigned flags,
+                                 lie_error *err);
 lie_status lie_atomic_commit(lie_atomic_file *af, lie_error *err);
 void lie_atomic_abort(lie_atomic_file *af);
 
 /* All outputs of one run visible together or none: a file opened into a
  * group is, on commit, complete and fsynced but left as its temporary;
- * lie_atomic_group_commit renames them all, in commit order (a rename failing
- * part way, which needs an I/O error on the folder itself, leaves the earlier
- * ones in place).  Destroy removes temporaries not renamed; accepts NULL. */
+ * lie_atomic_group_commit renames them all: first those opened
+ * LIE_ATOMIC_NO_REPLACE (when one finds its name taken, those placed are
+ * taken back and nothing is replaced), then the others in commit order (a
+ * rename failing part way, which needs an I/O error on the folder itself,
+ * leaves the earlier ones in place).  SIGINT, SIGTERM and SIGHUP wait for
+ * the end of the renames.  Destroy removes temporaries not renamed; accepts
+ * NULL. */
 lie_atomic_group *lie_atomic_group_create(void);
 lie_status lie_atomic_open_group(lie_atomic_file *af, const char *path, lie_atomic_group *group, lie_error *err);
 lie_status lie_atomic_group_commit(lie_atomic_group *g, lie_error *err);
@@ -322,7 +353,12 @@ lie_status lie_read_file(const char *path, unsigned char **data, size_t *size, l
  * reader's checks) and adds what it read, LIE_FILES_ONLY fails with
  * "cannot open: " LIE_FILE_SET_MISSING.  A NULL set means the file system.
  * Not thread-safe: one load at a time. */
-typedef enum { LIE_FILES_RECORD, LIE_FILES_ONLY } lie_file_set_mode;
+typedef enum {
+    LIE_FILES_RECORD,
+    LIE_FILES_ONLY,
+    LIE_FILES_NAMES /* like RECORD, but only the names and identities of the files read are kept, not
+                     * their bytes: a run's inputs, for lie_file_set_claim */
+} lie_file_set_mode;
 typedef struct lie_file_set lie_file_set;
 #define LIE_FILE_SET_MISSING "not among the files read by the first process"
 /* NULL when out of memory; destroy accepts NULL. */
@@ -340,6 +376,22 @@ lie_status lie_file_set_read(lie_file_set *set, const char *path, uint64_t max, 
                              lie_error *err);
 /* Could path be read: held, or (not LIE_FILES_ONLY) it exists on disk. */
 int lie_file_set_exists(const lie_file_set *set, const char *path);
+/* A run's inputs and outputs (CONTRIBUTING.md, Files): an output must be
+ * neither an input nor another output of the run.  lie_file_set_note adds
+ * an input read outside the set (its identity: device and inode); _note_all
+ * adds every input of `from`.  lie_file_set_claim checks an output about to
+ * be written against every input and every output claimed before, as the
+ * same file (device and inode) or, for one not there yet, the same resolved
+ * path, and claims it; "-", devices and FIFOs always pass.  `replaces`
+ * (may be NULL) names the one input this output is the new version of (a
+ * cache updated in place), which it may replace.  The error: "OUT: is also
+ * the input IN: refusing to write over it".  set NULL: nothing is checked. */
+lie_status lie_file_set_note(lie_file_set *set, const char *path, lie_error *err);
+lie_status lie_file_set_note_all(lie_file_set *set, const lie_file_set *from, lie_error *err);
+lie_status lie_file_set_claim(lie_file_set *set, const char *path, const char *replaces, lie_error *err);
+/* The same check, without claiming: for the many outputs of a pattern
+ * (frame_%04d.exr), distinct by construction. */
+lie_status lie_file_set_check(lie_file_set *set, const char *path, lie_error *err);
 /* The set as one malloc'd buffer, and back (the result is LIE_FILES_ONLY;
  * every length is checked). */
 lie_status lie_file_set_pack(const lie_file_set *set, unsigned char **data, size_t *size, lie_error *err);

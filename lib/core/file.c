@@ -11,8 +11,13 @@
  * character device such as /dev/null, a FIFO) is written in place.  A group
  * holds finished temporaries until every output of a run is complete, then
  * renames them all.  Temporaries still open are unlinked on SIGINT, SIGTERM
- * and SIGHUP by a handler that then re-raises the signal; SIGKILL cannot be
- * caught, so lie_tmp_clean removes stale ones of our naming when asked. */
+ * and SIGHUP by a handler that then re-raises the signal, unless a commit is
+ * renaming: the signal then waits for the last rename, so a group is all in
+ * place or none of it; SIGKILL cannot be caught, so lie_tmp_clean removes
+ * stale ones of our naming when asked.  A replaced file keeps its mode,
+ * owner and group; "do not replace" is decided by the rename itself
+ * (renameat2's RENAME_NOREPLACE, or link and unlink where the file system
+ * lacks it), never by a test made earlier. */
 #include "core/core.h"
 
 #include <dirent.h>
@@ -39,16 +44,72 @@ static char tmp_paths[TMP_SLOTS][4096];
 static atomic_int tmp_state[TMP_SLOTS];
 static pthread_once_t tmp_once = PTHREAD_ONCE_INIT;
 static const int tmp_signals[] = {SIGINT, SIGTERM, SIGHUP};
+/* The commits renaming now (>= 0), or -1 once a signal is ending the
+ * process.  A signal during a commit is left in `tmp_deferred` for the last
+ * commit to finish to act on; a commit that finds the process ending does
+ * not start.  One atomic word decides which comes first, whatever thread
+ * the signal lands on. */
+static atomic_int tmp_committing;
+static atomic_int tmp_deferred;
+
+/* Remove every live temporary and end the process by `sig`'s default action
+ * (async-signal-safe calls only). */
+static void tmp_die(int sig)
+{
+    for (int i = 0; i < TMP_SLOTS; i++)
+        if (atomic_load(&tmp_state[i]) == SLOT_LIVE)
+            unlink(tmp_paths[i]);
+    signal(sig, SIG_DFL);
+    sigset_t one;
+    sigemptyset(&one);
+    sigaddset(&one, sig);
+    pthread_sigmask(SIG_UNBLOCK, &one, NULL);
+    raise(sig); /* from the handler: delivered with the default action once it returns */
+}
 
 static void tmp_on_signal(int sig)
 {
     int saved = errno;
-    for (int i = 0; i < TMP_SLOTS; i++)
-        if (atomic_load(&tmp_state[i]) == SLOT_LIVE)
-            unlink(tmp_paths[i]);
+    for (;;) {
+        int c = atomic_load(&tmp_committing);
+        if (c > 0) { /* the commit in progress finishes, then acts on it */
+            int none = 0;
+            atomic_compare_exchange_strong(&tmp_deferred, &none, sig);
+            errno = saved;
+            return;
+        }
+        if (c < 0 || atomic_compare_exchange_weak(&tmp_committing, &c, -1))
+            break;
+    }
     errno = saved;
-    signal(sig, SIG_DFL);
-    raise(sig); /* delivered with the default action once the handler returns */
+    tmp_die(sig);
+}
+
+/* Enter a commit's renames: 0, or -1 when a signal is already ending the
+ * process (its handler is removing the temporaries). */
+static int commit_enter(void)
+{
+    for (;;) {
+        int c = atomic_load(&tmp_committing);
+        if (c < 0)
+            return -1;
+        if (atomic_compare_exchange_weak(&tmp_committing, &c, c + 1))
+            return 0;
+    }
+}
+
+/* Leave it; the last commit out acts on a signal that came meanwhile. */
+static void commit_leave(void)
+{
+    for (;;) {
+        int c = atomic_load(&tmp_committing);
+        int next = c == 1 && atomic_load(&tmp_deferred) ? -1 : c - 1;
+        if (atomic_compare_exchange_weak(&tmp_committing, &c, next)) {
+            if (next < 0)
+                tmp_die(atomic_load(&tmp_deferred));
+            return;
+        }
+    }
 }
 
 /* Installed only where the signal still has its default action: a program
@@ -97,7 +158,7 @@ struct lie_atomic_group {
     size_t n, cap;
     struct pending {
         char *tmp, *target;
-        int slot;
+        int slot, no_replace;
     } *files;
 };
 
@@ -117,23 +178,75 @@ void lie_atomic_group_destroy(lie_atomic_group *g)
     free(g);
 }
 
+/* rename(tmp, target), or with no_replace the same only while target does
+ * not exist, decided atomically by the kernel: renameat2's
+ * RENAME_NOREPLACE, or on a file system without it link (which fails on an
+ * existing name) then unlink.  0, or -1 with errno (EEXIST: it exists). */
+static int put_in_place(const char *tmp, const char *target, int no_replace)
+{
+    if (!no_replace)
+        return rename(tmp, target);
+    if (renameat2(AT_FDCWD, tmp, AT_FDCWD, target, RENAME_NOREPLACE) == 0)
+        return 0;
+    if (errno != EINVAL && errno != ENOSYS)
+        return -1;
+    if (link(tmp, target) != 0)
+        return -1;
+    unlink(tmp);
+    return 0;
+}
+
+static lie_status place_error(lie_error *err, const char *target, int e)
+{
+    if (e == EEXIST)
+        return lie_error_set(err, LIE_ERR_IO, target, "exists (it appeared while writing; not replaced)");
+    return lie_error_set(err, LIE_ERR_IO, target, "cannot rename into place: %s", strerror(e));
+}
+
+/* Renames in two passes: first the files that must not replace anything,
+ * which can fail because a file appeared (those already placed are taken
+ * back), then the replacing ones, in commit order, which fail only on an I/O
+ * error of the folder itself.  Signals wait for the end (commit_enter). */
 lie_status lie_atomic_group_commit(lie_atomic_group *g, lie_error *err)
 {
+    if (g->n == 0)
+        return LIE_OK;
+    if (commit_enter() != 0)
+        return lie_error_set(err, LIE_ERR_IO, g->files[0].target, "not renamed into place: interrupted by a signal");
     lie_status st = LIE_OK;
-    size_t i = 0;
-    for (; i < g->n; i++) {
+    for (size_t i = 0; i < g->n; i++) {
         struct pending *p = &g->files[i];
-        if (rename(p->tmp, p->target) != 0) {
-            st = lie_error_set(err, LIE_ERR_IO, p->target, "cannot rename into place: %s", strerror(errno));
+        if (!p->no_replace)
+            continue;
+        if (put_in_place(p->tmp, p->target, 1) != 0) {
+            st = place_error(err, p->target, errno);
+            for (size_t k = 0; k < i; k++) /* take back the new files placed */
+                if (g->files[k].no_replace)
+                    rename(g->files[k].target, g->files[k].tmp);
             break;
         }
-        tmp_release(p->slot);
-        free(p->tmp);
-        free(p->target);
     }
+    for (size_t i = 0; st == LIE_OK && i < g->n; i++) {
+        struct pending *p = &g->files[i];
+        if (!p->no_replace && rename(p->tmp, p->target) != 0)
+            st = place_error(err, p->target, errno);
+        else
+            p->no_replace = -1; /* in place */
+    }
+    commit_leave();
     /* what was not renamed stays for lie_atomic_group_destroy to remove */
-    memmove(g->files, g->files + i, (g->n - i) * sizeof *g->files);
-    g->n -= i;
+    size_t kept = 0;
+    for (size_t i = 0; i < g->n; i++) {
+        struct pending *p = &g->files[i];
+        if (p->no_replace == -1) {
+            tmp_release(p->slot);
+            free(p->tmp);
+            free(p->target);
+        } else {
+            g->files[kept++] = *p;
+        }
+    }
+    g->n = kept;
     return st;
 }
 
@@ -176,11 +289,13 @@ static int resolve_links(const char *path, char *out, size_t size)
     return 0;
 }
 
-lie_status lie_atomic_open_group(lie_atomic_file *af, const char *path, lie_atomic_group *group, lie_error *err)
+lie_status lie_atomic_open_flags(lie_atomic_file *af, const char *path, lie_atomic_group *group, unsigned flags,
+                                 lie_error *err)
 {
     memset(af, 0, sizeof *af);
     af->slot = -1;
     af->group = group;
+    af->no_replace = (flags & LIE_ATOMIC_NO_REPLACE) != 0;
     if (strcmp(path, "-") == 0) {
         af->fp = stdout;
         af->is_stdout = 1;
@@ -198,6 +313,8 @@ lie_status lie_atomic_open_group(lie_atomic_file *af, const char *path, lie_atom
 
     struct stat st;
     int exists = stat(af->target, &st) == 0;
+    if (af->no_replace && (exists || lstat(af->target, &st) == 0)) /* a dangling link too */
+        return lie_error_set(err, LIE_ERR_IO, path, "exists (not replaced)");
     if (exists && S_ISDIR(st.st_mode))
         return lie_error_set(err, LIE_ERR_IO, path, "cannot write: is a directory");
     if (exists && !S_ISREG(st.st_mode)) {
@@ -239,8 +356,20 @@ lie_status lie_atomic_open_group(lie_atomic_file *af, const char *path, lie_atom
         af->tmp[0] = 0;
         return lie_error_set(err, LIE_ERR_IO, path, "cannot create: %s", strerror(e));
     }
-    /* mkstemp makes 0600: a replaced file keeps its mode, a new one gets
-     * the usual umask-derived mode. */
+    /* mkstemp makes 0600 and gives the file our owner: a replaced file keeps
+     * its owner and group (chown first: it clears set-id bits) and its mode,
+     * a new one gets the usual umask-derived mode.  Where we may not give it
+     * the old owner (not root, another user's file in a folder we may
+     * write), we refuse rather than take the file from its owner. */
+    if (exists && (st.st_uid != geteuid() || st.st_gid != getegid()) &&
+        fchown(fd, st.st_uid != geteuid() ? st.st_uid : (uid_t)-1, st.st_gid != getegid() ? st.st_gid : (gid_t)-1) !=
+            0) {
+        e = errno;
+        close(fd);
+        lie_atomic_abort(af);
+        return lie_error_set(err, LIE_ERR_IO, path, "cannot replace it keeping its owner (uid %u, gid %u): %s",
+                             (unsigned)st.st_uid, (unsigned)st.st_gid, strerror(e));
+    }
     mode_t um = umask(0);
     umask(um);
     fchmod(fd, exists ? (st.st_mode & 07777) : (0666 & ~um));
@@ -254,9 +383,14 @@ lie_status lie_atomic_open_group(lie_atomic_file *af, const char *path, lie_atom
     return LIE_OK;
 }
 
+lie_status lie_atomic_open_group(lie_atomic_file *af, const char *path, lie_atomic_group *group, lie_error *err)
+{
+    return lie_atomic_open_flags(af, path, group, 0, err);
+}
+
 lie_status lie_atomic_open(lie_atomic_file *af, const char *path, lie_error *err)
 {
-    return lie_atomic_open_group(af, path, NULL, err);
+    return lie_atomic_open_flags(af, path, NULL, 0, err);
 }
 
 lie_status lie_atomic_commit(lie_atomic_file *af, lie_error *err)
@@ -292,7 +426,7 @@ lie_status lie_atomic_commit(lie_atomic_file *af, lie_error *err)
             g->files = nf;
             g->cap = cap;
         }
-        struct pending p = {strdup(af->tmp), strdup(af->target), af->slot};
+        struct pending p = {strdup(af->tmp), strdup(af->target), af->slot, af->no_replace};
         if (!p.tmp || !p.target) {
             free(p.tmp);
             free(p.target);
@@ -304,10 +438,16 @@ lie_status lie_atomic_commit(lie_atomic_file *af, lie_error *err)
         af->slot = -1;
         return LIE_OK;
     }
-    if (rename(af->tmp, af->target) != 0) {
-        e = errno;
+    if (commit_enter() != 0) {
         lie_atomic_abort(af);
-        return lie_error_set(err, LIE_ERR_IO, af->path, "cannot rename into place: %s", strerror(e));
+        return lie_error_set(err, LIE_ERR_IO, af->path, "not renamed into place: interrupted by a signal");
+    }
+    int placed = put_in_place(af->tmp, af->target, af->no_replace);
+    e = errno;
+    commit_leave();
+    if (placed != 0) {
+        lie_atomic_abort(af);
+        return place_error(err, af->path, e);
     }
     tmp_release(af->slot);
     af->slot = -1;

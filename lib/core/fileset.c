@@ -1,16 +1,26 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* File sets: inputs held in memory by the path they were read from
- * (core.h).  A handful of files per load, so lookups are linear. */
+/* File sets: inputs held in memory by the path they were read from, and
+ * the identities of a run's inputs and outputs (core.h).  A handful of files
+ * per load, so lookups are linear. */
 #include "core/core.h"
 
+#include <errno.h>
+#include <limits.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
+
+enum { HELD, INPUT, OUTPUT }; /* bytes held (an input); an input's identity only; an output */
 
 typedef struct held_file {
     char *path;
     unsigned char *data;
     size_t size;
+    int role, has_id; /* has_id: dev and ino are the file's (it existed) */
+    dev_t dev;
+    ino_t ino;
+    char *real; /* an output: its resolved path (it may not exist yet) */
 } held_file;
 
 struct lie_file_set {
@@ -35,6 +45,7 @@ void lie_file_set_destroy(lie_file_set *set)
     for (size_t i = 0; i < set->n; i++) {
         free(set->files[i].path);
         free(set->files[i].data);
+        free(set->files[i].real);
     }
     free(set->files);
     free(set);
@@ -47,15 +58,17 @@ uint64_t lie_file_set_bytes(const lie_file_set *set) { return set ? set->bytes :
 const unsigned char *lie_file_set_find(const lie_file_set *set, const char *path, size_t *size)
 {
     for (size_t i = 0; set && i < set->n; i++)
-        if (strcmp(set->files[i].path, path) == 0) {
+        if (set->files[i].role == HELD && strcmp(set->files[i].path, path) == 0) {
             *size = set->files[i].size;
             return set->files[i].data;
         }
     return NULL;
 }
 
-/* Take ownership of path and data (freed on failure). */
-static lie_status adopt(lie_file_set *set, char *path, unsigned char *data, size_t size, lie_error *err)
+/* Take ownership of path and data (freed on failure); the entry's identity
+ * is the file's at path now, if it is there. */
+static lie_status adopt_as(lie_file_set *set, char *path, unsigned char *data, size_t size, int role,
+                           lie_error *err)
 {
     if (set->n == set->cap) {
         size_t cap = set->cap ? 2 * set->cap : 8;
@@ -68,13 +81,27 @@ static lie_status adopt(lie_file_set *set, char *path, unsigned char *data, size
         set->files = f;
         set->cap = cap;
     }
-    set->files[set->n++] = (held_file){path, data, size};
+    held_file f = {path, data, size, role, 0, 0, 0, NULL};
+    struct stat st;
+    if (strcmp(path, "-") != 0 && stat(path, &st) == 0) {
+        f.has_id = 1;
+        f.dev = st.st_dev;
+        f.ino = st.st_ino;
+    }
+    set->files[set->n++] = f;
     set->bytes += size;
     return LIE_OK;
 }
 
+static lie_status adopt(lie_file_set *set, char *path, unsigned char *data, size_t size, lie_error *err)
+{
+    return adopt_as(set, path, data, size, HELD, err);
+}
+
 lie_status lie_file_set_add(lie_file_set *set, const char *path, const void *data, size_t size, lie_error *err)
 {
+    if (set->mode == LIE_FILES_NAMES)
+        return lie_file_set_note(set, path, err);
     size_t old;
     if (lie_file_set_find(set, path, &old))
         return LIE_OK; /* the first bytes read stay: a load sees one version of a file */
@@ -152,17 +179,22 @@ static uint64_t get64(const unsigned char *p)
 
 lie_status lie_file_set_pack(const lie_file_set *set, unsigned char **data, size_t *size, lie_error *err)
 {
-    size_t total = 16;
+    size_t total = 16, count = 0;
     for (size_t i = 0; i < set->n; i++)
-        total += 16 + strlen(set->files[i].path) + set->files[i].size;
+        if (set->files[i].role == HELD) {
+            total += 16 + strlen(set->files[i].path) + set->files[i].size;
+            count++;
+        }
     unsigned char *d = malloc(total), *p = d;
     if (!d)
         return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory for %zu bytes", total);
     memcpy(p, MAGIC, 8);
-    put64(p + 8, set->n);
+    put64(p + 8, count);
     p += 16;
     for (size_t i = 0; i < set->n; i++) {
         const held_file *f = &set->files[i];
+        if (f->role != HELD)
+            continue;
         size_t len = strlen(f->path);
         put64(p, len);
         put64(p + 8, f->size);
@@ -228,4 +260,108 @@ lie_status lie_file_set_unpack(const unsigned char *data, size_t size, lie_file_
     }
     *out = set;
     return LIE_OK;
+}
+
+/* ---- a run's inputs and outputs -------------------------------------------
+ * An output must not be an input, nor another output of the same run: the
+ * same file by device and inode when it exists (a symlink or a hard link to
+ * it too), or the same resolved path when it does not yet.  Devices, FIFOs
+ * and "-" are written in place and are never the same file in this sense
+ * (two writes to /dev/null are fine). */
+
+lie_status lie_file_set_note(lie_file_set *set, const char *path, lie_error *err)
+{
+    if (!set || strcmp(path, "-") == 0)
+        return LIE_OK;
+    for (size_t i = 0; i < set->n; i++)
+        if (set->files[i].role != OUTPUT && strcmp(set->files[i].path, path) == 0)
+            return LIE_OK;
+    char *p = strdup(path);
+    if (!p)
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    return adopt_as(set, p, NULL, 0, INPUT, err);
+}
+
+lie_status lie_file_set_note_all(lie_file_set *set, const lie_file_set *from, lie_error *err)
+{
+    for (size_t i = 0; set && from && i < from->n; i++)
+        if (from->files[i].role != OUTPUT) {
+            lie_status st = lie_file_set_note(set, from->files[i].path, err);
+            if (st != LIE_OK)
+                return st;
+        }
+    return LIE_OK;
+}
+
+/* The path with its folder resolved (symlinks, "..") and, when the file
+ * itself is a symlink, followed as lie_atomic_open follows it; malloc'd, or
+ * NULL when the folder does not exist (the write will fail anyway). */
+static char *resolved(const char *path)
+{
+    char *whole = realpath(path, NULL);
+    if (whole)
+        return whole;
+    const char *slash = strrchr(path, '/');
+    char dir[PATH_MAX];
+    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - path) + (slash == path) : 1, slash ? path : ".");
+    char *rdir = realpath(dir, NULL);
+    if (!rdir)
+        return NULL;
+    const char *base = slash ? slash + 1 : path;
+    size_t n = strlen(rdir) + 1 + strlen(base) + 1;
+    char *out = malloc(n);
+    if (out)
+        snprintf(out, n, "%s/%s", strcmp(rdir, "/") == 0 ? "" : rdir, base);
+    free(rdir);
+    return out;
+}
+
+/* The check of lie_file_set_claim; claim: record it as an output too. */
+static lie_status check(lie_file_set *set, const char *path, const char *replaces, int claim, lie_error *err)
+{
+    if (!set || strcmp(path, "-") == 0)
+        return LIE_OK;
+    struct stat st;
+    int exists = stat(path, &st) == 0;
+    if (exists && !S_ISREG(st.st_mode))
+        return LIE_OK; /* a device or FIFO: written in place, never replaced */
+    char *real = resolved(path);
+    for (size_t i = 0; i < set->n; i++) {
+        const held_file *f = &set->files[i];
+        int same = (exists && f->has_id && f->dev == st.st_dev && f->ino == st.st_ino) ||
+                   (real && f->real && strcmp(real, f->real) == 0);
+        if (same && f->role != OUTPUT && replaces && strcmp(f->path, replaces) == 0)
+            continue; /* the input this output is the new version of */
+        if (same) {
+            free(real);
+            return lie_error_set(err, LIE_ERR_ARG, path, "is also %s %s: refusing to write over it",
+                                 f->role == OUTPUT ? "the output" : "the input", f->path);
+        }
+    }
+    if (!claim) {
+        free(real);
+        return LIE_OK;
+    }
+    char *p = strdup(path);
+    if (!p) {
+        free(real);
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    }
+    lie_status s = adopt_as(set, p, NULL, 0, OUTPUT, err);
+    if (s != LIE_OK) {
+        free(real);
+        return s;
+    }
+    set->files[set->n - 1].real = real;
+    return LIE_OK;
+}
+
+lie_status lie_file_set_claim(lie_file_set *set, const char *path, const char *replaces, lie_error *err)
+{
+    return check(set, path, replaces, 1, err);
+}
+
+lie_status lie_file_set_check(lie_file_set *set, const char *path, lie_error *err)
+{
+    return check(set, path, NULL, 0, err);
 }

@@ -125,6 +125,8 @@ lie_status lie_dist_load(const lie_scene_options *so, lie_dist_load_fn load, voi
             st = load(ctx, &o, err);
         if (st == LIE_OK)
             st = lie_file_set_pack(set, &packed, &size, err);
+        if (st == LIE_OK) /* the caller's record of the run's inputs (lie_file_set_claim) */
+            st = lie_file_set_note_all(so->files, set, err);
         head[0] = (uint64_t)(int64_t)st;
         head[1] = size;
         head[2] = lie_file_set_count(set);

@@ -534,6 +534,19 @@ static lie_status apply_op(lie_scene *s, const lie_edit *e, const lie_edit_op *o
                                     op->kind == LIE_EDIT_SET_EMISSION ? "set-emission" : "set-material", op->node,
                                     light ? " (it holds a KHR_lights_punctual light: use set-light)" : "");
         }
+        if (op->has & LIE_EDIT_HAS_PRIMITIVE) {
+            /* one primitive of the node's own mesh, not its subtree */
+            int own = s->nodes[node].mesh >= 0 ? s->meshes[s->nodes[node].mesh].n_prims : 0;
+            if (op->primitive >= own) {
+                free(sub);
+                return lie_error_set_at(err, LIE_ERR_FORMAT, file, op->line, op->col,
+                                        "%s: node '%s' has %d primitive%s in its own mesh, no primitive %d",
+                                        op->kind == LIE_EDIT_SET_EMISSION ? "set-emission" : "set-material", op->node,
+                                        own, own == 1 ? "" : "s", op->primitive);
+            }
+            sub[0] = node;
+            nsub = 1;
+        }
         for (int k = 0; k < nsub; k++) {
             int nd = sub[k];
             if (s->nodes[nd].mesh < 0)
@@ -544,6 +557,8 @@ static lie_status apply_op(lie_scene *s, const lie_edit *e, const lie_edit_op *o
             }
             const lie_mesh *m = &s->meshes[s->nodes[nd].mesh];
             for (int pi = 0; pi < m->n_prims; pi++) {
+                if ((op->has & LIE_EDIT_HAS_PRIMITIVE) && pi != op->primitive)
+                    continue;
                 lie_material *mat = &s->materials[m->prims[pi].material];
                 if (op->has & LIE_EDIT_HAS_BASE_COLOR) {
                     memcpy(mat->base_color, op->base_color, sizeof op->base_color);
@@ -599,7 +614,11 @@ lie_status lie_edit_apply(lie_scene *s, const lie_edit *e, const lie_scene_optio
             return st;
     }
     lie_status st = lie_scene_flatten(s, err);
-    if (st != LIE_OK && err && !err->file[0])
-        snprintf(err->file, sizeof err->file, "%s", e->name);
+    /* the edits made the world what it is: they are the input to blame */
+    if (st != LIE_OK && err && st != LIE_ERR_NOMEM) {
+        char msg[sizeof err->msg];
+        snprintf(msg, sizeof msg, "%s", err->msg);
+        lie_error_set(err, st, e->name, "the edited scene: %s", msg);
+    }
     return st;
 }

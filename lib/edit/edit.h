@@ -44,7 +44,8 @@ enum {
     LIE_EDIT_HAS_RANGE = 1 << 7,
     LIE_EDIT_HAS_TRANSFORM = 1 << 8, /* add */
     LIE_EDIT_HAS_INNER = 1 << 9,
-    LIE_EDIT_HAS_OUTER = 1 << 10
+    LIE_EDIT_HAS_OUTER = 1 << 10,
+    LIE_EDIT_HAS_PRIMITIVE = 1 << 11 /* set-material, set-emission: one primitive of the node's mesh */
 };
 
 typedef struct lie_edit_op {
@@ -58,6 +59,7 @@ typedef struct lie_edit_op {
     char *as;              /* add: the new node's name */
     unsigned has;          /* LIE_EDIT_HAS_* */
     float base_color[3], metallic, roughness, emissive[3], strength;
+    int primitive;         /* with LIE_EDIT_HAS_PRIMITIVE: the primitive of the node's own mesh */
     double *weights;       /* set-weights: n_weights morph weights */
     int n_weights;
     float color[3], intensity, range, inner_deg, outer_deg; /* set-light */

@@ -3,10 +3,10 @@
  * change, in absolute values, so that their order does not matter:
  *   - move, rotate, scale, set-transform: the node's local transform
  *     (set-transform, once per node);
- *   - set-material, set-emission: per mesh node of the subtree, the first
- *     material's colour, metallic, roughness and emission (set-material,
- *     then set-emission); a base colour texture that set-material dropped
- *     stays dropped;
+ *   - set-material, set-emission: per mesh node of the subtree, each
+ *     primitive's own material (`primitive: K`): colour, metallic,
+ *     roughness and emission (set-material, then set-emission); a base
+ *     colour texture that set-material dropped stays dropped;
  *   - remove: restore; restore: remove;
  *   - set-weights: the node's weights; set-light: the light's fields.
  * Nodes are named '#index', which names them alone whatever their names.
@@ -42,7 +42,7 @@ static lie_status push(inverse_state *v, lie_edit_op op, lie_error *err)
     return lie_edit_append(v->out, &op, err);
 }
 
-/* the first material of every mesh node in node's subtree, as it is */
+/* every primitive's material of every mesh node in node's subtree, as it is */
 static lie_status restore_materials(inverse_state *v, int node, lie_error *err)
 {
     const lie_scene *s = v->s;
@@ -52,20 +52,29 @@ static lie_status restore_materials(inverse_state *v, int node, lie_error *err)
         if (!v->in[n] || v->done_mat[n] || s->nodes[n].mesh < 0 || s->meshes[s->nodes[n].mesh].n_prims == 0)
             continue;
         v->done_mat[n] = 1;
-        const lie_material *m = lie_scene_material(s, s->meshes[s->nodes[n].mesh].prims[0].material);
-        float peak = fmaxf(m->emissive[0], fmaxf(m->emissive[1], m->emissive[2]));
         char ref[24];
         snprintf(ref, sizeof ref, "#%d", n);
-        st = push(v, lie_edit_op_set_material(ref, LIE_EDIT_HAS_BASE_COLOR | LIE_EDIT_HAS_METALLIC |
-                                                       LIE_EDIT_HAS_ROUGHNESS,
-                                              m->base_color, m->metallic, m->roughness), err);
-        float colour[3] = {0.0f, 0.0f, 0.0f};
-        if (peak > 0.0f)
-            for (int c = 0; c < 3; c++)
-                colour[c] = m->emissive[c] / peak;
-        if (st == LIE_OK)
-            st = push(v, lie_edit_op_set_emission(ref, LIE_EDIT_HAS_EMISSIVE | (peak > 0.0f ? LIE_EDIT_HAS_STRENGTH : 0),
-                                                  colour, peak), err);
+        const lie_mesh *mesh = &s->meshes[s->nodes[n].mesh];
+        for (int pi = 0; st == LIE_OK && pi < mesh->n_prims; pi++) {
+            const lie_material *m = lie_scene_material(s, mesh->prims[pi].material);
+            float peak = fmaxf(m->emissive[0], fmaxf(m->emissive[1], m->emissive[2]));
+            lie_edit_op mat = lie_edit_op_set_material(
+                ref, LIE_EDIT_HAS_BASE_COLOR | LIE_EDIT_HAS_METALLIC | LIE_EDIT_HAS_ROUGHNESS, m->base_color,
+                m->metallic, m->roughness);
+            mat.primitive = pi;
+            mat.has |= LIE_EDIT_HAS_PRIMITIVE;
+            st = push(v, mat, err);
+            float colour[3] = {0.0f, 0.0f, 0.0f};
+            if (peak > 0.0f)
+                for (int c = 0; c < 3; c++)
+                    colour[c] = m->emissive[c] / peak;
+            lie_edit_op em =
+                lie_edit_op_set_emission(ref, LIE_EDIT_HAS_EMISSIVE | (peak > 0.0f ? LIE_EDIT_HAS_STRENGTH : 0), colour, peak);
+            em.primitive = pi;
+            em.has |= LIE_EDIT_HAS_PRIMITIVE;
+            if (st == LIE_OK)
+                st = push(v, em, err);
+        }
     }
     return st;
 }

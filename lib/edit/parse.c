@@ -178,6 +178,21 @@ static lie_status parse_set_light(lie_yaml *p, const yaml_node_t *vn, const char
     return LIE_OK;
 }
 
+/* `primitive: K`: one primitive of the node's own mesh (0-based); the
+ * number is converted only once it is known to be an integer in range. */
+static lie_status get_primitive(lie_yaml *p, const yaml_node_t *n, const char *key, lie_edit_op *op)
+{
+    double x = 0.0;
+    lie_status st = lie_yaml_number(p, n, key, &x);
+    if (st == LIE_OK && !(x >= 0.0 && x <= 65535.0 && x == floor(x)))
+        return lie_yaml_error(p, n, key, "expected an integer in [0, 65535]");
+    if (st == LIE_OK) {
+        op->primitive = (int)x;
+        op->has |= LIE_EDIT_HAS_PRIMITIVE;
+    }
+    return st;
+}
+
 static lie_status parse_op(lie_yaml *p, const yaml_node_t *item, int index, lie_edit_op *op)
 {
     char key[64];
@@ -287,8 +302,11 @@ static lie_status parse_op(lie_yaml *p, const yaml_node_t *item, int index, lie_
             op->has |= LIE_EDIT_HAS_TRANSFORM;
         }
     } else if (strcmp(name, "set-material") == 0) {
-        field f[] = {{"node", 0, 0, 0}, {"base-color", 0, 0, 0}, {"metallic", 0, 0, 0}, {"roughness", 0, 0, 0}};
-        if ((st = collect(p, vn, opk, f, 4)) != LIE_OK)
+        field f[] = {{"node", 0, 0, 0},      {"base-color", 0, 0, 0}, {"metallic", 0, 0, 0},
+                     {"roughness", 0, 0, 0}, {"primitive", 0, 0, 0}};
+        if ((st = collect(p, vn, opk, f, 5)) != LIE_OK)
+            return st;
+        if (f[4].seen && (st = get_primitive(p, f[4].value, "set-material.primitive", op)) != LIE_OK)
             return st;
         if (!f[0].seen)
             return lie_yaml_error(p, vn, "set-material.node", "missing");
@@ -321,8 +339,10 @@ static lie_status parse_op(lie_yaml *p, const yaml_node_t *item, int index, lie_
             op->has |= LIE_EDIT_HAS_ROUGHNESS;
         }
     } else if (strcmp(name, "set-emission") == 0) {
-        field f[] = {{"node", 0, 0, 0}, {"emissive", 0, 0, 0}, {"strength", 0, 0, 0}};
-        if ((st = collect(p, vn, opk, f, 3)) != LIE_OK)
+        field f[] = {{"node", 0, 0, 0}, {"emissive", 0, 0, 0}, {"strength", 0, 0, 0}, {"primitive", 0, 0, 0}};
+        if ((st = collect(p, vn, opk, f, 4)) != LIE_OK)
+            return st;
+        if (f[3].seen && (st = get_primitive(p, f[3].value, "set-emission.primitive", op)) != LIE_OK)
             return st;
         if (!f[0].seen)
             return lie_yaml_error(p, vn, "set-emission.node", "missing");

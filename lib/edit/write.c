@@ -176,6 +176,10 @@ static void write_op(writer *w, const lie_edit_op *op)
         break;
     case LIE_EDIT_SET_MATERIAL:
     case LIE_EDIT_SET_EMISSION:
+        if (op->has & LIE_EDIT_HAS_PRIMITIVE)
+            one(w, "primitive", op->primitive, DOUBLE_DIGITS); /* an integer: written as one */
+        float_fields(w, op);
+        break;
     case LIE_EDIT_SET_LIGHT:
         float_fields(w, op);
         break;

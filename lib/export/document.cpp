@@ -4,6 +4,7 @@
  * walks them, and skins. */
 #include "export/internal.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -182,19 +183,55 @@ void export_document(Export &ex)
     m.asset.generator = "lie";
 
     /* kept nodes in depth-first pre-order from the default scene's roots, as
-     * lie_scene_flatten walks them; a removed node takes its subtree along */
+     * lie_scene_flatten walks them; a removed node takes its subtree along.
+     * Except the joints a kept skinned mesh still needs, and their
+     * ancestors: a removed joint still poses the mesh (lie_scene_flatten
+     * skins from every node's transform), so it is written bare, its
+     * transform alone, without mesh, camera or light (their triangles and
+     * lights are gone, as removed). */
     std::vector<int> order, new_index(size_t(s.n_nodes), -1), stack;
-    for (int r = s.n_roots - 1; r >= 0; r--)
-        stack.push_back(s.roots[r]);
-    while (!stack.empty()) {
-        int nd = stack.back();
-        stack.pop_back();
-        if (nd < 0 || nd >= s.n_nodes || s.nodes[nd].removed || new_index[size_t(nd)] >= 0)
-            continue;
-        new_index[size_t(nd)] = int(order.size());
-        order.push_back(nd);
-        for (int c = s.nodes[nd].n_children - 1; c >= 0; c--)
-            stack.push_back(s.nodes[nd].children[c]);
+    std::vector<char> dead(size_t(s.n_nodes), 0), needed(size_t(s.n_nodes), 0), seen(size_t(s.n_nodes), 0);
+    for (int pass = 0; pass < 2; pass++) {
+        order.clear();
+        std::fill(seen.begin(), seen.end(), 0);
+        for (int r = s.n_roots - 1; r >= 0; r--)
+            stack.push_back(s.roots[r]);
+        std::vector<char> under(size_t(s.n_nodes), 0); /* below a removed node */
+        while (!stack.empty()) {
+            int nd = stack.back();
+            stack.pop_back();
+            if (nd < 0 || nd >= s.n_nodes || seen[size_t(nd)])
+                continue;
+            seen[size_t(nd)] = 1;
+            dead[size_t(nd)] = s.nodes[nd].removed || under[size_t(nd)];
+            if (dead[size_t(nd)] && !needed[size_t(nd)] && pass == 0)
+                continue;
+            if (!dead[size_t(nd)] || needed[size_t(nd)]) {
+                if (pass == 1)
+                    new_index[size_t(nd)] = int(order.size());
+                order.push_back(nd);
+            }
+            for (int c = s.nodes[nd].n_children - 1; c >= 0; c--) {
+                int ch = s.nodes[nd].children[c];
+                if (ch >= 0 && ch < s.n_nodes)
+                    under[size_t(ch)] = dead[size_t(nd)];
+                stack.push_back(ch);
+            }
+        }
+        if (pass == 1)
+            break;
+        /* the joints (and their ancestors) of the skins kept meshes use */
+        for (int nd : order) {
+            const lie_node &n = s.nodes[nd];
+            if (n.skin < 0 || n.skin >= s.n_skins || n.mesh < 0 || n.mesh >= s.n_meshes ||
+                !mesh_has_triangles(s.meshes[n.mesh]))
+                continue;
+            const lie_skin &sk = s.skins[n.skin];
+            for (int j = 0; j < sk.n_joints; j++)
+                for (int a = sk.joints[j], hops = 0; a >= 0 && a < s.n_nodes && hops <= s.n_nodes;
+                     a = s.nodes[a].parent, hops++)
+                    needed[size_t(a)] = 1;
+        }
     }
 
     /* meshes, cameras and lights the kept nodes use, in their own order */
@@ -202,6 +239,8 @@ void export_document(Export &ex)
         light_map(size_t(s.n_light_defs), -1);
     for (int nd : order) {
         const lie_node &n = s.nodes[nd];
+        if (dead[size_t(nd)])
+            continue; /* a bare joint */
         if (n.mesh >= 0 && n.mesh < s.n_meshes && mesh_has_triangles(s.meshes[n.mesh]))
             mesh_map[size_t(n.mesh)] = 0;
         if (n.camera >= 0 && n.camera < s.n_camera_defs &&
@@ -280,11 +319,12 @@ void export_document(Export &ex)
         /* bit for bit: an identity with a -0 is written, to come back as it is */
         if (memcmp(&n.local, &identity, sizeof identity) != 0)
             g.matrix.assign(n.local.m, n.local.m + 16);
-        if (n.mesh >= 0 && n.mesh < s.n_meshes)
+        bool bare = dead[size_t(nd)] != 0;
+        if (!bare && n.mesh >= 0 && n.mesh < s.n_meshes)
             g.mesh = mesh_map[size_t(n.mesh)];
-        if (n.camera >= 0 && n.camera < s.n_camera_defs)
+        if (!bare && n.camera >= 0 && n.camera < s.n_camera_defs)
             g.camera = camera_map[size_t(n.camera)];
-        if (n.light >= 0 && n.light < s.n_light_defs) {
+        if (!bare && n.light >= 0 && n.light < s.n_light_defs) {
             tinygltf::Value::Object o;
             o["light"] = tinygltf::Value(light_map[size_t(n.light)]);
             g.extensions["KHR_lights_punctual"] = tinygltf::Value(o);
@@ -300,7 +340,7 @@ void export_document(Export &ex)
     std::vector<int> skin_map(size_t(s.n_skins), -1);
     for (size_t k = 0; k < order.size(); k++) {
         const lie_node &n = s.nodes[order[k]];
-        if (n.skin < 0 || n.skin >= s.n_skins || m.nodes[k].mesh < 0)
+        if (n.skin < 0 || n.skin >= s.n_skins || m.nodes[k].mesh < 0 || dead[size_t(order[k])])
             continue;
         if (skin_map[size_t(n.skin)] < 0) {
             const lie_skin &sk = s.skins[n.skin];

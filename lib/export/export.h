@@ -40,7 +40,10 @@ extern "C" {
  * else 16-bit), in the colour space of the slot that uses them.  "-"
  * (stdout) is refused. */
 typedef struct lie_gltf_export_options {
-    int force; /* replace side files that are not this exporter's (above) */
+    int force;           /* replace side files that are not this exporter's (above) */
+    lie_file_set *files; /* the run's inputs and outputs (lib/core): every side file is claimed there
+                          * (lie_file_set_claim) before anything is written; the caller claims `path`.
+                          * NULL: no check */
 } lie_gltf_export_options;
 lie_gltf_export_options lie_gltf_export_options_default(void);
 /* With the default options. */

@@ -139,12 +139,15 @@ std::map<std::string, std::string> previous_side_files(const std::string &gltf_p
     return out;
 }
 
-void check_side_file(const std::string &path, const std::string &uri,
-                     const std::map<std::string, std::string> &ours)
+/* Returns the open flags of its write: a file absent now is created with
+ * LIE_ATOMIC_NO_REPLACE, so one that appears before the rename is not
+ * replaced either (the test and the write are one step, lib/core). */
+unsigned check_side_file(const std::string &path, const std::string &uri,
+                         const std::map<std::string, std::string> &ours)
 {
     struct stat st;
     if (lstat(path.c_str(), &st) != 0 && errno == ENOENT)
-        return;
+        return LIE_ATOMIC_NO_REPLACE;
     auto it = ours.find(uri);
     unsigned char *d = nullptr;
     size_t n = 0;
@@ -154,13 +157,15 @@ void check_side_file(const std::string &path, const std::string &uri,
     free(d);
     if (!same)
         throw ExistsError{path};
+    return 0;
 }
 
 /* Write one output through a temporary file of `group`; `body` fills it. */
-template <class F> lie_status write_atomic(const std::string &path, lie_atomic_group *group, lie_error *err, F body)
+template <class F>
+lie_status write_atomic(const std::string &path, lie_atomic_group *group, lie_error *err, F body, unsigned flags = 0)
 {
     lie_atomic_file af;
-    lie_status st = lie_atomic_open_group(&af, path.c_str(), group, err);
+    lie_status st = lie_atomic_open_flags(&af, path.c_str(), group, flags, err);
     if (st != LIE_OK)
         return st;
     st = body(af.fp);
@@ -238,23 +243,34 @@ extern "C" lie_status lie_gltf_export_group(const lie_scene *s, const char *path
             return write_atomic(p, group, err, [&](FILE *fp) { return write_bytes(fp, p, bytes.data(), bytes.size(), err); });
         }
         std::string bin_path = dir + stem + ".bin";
+        /* a side file must be neither an input nor another output of the run */
+        if (!ex.bin.empty() && (st = lie_file_set_claim(o.files, bin_path.c_str(), nullptr, err)) != LIE_OK)
+            return st;
+        for (const Png &png : ex.pngs)
+            if ((st = lie_file_set_claim(o.files, png.path.c_str(), nullptr, err)) != LIE_OK)
+                return st;
+        std::map<std::string, unsigned> flags; /* per side file (check_side_file) */
         if (!o.force) { /* before anything is written */
             std::map<std::string, std::string> ours = previous_side_files(p);
             if (!ex.bin.empty())
-                check_side_file(bin_path, uri_escape(stem + ".bin"), ours);
+                flags[bin_path] = check_side_file(bin_path, uri_escape(stem + ".bin"), ours);
             for (const Png &png : ex.pngs)
-                check_side_file(png.path, png.uri, ours);
+                flags[png.path] = check_side_file(png.path, png.uri, ours);
         }
         /* the side files first, the .gltf last: a .gltf never names a missing file */
         for (const Png &png : ex.pngs) {
-            st = write_atomic(png.path, group, err,
-                              [&](FILE *fp) { return write_bytes(fp, png.path, png.bytes.data(), png.bytes.size(), err); });
+            st = write_atomic(
+                png.path, group, err,
+                [&](FILE *fp) { return write_bytes(fp, png.path, png.bytes.data(), png.bytes.size(), err); },
+                flags[png.path]);
             if (st != LIE_OK)
                 break;
         }
         if (st == LIE_OK && !ex.bin.empty()) {
-            st = write_atomic(bin_path, group, err,
-                              [&](FILE *fp) { return write_bytes(fp, bin_path, ex.bin.data(), ex.bin.size(), err); });
+            st = write_atomic(
+                bin_path, group, err,
+                [&](FILE *fp) { return write_bytes(fp, bin_path, ex.bin.data(), ex.bin.size(), err); },
+                flags[bin_path]);
         }
         if (st == LIE_OK)
             st = write_atomic(p, group, err, [&](FILE *fp) { return write_bytes(fp, p, json.data(), json.size(), err); });

@@ -106,21 +106,28 @@ bool fs_write(std::string *err, const std::string &, const std::vector<unsigned 
 
 struct ImageState {
     const tinygltf::Model *model;
-    std::string limit_msg;
-    std::map<int, std::string> undecodable; /* image -> why the decoder refused it */
+    std::map<int, std::vector<unsigned char>> encoded; /* image -> its bytes, undecoded */
 };
 
-/* tinygltf's image loader (user data: an ImageState) */
+/* tinygltf's image loader (user data: an ImageState): checks a bufferView
+ * image's range and keeps the bytes; it decodes nothing. */
 bool image_load(tinygltf::Image *image, const int index, std::string *err, std::string *warn, int req_w,
                 int req_h, const unsigned char *bytes, int size, void *user);
+/* Decode image `index` (its glTF entry `meta`, its bytes) into *out, once a
+ * material uses it: its size from the header first (any format stb reads),
+ * refused (LIE_ERR_LIMIT, thrown) past MAX_IMAGE_PIXELS before anything is
+ * allocated.  An image the decoder cannot read sets *why (a warning: its
+ * slots fall back to their factors) and leaves *out without pixels. */
+void decode_image(const tinygltf::Image &meta, int index, const std::vector<unsigned char> &bytes,
+                  tinygltf::Image *out, std::string *why);
 
 /* ---- gltf_check.cpp: the file ------------------------------------------- */
 
 /* Parse the file into `model`; `image_errors` gets why external images that
- * tinygltf skipped (with a warning) could not be opened, `undecodable` the
- * images the decoder refused. */
+ * tinygltf skipped (with a warning) could not be opened, `encoded` every
+ * image's bytes, undecoded (decode_image decodes those a material uses). */
 void load_model(tinygltf::Model &model, const char *path, const lie_scene_options &opt,
-                std::map<int, std::string> &image_errors, std::map<int, std::string> &undecodable);
+                std::map<int, std::string> &image_errors, std::map<int, std::vector<unsigned char>> &encoded);
 
 /* ---- gltf_mesh.cpp: accessors and meshes -------------------------------- */
 

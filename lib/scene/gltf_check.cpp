@@ -372,7 +372,7 @@ void check_json(const std::vector<unsigned char> &d, bool glb)
 /* Parse the file into `model`; `image_errors` gets why external images that
  * tinygltf skipped (with a warning) could not be opened. */
 void load_model(tinygltf::Model &model, const char *path, const lie_scene_options &opt,
-                std::map<int, std::string> &image_errors, std::map<int, std::string> &undecodable)
+                std::map<int, std::string> &image_errors, std::map<int, std::vector<unsigned char>> &encoded)
 {
     std::vector<unsigned char> data = read_input(path, opt.files);
 
@@ -391,7 +391,7 @@ void load_model(tinygltf::Model &model, const char *path, const lie_scene_option
             fs.root += '/';
     }
 
-    ImageState images{&model, std::string(), {}};
+    ImageState images{&model, {}};
     tinygltf::TinyGLTF loader;
     tinygltf::FsCallbacks cb;
     cb.FileExists = fs_exists;
@@ -415,8 +415,6 @@ void load_model(tinygltf::Model &model, const char *path, const lie_scene_option
     }
     if (!fs.refused.empty())
         fail(LIE_ERR_UNSUPPORTED, "URI '%s' %s", clean(fs.refused).c_str(), fs.refused_why.c_str());
-    if (!images.limit_msg.empty())
-        fail(LIE_ERR_LIMIT, "%s", images.limit_msg.c_str());
     /* tinygltf's result decides; it also puts notes on problems it tolerated
      * in err.  An external image it could not open is only a warning: that is
      * an error where the image is used (texture_for). */
@@ -427,19 +425,13 @@ void load_model(tinygltf::Model &model, const char *path, const lie_scene_option
 
     for (size_t i = 0; i < model.images.size(); i++) {
         const tinygltf::Image &im = model.images[i];
-        if (im.image.empty() && !im.uri.empty()) {
+        if (!images.encoded.count(int(i)) && !im.uri.empty()) {
             auto it = fs.missing.find(percent_decode(im.uri));
             image_errors[int(i)] = "'" + clean(im.uri) + "': cannot open: " +
                                    (it != fs.missing.end() ? it->second : std::string("not loaded"));
         }
     }
-    for (const auto &u : images.undecodable) {
-        const tinygltf::Image &im = model.images[size_t(u.first)];
-        std::string name = !im.uri.empty() && im.uri.compare(0, 5, "data:") != 0 ? " '" + clean(im.uri) + "'"
-                           : !im.name.empty()                                  ? " '" + clean(im.name) + "'"
-                                                                               : std::string();
-        undecodable[u.first] = "image " + std::to_string(u.first) + name + ": cannot decode (" + clean(u.second) + ")";
-    }
+    encoded.swap(images.encoded);
 }
 
 } // namespace lie_gltf

@@ -19,7 +19,8 @@ struct Import {
     const tinygltf::Model &m;
     lie_scene *s;
     const std::map<int, std::string> &image_errors; /* from load_model */
-    const std::map<int, std::string> &undecodable;  /* from load_model: images to warn about */
+    const std::map<int, std::vector<unsigned char>> &encoded; /* from load_model: images' bytes */
+    std::map<int, tinygltf::Image> decoded;                    /* those decoded so far (decode_image) */
     std::map<int, int> texture_of; /* glTF texture * 2 + srgb -> s->textures index */
     std::set<int> warned;          /* images warned about */
 };
@@ -59,15 +60,28 @@ int texture_for(Import &im, int ti, bool srgb, const std::string &what)
         fail(LIE_ERR_UNSUPPORTED, "%s has no image source (only PNG/JPEG sources are supported)", tw.c_str());
     if (size_t(tex.source) >= m.images.size())
         fail(LIE_ERR_FORMAT, "%s: image %d out of range", tw.c_str(), tex.source);
-    const tinygltf::Image &img = m.images[size_t(tex.source)];
     std::string iw = "image " + std::to_string(tex.source);
-    if (img.image.empty() || img.width <= 0 || img.height <= 0) {
-        auto u = im.undecodable.find(tex.source);
-        if (u != im.undecodable.end()) { /* no texture: the slot keeps its factor */
-            if (im.warned.insert(tex.source).second)
-                scene_warn(im.s, u->second + "; its textures fall back to their factors");
-            return -1;
+    auto dec = im.decoded.find(tex.source);
+    if (dec == im.decoded.end()) { /* decoded on first use only: an unused image costs nothing */
+        dec = im.decoded.emplace(tex.source, m.images[size_t(tex.source)]).first;
+        auto enc = im.encoded.find(tex.source);
+        std::string why;
+        if (enc != im.encoded.end())
+            decode_image(m.images[size_t(tex.source)], tex.source, enc->second, &dec->second, &why);
+        if (!why.empty()) {
+            /* An image the decoder cannot read (a corrupt PNG, a KTX2 or
+             * WebP named as a plain source) is not the whole scene's
+             * failure: the slots using it fall back to their factors, as
+             * Blender and three.js do, with a warning.  Required extensions
+             * are refused earlier. */
+            im.warned.insert(tex.source);
+            scene_warn(im.s, why + "; its textures fall back to their factors");
         }
+    }
+    const tinygltf::Image &img = dec->second;
+    if (im.warned.count(tex.source))
+        return -1; /* no texture: the slot keeps its factor */
+    if (img.image.empty() || img.width <= 0 || img.height <= 0) {
         auto e = im.image_errors.find(tex.source);
         if (e != im.image_errors.end())
             fail(LIE_ERR_IO, "%s %s", iw.c_str(), e->second.c_str());
@@ -623,12 +637,13 @@ extern "C" lie_status lie_gltf_import(lie_scene *s, const char *path, const lie_
     lie_scene_options o = opt ? *opt : lie_scene_options_default();
     try {
         tinygltf::Model model;
-        std::map<int, std::string> image_errors, undecodable;
-        load_model(model, path, o, image_errors, undecodable);
+        std::map<int, std::string> image_errors;
+        std::map<int, std::vector<unsigned char>> encoded;
+        load_model(model, path, o, image_errors, encoded);
         s->stats.points_skipped = s->stats.lines_skipped = s->stats.prims_without_material = 0;
         import_document(model, s, o);
         s->n_warnings = 0;
-        Import im{model, s, image_errors, undecodable, {}, {}};
+        Import im{model, s, image_errors, encoded, {}, {}, {}};
         import_materials(im);
         import_cameras(model, s);
         import_lights(model, s);

@@ -4,6 +4,8 @@
  * checks an image's range and size before stb decodes it. */
 #include "scene/gltf.h"
 
+#include <stb_image.h> /* libstb: the decoder tinygltf uses; its header reader sizes every format */
+
 #include <cctype>
 #include <cerrno>
 #include <climits>
@@ -218,14 +220,19 @@ bool fs_write(std::string *err, const std::string &, const std::vector<unsigned 
 /* ---- images ---------------------------------------------------------------
  * tinygltf hands an image stored in a bufferView to the decoder without
  * checking the view's range against its buffer, so this loader checks it
- * first, and refuses images beyond MAX_IMAGE_PIXELS from the PNG or JPEG
- * header before stb allocates them. */
-
+ * first.  It decodes nothing: it keeps the encoded bytes, and an image is
+ * decoded only when a material uses it (decode_image), after its header
+ * showed it within MAX_IMAGE_PIXELS: stb_image's stbi_info_from_memory reads
+ * the header of every format stb decodes (PNG, JPEG, BMP, GIF, PSD, PIC,
+ * PNM, TGA, HDR).  A 70-byte BMP claiming 40000 x 13000 pixels then costs
+ * nothing unused, and one line of error used. */
 
 uint32_t be16(const unsigned char *p) { return uint32_t(p[0]) << 8 | p[1]; }
 uint32_t be32(const unsigned char *p) { return be16(p) << 16 | be16(p + 2); }
 
-/* Width and height from a PNG or JPEG header; false when not found. */
+/* Width and height from a PNG or JPEG header; false when not found.  For
+ * the headers stb's own reader refuses (stb refuses a PNG of more than 2^30
+ * bytes decoded even to size it), so the limit is still reported. */
 bool image_header_size(const unsigned char *b, size_t n, uint32_t *w, uint32_t *h)
 {
     if (n >= 24 && memcmp(b, "\x89PNG\r\n\x1a\n", 8) == 0 && memcmp(b + 12, "IHDR", 4) == 0) {
@@ -279,30 +286,42 @@ bool image_load(tinygltf::Image *image, const int index, std::string *err, std::
             *err += "image " + std::to_string(index) + " is empty\n";
         return false;
     }
-    uint32_t w, h;
-    if (image_header_size(bytes, size_t(size), &w, &h) && uint64_t(w) * h > MAX_IMAGE_PIXELS) {
-        st.limit_msg = "image " + std::to_string(index) + " is " + std::to_string(w) + "x" +
-                       std::to_string(h) + ", beyond the limit of " + std::to_string(MAX_IMAGE_PIXELS) +
-                       " pixels";
-        if (err)
-            *err += st.limit_msg + "\n";
-        return false;
-    }
-    /* stb decoding, expanded to 8- or 16-bit RGBA (tinygltf's default options) */
-    std::string derr;
-    if (tinygltf::LoadImageData(image, index, &derr, warn, req_w, req_h, bytes, size, nullptr))
-        return true;
-    /* An image the decoder cannot read (a corrupt PNG, a KTX2 or WebP named
-     * as a plain source) is not the whole scene's failure: the slots using
-     * it fall back to their factors, as Blender and three.js do, with a
-     * warning (texture_for).  Required extensions are refused earlier. */
-    /* tinygltf's message repeats the index and name; keep what it says */
-    st.undecodable[index] = derr.find("Unknown image format") != std::string::npos
-                                ? std::string("not a PNG or JPEG the decoder can read")
-                                : std::string("the decoder refused it");
+    st.encoded[index].assign(bytes, bytes + size);
     image->image.clear();
     image->width = image->height = 0;
     return true;
+}
+
+void decode_image(const tinygltf::Image &meta, int index, const std::vector<unsigned char> &b, tinygltf::Image *out,
+                  std::string *why)
+{
+    *out = meta;
+    std::string name = !meta.uri.empty() && meta.uri.compare(0, 5, "data:") != 0 ? " '" + clean(meta.uri) + "'"
+                       : !meta.name.empty()                                    ? " '" + clean(meta.name) + "'"
+                                                                               : std::string();
+    std::string iw = "image " + std::to_string(index) + name;
+    int w = 0, h = 0, comp = 0;
+    uint32_t hw = 0, hh = 0;
+    bool sized = stbi_info_from_memory(b.data(), int(b.size()), &w, &h, &comp) != 0;
+    if (!sized && image_header_size(b.data(), b.size(), &hw, &hh)) {
+        sized = true;
+        w = int(hw > INT_MAX ? INT_MAX : hw);
+        h = int(hh > INT_MAX ? INT_MAX : hh);
+    }
+    if (!sized) {
+        *why = iw + ": cannot decode (not an image the decoder reads)";
+        return;
+    }
+    if (w <= 0 || h <= 0 || uint64_t(w) * uint64_t(h) > MAX_IMAGE_PIXELS)
+        fail(LIE_ERR_LIMIT, "image %d is %dx%d, beyond the limit of %llu pixels", index, w, h,
+             (unsigned long long)MAX_IMAGE_PIXELS);
+    /* stb decoding, expanded to 8- or 16-bit RGBA (tinygltf's default options) */
+    std::string derr, warn;
+    if (!tinygltf::LoadImageData(out, index, &derr, &warn, 0, 0, b.data(), int(b.size()), nullptr)) {
+        out->image.clear();
+        out->width = out->height = 0;
+        *why = iw + ": cannot decode (the decoder refused it)";
+    }
 }
 
 } // namespace lie_gltf

@@ -535,6 +535,35 @@ static void hash_world(lie_scene *s, lie_hasher *h)
     }
 }
 
+/* The world within the coordinate range (core.h, LIE_COORD_MAX): vertices
+ * and lights, and the cameras' eyes within LIE_CAMERA_COORD_MAX.  A node a
+ * file or an edit sends past it is refused here, where every load, edit and
+ * animation frame passes, rather than left for Embree to abort on. */
+static lie_status check_range(const lie_scene *s, lie_error *err)
+{
+    const char *path = s->path ? s->path : "";
+    for (size_t i = 0; i < 3 * (size_t)s->n_tris; i++)
+        if (!s->tri_removed[i / 3] && !lie_v3_within(s->tri_p[i], LIE_COORD_MAX)) {
+            int nd = s->instances[s->tri_instance[i / 3]].node;
+            lie_vec3 p = s->tri_p[i];
+            return lie_error_set(err, LIE_ERR_LIMIT, path,
+                                 "node '%s': a vertex at (%g, %g, %g), outside the coordinate range +-%g",
+                                 s->nodes[nd].name ? s->nodes[nd].name : "", (double)p.x, (double)p.y, (double)p.z,
+                                 (double)LIE_COORD_MAX);
+        }
+    for (int i = 0; i < s->n_emitters; i++) {
+        const lie_emitter *e = &s->emitters[i];
+        if (e->type == LIE_EMITTER_POINT && !lie_v3_within(e->position, LIE_COORD_MAX))
+            return lie_error_set(err, LIE_ERR_LIMIT, path, "node '%s': a light outside the coordinate range +-%g",
+                                 s->nodes[e->node].name ? s->nodes[e->node].name : "", (double)LIE_COORD_MAX);
+    }
+    for (int i = 0; i < s->n_cameras; i++)
+        if (!lie_v3_within(s->cameras[i].eye, LIE_CAMERA_COORD_MAX))
+            return lie_error_set(err, LIE_ERR_LIMIT, path, "camera '%s': outside the coordinate range +-%g",
+                                 s->cameras[i].name ? s->cameras[i].name : "", (double)LIE_CAMERA_COORD_MAX);
+    return LIE_OK;
+}
+
 lie_status lie_scene_flatten(lie_scene *s, lie_error *err)
 {
     const char *path = s->path ? s->path : "";
@@ -592,12 +621,10 @@ lie_status lie_scene_flatten(lie_scene *s, lie_error *err)
             lie_box3_grow(&s->bounds, s->tri_p[i]);
     for (size_t i = 0; i < n; i++)
         s->max_tri_area = fmaxf(s->max_tri_area, s->tri_area[i]);
-    for (size_t i = 0; i < 3 * n; i++) {
-        lie_vec3 p = s->tri_p[i];
-        if (!isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z)) {
-            free_world(s);
-            return lie_error_set(err, LIE_ERR_FORMAT, path, "triangle %zu has a non-finite vertex", i / 3);
-        }
+    lie_status rst = check_range(s, err);
+    if (rst != LIE_OK) {
+        free_world(s);
+        return rst;
     }
     if (lie_scene_cluster(s) != LIE_OK) {
         free_world(s);

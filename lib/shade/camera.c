@@ -97,6 +97,20 @@ lie_view_exr lie_view_exr_make(const lie_view *v)
     return e;
 }
 
+const char *lie_camera_invalid(const lie_camera *c)
+{
+    if (!lie_v3_within(c->eye, LIE_CAMERA_COORD_MAX))
+        return "the eye is outside the coordinate range (+-1e14)";
+    float lf = lie_v3_len(c->forward), lu = lie_v3_len(c->up);
+    if (!(fabsf(lf - 1.0f) < 1e-3f))
+        return "no view direction (eye and target coincide)";
+    if (!(fabsf(lu - 1.0f) < 1e-3f) || !(fabsf(lie_v3_dot(c->forward, c->up)) < 1e-3f))
+        return "no up direction (up is parallel to the view direction)";
+    if (!(c->ymag > 0.0f && c->ymag < 1e30f) && !(c->yfov > 0.0f && c->yfov < (float)M_PI))
+        return "no field of view";
+    return NULL;
+}
+
 lie_status lie_camera_parse(const lie_scene *s, const char *spec, lie_camera *out, lie_error *err)
 {
     if (!spec || !strchr(spec, '='))
@@ -138,6 +152,10 @@ lie_status lie_camera_parse(const lie_scene *s, const char *spec, lie_camera *ou
     if (have_fov && height > 0.0f)
         return lie_error_set(err, LIE_ERR_ARG, NULL, "--camera: fov= is for a perspective view, ortho= for an orthographic one: not both");
     c.eye = lie_v3(eye[0], eye[1], eye[2]);
+    if (!lie_v3_within(c.eye, LIE_CAMERA_COORD_MAX) ||
+        !lie_v3_within(lie_v3(target[0], target[1], target[2]), LIE_CAMERA_COORD_MAX))
+        return lie_error_set(err, LIE_ERR_ARG, NULL, "--camera: eye and target must lie within +-%g",
+                             (double)LIE_CAMERA_COORD_MAX);
     lie_vec3 f = lie_v3_sub(lie_v3(target[0], target[1], target[2]), c.eye);
     if (lie_v3_len(f) <= 0.0f)
         return lie_error_set(err, LIE_ERR_ARG, NULL, "--camera: eye and target coincide");

@@ -53,17 +53,19 @@ static lie_status parse_key(lie_yaml *p, const yaml_node_t *n, int index, float 
         } else if (scalar_is(kn, "up")) {
             st = get_vec3(p, vn, sub, &k->up);
         } else if (scalar_is(kn, "fov")) {
-            double f = 0.0; /* converted below even when get_number fails */
+            double f = 0.0;
             st = lie_yaml_number(p, vn, sub, &f);
             if (st == LIE_OK && !(f > 0.0 && f < 180.0))
                 return lie_yaml_error(p, vn, sub, "expected a number in (0, 180)");
-            k->fov_deg = (float)f;
+            if (st == LIE_OK)
+                k->fov_deg = (float)f;
         } else if (scalar_is(kn, "frames")) {
-            double f = 0.0; /* converted below even when get_number fails */
+            double f = 0.0;
             st = lie_yaml_number(p, vn, sub, &f);
             if (st == LIE_OK && !(f >= 1.0 && f <= MAX_FRAMES && f == floor(f)))
                 return lie_yaml_error(p, vn, sub, "expected an integer in 1..1000000");
-            k->frames = (int)f;
+            if (st == LIE_OK) /* converted only once in range: a cast out of range is undefined */
+                k->frames = (int)f;
         } else {
             return lie_yaml_error(p, kn, sub, "unknown key (expected eye, target, up, fov or frames)");
         }
@@ -74,6 +76,8 @@ static lie_status parse_key(lie_yaml *p, const yaml_node_t *n, int index, float 
         return lie_yaml_error(p, n, key, "missing eye");
     if (!have_target)
         return lie_yaml_error(p, n, key, "missing target");
+    if (!lie_v3_within(k->eye, LIE_CAMERA_COORD_MAX) || !lie_v3_within(k->target, LIE_CAMERA_COORD_MAX))
+        return lie_yaml_error(p, n, key, "eye and target must lie within +-1e14 (the coordinate range)");
     lie_vec3 f = lie_v3_sub(k->target, k->eye);
     if (!(lie_v3_len(f) > 0.0f))
         return lie_yaml_error(p, n, key, "eye and target coincide");
@@ -81,6 +85,8 @@ static lie_status parse_key(lie_yaml *p, const yaml_node_t *n, int index, float 
         return lie_yaml_error(p, n, key, "up is parallel to the view direction");
     return LIE_OK;
 }
+
+static lie_status check_frames(const lie_camera_path *p, const char *name, lie_error *err);
 
 lie_status lie_camera_path_parse(const unsigned char *text, size_t size, const char *name,
                                  lie_camera_path **out, lie_error *err)
@@ -119,11 +125,12 @@ lie_status lie_camera_path_parse(const unsigned char *text, size_t size, const c
             else
                 st = lie_yaml_error(&p, vn, "interpolation", "expected linear or smooth");
         } else if (scalar_is(kn, "first-frame")) {
-            double x;
+            double x = 0.0;
             st = lie_yaml_number(&p, vn, "first-frame", &x);
             if (st == LIE_OK && !(x >= 0.0 && x <= MAX_FRAMES && x == floor(x)))
                 st = lie_yaml_error(&p, vn, "first-frame", "expected an integer in [0, 1000000]");
-            cp->first = (int)x;
+            if (st == LIE_OK) /* converted only once in range: a cast out of range is undefined */
+                cp->first = (int)x;
         } else {
             char k[128];
             snprintf(k, sizeof k, "%s", (const char *)kn->data.scalar.value);
@@ -159,6 +166,8 @@ lie_status lie_camera_path_parse(const unsigned char *text, size_t size, const c
         cp->n_frames = (int)frames;
     }
     lie_yaml_free(&p);
+    if (st == LIE_OK)
+        st = check_frames(cp, name, err);
     if (st != LIE_OK) {
         lie_camera_path_destroy(cp);
         return st;
@@ -209,17 +218,9 @@ static lie_vec3 interp3(const lie_camera_path *p, int i, float t, size_t offset)
                   catmull_rom(a->z, b->z, c->z, d->z, t));
 }
 
-lie_camera lie_camera_path_frame(const lie_camera_path *p, int frame)
+/* The camera at parameter t in [0, 1) of the span from key i. */
+static lie_camera frame_at(const lie_camera_path *p, int i, float t)
 {
-    int i = 0;
-    float t = 0.0f;
-    int f = frame;
-    while (i + 1 < p->n_keys && f >= p->keys[i].frames) {
-        f -= p->keys[i].frames;
-        i++;
-    }
-    if (i + 1 < p->n_keys)
-        t = (float)f / (float)p->keys[i].frames;
     lie_vec3 eye = interp3(p, i, t, offsetof(lie_camera_key, eye));
     lie_vec3 target = interp3(p, i, t, offsetof(lie_camera_key, target));
     lie_vec3 up = interp3(p, i, t, offsetof(lie_camera_key, up));
@@ -235,6 +236,41 @@ lie_camera lie_camera_path_frame(const lie_camera_path *p, int frame)
     c.up = lie_v3_norm(lie_v3_sub(u, lie_v3_scale(c.forward, lie_v3_dot(u, c.forward))));
     c.yfov = fov * (float)M_PI / 180.0f;
     return c;
+}
+
+static float span_t(const lie_camera_path *p, int i, int f)
+{
+    return i + 1 < p->n_keys ? (float)f / (float)p->keys[i].frames : 0.0f;
+}
+
+lie_camera lie_camera_path_frame(const lie_camera_path *p, int frame)
+{
+    int i = 0;
+    int f = frame;
+    while (i + 1 < p->n_keys && f >= p->keys[i].frames) {
+        f -= p->keys[i].frames;
+        i++;
+    }
+    return frame_at(p, i, span_t(p, i, f));
+}
+
+/* Every frame a renderer will be given, as lie_camera_parse checks one
+ * --camera: valid keys can still interpolate to a frame whose eye meets its
+ * target (keys that swap them), or a spline overshoot past the range. */
+static lie_status check_frames(const lie_camera_path *p, const char *name, lie_error *err)
+{
+    long frame = 0;
+    for (int i = 0; i < p->n_keys; i++) {
+        int n = i + 1 < p->n_keys ? p->keys[i].frames : 1;
+        for (int f = 0; f < n; f++, frame++) {
+            lie_camera c = frame_at(p, i, span_t(p, i, f));
+            const char *bad = lie_camera_invalid(&c);
+            if (bad)
+                return lie_error_set(err, LIE_ERR_FORMAT, name, "frame %ld (between keys[%d] and keys[%d]): %s",
+                                     p->first + frame, i, i + 1 < p->n_keys ? i + 1 : i, bad);
+        }
+    }
+    return LIE_OK;
 }
 
 lie_status lie_camera_path_write(const lie_camera_path *p, const char *path, lie_error *err)

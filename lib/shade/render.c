@@ -435,6 +435,9 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
         return lie_error_set(err, LIE_ERR_ARG, path, "tiles %zu..%zu out of range", first, first + count);
     if (opt->light_samples < 1 || opt->light_samples > 1000000)
         return lie_error_set(err, LIE_ERR_ARG, path, "light samples %d out of range", opt->light_samples);
+    const char *bad_camera = lie_camera_invalid(cam);
+    if (bad_camera)
+        return lie_error_set(err, LIE_ERR_ARG, path, "camera: %s", bad_camera);
     if (opt->visibility == LIE_VIS_LIE && !opt->oracle)
         return lie_error_set(err, LIE_ERR_ARG, path, "LIE visibility needs a cache");
     if ((opt->aovs & (LIE_AOV_COMPLEXITY | LIE_AOV_PATCH)) && (!opt->oracle || !opt->oracle->describe))

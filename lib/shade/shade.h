@@ -360,6 +360,12 @@ lie_view_exr lie_view_exr_make(const lie_view *v);
  * "eye=X,Y,Z,target=X,Y,Z[,up=X,Y,Z][,fov=DEG|ortho=HEIGHT]" (ortho: an
  * orthographic view HEIGHT world units tall). */
 lie_status lie_camera_parse(const lie_scene *s, const char *spec, lie_camera *out, lie_error *err);
+/* What makes a camera unusable, or NULL: its eye outside the coordinate
+ * range (LIE_CAMERA_COORD_MAX, lib/core/core.h), forward or up not unit
+ * vectors at right angles (eye on target, up along the view), no field of
+ * view.  lie_render refuses such a camera; --camera values and every frame
+ * of a camera path are checked when parsed. */
+const char *lie_camera_invalid(const lie_camera *c);
 
 /* Mark in mask (n_tris entries, not cleared) every triangle seen from the
  * cameras through a width x height image (2 x 2 rays per pixel) and through
@@ -389,7 +395,10 @@ typedef struct lie_camera_path {
 } lie_camera_path;
 
 /* Parse a camera path from YAML text; `name` is used in messages, which
- * carry line:col and the key.  On success *out is owned by the caller. */
+ * carry line:col and the key.  Every frame the path interpolates is checked
+ * (lie_camera_invalid): keys whose eye and target cross give a frame with
+ * no view direction, and a spline can overshoot the coordinate range.  On
+ * success *out is owned by the caller. */
 lie_status lie_camera_path_parse(const unsigned char *text, size_t size, const char *name,
                                  lie_camera_path **out, lie_error *err);
 lie_status lie_camera_path_read(const char *path, lie_camera_path **out, lie_error *err);

@@ -98,12 +98,16 @@ static void test_every_operation_round_trips_through_its_written_form(void **sta
     append(e, lie_edit_op_set_material("TableTop", LIE_EDIT_HAS_ROUGHNESS, NULL, 0.0f, 0.9f));
     append(e, lie_edit_op_set_emission("Light", LIE_EDIT_HAS_EMISSIVE | LIE_EDIT_HAS_STRENGTH, rgb, 14.0f));
     append(e, lie_edit_op_set_emission("Light", LIE_EDIT_HAS_STRENGTH, NULL, 0.0f));
+    lie_edit_op one_prim = lie_edit_op_set_material("Blocks", LIE_EDIT_HAS_BASE_COLOR, rgb, 0.0f, 0.0f);
+    one_prim.primitive = 2; /* one primitive of the node's mesh (lie-view's undo) */
+    one_prim.has |= LIE_EDIT_HAS_PRIMITIVE;
+    append(e, one_prim);
     append(e, lie_edit_op_set_weights("Half", w, 3));
     append(e, lie_edit_op_set_light("Spot", LIE_EDIT_HAS_COLOR | LIE_EDIT_HAS_INTENSITY | LIE_EDIT_HAS_RANGE |
                                                 LIE_EDIT_HAS_INNER | LIE_EDIT_HAS_OUTER,
                                     light, 12.5f, 8.0f, 10.0f, 30.0f));
     append(e, lie_edit_op_set_light("Bulb", LIE_EDIT_HAS_INTENSITY, NULL, 3.0f, 0.0f, 0.0f, 0.0f));
-    assert_int_equal(e->n_ops, 17);
+    assert_int_equal(e->n_ops, 18);
     assert_null(e->text);
 
     unsigned char *text = NULL;

@@ -7,7 +7,10 @@
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <cmocka.h>
@@ -131,6 +134,149 @@ static void test_group_commits_all_or_none(void **state)
     assert_true(file_is(b, "B"));
 }
 
+
+static void put_file(const char *path, const char *text)
+{
+    FILE *fp = fopen(path, "wb");
+    assert_non_null(fp);
+    fputs(text, fp);
+    fclose(fp);
+}
+
+static int count_tmps(void)
+{
+    int n = 0;
+    lie_error err;
+    assert_int_equal(lie_tmp_clean(dir, 0, 1, count_cb, &n, &err), LIE_OK);
+    return n;
+}
+
+/* "Do not replace" is the rename's own test: a file that appears between
+ * the open and the commit is not replaced, alone or in a group, and a group
+ * then places nothing (not even its replacing files). */
+static void test_no_replace_is_decided_by_the_rename(void **state)
+{
+    char a[128], b[128], c[128];
+    path_in(a, sizeof a, "a.out");
+    path_in(b, sizeof b, "b.out");
+    path_in(c, sizeof c, "c.out");
+    lie_error err;
+    lie_atomic_file fa, fb, fc;
+    /* alone: exists at the open, appears before the commit */
+    put_file(a, "theirs");
+    assert_int_equal(lie_atomic_open_flags(&fa, a, NULL, LIE_ATOMIC_NO_REPLACE, &err), LIE_ERR_IO);
+    assert_non_null(strstr(err.msg, "exists"));
+    assert_int_equal(lie_atomic_open_flags(&fb, b, NULL, LIE_ATOMIC_NO_REPLACE, &err), LIE_OK);
+    write_text(&fb, "ours");
+    put_file(b, "theirs");
+    assert_int_equal(lie_atomic_commit(&fb, &err), LIE_ERR_IO);
+    assert_non_null(strstr(err.msg, "exists"));
+    assert_true(file_is(b, "theirs"));
+    assert_int_equal(count_tmps(), 0);
+    /* a group of one replacing file and two new ones, one of which appears */
+    unlink(b);
+    put_file(c, "old");
+    lie_atomic_group *g = lie_atomic_group_create();
+    assert_int_equal(lie_atomic_open_flags(&fc, c, g, 0, &err), LIE_OK);
+    unlink(a);
+    assert_int_equal(lie_atomic_open_flags(&fa, a, g, LIE_ATOMIC_NO_REPLACE, &err), LIE_OK);
+    assert_int_equal(lie_atomic_open_flags(&fb, b, g, LIE_ATOMIC_NO_REPLACE, &err), LIE_OK);
+    write_text(&fa, "A");
+    write_text(&fb, "B");
+    write_text(&fc, "C");
+    assert_int_equal(lie_atomic_commit(&fc, &err), LIE_OK);
+    assert_int_equal(lie_atomic_commit(&fa, &err), LIE_OK);
+    assert_int_equal(lie_atomic_commit(&fb, &err), LIE_OK);
+    put_file(b, "theirs");
+    assert_int_equal(lie_atomic_group_commit(g, &err), LIE_ERR_IO);
+    lie_atomic_group_destroy(g);
+    assert_int_equal(access(a, F_OK), -1); /* placed, then taken back */
+    assert_true(file_is(b, "theirs"));
+    assert_true(file_is(c, "old"));
+    assert_int_equal(count_tmps(), 0);
+}
+
+/* A replaced file keeps its owner, group and mode: as root, a file of
+ * another user (65534, "nobody") stays theirs and readable by them. */
+static void test_replaced_file_keeps_owner_and_mode(void **state)
+{
+    char a[128];
+    path_in(a, sizeof a, "a.out");
+    put_file(a, "old");
+    assert_int_equal(chmod(a, 0640), 0);
+    uid_t uid = geteuid() == 0 ? 65534 : geteuid();
+    gid_t gid = geteuid() == 0 ? 65534 : getegid();
+    assert_int_equal(chown(a, uid, gid), 0);
+    lie_error err;
+    lie_atomic_file fa;
+    assert_int_equal(lie_atomic_open(&fa, a, &err), LIE_OK);
+    write_text(&fa, "new");
+    assert_int_equal(lie_atomic_commit(&fa, &err), LIE_OK);
+    struct stat st;
+    assert_int_equal(stat(a, &st), 0);
+    assert_true(file_is(a, "new"));
+    assert_int_equal(st.st_uid, uid);
+    assert_int_equal(st.st_gid, gid);
+    assert_int_equal(st.st_mode & 07777, 0640);
+}
+
+/* SIGTERM at any moment of a group's commit leaves all of its files old or
+ * all new: a child commits a group of 24 replacing files and is killed a
+ * random few microseconds after it says it starts, 60 times. */
+static void test_group_commit_is_whole_under_sigterm(void **state)
+{
+    enum { FILES = 24, RUNS = 60 };
+    char names[FILES][128];
+    for (int i = 0; i < FILES; i++) {
+        char n[32];
+        snprintf(n, sizeof n, "f%02d.out", i);
+        path_in(names[i], sizeof names[i], n);
+    }
+    int mixed = 0;
+    for (int run = 0; run < RUNS; run++) {
+        for (int i = 0; i < FILES; i++)
+            put_file(names[i], "old");
+        int pfd[2];
+        assert_int_equal(pipe(pfd), 0);
+        pid_t pid = fork();
+        assert_true(pid >= 0);
+        if (pid == 0) {
+            close(pfd[0]);
+            lie_error err;
+            lie_atomic_group *g = lie_atomic_group_create();
+            lie_atomic_file f;
+            for (int i = 0; i < FILES; i++) {
+                if (lie_atomic_open_group(&f, names[i], g, &err) != LIE_OK)
+                    _exit(3);
+                write_text(&f, "new");
+                if (lie_atomic_commit(&f, &err) != LIE_OK)
+                    _exit(3);
+            }
+            (void)!write(pfd[1], "x", 1);
+            lie_status st = lie_atomic_group_commit(g, &err);
+            lie_atomic_group_destroy(g);
+            _exit(st == LIE_OK ? 0 : 4);
+        }
+        close(pfd[1]);
+        char x;
+        assert_int_equal(read(pfd[0], &x, 1), 1);
+        close(pfd[0]);
+        struct timespec ts = {0, (run % 12) * 15000L};
+        nanosleep(&ts, NULL);
+        kill(pid, SIGTERM);
+        int status;
+        assert_int_equal(waitpid(pid, &status, 0), pid);
+        assert_true(WIFSIGNALED(status) || (WIFEXITED(status) && WEXITSTATUS(status) == 0));
+        int n_new = 0;
+        for (int i = 0; i < FILES; i++)
+            n_new += file_is(names[i], "new");
+        if (n_new != 0 && n_new != FILES)
+            mixed++;
+        assert_int_equal(count_tmps(), 0);
+    }
+    assert_int_equal(mixed, 0);
+}
+
 static void test_tmp_clean_finds_our_names_only(void **state)
 {
     const char *names[] = {".x.lie.tmpAb12Cd", ".y.exr.tmp000000", ".z.tmp", "w.lie.tmpAb12Cd", ".v.lie.tmpAb_2Cd"};
@@ -165,6 +311,9 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_read_refuses_fifo_and_respects_limit, setup, teardown),
         cmocka_unit_test_setup_teardown(test_group_commits_all_or_none, setup, teardown),
         cmocka_unit_test_setup_teardown(test_tmp_clean_finds_our_names_only, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_no_replace_is_decided_by_the_rename, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_replaced_file_keeps_owner_and_mode, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_group_commit_is_whole_under_sigterm, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

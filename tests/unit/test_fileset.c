@@ -11,6 +11,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cmocka.h>
 
@@ -138,6 +140,66 @@ static void test_scene_from_memory_keeps_the_uri_policy(void **state)
     lie_file_set_destroy(so.files);
 }
 
+
+/* A run's outputs: never an input (by name, through a symlink, a hard link
+ * or ".."), never another output (even one not there yet); the input an
+ * output updates in place, "-" and devices pass. */
+static void test_outputs_may_be_no_input_and_no_other_output(void **state)
+{
+    char dir[] = "/tmp/lie-test-claim.XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    char in[256], lnk[256], hard[256], out[256], dotdot[256], sub[256];
+    snprintf(in, sizeof in, "%s/in.lie", dir);
+    snprintf(lnk, sizeof lnk, "%s/link.png", dir);
+    snprintf(hard, sizeof hard, "%s/hard.png", dir);
+    snprintf(out, sizeof out, "%s/out.png", dir);
+    snprintf(sub, sizeof sub, "%s/sub", dir);
+    snprintf(dotdot, sizeof dotdot, "%s/sub/../out.png", dir);
+    FILE *fp = fopen(in, "w");
+    assert_non_null(fp);
+    fputs("x", fp);
+    fclose(fp);
+    assert_int_equal(symlink(in, lnk), 0);
+    assert_int_equal(link(in, hard), 0);
+    assert_int_equal(mkdir(sub, 0700), 0);
+    lie_error err;
+    lie_file_set *set = lie_file_set_create(LIE_FILES_NAMES);
+    assert_int_equal(lie_file_set_note(set, in, &err), LIE_OK);
+    assert_int_equal(lie_file_set_claim(set, in, NULL, &err), LIE_ERR_ARG);
+    assert_non_null(strstr(err.msg, "is also the input"));
+    assert_int_equal(lie_file_set_claim(set, lnk, NULL, &err), LIE_ERR_ARG);
+    assert_int_equal(lie_file_set_claim(set, hard, NULL, &err), LIE_ERR_ARG);
+    assert_int_equal(lie_file_set_check(set, hard, &err), LIE_ERR_ARG);
+    assert_int_equal(lie_file_set_claim(set, out, NULL, &err), LIE_OK); /* not there yet */
+    assert_int_equal(lie_file_set_claim(set, out, NULL, &err), LIE_ERR_ARG);
+    assert_non_null(strstr(err.msg, "is also the output"));
+    assert_int_equal(lie_file_set_claim(set, dotdot, NULL, &err), LIE_ERR_ARG);
+    assert_int_equal(lie_file_set_check(set, dotdot, &err), LIE_ERR_ARG);
+    assert_int_equal(lie_file_set_claim(set, in, in, &err), LIE_OK); /* an update in place */
+    assert_int_equal(lie_file_set_claim(set, "-", NULL, &err), LIE_OK);
+    assert_int_equal(lie_file_set_claim(set, "-", NULL, &err), LIE_OK);
+    assert_int_equal(lie_file_set_claim(set, "/dev/null", NULL, &err), LIE_OK);
+    assert_int_equal(lie_file_set_claim(set, "/dev/null", NULL, &err), LIE_OK);
+    assert_int_equal(lie_file_set_claim(NULL, in, NULL, &err), LIE_OK); /* no set: no check */
+    lie_file_set_destroy(set);
+    /* a scene's load names its buffers: none may be an output */
+    set = lie_file_set_create(LIE_FILES_NAMES);
+    lie_scene_options so = lie_scene_options_default();
+    so.files = set;
+    lie_scene *s = NULL;
+    assert_int_equal(lie_scene_load(SCENES "cornell.gltf", &so, &s, &err), LIE_OK);
+    assert_int_equal(lie_file_set_bytes(set), 0); /* names, not bytes */
+    assert_int_equal(lie_file_set_claim(set, SCENES "cornell.bin", NULL, &err), LIE_ERR_ARG);
+    assert_int_equal(lie_file_set_claim(set, SCENES "../scenes/cornell.gltf", NULL, &err), LIE_ERR_ARG);
+    lie_scene_destroy(s);
+    lie_file_set_destroy(set);
+    unlink(lnk);
+    unlink(hard);
+    unlink(in);
+    rmdir(sub);
+    rmdir(dir);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -145,6 +207,7 @@ int main(void)
         cmocka_unit_test(test_fileset_only_mode_reads_nothing_else),
         cmocka_unit_test(test_scene_loads_from_the_files_another_load_read),
         cmocka_unit_test(test_scene_from_memory_keeps_the_uri_policy),
+        cmocka_unit_test(test_outputs_may_be_no_input_and_no_other_output),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

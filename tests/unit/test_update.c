@@ -197,6 +197,49 @@ static void test_update_restore_after_remove_equals_rebuild(void **state)
     check_update(texts, 2, 13, NULL);
 }
 
+
+/* set-material and set-emission with `primitive: K` change that primitive
+ * of the node's own mesh alone (lie-view's undo restores each primitive's
+ * material so); update equals rebuild; K past the node's primitives is an
+ * error at the operation's line, as is a K that is not an integer. */
+static void test_set_material_of_one_primitive(void **state)
+{
+    (void)state;
+    const char *texts[2] = {"- set-material: {node: ShortBlock, primitive: 0, base-color: [0.1, 0.7, 0.2]}\n",
+                            "- set-emission: {node: Light, primitive: 0, strength: 3}\n"};
+    uint64_t flagged = 0;
+    check_update(texts, 2, 0, &flagged);
+    lie_error err;
+    lie_scene *s = load();
+    lie_scene_options so = lie_scene_options_default();
+    lie_edit *e = parse(texts[0]);
+    assert_int_equal(lie_edit_apply(s, e, &so, NULL, &err), LIE_OK);
+    lie_edit_destroy(e);
+    int node = -1;
+    assert_int_equal(lie_edit_find_node(s, "ShortBlock", &node, "", 0, 0, &err), LIE_OK);
+    const lie_material *m = lie_scene_material(s, s->meshes[s->nodes[node].mesh].prims[0].material);
+    assert_float_equal(m->base_color[1], 0.7f, 0.0f);
+    int tall = -1;
+    assert_int_equal(lie_edit_find_node(s, "TallBlock", &tall, "", 0, 0, &err), LIE_OK);
+    m = lie_scene_material(s, s->meshes[s->nodes[tall].mesh].prims[0].material);
+    assert_float_not_equal(m->base_color[1], 0.7f, 0.0f); /* the shared material was copied first */
+    e = parse("\n- set-material: {node: ShortBlock, primitive: 1, roughness: 0.5}\n");
+    assert_int_equal(lie_edit_apply(s, e, &so, NULL, &err), LIE_ERR_FORMAT);
+    assert_int_equal(err.line, 2);
+    assert_non_null(strstr(err.msg, "has 1 primitive in its own mesh, no primitive 1"));
+    lie_edit_destroy(e);
+    lie_scene_destroy(s);
+    const char *bad[] = {"- set-material: {node: ShortBlock, primitive: 1e300, roughness: 0.5}\n",
+                         "- set-material: {node: ShortBlock, primitive: -1, roughness: 0.5}\n",
+                         "- set-emission: {node: Light, primitive: 0.5, strength: 1}\n"};
+    for (int i = 0; i < 3; i++) {
+        lie_edit *b = NULL;
+        assert_int_equal(lie_edit_parse((const unsigned char *)bad[i], strlen(bad[i]), EDIT_NAME, &b, &err),
+                         LIE_ERR_FORMAT);
+        assert_non_null(strstr(err.msg, "primitive: expected an integer"));
+    }
+}
+
 static void test_update_in_chunks_equals_update_at_once(void **state)
 {
     (void)state;
@@ -350,6 +393,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_update_equals_rebuild_for_each_operation),
         cmocka_unit_test(test_update_restore_after_remove_equals_rebuild),
+        cmocka_unit_test(test_set_material_of_one_primitive),
         cmocka_unit_test(test_update_in_chunks_equals_update_at_once),
         cmocka_unit_test(test_update_of_several_files_equals_rebuild),
         cmocka_unit_test(test_update_edits_while_pending_and_after_commit),

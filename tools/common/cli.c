@@ -226,9 +226,12 @@ double lie_phase(const char *prog, int verbose, const char *phase, double since)
 void lie_print_scene_warnings(const char *prog, const lie_scene *s, const char *fallback)
 {
     int kept = s->n_warnings < LIE_SCENE_WARNINGS_MAX ? s->n_warnings : LIE_SCENE_WARNINGS_MAX;
-    const char *file = s->path && s->path[0] ? s->path : fallback;
-    for (int i = 0; i < kept; i++)
-        fprintf(stderr, "%s: %s: warning: %s\n", prog, file, s->warnings[i]);
+    char file[1024], w[2048]; /* both may carry bytes of the file: escaped like errors */
+    lie_escape_controls(file, sizeof file, s->path && s->path[0] ? s->path : fallback ? fallback : "");
+    for (int i = 0; i < kept; i++) {
+        lie_escape_controls(w, sizeof w, s->warnings[i]);
+        fprintf(stderr, "%s: %s: warning: %s\n", prog, file, w);
+    }
     if (s->n_warnings > kept)
         fprintf(stderr, "%s: %s: warning: %d more warnings\n", prog, file, s->n_warnings - kept);
 }

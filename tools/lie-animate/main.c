@@ -210,9 +210,23 @@ typedef struct run {
     double duration; /* the animation's, in seconds */
     targets tg;
     lie_camera_path cp;
+    lie_file_set *files;   /* the scene's files: no output may replace one */
     lie_camera_key fixed; /* a scene without a camera: every key (fixed.frames = 1) */
     lie_error err;
 } run;
+
+/* Every frame's file and --camera-path: none an input, nor the path one of
+ * the frames; checked before the first is written. */
+static lie_status check_outputs(run *r)
+{
+    lie_status st = r->path_out ? lie_file_set_claim(r->files, r->path_out, NULL, &r->err) : LIE_OK;
+    for (long f = r->fa; st == LIE_OK && f <= r->fb; f++) {
+        char name[4096];
+        snprintf(name, sizeof name, r->output, (int)f);
+        st = lie_file_set_check(r->files, name, &r->err);
+    }
+    return st;
+}
 
 /* The options: -1 to go on, or the exit status. */
 static int parse_options(run *r, lie_cli *cli, int argc, char **argv)
@@ -257,6 +271,9 @@ static int parse_options(run *r, lie_cli *cli, int argc, char **argv)
 static lie_status load(run *r, int quiet)
 {
     lie_error *err = &r->err;
+    if (!(r->files = lie_file_set_create(LIE_FILES_NAMES)))
+        return lie_error_set(err, LIE_ERR_NOMEM, r->scene_path, "out of memory");
+    r->so.files = r->files;
     lie_status st = lie_scene_load(r->scene_path, &r->so, &r->s, err);
     if (st != LIE_OK)
         return st;
@@ -273,11 +290,16 @@ static lie_status load(run *r, int quiet)
     const lie_animation *an = &s->animations[r->a];
     r->duration = (double)an->end - an->start;
     if (!r->have_frames) {
+        /* the last frame, compared before it is converted: an end of 1e30 s
+         * (a last key, or an unused sampler's) must not reach the cast */
+        double last = floor(r->duration * r->fps + 1e-6);
+        if (!(last <= 999999.0))
+            return lie_error_set(err, LIE_ERR_LIMIT, r->scene_path,
+                                 "%.6g frames (%.6g s at %g fps): more than 1000000", last + 1.0, r->duration,
+                                 r->fps);
         r->fa = 0;
-        r->fb = (long)floor(r->duration * r->fps + 1e-6);
+        r->fb = (long)last;
     }
-    if (r->fb > 999999)
-        return lie_error_set(err, LIE_ERR_LIMIT, r->scene_path, "%ld frames: more than 1000000", r->fb + 1);
     return pick_targets(s, r->a, quiet, r->scene_path, &r->tg, err);
 }
 
@@ -335,7 +357,14 @@ static lie_status write_frames(run *r)
             for (int k = 0; k < r->tg.n_trs; k++)
                 r->s->nodes[r->tg.trs_nodes[k]].local =
                     lie_node_trs_matrix(pose->trs + 10 * (size_t)r->tg.trs_nodes[k]);
-            r->cp.keys[r->cp.n_keys++] = r->cam >= 0 ? camera_key(r->s, r->cam) : r->fixed;
+            lie_camera_key k = r->cam >= 0 ? camera_key(r->s, r->cam) : r->fixed;
+            if (!lie_v3_within(k.eye, LIE_CAMERA_COORD_MAX) || !lie_v3_within(k.target, LIE_CAMERA_COORD_MAX)) {
+                st = lie_error_set(&r->err, LIE_ERR_LIMIT, r->scene_path,
+                                   "frame %ld: the camera is outside the coordinate range (+-%g)", f,
+                                   (double)LIE_CAMERA_COORD_MAX);
+                break;
+            }
+            r->cp.keys[r->cp.n_keys++] = k;
         }
     }
     lie_pose_destroy(pose);
@@ -387,6 +416,8 @@ int main(int argc, char **argv)
     if (st == LIE_OK && r.path_out)
         st = camera_path_start(&r, cli.quiet);
     if (st == LIE_OK)
+        st = check_outputs(&r);
+    if (st == LIE_OK)
         st = write_frames(&r);
     if (st == LIE_OK && r.path_out) {
         r.cp.smooth = 0; /* one key per frame: frame i is key i exactly */
@@ -401,5 +432,6 @@ int main(int argc, char **argv)
     free(r.tg.trs_nodes);
     free(r.tg.w_nodes);
     lie_scene_destroy(r.s);
+    lie_file_set_destroy(r.files);
     return rc;
 }

@@ -70,7 +70,7 @@ static lie_status apply_edits(lie_scene *scene, const lie_scene_options *so, lie
     for (int i = 0; i < n; i++) {
         lie_cache_edit *ed = &edit_log[i];
         lie_edit *e = NULL;
-        if (lie_read_file_max(ed->name, LIE_READ_MAX_TEXT, &ed->text, &ed->size, err) != LIE_OK ||
+        if (lie_file_set_read(so->files, ed->name, LIE_READ_MAX_TEXT, &ed->text, &ed->size, err) != LIE_OK ||
             lie_edit_parse(ed->text, ed->size, ed->name, &e, err) != LIE_OK ||
             lie_edit_apply(scene, e, so, NULL, err) != LIE_OK) {
             lie_edit_destroy(e);
@@ -166,6 +166,12 @@ static lie_status load_into(build_job *j)
 lie_status job_load(build_job *j)
 {
     j->cv = (lie_cache_views){NULL, 0, j->view_w, j->view_h, LIE_MAX_DEPTH_DEFAULT};
+    if (!(j->files = lie_file_set_create(LIE_FILES_NAMES)))
+        return lie_error_set(&j->err, LIE_ERR_NOMEM, j->input, "out of memory");
+    j->so.files = j->files;
+    const char *cache_in = j->resume_file ? j->resume_file : j->into;
+    if (cache_in && lie_file_set_note(j->files, cache_in, &j->err) != LIE_OK)
+        return j->err.status;
     if (j->resume_file) { /* the partial cache's parameters, this run's threads and node cap */
         if (lie_cache_read(j->resume_file, &j->resume, &j->err) != LIE_OK)
             return j->err.status;
@@ -180,7 +186,12 @@ lie_status job_load(build_job *j)
     if (st != LIE_OK)
         return st;
     j->loaded_hash = j->scene->hash;
-    return apply_edits(j->scene, &j->so, j->edit_log, j->n_edits, j->resume, &j->err);
+    st = apply_edits(j->scene, &j->so, j->edit_log, j->n_edits, j->resume, &j->err);
+    if (st == LIE_OK && j->path_file)
+        st = lie_file_set_note(j->files, j->path_file, &j->err);
+    if (st == LIE_OK && j->output)
+        st = lie_file_set_claim(j->files, j->output, cache_in, &j->err);
+    return st;
 }
 
 /* --into: the old views' pixels, and the old views first in j->cv. */
@@ -294,5 +305,6 @@ void job_free(build_job *j)
     lie_cache_destroy(j->old);
     lie_rt_destroy(j->rt);
     lie_scene_destroy(j->scene);
+    lie_file_set_destroy(j->files);
     memset(j, 0, sizeof *j);
 }

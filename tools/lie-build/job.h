@@ -35,12 +35,15 @@ typedef struct build_job {
     lie_build_stats st;
     lie_add_stats as;
     size_t bytes;
+    lie_file_set *files; /* the run's inputs and output (lie_file_set_claim) */
     lie_error err;
 } build_job;
 
 /* The defaults, nothing loaded. */
 void job_init(build_job *j);
-/* --resume's and --into's caches, the scene (and --path), the edits. */
+/* --resume's and --into's caches, the scene (and --path), the edits; then
+ * the output is claimed: it may replace --resume's or --into's cache, no
+ * other input. */
 lie_status job_load(build_job *j);
 /* The views' cameras and pixels (all the views' with --into), checked
  * against a resumed build's and across ranks. */

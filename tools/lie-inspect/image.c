@@ -26,7 +26,12 @@ int inspect_image(const char *path, const inspect_options *o)
     lie_frame *frame = NULL;
     uint8_t *rgb = NULL;
     lie_camera cam;
-    lie_status st = lie_cache_load_scene(l.cache, path, o->scene, &so, &s, &err);
+    lie_file_set *files = so.files = lie_file_set_create(LIE_FILES_NAMES); /* the PNG must be no input */
+    lie_status st = files ? lie_file_set_note(files, path, &err) : lie_error_set(&err, LIE_ERR_NOMEM, path, "out of memory");
+    if (st == LIE_OK)
+        st = lie_cache_load_scene(l.cache, path, o->scene, &so, &s, &err);
+    if (st == LIE_OK)
+        st = lie_file_set_claim(files, o->output, NULL, &err);
     if (st == LIE_OK && !o->quiet)
         lie_print_scene_warnings(inspect_prog, s, path);
     if (st == LIE_OK && o->emitter >= s->n_emitters)
@@ -76,6 +81,7 @@ int inspect_image(const char *path, const inspect_options *o)
     lie_rt_destroy(rt);
     lie_env_shadows_destroy(lv);
     lie_scene_destroy(s);
+    lie_file_set_destroy(files);
     inspect_unload(&l);
     return st == LIE_OK ? 0 : inspect_fail(&err, 1);
 }

@@ -98,15 +98,20 @@ static void summary_text(const char *path, const inspect_cache *l, const lie_bui
     for (int e = 0; e < c->n_emitters; e++)
         if (c->emitters[e].type < 3)
             by_type[c->emitters[e].type]++;
-    printf("cache           %s (%zu bytes, format version %u)\n", path, l->size, LIE_CACHE_VERSION);
+    fputs("cache           ", stdout);
+    inspect_text_string(stdout, path);
+    printf(" (%zu bytes, format version %u)\n", l->size, LIE_CACHE_VERSION);
     fputs("scene           ", stdout);
     inspect_text_string(stdout, c->scene_path); /* from the file: may hold control bytes */
     putchar('\n');
     printf("scene hash      %016llx\n", (unsigned long long)c->scene_hash);
     printf("state hash      %016llx\n", (unsigned long long)c->state_hash);
     printf("edits           %d\n", c->n_edits);
-    for (int i = 0; i < c->n_edits; i++)
-        printf("  %d  %s (%zu bytes)\n", i, c->edits[i].name, c->edits[i].size);
+    for (int i = 0; i < c->n_edits; i++) {
+        printf("  %d  ", i);
+        inspect_text_string(stdout, c->edits[i].name); /* from the file, as the scene's path */
+        printf(" (%zu bytes)\n", c->edits[i].size);
+    }
     char mp[32];
     inspect_fmt_float(p->min_patch, mp, sizeof mp);
     printf("parameters      samples %u, max-samples %u, max-blockers %u, complex-cap %u, min-patch %s, "

@@ -266,7 +266,7 @@ static lie_status load_input(void *ctx, const lie_scene_options *so, lie_error *
          * its bytes go to the loader in a set of their own */
         lie_scene_options o = *so;
         lie_file_set *own = NULL;
-        if (!so->files && strcmp(in->input, "-") == 0) {
+        if ((!so->files || lie_file_set_get_mode(so->files) == LIE_FILES_NAMES) && strcmp(in->input, "-") == 0) {
             o.files = own = lie_file_set_create(LIE_FILES_RECORD);
             st = own ? lie_file_set_add(own, in->input, data, size, err)
                      : lie_error_set(err, LIE_ERR_NOMEM, in->input, "out of memory");
@@ -461,11 +461,13 @@ typedef struct run {
     lie_env_shadows *lv;
     lie_rt *rt;
     lie_camera cam; /* without --path */
+    lie_file_set *files; /* the run's inputs: no frame may replace one */
     lie_error err;
 } run;
 
 static void run_free(run *r)
 {
+    lie_file_set_destroy(r->files);
     lie_camera_path_destroy(r->cpath);
     lie_rt_destroy(r->rt);
     lie_env_shadows_destroy(r->lv);
@@ -581,7 +583,12 @@ static int render_all(args *a, run *r, const lie_cli *cli)
     lie_render_options *ro = &a->ro;
     double t0 = lie_time_now();
     inputs in = {a->input, a->scene_override, a->path_file, NULL, NULL, NULL};
+    lie_file_set *files = r->files = lie_file_set_create(LIE_FILES_NAMES);
+    if (!files)
+        return lie_error_set(&r->err, LIE_ERR_NOMEM, a->input, "out of memory");
+    a->so.files = files;
     lie_status st = lie_dist_load(&a->so, load_input, &in, &r->err);
+    a->so.files = NULL;
     r->scene = in.scene;
     r->cache = in.cache;
     r->cpath = in.cpath;
@@ -610,14 +617,28 @@ static int render_all(args *a, run *r, const lie_cli *cli)
     char hash[32];
     snprintf(hash, sizeof hash, "%016llx", (unsigned long long)r->scene->hash);
     int *todo = NULL, n_todo = 0, rendered = 0, skipped = 0;
-    if ((st = plan_frames(a, r, &todo, &n_todo, &skipped, &r->err)) != LIE_OK)
-        return st;
-    lie_render_stats rs;
-    memset(&rs, 0, sizeof rs);
-    double t_render = 0.0, t_write = 0.0;
+    st = plan_frames(a, r, &todo, &n_todo, &skipped, &r->err);
     /* with --cache, the frames say what lie-render of the cache says */
     frame_out fo = {a->output, a->cache_file ? a->cache_file : a->input, hash, ro, r->cpath != NULL, a->fopt,
                     r->cpath ? r->cpath->first : 0};
+    /* no output may be an input (the cache, the scene's files, the path),
+     * nor a frame --cache: every name is checked before the first is
+     * written (an interrupted run's --cache is read by cached_render, not
+     * through the set: it may be replaced) */
+    if (st == LIE_OK && a->cache_file)
+        st = lie_file_set_claim(files, a->cache_file, NULL, &r->err);
+    for (int i = 0; st == LIE_OK && lie_dist_rank() == 0 && i < n_todo; i++) {
+        char name[4096];
+        frame_name(&fo, todo[i], name, sizeof name);
+        st = lie_file_set_check(files, name, &r->err);
+    }
+    if (st != LIE_OK) {
+        free(todo);
+        return st;
+    }
+    lie_render_stats rs;
+    memset(&rs, 0, sizeof rs);
+    double t_render = 0.0, t_write = 0.0;
     if (a->cache_file) {
         cached_run cr = {a->cache_file, a->input, a->view_w ? a->view_w : 512, a->view_h ? a->view_h : 512, r->scene,
                          r->rt, r->cpath, ro, cli->quiet, cli->verbose, a->frame_a < 0, 0, 0};

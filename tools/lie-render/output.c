@@ -24,16 +24,21 @@ static const char *rays_name(lie_ray_mode m)
 }
 
 
+void frame_name(const frame_out *o, int fi, char *name, size_t size)
+{
+    if (o->path)
+        snprintf(name, size, o->output, o->first + fi);
+    else
+        snprintf(name, size, "%s", o->output);
+}
+
 lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame, lie_error *err)
 {
     const frame_out *o = ctx;
     const lie_render_options *ro = o->ro;
     char name[4096];
     int number = o->first + fi;
-    if (o->path)
-        snprintf(name, sizeof name, o->output, number);
-    else
-        snprintf(name, sizeof name, "%s", o->output);
+    frame_name(o, fi, name, sizeof name);
     float yfov_deg = fc->yfov * 180.0f / (float)M_PI;
     char seed[24];
     snprintf(seed, sizeof seed, "%llu", (unsigned long long)ro->seed);

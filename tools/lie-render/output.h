@@ -15,6 +15,8 @@ typedef struct frame_out {
     int first; /* the number of the path's frame 0 */
 } frame_out;
 
+/* The file of frame fi. */
+void frame_name(const frame_out *o, int fi, char *name, size_t size);
 /* Write frame fi (the path's frame first + fi) of camera fc to its file,
  * its header saying how it was made (README.md, lie-render). */
 lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame, lie_error *err);

@@ -16,6 +16,19 @@ lie_vec3 view_orbit_eye(const view_orbit *o)
 
 static float clampf(float x, float lo, float hi) { return x < lo ? lo : x > hi ? hi : x; }
 
+/* Navigation stays inside the coordinate range (LIE_CAMERA_COORD_MAX,
+ * lib/core/core.h): the target and the distance within a quarter of it
+ * each, so the eye is always a camera lie_camera_parse takes.  A dolly or a
+ * pan of any size gives this clamped view, never a failure. */
+static void keep_in_range(view_orbit *o)
+{
+    const float lim = 0.25f * LIE_CAMERA_COORD_MAX;
+    float *t[3] = {&o->target.x, &o->target.y, &o->target.z};
+    for (int k = 0; k < 3; k++)
+        *t[k] = isfinite(*t[k]) ? clampf(*t[k], -lim, lim) : 0.0f;
+    o->dist = isfinite(o->dist) ? clampf(o->dist, 1e-4f, lim) : lim;
+}
+
 void view_orbit_from_camera(view_orbit *o, const lie_camera *c, const lie_scene *s)
 {
     lie_vec3 f = lie_v3_norm(c->forward);
@@ -34,6 +47,7 @@ void view_orbit_from_camera(view_orbit *o, const lie_camera *c, const lie_scene 
     o->fov = c->ymag > 0.0f ? 45.0f : c->yfov / deg;
     if (!(o->fov > 1.0f && o->fov < 170.0f))
         o->fov = 45.0f;
+    keep_in_range(o);
 }
 
 void view_orbit_rotate(view_orbit *o, float dyaw, float dpitch)
@@ -44,8 +58,8 @@ void view_orbit_rotate(view_orbit *o, float dyaw, float dpitch)
 
 void view_orbit_dolly(view_orbit *o, float f)
 {
-    float d = o->dist * (1.0f - f);
-    o->dist = d > 1e-4f ? d : 1e-4f;
+    o->dist = o->dist * (1.0f - f);
+    keep_in_range(o);
 }
 
 /* Right and up of the view (forward from the eye to the target). */
@@ -62,6 +76,7 @@ void view_orbit_pan(view_orbit *o, float dx, float dy)
     basis(o, &f, &r, &u);
     float h = 2.0f * o->dist * tanf(0.5f * o->fov * deg);
     o->target = lie_v3_add(o->target, lie_v3_add(lie_v3_scale(r, -dx * h), lie_v3_scale(u, dy * h)));
+    keep_in_range(o);
 }
 
 void view_orbit_fly(view_orbit *o, float fwd, float right, float up)
@@ -70,6 +85,7 @@ void view_orbit_fly(view_orbit *o, float fwd, float right, float up)
     basis(o, &f, &r, &u);
     lie_vec3 d = lie_v3_add(lie_v3_add(lie_v3_scale(f, fwd), lie_v3_scale(r, right)), lie_v3(0.0f, up, 0.0f));
     o->target = lie_v3_add(o->target, d);
+    keep_in_range(o);
 }
 
 void view_orbit_frame(view_orbit *o, lie_box3 b)
@@ -80,6 +96,7 @@ void view_orbit_frame(view_orbit *o, lie_box3 b)
     float r = 0.5f * lie_v3_len(lie_v3_sub(b.hi, b.lo));
     float d = r / sinf(0.5f * o->fov * deg);
     o->dist = d > 1e-3f ? d : 1e-3f;
+    keep_in_range(o);
 }
 
 void view_orbit_spec(const view_orbit *o, char *buf, size_t size)

@@ -64,7 +64,8 @@ static void usage(FILE *fp)
             "E and Shift+E exposure, Ctrl+Z undo, Ctrl+Y redo, P prints the camera as a lie-render --camera spec,\n"
             "Ctrl+S saves the cache, O toggles the overlay, Q or Escape quits.\n"
             "\n"
-            "Script commands: frames N, orbit YAW PITCH, dolly F, select NODE, pick X Y,\n"
+            "Script commands: frames N, orbit YAW PITCH, dolly F, select NODE (a name, or\n"
+            "'#N' quoted: an unquoted # starts a comment), pick X Y,\n"
             "drag DX DY DZ, rotate AX AY AZ DEG, set-material FIELDS, set-emission FIELDS\n"
             "(FIELDS as in edit files: base-color: [r, g, b], roughness: r, strength: s),\n"
             "remove (the selection), undo, redo, wait (until no unit is pending),\n"
@@ -543,6 +544,27 @@ static int open_world(session *S, const view_world_options *wo, const char *inpu
     return 0;
 }
 
+/* The outputs (--record, --save, the script's screenshots) before the
+ * window opens: none may be an input (the cache, the scene's files, the
+ * script), and --record and --save not the same file; --save may replace
+ * the cache it started from. */
+static int claim_outputs(session *S, const view_world_options *wo, const char *input, const script_run *R)
+{
+    lie_error err;
+    lie_error_clear(&err);
+    lie_status st = lie_file_set_note(S->files, input, &err);
+    if (st == LIE_OK && R->path)
+        st = lie_file_set_note(S->files, R->path, &err);
+    if (st == LIE_OK && wo->record)
+        st = lie_file_set_claim(S->files, wo->record, NULL, &err);
+    if (st == LIE_OK && S->save)
+        st = lie_file_set_claim(S->files, S->save, input, &err);
+    for (int i = 0; st == LIE_OK && R->sc && i < R->sc->n; i++)
+        if (R->sc->cmds[i].kind == VIEW_CMD_SCREENSHOT)
+            st = lie_file_set_check(S->files, R->sc->cmds[i].arg, &err);
+    return st == LIE_OK ? 0 : fail_line(&err);
+}
+
 /* At exit: the script's error, the record, --save, --stats. */
 static int finish(session *S, const script_run *R, const lie_cli *cli, int rc)
 {
@@ -604,6 +626,7 @@ int main(int argc, char **argv)
     view_world_options wo;
     memset(&wo, 0, sizeof wo);
     wo.so = lie_scene_options_default();
+    wo.so.files = S.files = lie_file_set_create(LIE_FILES_NAMES);
     wo.threads = 1;
     wo.view_width = wo.view_height = 512;
     wo.max_depth = S.ro.max_depth;
@@ -628,7 +651,9 @@ int main(int argc, char **argv)
     quit_handlers();
     window W;
     memset(&W, 0, sizeof W);
-    rc = open_world(&S, &wo, cli.operand, camera);
+    rc = S.files ? open_world(&S, &wo, cli.operand, camera) : 1;
+    if (rc == 0)
+        rc = claim_outputs(&S, &wo, cli.operand, &R);
     if (rc == 0) {
         rc = window_open(&W, cli.operand, S.ro.width, S.ro.height);
         if (rc == 0 && view_render_start(S.w, &S.ro, &S.r, &err) != LIE_OK)
@@ -656,6 +681,7 @@ int main(int argc, char **argv)
     window_close(&W);
     view_world_close(S.w);
     view_script_destroy(R.sc);
+    lie_file_set_destroy(S.files);
     SDL_Quit();
     return rc;
 }

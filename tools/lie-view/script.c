@@ -1,6 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* --script FILE: one command a line, '#' comments (lie-view --help lists
- * them).  Parsing checks everything it can, so a bad script
+/* --script FILE: one command a line, '#' comments (see lie-view --help).
+ * A '#' inside single or double quotes is not a comment, so a node is
+ * selected by index as edit files name it, `select '#3'` (an unquoted #3
+ * would be a comment).  Parsing checks everything it can, so a bad script
  * fails before a window opens. */
 #include "view.h"
 
@@ -89,9 +91,17 @@ lie_status view_script_read(const char *path, view_script **out, lie_error *err)
         if (nl)
             *nl = 0;
         line++;
-        char *hash = strchr(ln, '#');
-        if (hash)
-            *hash = 0;
+        /* a comment: '#' outside quotes */
+        for (char *q = ln, quote = 0; *q; q++) {
+            if (quote) {
+                quote = *q == quote ? 0 : quote;
+            } else if (*q == '\'' || *q == '"') {
+                quote = *q;
+            } else if (*q == '#') {
+                *q = 0;
+                break;
+            }
+        }
         char *p = trim(ln);
         if (!*p)
             continue;
@@ -146,6 +156,11 @@ lie_status view_script_read(const char *path, view_script **out, lie_error *err)
                 st = parse_fields(path, line, p, rest, &c.fields, err);
                 if (st != LIE_OK)
                     break;
+            }
+            size_t len = strlen(rest);
+            if (c.kind == VIEW_CMD_SELECT && len >= 2 && (rest[0] == '\'' || rest[0] == '"') && rest[len - 1] == rest[0]) {
+                rest[len - 1] = 0; /* 'NAME': quoted as in edit files */
+                rest++;
             }
             c.arg = strdup(rest);
             if (!c.arg) {

@@ -43,8 +43,11 @@ static void say(session *S, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(S->message, sizeof S->message, fmt, ap);
+    char raw[sizeof S->message];
+    vsnprintf(raw, sizeof raw, fmt, ap);
     va_end(ap);
+    /* names come from the scene file: no control byte reaches the terminal */
+    lie_escape_controls(S->message, sizeof S->message, raw);
     S->message_until = lie_time_now() + 3.0;
     if (!S->quiet)
         fprintf(stderr, "%s: %s\n", prog, S->message);
@@ -106,10 +109,54 @@ static lie_status edit(session *S, lie_edit_op op, int join, lie_error *err)
     return st;
 }
 
+/* The world box of the selection's subtree: its triangles and point lights. */
+static lie_box3 sel_box(session *S)
+{
+    const lie_scene *s = view_world_scene(S->w);
+    lie_box3 b = lie_box3_empty();
+    uint8_t *in = calloc((size_t)s->n_nodes + 1, 1);
+    if (!in)
+        return b;
+    view_node_subtree(s, S->sel, in);
+    for (int i = 0; i < s->n_instances; i++)
+        if (in[s->instances[i].node])
+            for (uint32_t t = 3 * s->instances[i].first_tri; t < 3 * (s->instances[i].first_tri + s->instances[i].n_tris); t++)
+                lie_box3_grow(&b, s->tri_p[t]);
+    for (int i = 0; i < s->n_emitters; i++)
+        if (s->emitters[i].type == LIE_EMITTER_POINT && in[s->emitters[i].node])
+            lie_box3_grow(&b, s->emitters[i].position);
+    free(in);
+    return b;
+}
+
+/* A move clamped so the selection stays inside the coordinate range
+ * (LIE_COORD_MAX, lib/core/core.h): a drag or a script's drag of any size
+ * gives a defined result, never an edit the scene refuses. */
+static lie_vec3 clamp_move(session *S, lie_vec3 d)
+{
+    view_world_read_lock(S->w);
+    lie_box3 b = sel_box(S);
+    view_world_read_unlock(S->w);
+    const float m = 0.99f * LIE_COORD_MAX; /* a margin for the transforms' rounding */
+    float lo[3] = {-2.0f * m, -2.0f * m, -2.0f * m}, hi[3] = {2.0f * m, 2.0f * m, 2.0f * m};
+    if (!lie_box3_is_empty(&b)) {
+        const float blo[3] = {b.lo.x, b.lo.y, b.lo.z}, bhi[3] = {b.hi.x, b.hi.y, b.hi.z};
+        for (int k = 0; k < 3; k++) {
+            lo[k] = -m - blo[k];
+            hi[k] = m - bhi[k];
+        }
+    }
+    float v[3] = {d.x, d.y, d.z};
+    for (int k = 0; k < 3; k++)
+        v[k] = v[k] < lo[k] ? lo[k] : v[k] > hi[k] ? hi[k] : v[k];
+    return lie_v3(v[0], v[1], v[2]);
+}
+
 /* A drag's motion and turns are floats: their nine digits are the edit's
  * values (lie_edit_float_value), what the record holds. */
 static lie_status edit_move(session *S, lie_vec3 d, int join, lie_error *err)
 {
+    d = clamp_move(S, d);
     return edit(S, lie_edit_op_move_by(NULL, lie_edit_float_value(d.x), lie_edit_float_value(d.y),
                                        lie_edit_float_value(d.z)),
                 join, err);
@@ -214,7 +261,9 @@ void session_key(session *S, const SDL_KeyboardEvent *k, int *quit)
             say(S, done ? (redo ? "redone" : "undone") : (redo ? "nothing to redo" : "nothing to undo"));
     } else if (ctrl && key == SDLK_s) {
         const char *out = S->save ? S->save : "lie-view.lie";
-        st = view_world_save(S->w, out, &err);
+        st = S->save ? LIE_OK : lie_file_set_check(S->files, out, &err); /* --save was claimed at the start */
+        if (st == LIE_OK)
+            st = view_world_save(S->w, out, &err);
         if (st == LIE_OK)
             say(S, "wrote %s", out);
     } else if (key == SDLK_w) {
@@ -293,6 +342,15 @@ void session_key(session *S, const SDL_KeyboardEvent *k, int *quit)
 
 /* ---- scripts ----------------------------------------------------------------- */
 
+/* The node or an ancestor removed: it is not in the scene. */
+static int node_removed(const lie_scene *s, int node)
+{
+    for (int a = node, hops = 0; a >= 0 && a < s->n_nodes && hops <= s->n_nodes; a = s->nodes[a].parent, hops++)
+        if (s->nodes[a].removed)
+            return 1;
+    return 0;
+}
+
 
 int session_script_step(session *S, script_run *R, uint64_t images, int idle)
 {
@@ -337,6 +395,8 @@ int session_script_step(session *S, script_run *R, uint64_t images, int idle)
             int node;
             view_world_read_lock(S->w);
             st = lie_edit_find_node(view_world_scene(S->w), c->arg, &node, R->path, c->line, 1, &err);
+            if (st == LIE_OK && node_removed(view_world_scene(S->w), node)) /* nothing to act on: refused */
+                st = lie_error_set_at(&err, LIE_ERR_ARG, R->path, c->line, 1, "select: node '%s' was removed", c->arg);
             view_world_read_unlock(S->w);
             if (st == LIE_OK)
                 session_select(S, node);
@@ -405,13 +465,12 @@ int session_script_step(session *S, script_run *R, uint64_t images, int idle)
             return 0;
         }
         if (st != LIE_OK) {
-            R->err = err;
-            if (!R->err.line) {
-                /* name the script line; keep the library's message */
-                char msg[sizeof err.msg];
-                snprintf(msg, sizeof msg, "%s", err.msg);
-                lie_error_set_at(&R->err, st, R->path, c->line, 1, "%s", msg);
-            }
+            /* the script's file and line, whatever the command went through
+             * (an edit's own text is the viewer's, not the user's); keep the
+             * library's message */
+            char msg[sizeof err.msg];
+            snprintf(msg, sizeof msg, "%s", err.msg);
+            lie_error_set_at(&R->err, st, R->path, c->line, 1, "%s", msg);
             R->failed = 1;
             return 1;
         }

@@ -10,6 +10,7 @@
 #include <SDL.h>
 
 typedef struct session {
+    lie_file_set *files; /* the session's inputs and outputs: no output may replace an input */
     view_world *w;
     view_render *r;
     view_render_options ro;

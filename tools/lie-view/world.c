@@ -138,7 +138,7 @@ const char *view_node_name(const lie_scene *s, int node, char *buf, size_t size)
     if (node < 0 || node >= s->n_nodes)
         snprintf(buf, size, "-");
     else if (s->nodes[node].name && *s->nodes[node].name)
-        snprintf(buf, size, "%s", s->nodes[node].name);
+        lie_escape_controls(buf, size, s->nodes[node].name); /* from the file: shown on the overlay */
     else
         snprintf(buf, size, "#%d", node);
     return buf;

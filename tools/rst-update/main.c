@@ -66,12 +66,12 @@ static int scene_format_ok(const char *path)
 }
 
 /* Read and parse every edit file first: a bad edit leaves everything untouched. */
-static lie_status read_edits(char **files, int n, lie_edit **edits, lie_error *err)
+static lie_status read_edits(lie_file_set *set, char **files, int n, lie_edit **edits, lie_error *err)
 {
     for (int i = 0; i < n; i++) {
         unsigned char *text = NULL;
         size_t size = 0;
-        lie_status st = lie_read_file_max(files[i], LIE_READ_MAX_TEXT, &text, &size, err);
+        lie_status st = lie_file_set_read(set, files[i], LIE_READ_MAX_TEXT, &text, &size, err);
         if (st == LIE_OK)
             st = lie_edit_parse(text, size, files[i], &edits[i], err);
         free(text);
@@ -156,9 +156,27 @@ typedef struct run_opts {
     const lie_cli *cli; /* --stats=json's destination */
 } run_opts;
 
-static lie_status run(const char *input, char **files, int n_files, const lie_update_options *uo, const run_opts *ro,
-                      lie_error *err)
+/* The outputs, before any work: neither may be an input (the cache, the edit
+ * files, the scene with its buffers and images, the files edits add) or the
+ * other; -o may replace the input cache (an update in place).  The scene's
+ * side files are claimed by the export. */
+static lie_status claim_outputs(lie_file_set *set, const char *input, const run_opts *ro, lie_error *err)
 {
+    lie_status st = lie_file_set_claim(set, ro->output, input, err);
+    if (st == LIE_OK && ro->scene_out)
+        st = lie_file_set_claim(set, ro->scene_out, NULL, err);
+    return st;
+}
+
+static lie_status run(const char *input, char **files, int n_files, const lie_update_options *uo_in,
+                      const run_opts *ro_in, lie_error *err)
+{
+    lie_update_options uo_copy = *uo_in;
+    run_opts ro_copy = *ro_in;
+    const lie_update_options *uo = &uo_copy;
+    const run_opts *ro = &ro_copy;
+    lie_file_set *set = lie_file_set_create(LIE_FILES_NAMES); /* the run's inputs and outputs */
+    uo_copy.scene.files = ro_copy.scene_opt.files = set;
     int quiet = ro->quiet, stats = ro->stats;
     double t0 = lie_time_now();
     lie_cache *cache = NULL;
@@ -168,13 +186,15 @@ static lie_status run(const char *input, char **files, int n_files, const lie_up
     lie_update_stats ust;
     size_t bytes = 0;
     double t_load = 0;
-    lie_status st = edits ? LIE_OK : lie_error_set(err, LIE_ERR_NOMEM, input, "out of memory");
+    lie_status st = edits && set ? LIE_OK : lie_error_set(err, LIE_ERR_NOMEM, input, "out of memory");
     if (st == LIE_OK)
-        st = read_edits(files, n_files, edits, err);
-    if (st == LIE_OK)
-        st = lie_cache_read(input, &cache, err);
+        st = read_edits(set, files, n_files, edits, err);
+    if (st == LIE_OK && (st = lie_cache_read(input, &cache, err)) == LIE_OK)
+        st = lie_file_set_note(set, input, err);
     if (st == LIE_OK)
         st = lie_cache_load_scene(cache, input, NULL, &uo->scene, &scene, err);
+    if (st == LIE_OK)
+        st = claim_outputs(set, input, ro, err);
     if (st == LIE_OK) {
         t_load = lie_time_now() - t0;
         lie_phase(prog, ro->verbose, "load", t0);
@@ -205,6 +225,7 @@ static lie_status run(const char *input, char **files, int n_files, const lie_up
     lie_update_destroy(u);
     lie_scene_destroy(scene);
     lie_cache_destroy(cache);
+    lie_file_set_destroy(set);
     return st;
 }
 
