@@ -18,15 +18,15 @@ ARGS="--min-patch 1e-3" # the default build but for the patch floor: seconds, no
 run "$H/blocker-scenes" "$TMP"
 expect_rc 0 "blocker-scenes writes the fixtures"
 count() { sed -n "s/.*\"$2\":\([0-9]*\).*/\1/p" "$1"; }
-# equal samples: the per-emitter sampler gives both renders the same samples of
-# every emitter, so what differs is the lists' answers alone
 for sc in thin cubes; do
     run "$B/lie-build" "$TMP/$sc.gltf" $ARGS -q --threads 1 --stats=json -o "$TMP/$sc.lie"
     expect_rc 0 "$sc: default build"
     cp "$TMP/err" "$TMP/$sc.json"
     run "$B/lie-build" "$TMP/$sc.gltf" $ARGS -q --threads 2 -o "$TMP/${sc}2.lie"
     expect_same "$TMP/$sc.lie" "$TMP/${sc}2.lie" "$sc: identical caches for 1 and 2 threads"
-    run "$B/lie-render" "$TMP/$sc.lie" -q --size $SIZE --camera Inside --light-sampler per-emitter --visibility=full -o "$TMP/${sc}_full.exr"
+    # the same samples for both (the per-emitter sampler): only visibility differs
+    run "$B/lie-render" "$TMP/$sc.lie" -q --size $SIZE --camera Inside --light-sampler per-emitter \
+        --visibility=full -o "$TMP/${sc}_full.exr"
     expect_rc 0 "$sc: full visibility"
     run "$B/lie-render" "$TMP/$sc.lie" -q --size $SIZE --camera Inside --light-sampler per-emitter -o "$TMP/${sc}_lie.exr"
     expect_rc 0 "$sc: LIE render"
