@@ -176,7 +176,7 @@ $(ATRIUM_GEN): $(BUILD)/bench/atrium.o $(BUILD)/tests/scenes/gen/gen_gltf.o
 # the equal-quality bench's Lambertian copies of the third-party scenes (bench/lambert.c)
 BENCH_LAMBERT := $(BUILD)/bench-lambert
 $(BENCH_LAMBERT): $(BUILD)/bench/lambert.o $(LIB_A)
-	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
+	$(CC_LD) $^ $(LDLIBS_ALL) -o $@
 
 # ---- LTC tables (lib/shade/ltc.h): fitted by scripts/ltc-fit.c, the data committed ----
 LTC_FIT := $(BUILD)/ltc-fit

@@ -16,7 +16,7 @@
 # rendered once and kept in out/truth/ (delete it, or out/bench-scenes/, after
 # a change to the shading or to bench/lambert.c).  Then per method the time to p99 <= 2%: the first budget that
 # gets there, else "~T" extrapolated from its last two budgets (p99 taken
-# as a power of the time), else "-".  A method's ladder stops at the first
+# as a power of the time; ">1000x" past a thousand times the last), else "-".  A method's ladder stops at the first
 # budget within 2%, or once a render takes longer than STOP seconds.
 #
 # Methods (those the renderer at hand has; `lie-render --help` is asked):
@@ -93,7 +93,8 @@ time_to() {
              n = NR
              if (n >= 2 && p[n] > 0 && p[n-1] > p[n] && t[n] > t[n-1]) {
                  a = -log(p[n] / p[n-1]) / log(t[n] / t[n-1])
-                 printf "~%.0f\n", t[n] * exp(log(p[n] / 0.02) / a)
+                 x = log(p[n] / 0.02) / a
+                 if (x < log(1000)) printf "~%.0f\n", t[n] * exp(x); else print ">1000x"
              } else print "-"
          }'
 }
