@@ -417,6 +417,9 @@ static void print_bin(FILE *f, const out_bin *b)
     fprintf(f, "%.9g %.9g %.9g %.9g %.9g %.9g\n", b->m00, b->m02, b->m20, b->m22, b->norm, b->fresnel);
 }
 
+/* The fit's stages in order: options, the grid of roughness and view
+ * angle, each cell's fit from its neighbour's, the table written.  One
+ * piece: each stage is a loop over the same grid. */
 int main(int argc, char **argv)
 {
     const char *path = NULL;
