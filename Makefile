@@ -159,6 +159,8 @@ HELPERS  := $(patsubst tests/helpers/%.c,$(BUILD)/tests/%,$(wildcard tests/helpe
 $(BUILD)/tests/%: $(BUILD)/tests/helpers/%.o $(COMMON_OBJ) $(LIB_A)
 	@mkdir -p $(dir $@)
 	$(CC_LD) $^ $(LDLIBS_ALL) -o $@
+# the tool tests' generated fixtures write glTF with the scenes' writer
+$(BUILD)/tests/blocker-scenes: $(BUILD)/tests/scenes/gen/gen_gltf.o
 
 # ---- scenes -------------------------------------------------------------
 GEN := $(BUILD)/gen_scenes

@@ -2,8 +2,9 @@
 # SPDX-License-Identifier: Apache-2.0
 # make bench-mpi: lie-render and lie-build under mpirun against one process,
 # measured side by side in one run on this machine: 1 process x 2 threads
-# against 2 ranks x 1 thread, a 12-frame camera path and a build, with the
-# bytes each sends.  Times are wall clock of the whole command (mpirun's
+# against 2 ranks x 1 thread, a 12-frame camera path (each rank writes the
+# frames it rendered) and a build, with the bytes each sends; and a 1024x1024
+# EXR written on 1 and 2 threads.  Times are wall clock of the whole command (mpirun's
 # start included) and the tool's own (load to last write, from --stats);
 # REPEAT runs each, the best kept.  Writes out/bench-mpi.json.  docs/mpi.md
 # turns these costs into a model for 64 nodes.
@@ -78,6 +79,17 @@ bw1=$w1; bt1=$t1; bw2=$w2; bt2=$t2
 cmp -s "$TMP/b1.lie" "$TMP/b2.lie" && bsame=yes || bsame=no
 bb=$(field bytes_gathered <"$TMP/build2.json"); cache=$(stat -c %s "$TMP/b1.lie")
 
+# EXR encoding on threads: a 1024x1024 frame with zip (the default), its
+# chunks compressed on 1 and on 2 threads (--threads; the bytes are the same)
+X="bin/lie-render $TMP/c.lie -q --size 1024x1024 --light-samples 1 --stats=json"
+xw1=""; xw2=""; i=0
+while [ $i -lt "$REPEAT" ]; do
+    $X --threads 1 -o "$TMP/x1.exr" 2>"$TMP/x1.json"; xw1=$(best "$xw1" "$(field seconds_write <"$TMP/x1.json")")
+    $X --threads 2 -o "$TMP/x2.exr" 2>"$TMP/x2.json"; xw2=$(best "$xw2" "$(field seconds_write <"$TMP/x2.json")")
+    i=$((i + 1))
+done
+cmp -s "$TMP/x1.exr" "$TMP/x2.exr" && xsame=yes || xsame=no
+
 # mpirun's own start and stop: --version exits before MPI
 pair start "bin/lie-render --version" "$MPI bin/lie-render --version"
 sw=$w2
@@ -88,7 +100,9 @@ printf '%-34s %12.3f %12.3f %8s\n' "path, 12 frames: wall seconds" "$pw1" "$pw2"
 printf '%-34s %12.3f %12.3f %8s\n' "one frame ($t_items items): tool s" "$ft1" "$ft2" "$(ratio "$ft2" "$ft1")"
 printf '%-34s %12.3f %12.3f %8s\n' "build: tool seconds" "$bt1" "$bt2" "$(ratio "$bt2" "$bt1")"
 printf '%-34s %12.3f %12.3f %8s\n' "build: wall seconds" "$bw1" "$bw2" "$(ratio "$bw2" "$bw1")"
-echo "mpirun -np 2 start and stop: $sw s; path EXR writing: $pwr1 s (2 threads), $pwr2 s (rank 0, 1 thread)"
+printf '%-34s %12.3f %12.3f %8s\n' "EXR 1024x1024 zip write: seconds" "$xw1" "$xw2" "$(ratio "$xw2" "$xw1")"
+echo "  (EXR row: 1 thread against 2 threads in one process; the same bytes: $xsame)"
+echo "mpirun -np 2 start and stop: $sw s; path EXR writing: $pwr1 s (2 threads), $pwr2 s (rank 0's own, 1 thread)"
 echo "bytes: per frame gathered $fb, inputs broadcast (cache, scene, its .bin) $fbc (to 1 other rank), per build gathered $bb (cache $cache)"
 echo "identical to one process: path $same, build $bsame"
 cat >out/bench-mpi.json <<JSON
@@ -96,6 +110,7 @@ cat >out/bench-mpi.json <<JSON
  "path":{"one_process_2_threads":{"tool_seconds":$pt1,"wall_seconds":$pw1},"two_ranks_1_thread":{"tool_seconds":$pt2,"wall_seconds":$pw2},"ratio_tool":$(ratio "$pt2" "$pt1"),"identical":"$same"},
  "frame":{"one_process_2_threads":{"tool_seconds":$ft1},"two_ranks_1_thread":{"tool_seconds":$ft2},"items":$t_items},
  "build":{"one_process_2_threads":{"tool_seconds":$bt1,"wall_seconds":$bw1},"two_ranks_1_thread":{"tool_seconds":$bt2,"wall_seconds":$bw2},"ratio_tool":$(ratio "$bt2" "$bt1"),"identical":"$bsame"},
+ "exr_1024_zip_write":{"threads_1":$xw1,"threads_2":$xw2,"ratio":$(ratio "$xw2" "$xw1"),"identical":"$xsame"},
  "seconds_write_path":{"one_process":$pwr1,"rank0":$pwr2},"bytes_per_frame":$fb,"bytes_broadcast":$fbc,"bytes_per_build":$bb,"cache_bytes":$cache,"mpirun_start_seconds":$sw}
 JSON
 echo "wrote out/bench-mpi.json"

@@ -9,6 +9,8 @@
 #include <limits.h>
 #include <stdlib.h>
 
+int lie_cache_rules_old(const lie_cache *c) { return c->version != 0 && c->version < LIE_CACHE_RULES_VERSION; }
+
 void lie_cache_destroy(lie_cache *c)
 {
     if (!c)

@@ -20,7 +20,13 @@
 extern "C" {
 #endif
 
-#define LIE_CACHE_VERSION 4u
+#define LIE_CACHE_VERSION 5u
+/* Caches of earlier versions hold units built by earlier rules (their
+ * sampling hashed emitter indices, their shaft tolerances read the scene's
+ * extent; formats/lie-cache.md, Versions): they still render, but an update
+ * or a resumed build would mix their units with units of the present rules,
+ * which no fresh build gives.  lie_cache_rules_old says which. */
+#define LIE_CACHE_RULES_VERSION 5u
 /* optional_flags bit: an interrupted lie-build (env->partial); a reader
  * that ignores it still renders correctly, as the unbuilt units are class
  * none (formats/lie-cache.md) */
@@ -65,7 +71,12 @@ typedef struct lie_cache {
      * which an update samples again to keep their decisions (none: every
      * unit was built, as fine as its lists need) */
     lie_cache_views views;
+    uint32_t version;        /* the format version it was read from; 0: made in memory (current rules) */
 } lie_cache;
+
+/* Whether the cache's units were built by rules older than this library's
+ * (read from a file older than LIE_CACHE_RULES_VERSION). */
+int lie_cache_rules_old(const lie_cache *c);
 
 /* Free everything the cache owns (env included); NULL is fine. */
 void lie_cache_destroy(lie_cache *c);
@@ -104,11 +115,20 @@ typedef struct lie_cache_section {
 lie_status lie_cache_sections(const unsigned char *data, size_t size, const char *name,
                               lie_cache_section *out, int *n, lie_error *err);
 
+/* Record the names of edits first .. n_edits - 1 of the log (given relative
+ * to the working directory) relative to the folder of cache_path, the file
+ * the cache is about to be written to, so that their `add` files resolve
+ * from the cache's folder wherever it is loaded from, as its scene does.
+ * Absolute names, names whose folder does not exist, and "-" (stdout) stay
+ * as they are. */
+void lie_cache_log_relative_to(lie_cache *c, int first, const char *cache_path);
 /* Load the scene the cache describes: its glTF file (`override`, or the
  * recorded path as given, or that path relative to the cache's folder),
  * checked against scene_hash, with the edit log replayed and the result
- * checked against state_hash.  `cache_path` (may be NULL) names the cache
- * in messages. */
+ * checked against state_hash.  A logged edit's `add` files resolve the
+ * same way: relative to its recorded name's folder as given, or else with
+ * that name taken relative to the cache's folder.  `cache_path` (may be
+ * NULL) names the cache in messages. */
 lie_status lie_cache_load_scene(const lie_cache *c, const char *cache_path, const char *override,
                                 const lie_scene_options *so, lie_scene **out, lie_error *err);
 

@@ -357,6 +357,7 @@ lie_status lie_cache_decode(const unsigned char *data, size_t size, const char *
         return lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory");
     }
     c->env = env;
+    c->version = lie_cache_get_u32(data + 8);
     meta_counts m = {0, 0, 0, 0, 0, 0};
     st = parse_meta(data + s[0]->offset, s[0]->size, name, c, &m, err);
     if (st == LIE_OK)

@@ -6,6 +6,57 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Whether every file the `add` operations of e load exists. */
+static int adds_resolve(const lie_edit *e, const lie_file_set *files)
+{
+    char path[4096];
+    for (int k = 0; k < e->n_ops; k++)
+        if (e->ops[k].kind == LIE_EDIT_ADD &&
+            (!lie_edit_add_path(e, &e->ops[k], path, sizeof path) || !lie_file_set_exists(files, path)))
+            return 0;
+    return 1;
+}
+
+/* A logged edit's `add` files are relative to its file's name as recorded
+ * (lie_cache_log_relative_to makes it relative to the cache's folder).
+ * Like the scene's path: as recorded when they resolve from here, else
+ * from the cache's folder, so that a cache loads from any directory. */
+static lie_status log_name(lie_edit *e, const char *cache_path, const lie_file_set *files, lie_error *err)
+{
+    const char *slash = strrchr(cache_path, '/');
+    if (e->name[0] == '/' || !slash || adds_resolve(e, files))
+        return LIE_OK;
+    size_t n = (size_t)(slash - cache_path) + strlen(e->name) + 2;
+    char *alt = malloc(n);
+    if (!alt)
+        return lie_error_set(err, LIE_ERR_NOMEM, cache_path, "out of memory");
+    snprintf(alt, n, "%.*s/%s", (int)(slash - cache_path), cache_path, e->name);
+    char *was = e->name;
+    e->name = alt;
+    if (adds_resolve(e, files)) {
+        free(was);
+        return LIE_OK;
+    }
+    e->name = was; /* from neither: the errors name them as recorded */
+    free(alt);
+    return LIE_OK;
+}
+
+void lie_cache_log_relative_to(lie_cache *c, int first, const char *cache_path)
+{
+    if (strcmp(cache_path, "-") == 0)
+        return;
+    for (int i = first < 0 ? 0 : first; i < c->n_edits; i++) {
+        if (c->edits[i].name[0] == '/')
+            continue;
+        char *rel = lie_path_from_folder_of(c->edits[i].name, cache_path);
+        if (!rel)
+            continue; /* its folder does not resolve (a name, not a file): kept as given */
+        free(c->edits[i].name);
+        c->edits[i].name = rel;
+    }
+}
+
 lie_status lie_cache_load_scene(const lie_cache *c, const char *cache_path, const char *override,
                                 const lie_scene_options *so, lie_scene **out, lie_error *err)
 {
@@ -48,6 +99,8 @@ lie_status lie_cache_load_scene(const lie_cache *c, const char *cache_path, cons
     for (int i = 0; i < c->n_edits; i++) {
         lie_edit *e = NULL;
         st = lie_edit_parse(c->edits[i].text, c->edits[i].size, c->edits[i].name, &e, err);
+        if (st == LIE_OK && cache_path)
+            st = log_name(e, cache_path, files, err);
         if (st == LIE_OK)
             st = lie_edit_apply(s, e, so, NULL, err);
         lie_edit_destroy(e);

@@ -342,6 +342,11 @@ lie_status lie_read_fd(int fd, const char *name, uint64_t max, uint64_t hint, un
  * lie_read_file allows LIE_READ_MAX_DEFAULT bytes. */
 lie_status lie_read_file_max(const char *path, uint64_t max, unsigned char **data, size_t *size, lie_error *err);
 lie_status lie_read_file(const char *path, unsigned char **data, size_t *size, lie_error *err);
+/* `path` (relative to the working directory) written relative to the
+ * folder of file `other` instead, so that it names the same file from
+ * there: a malloc'd string, or NULL when either folder cannot be resolved
+ * (realpath) or memory runs out.  An absolute path comes back as it is. */
+char *lie_path_from_folder_of(const char *path, const char *other);
 
 /* ---- file sets: inputs held in memory (fileset.c) ------------------------
  * The files a load read (a scene with its buffers and images, a cache, a

@@ -633,3 +633,53 @@ lie_status lie_read_file(const char *path, unsigned char **data, size_t *size, l
 {
     return lie_read_file_max(path, LIE_READ_MAX_DEFAULT, data, size, err);
 }
+
+/* The folder part of `path` resolved to an absolute path without links, or
+ * NULL. */
+static char *real_folder(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    char *dir = slash ? strndup(path, slash == path ? 1 : (size_t)(slash - path)) : strdup(".");
+    char *real = dir ? realpath(dir, NULL) : NULL;
+    free(dir);
+    return real;
+}
+
+char *lie_path_from_folder_of(const char *path, const char *other)
+{
+    if (path[0] == '/')
+        return strdup(path);
+    char *from = real_folder(other), *to = real_folder(path);
+    char *out = NULL;
+    if (from && to) {
+        /* the components the two folders share, then one ".." for each of
+         * `from`'s others, then the rest of `to`, then the file's name */
+        size_t common = 0;
+        for (size_t i = 0;; i++) {
+            int end_f = from[i] == 0 || from[i] == '/', end_t = to[i] == 0 || to[i] == '/';
+            if (end_f && end_t)
+                common = i;
+            if (from[i] != to[i] || !from[i])
+                break;
+        }
+        size_t ups = 0;
+        for (const char *c = from + common; strcmp(from, "/") != 0 && *c; c++)
+            ups += *c == '/';
+        const char *rest = to + common + (to[common] == '/');
+        const char *slash = strrchr(path, '/');
+        const char *base = slash ? slash + 1 : path;
+        size_t cap = 3 * ups + strlen(rest) + strlen(base) + 3;
+        out = malloc(cap);
+        if (out) {
+            size_t n = 0;
+            for (size_t k = 0; k < ups; k++)
+                n += (size_t)snprintf(out + n, cap - n, "../");
+            if (*rest)
+                n += (size_t)snprintf(out + n, cap - n, "%s/", rest);
+            snprintf(out + n, cap - n, "%s", base);
+        }
+    }
+    free(from);
+    free(to);
+    return out;
+}

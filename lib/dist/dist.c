@@ -18,10 +18,12 @@ static struct {
     int checked;       /* lie_dist_check passed: errors now travel in lie_dist_run's messages */
     int serialized;    /* MPI may be called from another thread than the main one */
     uint64_t bcast_bytes, bcast_files;
+    int argc;          /* the command line (main's argv, borrowed): every rank must share it */
+    char **argv;
     /* the last lie_dist_run, for statistics (rank 0) */
     lie_dist_rank_stats *per_rank;
     size_t n_items;
-} dist = {0, 0, 1, 0, 0, 0, 0, NULL, 0};
+} dist = {0, 0, 1, 0, 0, 0, 0, 0, NULL, NULL, 0};
 
 enum { TAG_REQ = 1, TAG_RES, TAG_ERR, TAG_ITEM };
 #define ITEM_DONE (-1)
@@ -74,6 +76,8 @@ int lie_dist_start(int *argc, char ***argv)
     dist.serialized = provided >= MPI_THREAD_SERIALIZED;
     MPI_Comm_rank(MPI_COMM_WORLD, &dist.rank);
     MPI_Comm_size(MPI_COMM_WORLD, &dist.size);
+    dist.argc = *argc;
+    dist.argv = *argv;
     dist.active = 1;
     atexit(finish);
     return dist.size;
@@ -193,10 +197,73 @@ static void format_error(const lie_error *err, char *out, size_t cap)
     lie_error_format(err, out, cap);
 }
 
+static int is_option(const char *a) { return a[0] == '-' && a[1] && !strchr(a, '='); }
+
+/* Argument i of a command line of n with its option ("--size 32x24"),
+ * or "nothing" past its end. */
+static void describe_arg(char *const *args, int n, int i, char *out, size_t cap)
+{
+    if (i >= n)
+        snprintf(out, cap, "nothing");
+    else if (i > 0 && args[i][0] != '-' && is_option(args[i - 1]))
+        snprintf(out, cap, "%.200s %.200s", args[i - 1], args[i]);
+    else if (i + 1 < n && is_option(args[i]) && args[i + 1][0] != '-')
+        snprintf(out, cap, "%.200s %.200s", args[i], args[i + 1]);
+    else
+        snprintf(out, cap, "%.400s", args[i]);
+}
+
+/* Ranks started with other options (mpirun's MPMD form, A : B) would each
+ * compute their share of another image or cache, and the output would mix
+ * them: rank 0 broadcasts its command line (argv[1..]) and every rank
+ * compares its own.  why: "" when they are the same, else the first
+ * argument that differs, with its option. */
+static void compare_args(char *why, size_t cap)
+{
+    uint64_t n = 0;
+    for (int i = 1; dist.rank == 0 && i < dist.argc; i++)
+        n += strlen(dist.argv[i]) + 1;
+    MPI_Bcast(&n, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
+    char *buf = malloc(n + 1);
+    char **theirs = calloc(n + 1, sizeof *theirs);
+    if (!buf || !theirs)
+        MPI_Abort(MPI_COMM_WORLD, 1); /* a command line's size: nothing else can go on */
+    for (int i = 1, k = 0; dist.rank == 0 && i < dist.argc; i++) {
+        size_t len = strlen(dist.argv[i]) + 1;
+        memcpy(buf + k, dist.argv[i], len);
+        k += (int)len;
+    }
+    bcast_bytes((unsigned char *)buf, n);
+    int m = 0;
+    for (size_t k = 0; k < n; k += strlen(buf + k) + 1)
+        theirs[m++] = buf + k;
+    char *const *mine = dist.argv + 1;
+    int nm = dist.argc - 1, i = 0;
+    while (i < nm && i < m && strcmp(mine[i], theirs[i]) == 0)
+        i++;
+    why[0] = 0;
+    if (i < nm || i < m) {
+        char a[512], b[512];
+        describe_arg(mine, nm, i, a, sizeof a);
+        describe_arg(theirs, m, i, b, sizeof b);
+        snprintf(why, cap, "started with %s where rank 0 has %s: every rank must be given the same options", a,
+                 b);
+    }
+    free(buf);
+    free(theirs);
+}
+
 /* Gather every rank's report on rank 0, decide, broadcast the verdict;
  * on failure rank 0's err names the rank. */
-static lie_status exchange(const rank_report *mine, lie_error *err)
+static lie_status exchange(const rank_report *report, lie_error *err)
 {
+    rank_report copy = *report, *mine = &copy;
+    char why[MSG_MAX];
+    compare_args(why, sizeof why);
+    if (mine->status == LIE_OK && why[0]) {
+        mine->status = LIE_ERR_ARG;
+        snprintf(mine->msg, sizeof mine->msg, "%s", why);
+    }
     rank_report *all = NULL;
     if (dist.rank == 0 && !(all = calloc((size_t)dist.size, sizeof *all)))
         MPI_Abort(MPI_COMM_WORLD, 1); /* a few kilobytes per rank: nothing else can go on */
@@ -227,8 +294,8 @@ static lie_status exchange(const rank_report *mine, lie_error *err)
     MPI_Bcast(verdict, (int)sizeof verdict, MPI_CHAR, 0, MPI_COMM_WORLD);
     if (!verdict[0])
         return LIE_OK;
-    if (mine->status != LIE_OK && dist.rank != 0)
-        return (lie_status)mine->status; /* err holds this rank's own error */
+    if (report->status != LIE_OK && dist.rank != 0)
+        return (lie_status)report->status; /* err holds this rank's own error */
     lie_error_clear(err);
     return lie_error_set(err, mine->status != LIE_OK ? (lie_status)mine->status : LIE_ERR_ARG, NULL, "%s",
                          verdict);

@@ -403,6 +403,14 @@ static lie_status set_light(lie_scene *s, const char *file, const lie_edit_op *o
     return LIE_OK;
 }
 
+int lie_edit_add_path(const lie_edit *e, const lie_edit_op *op, char *path, size_t cap)
+{
+    const char *slash = strrchr(e->name, '/');
+    int n = op->file[0] != '/' && slash ? snprintf(path, cap, "%.*s/%s", (int)(slash - e->name), e->name, op->file)
+                                        : snprintf(path, cap, "%s", op->file);
+    return n >= 0 && (size_t)n < cap;
+}
+
 /* Apply one operation.  One piece: the checks every operation shares (the
  * node found, not removed, a transform that moves something), one case per
  * operation of formats/edit.md, and the effect they share (the subtree's
@@ -499,13 +507,9 @@ static lie_status apply_op(lie_scene *s, const lie_edit *e, const lie_edit_op *o
         if (dup)
             return lie_error_set_at(err, LIE_ERR_FORMAT, file, op->line, op->col,
                                     "add.as: a node named '%s' exists already", op->as);
-        /* the file is relative to the edit file's folder */
         char path[4096];
-        const char *slash = strrchr(file, '/');
-        if (op->file[0] != '/' && slash)
-            snprintf(path, sizeof path, "%.*s/%s", (int)(slash - file), file, op->file);
-        else
-            snprintf(path, sizeof path, "%s", op->file);
+        if (!lie_edit_add_path(e, op, path, sizeof path))
+            return lie_error_set_at(err, LIE_ERR_LIMIT, file, op->line, op->col, "add.file: the path is too long");
         lie_scene *src = NULL;
         lie_error sub;
         lie_error_clear(&sub);

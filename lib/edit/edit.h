@@ -81,6 +81,10 @@ typedef struct lie_edit {
 lie_status lie_edit_parse(const unsigned char *text, size_t size, const char *name, lie_edit **out,
                           lie_error *err);
 void lie_edit_destroy(lie_edit *e);
+/* The file an `add` operation loads: op->file relative to the folder of
+ * the edit file's name, or op->file itself when absolute or when the name
+ * has no folder.  0 when it does not fit in `cap` bytes. */
+int lie_edit_add_path(const lie_edit *e, const lie_edit_op *op, char *path, size_t cap);
 
 /* ---- edits as data (build.c, write.c, inverse.c) -------------------------- */
 

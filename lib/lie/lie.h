@@ -130,6 +130,10 @@ typedef struct lie_build_stats {
     uint64_t units_interrupted;        /* units a stop left unbuilt (LIE_CLASS_NONE) */
     uint64_t splits_pixels;            /* splits not tried: too few pixels see the patch (views) */
     uint64_t splits_kept;              /* splits made */
+    /* sampled leaves whose segments said occluded, or visible though
+     * triangles enter the shaft, without proof: each got its exact list
+     * instead (lib/lie/subdiv.c), where sampling alone would leak light */
+    uint64_t unproven_occluded, unproven_visible;
     /* the model against the build, over the splits made: the render time
      * they save per frame as the model predicts it before the lookahead
      * (half the parent's list), and as the children's lists give it */

@@ -4,13 +4,27 @@
 #include "lie/pair.h"
 #include "lie/shaft.h"
 
+#include <float.h>
 #include <string.h>
 
 float lie_pair_ray_far(const lie_scene *s)
 {
     lie_vec3 ext = lie_box3_is_empty(&s->bounds) ? lie_v3(1, 1, 1) : lie_v3_sub(s->bounds.hi, s->bounds.lo);
     float scale = fmaxf(1.0f, fmaxf(ext.x, fmaxf(ext.y, ext.z)));
-    return 4.0f * scale + 4.0f * lie_v3_len(ext);
+    float need = 4.0f * scale + 4.0f * lie_v3_len(ext);
+    if (!(need < FLT_MAX / 2.0f))
+        return need;
+    int ex;
+    frexpf(need, &ex); /* need = m 2^ex, m in [0.5, 1): 2^ex > need */
+    return ldexpf(1.0f, ex);
+}
+
+float lie_pair_hull_scale(const lie_vec3 *hull, int n)
+{
+    float m = 1.0f;
+    for (int i = 0; i < n; i++)
+        m = fmaxf(m, lie_v3_maxabs(hull[i]));
+    return m;
 }
 
 float lie_pair_eps(const lie_scene *s, uint32_t tri)

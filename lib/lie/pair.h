@@ -16,8 +16,19 @@
 extern "C" {
 #endif
 
-/* How far shadow segments towards directional emitters reach. */
+/* How far shadow segments towards directional emitters reach: past the
+ * scene's bounds (4 times their largest extent plus 4 times their
+ * diagonal), rounded up to a power of two.  Their shafts depend on it, so
+ * the rounding keeps it, and them, unchanged by edits that grow the bounds
+ * a little; an update rebuilds the units of lights at infinity whenever
+ * it does change (lib/update/mark.c). */
 float lie_pair_ray_far(const lie_scene *s);
+/* The size of the coordinates a pair's hull tests round at: the largest
+ * coordinate magnitude among hull[0..n), at least 1.  Tolerances of shaft
+ * tests are relative to it (float spacing grows with magnitude), never to
+ * scene-wide sizes, so that a unit's list does not change when an edit
+ * elsewhere grows the scene. */
+float lie_pair_hull_scale(const lie_vec3 *hull, int n);
 /* The renderer's largest shadow-ray offset on triangle tri. */
 float lie_pair_eps(const lie_scene *s, uint32_t tri);
 /* The hull of a pair, as lie-build and the ray segment trees see it: the

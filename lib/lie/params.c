@@ -77,6 +77,8 @@ void lie_stats_merge(lie_build_stats *dst, const lie_build_stats *src)
     dst->units_interrupted += src->units_interrupted;
     dst->splits_pixels += src->splits_pixels;
     dst->splits_kept += src->splits_kept;
+    dst->unproven_occluded += src->unproven_occluded;
+    dst->unproven_visible += src->unproven_visible;
     dst->split_saving_predicted_ns += src->split_saving_predicted_ns;
     dst->split_saving_measured_ns += src->split_saving_measured_ns;
 }

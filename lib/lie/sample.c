@@ -170,11 +170,15 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
     const int em_index = s->clusters[e].emitter;
     const lie_emitter *em = &s->emitters[em_index];
     const int shared = em->n_clusters > 1;
-    /* the shifts are the emitter's, so that its clusters share one pattern
-     * (an emitter of one cluster: cluster and emitter hash alike only if
-     * every emitter before it has one cluster too, as they hashed before) */
-    uint64_t h = lie_hash_u64x4(tri, path.digits, (uint64_t)path.depth,
-                                shared ? (uint64_t)em->first_cluster | 0x100000000ull : (uint64_t)e);
+    /* The shifts hash the patch alone, so that every emitter, and every
+     * cluster of one, sees the same pattern from it.  Not the emitter's
+     * index: emitters are numbered in the scene's walk order, so one that
+     * appears or goes (a set-emission) renumbers those after it, and a
+     * unit's segments would change with no change to its patch or emitter
+     * (update = rebuild; formats/lie-cache.md, version 5).  The patterns of
+     * different emitters from one patch are alike, but their segments end
+     * on different emitters and meet different blockers. */
+    uint64_t h = lie_hash_u64x4(tri, path.digits, (uint64_t)path.depth, 0);
     uint64_t h2 = lie_hash_u64x4(h, 0x656d6974ull, 0, 0);
     const pair_sampler ps = {c,
                              tri,
@@ -319,10 +323,14 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
         *n_list = w->n_hits;
         return LIE_CLASS_PARTIAL;
     }
-    if (shared && forced && blocked == 0) {
-        /* a cluster's share of the segments found nothing in a shaft of
-         * many triangles: they are its list, which lie_subdiv narrows to
-         * the exact one at a leaf (past complex_cap: complex, or split) */
+    if (forced && blocked == 0) {
+        /* The segments found nothing in a shaft of many triangles.  That
+         * proves nothing (thin parts, small triangles between them): the
+         * pair is visible with the shaft as its list, which lie_subdiv
+         * replaces at a leaf by the exact one (lib/lie/subdiv.c,
+         * complete_leaf).  A cluster of a shared sampling, which saw only
+         * its share of the segments, takes them as a partial list instead,
+         * so that its patch splits while the list is long. */
         if (!LIE_GROW(w->hits, w->cap_hits, n_forced)) {
             w->nomem = 1;
             return LIE_CLASS_VISIBLE;
@@ -330,10 +338,10 @@ lie_class lie_sample_pair(const build_ctx *c, worker *w, uint32_t tri, lie_patch
         memcpy(w->hits, w->cand, n_forced * sizeof *w->hits);
         *quality = total;
         *n_list = n_forced;
-        return LIE_CLASS_PARTIAL;
+        return shared ? LIE_CLASS_PARTIAL : LIE_CLASS_VISIBLE;
     }
     if (blocked > 0 && blocked < valid)
-        lie_cull_expand(c, w, tri, V, two_sided, e);
+        lie_cull_expand(c, w, tri, V, two_sided, e, c->p->complex_cap);
     *quality = total;
     *n_list = w->n_hits;
     if (valid == 0 || blocked == 0)

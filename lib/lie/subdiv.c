@@ -164,36 +164,26 @@ static double render_weight(lie_class cls, size_t n_list)
 
 /* Whether an old node an update copies still tells its sampled list's
  * length, which the lookahead weighs: a split node does (count), and so
- * does a leaf that could not split.  A leaf large enough to split may hold
- * its exact list instead (a split undone, or too few pixels), or be
- * visible for an empty exact list: it is sampled again. */
+ * do unlit and occluded leaves (proven, as sampled).  Any other sampled
+ * leaf holds its exact list instead (complete_leaf), and with conservative
+ * lists a leaf large enough to split may hold a list its split did not
+ * shorten: those are classified again. */
 static int old_weight_known(const build_ctx *c, uint32_t tri, lie_patch_path path, const lie_pnode *x)
 {
     if (x->child || x->cls == LIE_CLASS_UNLIT || x->cls == LIE_CLASS_OCCLUDED)
         return 1;
-    return !lie_subdiv_may_split(c, tri, path);
+    return c->p->mode != LIE_BLOCKERS_SAMPLED && !lie_subdiv_may_split(c, tri, path);
 }
 
-/* The exact list of a leaf: every triangle meeting the pair's hull
- * (§4.1.2), counted up to `cap` (more: the count only), less a planar
- * emitter's own triangles, which end every segment; left in w->hits. */
+/* The exact list of a leaf: every triangle entering the pair's shaft
+ * (§4.1.2; lie_cull_exact), counted up to `cap` (more: the count only);
+ * left in w->hits. */
 static size_t exact_leaf_list(const build_ctx *c, worker *w, uint32_t tri, lie_patch_path path, int e, int two_sided,
                               size_t cap)
 {
-    const lie_scene *s = c->s;
     lie_vec3 V[3];
-    size_t n_leaf = 0;
-    lie_patch_world(path, &s->tri_p[3 * (size_t)tri], V);
-    lie_cull_conservative(c, w, tri, V, two_sided, e, NULL, 0, cap, &n_leaf);
-    const lie_emitter *em = &s->emitters[s->clusters[e].emitter];
-    if (em->type == LIE_EMITTER_AREA && em->planar && n_leaf <= cap) {
-        size_t k = 0;
-        for (size_t j = 0; j < n_leaf; j++)
-            if (w->hits[j] - em->first_tri >= em->n_tris)
-                w->hits[k++] = w->hits[j];
-        n_leaf = k;
-    }
-    return n_leaf;
+    lie_patch_world(path, &c->s->tri_p[3 * (size_t)tri], V);
+    return lie_cull_exact(c, w, tri, V, two_sided, e, cap);
 }
 
 /* The same for an old node an update copies (its class and count are
@@ -202,6 +192,41 @@ static double old_weight(const lie_pnode *x)
 {
     return render_weight((lie_class)x->cls, x->count);
 }
+
+/* A sampled leaf, made right (§4.1.2 completing §4.1): sampling shapes
+ * the tree, but what a leaf tells the renderer must hold for every
+ * segment, and segments sampled say less than that.
+ * - Partial: the list holds what the segments hit (and the rest of those
+ *   instances in the shaft); it misses thin parts and small triangles
+ *   between them, and a cluster of a shared sampling (lib/lie/sample.c)
+ *   saw only its share of the segments.
+ * - Visible with a list: nothing was hit in a shaft the list's triangles
+ *   enter (lie_sample_pair); only an empty shaft proves visibility.
+ * - Occluded: every segment was blocked, but the gaps between them may
+ *   let light through; kept if the blockers prove it
+ *   (lie_cull_occlusion_proven).
+ * Otherwise the leaf gets the exact list of its hull: empty is visible,
+ * past complex_cap complex (the renderer asks the whole scene).  Returns
+ * the list's length, left in w->hits; *cls is updated. */
+static size_t complete_leaf(const build_ctx *c, worker *w, uint32_t tri, lie_patch_path path, int e, int two_sided,
+                            lie_class *cls, size_t n_list)
+{
+    if (*cls == LIE_CLASS_OCCLUDED) {
+        lie_vec3 V[3];
+        lie_patch_world(path, &c->s->tri_p[3 * (size_t)tri], V);
+        if (lie_cull_occlusion_proven(c, w, tri, V, two_sided, e, w->hits, n_list))
+            return n_list;
+        w->st.unproven_occluded++;
+    } else if (*cls == LIE_CLASS_VISIBLE && n_list > 0) {
+        w->st.unproven_visible++;
+    } else if (!(*cls == LIE_CLASS_PARTIAL && n_list <= c->p->complex_cap)) {
+        return n_list;
+    }
+    size_t n = exact_leaf_list(c, w, tri, path, e, two_sided, c->p->complex_cap);
+    *cls = n == 0 ? LIE_CLASS_VISIBLE : n > c->p->complex_cap ? LIE_CLASS_COMPLEX : LIE_CLASS_PARTIAL;
+    return n;
+}
+
 
 /* The exact lengths of the node's and its children's lists, the triangles
  * meeting each hull (§4.1.2), counted up to 8 complex_cap: a sampled list
@@ -435,16 +460,10 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
             return;
         w->st.splits_undone++;
     }
-    if (exact_done == 0 && nc.cls == LIE_CLASS_PARTIAL && c->p->mode == LIE_BLOCKERS_SAMPLED &&
-        s->emitters[s->clusters[e].emitter].n_clusters > 1 && n_list <= c->p->complex_cap) {
-        /* A cluster of a shared sampling (lib/lie/sample.c) saw only its
-         * share of the emitter's segments: its leaf gets the exact list of
-         * its own, narrow hull (§4.1.2), as a leaf kept whole does. */
-        n_list = exact_leaf_list(c, w, tri, path, e, two_sided, c->p->complex_cap);
+    if (exact_done == 0 && c->p->mode == LIE_BLOCKERS_SAMPLED) {
+        n_list = complete_leaf(c, w, tri, path, e, two_sided, &nc.cls, n_list);
         if (w->nomem)
             return;
-        if (n_list == 0)
-            nc.cls = LIE_CLASS_VISIBLE;
     }
     lie_pnode *nd = &u->nodes[idx];
     nd->quality = nc.quality;

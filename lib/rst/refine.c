@@ -26,7 +26,8 @@ static void refine_node(const refine_ctx *c, int wid, uint32_t node, uint32_t tr
     lie_patch_world(path, &c->s->tri_p[3 * (size_t)tri], V);
     int n = lie_pair_hull_points(c->s, tri, V, e, hull);
     int meets = 0;
-    float tol = 1e-5f * fmaxf(1.0f, lie_v3_len(lie_v3_sub(c->s->bounds.hi, c->s->bounds.lo)));
+    /* never below the build's shaft tolerance (lie_pair_hull_scale, lib/lie/cull.c) */
+    float tol = 1e-5f * fmaxf(lie_pair_hull_scale(hull, n), lie_v3_len(lie_v3_sub(c->s->bounds.hi, c->s->bounds.lo)));
     for (int b = 0; b < c->n_boxes && !meets; b++)
         meets = lie_pair_hull_meets_box(hull, n, c->boxes[b], tol);
     if (!meets) {

@@ -54,7 +54,7 @@ static inline double lie_cost_embree(int n) { return 800.0 * n; }
  * is taken wherever it costs less than this many of Embree's rays: the
  * samples a sampled pair needs before its noise is as small as the exact
  * shadow's rounding (the museums reach p99 <= 2% from about 4096 samples
- * per emitter; README.md, "Equal quality"). */
+ * per emitter; docs/measurements.md, "Equal quality"). */
 #define LIE_GUIDED_SAMPLES 4096
 
 /* Benchmark ablations of --visibility=lie (lie_render_options.ablate;

@@ -38,7 +38,9 @@ int lie_update_same_subtree(const lie_env *A, uint32_t a, const lie_env *B, uint
 }
 
 /* An emitter continues when the same, unmoved instance emits before and
- * after, split into the same clusters: its committed index, or -1. */
+ * after, split into the same clusters: its committed index, or -1.  Its
+ * index may differ (another emitter appeared or went before it): nothing a
+ * unit computes reads the index (lib/lie/sample.c). */
 static int32_t emitter_before(const lie_cache *c, const lie_scene *s, int e, const uint8_t *moved)
 {
     const lie_emitter *em = &s->emitters[e];
@@ -90,12 +92,22 @@ static lie_status map_units(lie_update *u)
             moved[u->moved[k]] = 1;
     for (int e = 0; e < s->n_emitters; e++)
         emap[e] = emitter_before(c, s, e, moved);
+    /* Scene-wide quantities a unit reads.  The shafts of a light at
+     * infinity (no points hold it) reach lie_pair_ray_far, which the bounds
+     * set: when it changes, so may all of that light's units.  The smallest
+     * patch is a share of the largest triangle's area (--min-patch): when
+     * that changes (or stops being a number), every unit may.  A cache
+     * whose units were built by older rules (formats/lie-cache.md,
+     * Versions) is rebuilt whole, as a rebuild would give other bytes. */
+    const int far_changed = lie_pair_ray_far(s) != u->base_far;
     for (int k = 0; k < s->n_clusters; k++) {
         int e = s->clusters[k].emitter;
-        cmap[k] = emap[e] < 0 ? -1 : ofirst[emap[e]] + (k - s->emitters[e].first_cluster);
+        const lie_vec3 *pts;
+        int at_infinity = lie_emitter_extent(s, e, &pts) == 0;
+        cmap[k] = emap[e] < 0 || (far_changed && at_infinity) ? -1 : ofirst[emap[e]] + (k - s->emitters[e].first_cluster);
     }
     const size_t old_nc = (size_t)u->cache->env->n_clusters;
-    int everything = u->opt.full || s->max_tri_area != u->base_max_area;
+    int everything = u->opt.full || !(s->max_tri_area == u->base_max_area) || lie_cache_rules_old(c);
     u->st.units_views = 0;
     for (uint32_t t = 0; t < s->n_tris; t++) {
         int patch_moved = t >= u->base_tris || moved[s->instances[s->tri_instance[t]].node];

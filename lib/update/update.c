@@ -53,6 +53,7 @@ lie_status lie_update_create(lie_cache *cache, lie_scene *scene, const lie_updat
     u->opt = opt ? *opt : lie_update_options_default();
     u->base_tris = scene->n_tris;
     u->base_max_area = scene->max_tri_area;
+    u->base_far = lie_pair_ray_far(scene);
     if (!u->opt.full && build_trees(u, err) != LIE_OK) {
         lie_update_destroy(u);
         return err->status;
@@ -248,12 +249,14 @@ static lie_status commit(lie_update *u, lie_error *err)
     c->n_edits += u->n_log;
     u->n_log = 0;
     w->scene_hash = s->hash;
+    c->version = 0; /* every unit now follows this library's rules */
     lie_env_destroy(c->env);
     c->env = w;
     u->work = NULL;
     drop_edits(u);
     u->base_tris = s->n_tris;
     u->base_max_area = s->max_tri_area;
+    u->base_far = lie_pair_ray_far(s);
     u->rst_stale = 1;
     if (u->opt.keep_trees && !u->opt.full)
         return build_trees(u, err) == LIE_OK ? LIE_OK : (u->failed = 1, err->status);

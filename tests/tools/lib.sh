@@ -57,6 +57,13 @@ expect_no_temp() {
 }
 expect_same() { if cmp -s "$1" "$2"; then ok "$3"; else not_ok "$3: $1 and $2 differ"; fi; }
 
+# expect_near_full FULL.exr LIE.exr WHAT: the LIE image within 2% of full
+# visibility on at least 99.9% of its pixels (exr-compare's report as evidence)
+expect_near_full() {
+    if "$H/exr-compare" "$1" "$2" 1 0.001 >"$TMP/cmp" 2>&1; then
+        ok "$3: LIE image within 2% of full on >= 99.9% of pixels: $(cat "$TMP/cmp")"
+    else not_ok "$3: LIE image against full: $(cat "$TMP/cmp")"; fi
+}
 finish() { [ "$failures" -eq 0 ]; exit $?; }
 
 # a number member of one-line JSON on stdin: field NAME

@@ -4,7 +4,7 @@
 # process for builds, frames and paths, for any ranks and threads; inputs
 # read on rank 0 only and broadcast (ranks 1 and 2 run in an empty folder,
 # the scene, cache or camera path may come on stdin); per-rank statistics;
-# usage errors said once; failures (ranks given different inputs, a
+# usage errors said once; failures (ranks given different inputs or options, a
 # different binary, a rank killed mid-frame) end the job with an error,
 # never a hang.  Every launch checks several things: MPI_Init costs about
 # half a second a launch, four times that under ASan.
@@ -65,7 +65,7 @@ else
     not_ok "--stats=json per-rank tiles: $(cat "$TMP/err")"
 fi
 
-# A path: 5 frames on 3 ranks (whole frames, then the last ones by tiles),
+# A path: 5 frames on 3 ranks (whole frames, each written by its rank, then the last ones by tiles),
 # the glTF on stdin, its .bin and the camera path readable by rank 0 only
 cat >"$A/path.yaml" <<'YAML'
 interpolation: smooth
@@ -83,8 +83,42 @@ expect_rc 0 "path on 3 ranks, glTF on stdin"
 same=0
 for f in "$TMP"/p1/*.exr; do cmp -s "$f" "$TMP/p3/$(basename "$f")" && same=$((same + 1)); done
 if [ "$same" -eq 5 ]; then ok "path: 5 frames = one process's"; else not_ok "path: $same of 5 frames equal"; fi
+# each rank writes the whole frames it rendered; rank 0 the ones it assembled
+written=$(grep -o '"written":\[[^]]*\]' "$TMP/err")
+wf=$(( $(printf '%s' "$written" | grep -o '"frames":[0-9]*' | sed 's/.*://' | paste -sd+) ))
+wb=$(( $(printf '%s' "$written" | grep -o '"bytes":[0-9]*' | sed 's/.*://' | paste -sd+) ))
+others=$(printf '%s' "$written" | grep -o '"rank":[12],"frames":[1-9]' | wc -l)
+if [ "$wf" -eq 5 ] && [ "$wb" -eq "$(cat "$TMP"/p3/*.exr | wc -c)" ] && [ "$others" -ge 1 ]; then
+    ok "--stats=json: frames and bytes written per rank ($written)"
+else
+    not_ok "frames written per rank: $written"
+fi
+
 [ "$(json_member files_broadcast)" = 3 ] && ok "the glTF from stdin, its .bin and the path broadcast" ||
     not_ok "files broadcast for the path: $(json_member files_broadcast)"
+# --frames and --skip-existing under mpirun: only the frames asked for, and
+# only the missing ones, each written by the rank that rendered it
+rm "$TMP/p3/f_01.exr" "$TMP/p3/f_03.exr"
+split3 "$MPI_NOLEAK" "$B/lie-render" - $POPTS --threads 1 --skip-existing -o "$TMP/p3/f_%02d.exr" --stats=json \
+    <"$A/museum1.gltf" >"$TMP/out" 2>"$TMP/err"
+rc=$?
+same=0
+for f in "$TMP"/p1/*.exr; do cmp -s "$f" "$TMP/p3/$(basename "$f")" && same=$((same + 1)); done
+if [ "$rc" -eq 0 ] && [ "$same" -eq 5 ] && grep -q '"frames_skipped":3' "$TMP/err"; then
+    ok "--skip-existing on 3 ranks: the 2 missing frames written again, the same bytes"
+else
+    not_ok "--skip-existing on 3 ranks (exit $rc, $same of 5 equal): $(grep -o '"frames_[a-z]*":[0-9]*' "$TMP/err" | paste -sd' ')"
+fi
+mkdir "$TMP/p4"
+split3 "$MPI_NOLEAK" "$B/lie-render" - $POPTS --threads 1 --frames 1-3 -o "$TMP/p4/f_%02d.exr" <"$A/museum1.gltf" \
+    >"$TMP/out" 2>"$TMP/err"
+rc=$?
+if [ "$rc" -eq 0 ] && [ "$(ls "$TMP/p4" | paste -sd' ')" = "f_01.exr f_02.exr f_03.exr" ] &&
+    cmp -s "$TMP/p1/f_02.exr" "$TMP/p4/f_02.exr" && cmp -s "$TMP/p1/f_03.exr" "$TMP/p4/f_03.exr"; then
+    ok "--frames 1-3 on 3 ranks: those frames, one process's bytes"
+else
+    not_ok "--frames 1-3 on 3 ranks (exit $rc): $(ls "$TMP/p4")"
+fi
 
 # A usage error: said once (by rank 0), every rank exits 2
 run $MPI -np 3 "$B/lie-render" "$A/m-1.lie" --size 0x0 -o "$TMP/u.exr"
@@ -105,6 +139,24 @@ else
     not_ok "another scene on rank 2 (exit $rc):"; sed 's/^/# /' "$TMP/err" | head -8
 fi
 expect_no_file "$TMP/miss.exr" "no output when a rank fails"
+
+# Ranks started with different options (mpirun's A : B form) would mix two
+# images or caches: refused, one line naming the option, every rank exits 1
+refused() { # TOOL PATTERN WHAT
+    if [ "$rc" -eq 1 ] && [ "$(grep -c "^$1: " "$TMP/err")" -eq 1 ] && grep -q "^$1: $2" "$TMP/err"; then
+        ok "$3: $(grep "^$1" "$TMP/err")"
+    else
+        not_ok "$3 (exit $rc):"; sed 's/^/# /' "$TMP/err" | head -8
+    fi
+}
+run $MPI_NOLEAK -np 1 "$B/lie-render" "$A/m-1.lie" -q --size 32x32 -o "$TMP/opt.exr" : \
+    -np 2 "$B/lie-render" "$A/m-1.lie" -q --size 32x24 -o "$TMP/opt.exr"
+refused lie-render "rank 1: started with --size 32x24 where rank 0 has --size 32x32" "ranks with another --size"
+expect_no_file "$TMP/opt.exr" "no image when options differ"
+run $MPI_NOLEAK -np 1 "$B/lie-build" "$A/bent_light.gltf" -q --samples 16 -o "$TMP/opt.lie" : \
+    -np 1 "$B/lie-build" "$A/bent_light.gltf" -q -o "$TMP/opt.lie"
+refused lie-build "rank 1: started with -o .* where rank 0 has --samples 16" "a rank without --samples"
+expect_no_file "$TMP/opt.lie" "no cache when options differ"
 
 # A different binary on one rank is refused
 cp "$B/lie-build" "$TMP/lie-build-other" && printf 'x' >>"$TMP/lie-build-other"

@@ -149,7 +149,7 @@ static void assemble(const sect *s, int n, unsigned char **out, size_t *size)
     unsigned char *b = calloc(1, total);
     assert_non_null(b);
     memcpy(b, "LIECACHE", 8);
-    put32(b + 8, 4);
+    put32(b + 8, 5);
     put32(b + 20, (uint32_t)n);
     put64(b + 24, total);
     for (int i = 0; i < n; i++) {
@@ -702,17 +702,44 @@ static void test_newer_version_is_unsupported(void **state)
     unsigned char *a;
     size_t na;
     encode(c, &a, &na);
-    put32(a + 8, 5);
+    put32(a + 8, LIE_CACHE_VERSION + 1);
     /* a newer file may lay out anything after the version: only the
      * invariant trailing checksum must hold */
     memset(a + 12, 0xAB, na - 20);
     reseal(a, na);
-    expect_reject(a, na, LIE_ERR_UNSUPPORTED, "version 5");
+    expect_reject(a, na, LIE_ERR_UNSUPPORTED, "version 6");
     free(a);
     encode(c, &a, &na);
     put32(a + 8, 0);
     reseal(a, na);
     expect_reject(a, na, LIE_ERR_FORMAT, "version 0");
+    free(a);
+    lie_cache_destroy(c);
+}
+
+/* Version 4 has version 5's layout: it reads, and says its units follow
+ * older rules (an update recomputes them all, lib/update); a cache this
+ * library wrote does not. */
+static void test_version_4_reads_with_older_rules(void **state)
+{
+    (void)state;
+    lie_cache *c = small_cache(), *d = NULL;
+    unsigned char *a;
+    size_t na;
+    lie_error err;
+    encode(c, &a, &na);
+    assert_int_equal(lie_cache_decode(a, na, "t.lie", &d, &err), LIE_OK);
+    assert_int_equal(d->version, LIE_CACHE_VERSION);
+    assert_false(lie_cache_rules_old(d));
+    assert_false(lie_cache_rules_old(c));
+    lie_cache_destroy(d);
+    put32(a + 8, 4);
+    reseal(a, na);
+    assert_int_equal(lie_cache_decode(a, na, "t.lie", &d, &err), LIE_OK);
+    assert_int_equal(d->version, 4);
+    assert_true(lie_cache_rules_old(d));
+    assert_int_equal(d->env->n_nodes, c->env->n_nodes);
+    lie_cache_destroy(d);
     free(a);
     lie_cache_destroy(c);
 }
@@ -1249,6 +1276,7 @@ int main(void)
         cmocka_unit_test(test_version_2_reads_with_the_default_cost_model),
         cmocka_unit_test(test_views_round_trip_and_bad_views_are_rejected),
         cmocka_unit_test(test_newer_version_is_unsupported),
+        cmocka_unit_test(test_version_4_reads_with_older_rules),
         cmocka_unit_test(test_version_3_reads_with_one_cluster_each),
         cmocka_unit_test(test_unknown_required_flag_is_unsupported_optional_ignored),
         cmocka_unit_test(test_unknown_sections_are_skipped_and_order_is_free),

@@ -304,6 +304,41 @@ static void test_tmp_clean_finds_our_names_only(void **state)
     assert_int_equal(access(p, F_OK), 0);
 }
 
+static void expect_path(const char *path, const char *other, const char *want)
+{
+    char *got = lie_path_from_folder_of(path, other);
+    if (!want) {
+        assert_null(got);
+        return;
+    }
+    assert_non_null(got);
+    assert_string_equal(got, want);
+    free(got);
+}
+
+/* A path given from the working directory, rewritten from another file's
+ * folder (a cache's edit log, lib/cache): the same file from there. */
+static void test_path_from_another_folder_names_the_same_file(void **state)
+{
+    char here[4096], p[128];
+    assert_non_null(getcwd(here, sizeof here));
+    const char *dirs[] = {"a", "a/b", "c"};
+    for (int i = 0; i < 3; i++) {
+        path_in(p, sizeof p, dirs[i]);
+        assert_int_equal(mkdir(p, 0755), 0);
+    }
+    assert_int_equal(chdir(dir), 0);
+    expect_path("a/b/e.yaml", "c/u.lie", "../a/b/e.yaml");
+    expect_path("a/e.yaml", "a/b/u.lie", "../e.yaml");
+    expect_path("a/b/e.yaml", "a/u.lie", "b/e.yaml");
+    expect_path("e.yaml", "u.lie", "e.yaml");
+    expect_path("./a/../c/e.yaml", "c/u.lie", "e.yaml");
+    expect_path("/x/e.yaml", "c/u.lie", "/x/e.yaml");
+    expect_path("nosuch/e.yaml", "u.lie", NULL);
+    expect_path("e.yaml", "nosuch/u.lie", NULL);
+    assert_int_equal(chdir(here), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -312,6 +347,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_read_refuses_fifo_and_respects_limit, setup, teardown),
         cmocka_unit_test_setup_teardown(test_group_commits_all_or_none, setup, teardown),
         cmocka_unit_test_setup_teardown(test_tmp_clean_finds_our_names_only, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_path_from_another_folder_names_the_same_file, setup, teardown),
         cmocka_unit_test_setup_teardown(test_no_replace_is_decided_by_the_rename, setup, teardown),
         cmocka_unit_test_setup_teardown(test_replaced_file_keeps_owner_and_mode, setup, teardown),
         cmocka_unit_test_setup_teardown(test_group_commit_is_whole_under_sigterm, setup, teardown),

@@ -18,45 +18,22 @@
 #define SCENE TEST_SCENES "/cornell.gltf"
 #define EDIT_NAME TEST_SCENES "/update-test.yaml" /* never read: names the edit, resolves `add` */
 
-static lie_build_params params(void)
+/* The state a test's cache is built for: cornell after the edits `pre`
+ * (applied to the loaded scene, not logged), built in `mode`. */
+typedef struct base {
+    const char *const *pre;
+    int n_pre;
+    lie_blocker_mode mode;
+} base;
+static const base CORNELL = {NULL, 0, LIE_BLOCKERS_SAMPLED};
+
+static lie_build_params params(const base *b)
 {
     lie_build_params p = lie_build_params_default();
     p.min_patch = 1e-3f;
     p.threads = 2;
+    p.mode = b->mode;
     return p;
-}
-
-static lie_scene *load(void)
-{
-    lie_scene *s = NULL;
-    lie_error err;
-    assert_int_equal(lie_scene_load(SCENE, NULL, &s, &err), LIE_OK);
-    return s;
-}
-
-static lie_env *build(const lie_scene *s)
-{
-    lie_error err;
-    lie_rt *rt = NULL;
-    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
-    lie_build_params p = params();
-    lie_env *env = NULL;
-    assert_int_equal(lie_env_build(s, rt, &p, NULL, &env, NULL, &err), LIE_OK);
-    lie_rt_destroy(rt);
-    return env;
-}
-
-/* A cache of cornell as lie-build makes it, and its scene. */
-static lie_cache *make_cache(lie_scene **scene)
-{
-    lie_error err;
-    *scene = load();
-    lie_cache *c = calloc(1, sizeof *c);
-    c->scene_path = strdup(SCENE);
-    c->scene_hash = (*scene)->hash;
-    assert_int_equal(lie_cache_set_state(c, *scene, &err), LIE_OK);
-    c->env = build(*scene);
-    return c;
 }
 
 static lie_edit *parse(const char *text)
@@ -68,18 +45,58 @@ static lie_edit *parse(const char *text)
     return e;
 }
 
-/* A fresh build of cornell after the edits, as lie-build would make it. */
-static lie_env *rebuild(const char *const *texts, int n, lie_scene **scene)
+static void apply(lie_scene *s, const char *const *texts, int n)
 {
     lie_error err;
-    lie_scene *s = load();
     lie_scene_options so = lie_scene_options_default();
     for (int i = 0; i < n; i++) {
         lie_edit *e = parse(texts[i]);
-        assert_int_equal(lie_edit_apply(s, e, &so, NULL, &err), LIE_OK);
+        if (lie_edit_apply(s, e, &so, NULL, &err) != LIE_OK)
+            fail_msg("%s", err.msg);
         lie_edit_destroy(e);
     }
-    lie_env *env = build(s);
+}
+
+static lie_scene *load(const base *b)
+{
+    lie_scene *s = NULL;
+    lie_error err;
+    assert_int_equal(lie_scene_load(SCENE, NULL, &s, &err), LIE_OK);
+    apply(s, b->pre, b->n_pre);
+    return s;
+}
+
+static lie_env *build(const base *b, const lie_scene *s)
+{
+    lie_error err;
+    lie_rt *rt = NULL;
+    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
+    lie_build_params p = params(b);
+    lie_env *env = NULL;
+    assert_int_equal(lie_env_build(s, rt, &p, NULL, &env, NULL, &err), LIE_OK);
+    lie_rt_destroy(rt);
+    return env;
+}
+
+/* A cache of the base state as lie-build makes it, and its scene. */
+static lie_cache *make_cache(const base *b, lie_scene **scene)
+{
+    lie_error err;
+    *scene = load(b);
+    lie_cache *c = calloc(1, sizeof *c);
+    c->scene_path = strdup(SCENE);
+    c->scene_hash = (*scene)->hash;
+    assert_int_equal(lie_cache_set_state(c, *scene, &err), LIE_OK);
+    c->env = build(b, *scene);
+    return c;
+}
+
+/* A fresh build of the base state after the edits, as lie-build would make it. */
+static lie_env *rebuild(const base *b, const char *const *texts, int n, lie_scene **scene)
+{
+    lie_scene *s = load(b);
+    apply(s, texts, n);
+    lie_env *env = build(b, s);
     *scene = s;
     return env;
 }
@@ -97,11 +114,11 @@ static void assert_env_equal(const lie_env *a, const lie_env *b)
         assert_memory_equal(a->pool, b->pool, sizeof(uint32_t) * a->n_pool);
 }
 
-/* An update of a fresh cornell cache (make_cache). */
-static lie_update *start(lie_cache **c, lie_scene **s, int keep_trees)
+/* An update of a fresh cache of the base state (make_cache). */
+static lie_update *start(const base *b, lie_cache **c, lie_scene **s, int keep_trees)
 {
     lie_error err;
-    *c = make_cache(s);
+    *c = make_cache(b, s);
     lie_update_options o = lie_update_options_default();
     o.threads = 2;
     o.keep_trees = keep_trees;
@@ -110,14 +127,15 @@ static lie_update *start(lie_cache **c, lie_scene **s, int keep_trees)
     return u;
 }
 
-/* Update cornell by `texts` (in steps of `chunk` units, 0 = at once) and
- * check the cache against a rebuild: environments, state, edit log. */
-static void check_update(const char *const *texts, int n, size_t chunk, uint64_t *flagged)
+/* Update the base state by `texts` (in steps of `chunk` units, 0 = at
+ * once) and check the cache against a rebuild: environments, state, edit
+ * log. */
+static void check_update_on(const base *b, const char *const *texts, int n, size_t chunk, uint64_t *flagged)
 {
     lie_error err;
     lie_scene *s = NULL, *ref_scene = NULL;
     lie_cache *c = NULL;
-    lie_update *u = start(&c, &s, 0);
+    lie_update *u = start(b, &c, &s, 0);
     for (int i = 0; i < n; i++) {
         lie_edit *e = parse(texts[i]);
         assert_int_equal(lie_update_edit(u, e, &err), LIE_OK);
@@ -138,7 +156,7 @@ static void check_update(const char *const *texts, int n, size_t chunk, uint64_t
     assert_int_equal(lie_update_pending(u), 0);
     lie_update_destroy(u);
 
-    lie_env *ref = rebuild(texts, n, &ref_scene);
+    lie_env *ref = rebuild(b, texts, n, &ref_scene);
     assert_env_equal(c->env, ref);
     assert_int_equal(c->n_tris, ref_scene->n_tris);
     assert_true(c->state_hash == ref_scene->hash);
@@ -157,6 +175,11 @@ static void check_update(const char *const *texts, int n, size_t chunk, uint64_t
     lie_scene_destroy(ref_scene);
     lie_cache_destroy(c);
     lie_scene_destroy(s);
+}
+
+static void check_update(const char *const *texts, int n, size_t chunk, uint64_t *flagged)
+{
+    check_update_on(&CORNELL, texts, n, chunk, flagged);
 }
 
 static const char *const OPS[8] = {
@@ -210,7 +233,7 @@ static void test_set_material_of_one_primitive(void **state)
     uint64_t flagged = 0;
     check_update(texts, 2, 0, &flagged);
     lie_error err;
-    lie_scene *s = load();
+    lie_scene *s = load(&CORNELL);
     lie_scene_options so = lie_scene_options_default();
     lie_edit *e = parse(texts[0]);
     assert_int_equal(lie_edit_apply(s, e, &so, NULL, &err), LIE_OK);
@@ -256,6 +279,87 @@ static void test_update_of_several_files_equals_rebuild(void **state)
     check_update(texts, 3, 11, NULL);
 }
 
+/* Emitters renumbered: an emitter that appears before the others (walls
+ * made emissive come before cornell's light in the walk) or goes moves the
+ * indices of every emitter after it, whose units continue unchanged.  In
+ * both blocker modes, in one file and over a chain. */
+static void test_update_equals_rebuild_when_emitters_are_renumbered(void **state)
+{
+    (void)state;
+    static const char *const ON[4] = {
+        "- set-emission: {node: BackWall, emissive: [1, 1, 1], strength: 1}\n",
+        "- set-emission: {node: Floor, emissive: [0.5, 0.5, 0.5], strength: 2}\n",
+        "- set-emission: {node: LeftWall, emissive: [1, 0.2, 0.2], strength: 1}\n"
+        "- set-emission: {node: RightWall, emissive: [0.2, 1, 0.2], strength: 1}\n",
+        "- set-emission: {node: BackWall, strength: 0}\n",
+    };
+    for (int m = 0; m < 2; m++) {
+        const base b = {NULL, 0, m ? LIE_BLOCKERS_CONSERVATIVE : LIE_BLOCKERS_SAMPLED};
+        for (int i = 0; i < 3; i++)
+            check_update_on(&b, &ON[i], 1, 0, NULL);
+        check_update_on(&b, ON, 4, 7, NULL); /* on, more before it, the first off again */
+        /* a base with the back wall lit: turning it off renumbers the light */
+        const base lit = {ON, 1, b.mode};
+        check_update_on(&lit, &ON[3], 1, 0, NULL);
+    }
+}
+
+/* Scene-wide quantities: edits that grow the scene's bounds (its largest
+ * extent, and with it how far the shafts of a directional light reach) or
+ * its largest triangle, with cornell open to a sun (its ceiling removed, a
+ * directional light added) and without, in both blocker modes. */
+static void test_update_equals_rebuild_when_scene_wide_sizes_change(void **state)
+{
+    (void)state;
+    static const char *const SUN[2] = {
+        "- remove: {node: Ceiling}\n",
+        "- add: {file: ../data/gltf/lights_cameras.gltf, node: \"#3\", as: Sun,"
+        " transform: {rotation: [-0.3535534, 0.3535534, 0.1464466, 0.8535534]}}\n",
+    };
+    static const char *const GROW[5] = {
+        "- move: {node: TallBlock, by: [2, 0, 0]}\n",                      /* the largest extent grows */
+        "- move: {node: ShortBlock, by: [0, 0, -3.5]}\n",                  /* along another axis */
+        "- add: {file: cornell.gltf, node: ShortBlock, as: Far, transform: {translation: [9, 0, 0]}}\n",
+        "- scale: {node: TallBlock, by: [3, 1, 3]}\n",                     /* the largest triangle grows */
+        "- move: {node: TallBlock, by: [0.05, 0, 0.02]}\n",               /* inside the bounds */
+    };
+    for (int m = 0; m < 2; m++) {
+        const lie_blocker_mode mode = m ? LIE_BLOCKERS_CONSERVATIVE : LIE_BLOCKERS_SAMPLED;
+        const base open = {SUN, 2, mode}, closed = {NULL, 0, mode};
+        for (int i = 0; i < 5; i++) {
+            check_update_on(&open, &GROW[i], 1, 0, NULL);
+            if (i < 3)
+                check_update_on(&closed, &GROW[i], 1, 0, NULL);
+        }
+        check_update_on(&open, GROW, 3, 9, NULL);
+    }
+}
+
+/* A cache read from a file older than LIE_CACHE_RULES_VERSION holds units
+ * of older rules: its update recomputes every unit, and the result is the
+ * present rules' rebuild. */
+static void test_update_of_an_older_cache_rebuilds_every_unit(void **state)
+{
+    (void)state;
+    lie_error err;
+    lie_scene *s = NULL, *ref_scene = NULL;
+    lie_cache *c = make_cache(&CORNELL, &s);
+    c->version = LIE_CACHE_RULES_VERSION - 1;
+    assert_true(lie_cache_rules_old(c));
+    lie_edit *e = parse(OPS[0]);
+    lie_update_stats st;
+    assert_int_equal(lie_update_apply(c, s, (const lie_edit *const *)&e, 1, NULL, &st, &err), LIE_OK);
+    assert_int_equal(st.units_rebuilt, st.units);
+    assert_false(lie_cache_rules_old(c));
+    lie_env *ref = rebuild(&CORNELL, &OPS[0], 1, &ref_scene);
+    assert_env_equal(c->env, ref);
+    lie_env_destroy(ref);
+    lie_scene_destroy(ref_scene);
+    lie_edit_destroy(e);
+    lie_cache_destroy(c);
+    lie_scene_destroy(s);
+}
+
 /* Interactive use: an edit while units are pending, then one after the
  * commit (with keep_trees), each state equal to a rebuild. */
 static void test_update_edits_while_pending_and_after_commit(void **state)
@@ -264,7 +368,7 @@ static void test_update_edits_while_pending_and_after_commit(void **state)
     lie_error err;
     lie_scene *s = NULL, *ref_scene = NULL;
     lie_cache *c = NULL;
-    lie_update *u = start(&c, &s, 1);
+    lie_update *u = start(&CORNELL, &c, &s, 1);
     const char *texts[3] = {OPS[0], OPS[1], OPS[2]};
     for (int i = 0; i < 3; i++) {
         lie_edit *e = parse(texts[i]);
@@ -279,7 +383,7 @@ static void test_update_edits_while_pending_and_after_commit(void **state)
         do
             assert_int_equal(lie_update_step(u, 5, &left, &err), LIE_OK);
         while (left);
-        lie_env *ref = rebuild(texts, i + 1, &ref_scene);
+        lie_env *ref = rebuild(&CORNELL, texts, i + 1, &ref_scene);
         assert_env_equal(c->env, ref);
         assert_int_equal(c->n_edits, i + 1);
         lie_env_destroy(ref);
@@ -337,8 +441,8 @@ static void test_update_snapshots_never_show_a_changed_answer(void **state)
     lie_error err;
     lie_scene *s = NULL, *ref_scene = NULL;
     lie_cache *c = NULL;
-    lie_update *u = start(&c, &s, 0);
-    lie_env *final = rebuild(&OPS[0], 1, &ref_scene);
+    lie_update *u = start(&CORNELL, &c, &s, 0);
+    lie_env *final = rebuild(&CORNELL, &OPS[0], 1, &ref_scene);
     lie_edit *e = parse(OPS[0]);
     assert_int_equal(lie_update_edit(u, e, &err), LIE_OK);
     lie_edit_destroy(e);
@@ -379,7 +483,7 @@ static void test_update_refuses_a_scene_that_is_not_the_caches(void **state)
     (void)state;
     lie_error err;
     lie_scene *s = NULL;
-    lie_cache *c = make_cache(&s);
+    lie_cache *c = make_cache(&CORNELL, &s);
     c->state_hash ^= 1;
     lie_update *u = NULL;
     assert_int_equal(lie_update_create(c, s, NULL, &u, &err), LIE_ERR_ARG);
@@ -396,6 +500,9 @@ int main(void)
         cmocka_unit_test(test_set_material_of_one_primitive),
         cmocka_unit_test(test_update_in_chunks_equals_update_at_once),
         cmocka_unit_test(test_update_of_several_files_equals_rebuild),
+        cmocka_unit_test(test_update_equals_rebuild_when_emitters_are_renumbered),
+        cmocka_unit_test(test_update_equals_rebuild_when_scene_wide_sizes_change),
+        cmocka_unit_test(test_update_of_an_older_cache_rebuilds_every_unit),
         cmocka_unit_test(test_update_edits_while_pending_and_after_commit),
         cmocka_unit_test(test_update_snapshots_never_show_a_changed_answer),
         cmocka_unit_test(test_update_refuses_a_scene_that_is_not_the_caches),

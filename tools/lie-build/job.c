@@ -141,6 +141,10 @@ void job_init(build_job *j)
     lie_error_clear(&j->err);
 }
 
+/* A cache whose units follow older build rules (lie_cache_rules_old) cannot
+ * be completed: its units and new ones would not be one build's. */
+#define OLD_RULES "made by an older lie (format version before 5), whose units a new build would not reproduce: build it afresh"
+
 /* --into: the cache to add views to, its scene and parameters. */
 static lie_status load_into(build_job *j)
 {
@@ -150,6 +154,8 @@ static lie_status load_into(build_job *j)
         (j->path_file && lie_camera_path_read(j->path_file, &j->cpath, err) != LIE_OK))
         return err->status;
     const lie_cache_views *ov = &j->old->views;
+    if (lie_cache_rules_old(j->old))
+        return lie_error_set(err, LIE_ERR_ARG, j->into, "%s", OLD_RULES);
     if (!ov->n_cams)
         return lie_error_set(err, LIE_ERR_ARG, j->into, "built for the whole scene, not for views: nothing to add");
     if (j->size_given && (j->view_w != ov->width || j->view_h != ov->height))
@@ -175,6 +181,8 @@ lie_status job_load(build_job *j)
     if (j->resume_file) { /* the partial cache's parameters, this run's threads and node cap */
         if (lie_cache_read(j->resume_file, &j->resume, &j->err) != LIE_OK)
             return j->err.status;
+        if (lie_cache_rules_old(j->resume))
+            return lie_error_set(&j->err, LIE_ERR_ARG, j->resume_file, "%s", OLD_RULES);
         int threads = j->bp.threads;
         uint64_t max_nodes = j->bp.max_nodes;
         j->bp = j->resume->env->params;
@@ -284,11 +292,31 @@ lie_status job_write(build_job *j)
         cache.edits = j->edit_log;
         cache.n_edits = j->n_edits;
     }
+    /* --edit's names (command-line arguments) relative to the cache's folder,
+     * where their `add` files resolve from (lie_cache_log_relative_to) */
+    lie_cache_edit *log = NULL;
+    if (!j->old && j->n_edits) {
+        log = calloc((size_t)j->n_edits, sizeof *log);
+        if (!log)
+            return lie_error_set(&j->err, LIE_ERR_NOMEM, j->output, "out of memory");
+        for (int i = 0; i < j->n_edits; i++) {
+            log[i] = j->edit_log[i];
+            log[i].name = strdup(j->edit_log[i].name);
+            if (!log[i].name)
+                log[i].name = j->edit_log[i].name; /* kept as given */
+        }
+        cache.edits = log;
+        lie_cache_log_relative_to(&cache, 0, j->output);
+    }
     lie_status rc = lie_cache_set_state(&cache, j->scene, &j->err);
     cache.env = j->env;
     cache.views = j->cv;
     if (rc == LIE_OK)
         rc = lie_cache_write(j->output, &cache, &j->bytes, &j->err);
+    for (int i = 0; log && i < j->n_edits; i++)
+        if (log[i].name != j->edit_log[i].name)
+            free(log[i].name);
+    free(log);
     free(cache.emitters);
     return rc;
 }

@@ -48,11 +48,12 @@ static void print_json(FILE *fp, const summary *m)
         fprintf(fp, "%s%llu", b ? "," : "", (unsigned long long)m->st->list_hist[b]);
     fprintf(fp,
             "],\"mean_list_length\":%.3f,\"segments\":%llu,\"splits_undone\":%llu,\"splits_kept\":%llu,"
-            "\"splits_pixels\":%llu,\"nodes\":%u,\"pool\":%u,"
+            "\"splits_pixels\":%llu,\"unproven_occluded\":%llu,\"unproven_visible\":%llu,\"nodes\":%u,\"pool\":%u,"
             "\"seconds_load\":%.6f,\"seconds_bvh\":%.6f,\"seconds_build\":%.6f,\"seconds_write\":%.6f,"
             "\"bytes\":%zu",
             m->mean, (unsigned long long)m->st->segments, (unsigned long long)m->st->splits_undone,
             (unsigned long long)m->st->splits_kept, (unsigned long long)m->st->splits_pixels,
+            (unsigned long long)m->st->unproven_occluded, (unsigned long long)m->st->unproven_visible,
             m->env->n_nodes, m->env->n_pool, m->t[0], m->t[1], m->t[2], m->t[3], m->bytes);
     fprintf(fp, ",\"model\":{\"build_cpu_s_predicted\":%.6f,\"build_cpu_s_measured\":%.6f", m->model_build,
             m->cpu_build);
@@ -106,6 +107,9 @@ static void print_text(const char *prog, const summary *m)
             (unsigned long long)m->st->segments, (unsigned long long)m->st->splits_kept,
             (unsigned long long)m->st->splits_undone, (unsigned long long)m->st->splits_pixels, m->env->n_nodes, m->env->n_pool,
             m->bytes);
+    if (m->st->unproven_occluded || m->st->unproven_visible)
+        fprintf(stderr, "  sampled leaves not proven, given exact lists: %llu called occluded, %llu visible\n",
+                (unsigned long long)m->st->unproven_occluded, (unsigned long long)m->st->unproven_visible);
     fprintf(stderr, "  time: load %.3f s, bvh %.3f s, build %.3f s, write %.3f s\n", m->t[0], m->t[1], m->t[2],
             m->t[3]);
     fprintf(stderr, "  cpu: %.3f s in all; the build's %d workers %.3f s, the busiest %.3f s, cores idle for the "

@@ -114,7 +114,7 @@ lie_status cached_render(cached_run *cr, frame_out *fo, const int *todo, int n_t
         if (st == LIE_OK) {
             (*rendered)++;
             lie_render_stats_add(rs, &fs);
-            st = write_frame(fo, fi, &cams[fi], frame, err);
+            st = write_frame(fo, fi, &cams[fi], frame, NULL, err);
         }
         lie_frame_destroy(frame);
         *t_render += tb - ta;

@@ -1,10 +1,13 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* lie-render under mpirun: frames cut into items handed out dynamically
- * (lib/dist), rank 0 assembling and writing.  A camera path is shared out
- * by whole frames while at least as many frames remain as ranks; the last
- * frames, or a lone frame, go out as ranges of tiles, so the tail balances.
- * A pixel depends on its own rays only (lib/shade/render.c), so any split
- * gives one process's bytes. */
+ * (lib/dist).  A camera path is shared out by whole frames while at least
+ * as many frames remain as ranks, and each rank encodes and writes the
+ * whole frames it rendered (rank 0's EXR encoding was the first limit of a
+ * path's throughput: docs/mpi.md); the last frames, or a lone frame, go
+ * out as ranges of tiles, so the tail balances, and rank 0 assembles and
+ * writes those.  A pixel depends on its own rays only (lib/shade/render.c)
+ * and a file on its frame and options only, so any split gives one
+ * process's bytes. */
 #include "dist.h"
 
 #include <stdlib.h>
@@ -34,9 +37,22 @@ typedef struct job {
     double t_write;
     lie_status setup;       /* this rank could not set up: its items fail with setup_err */
     lie_error setup_err;
+    uint64_t *written;      /* rank 0: per rank, frames and bytes written (2 per rank) */
 } job;
 
-static int last_frames; /* of the last render_dist */
+/* What a rank sends for an item: its statistics, then the tiles' floats,
+ * or nothing more when it wrote the whole frame itself. */
+typedef struct item_head {
+    lie_render_stats fs;
+    uint64_t bytes_written; /* the frame's file, when written */
+    uint32_t written;       /* 1: this rank wrote the frame */
+    uint32_t pad;
+} item_head;
+
+static int last_frames;         /* of the last render_dist */
+static uint64_t *last_written;  /* rank 0: its job's written (2 per rank) */
+
+static int whole(const job *j, const item *it) { return it->first == 0 && it->count == j->n_tiles; }
 
 static lie_camera frame_camera(const job *j, int f)
 {
@@ -109,12 +125,23 @@ static lie_status run(void *ctx, size_t i, lie_dist_buf *out, lie_error *err)
     }
     const item *it = &j->items[i];
     lie_camera cam = frame_camera(j, j->list[it->frame]);
-    lie_render_stats fs;
-    lie_status st = lie_render_tiles(j->s, j->rt, &cam, j->ro, j->scratch, it->first, it->count, &fs, err);
+    item_head h;
+    memset(&h, 0, sizeof h);
+    lie_status st = lie_render_tiles(j->s, j->rt, &cam, j->ro, j->scratch, it->first, it->count, &h.fs, err);
     if (st != LIE_OK)
         return st;
+    if (j->path && whole(j, it)) {
+        /* a whole frame of a path: written here, rank 0 only hears of it */
+        double t0 = lie_time_now();
+        st = j->write(j->write_ctx, j->list[it->frame], &cam, j->scratch, &h.bytes_written, err);
+        j->t_write += lie_time_now() - t0;
+        if (st != LIE_OK)
+            return st;
+        h.written = 1;
+        return lie_dist_buf_add(out, &h, sizeof h) ? LIE_OK : lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
+    }
     size_t n = packed_floats(j->scratch, it->first, it->count);
-    if (!lie_dist_buf_add(out, &fs, sizeof fs))
+    if (!lie_dist_buf_add(out, &h, sizeof h))
         return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
     float *dst = lie_dist_buf_add(out, NULL, n * sizeof(float));
     if (!dst)
@@ -131,6 +158,20 @@ static lie_status take(void *ctx, size_t i, int rank, const unsigned char *data,
         return j->setup;
     }
     const item *it = &j->items[i];
+    item_head h;
+    if (size < sizeof h)
+        return lie_error_set(err, LIE_ERR_FORMAT, NULL, "rank %d sent %zu bytes for frame %d", rank, size, it->frame);
+    memcpy(&h, data, sizeof h);
+    if (h.written) {
+        /* the check: a whole frame of a path, reported written once */
+        if (!j->path || !whole(j, it) || size != sizeof h)
+            return lie_error_set(err, LIE_ERR_FORMAT, NULL, "rank %d reports frame %d written, which it was not given whole",
+                                 rank, it->frame);
+        lie_render_stats_add(&j->rs, &h.fs);
+        j->written[2 * rank]++;
+        j->written[2 * rank + 1] += h.bytes_written;
+        return LIE_OK;
+    }
     lie_frame **f = &j->frames[it->frame];
     if (!*f) {
         lie_status st = lie_render_frame_create(j->s, j->ro, f, err);
@@ -139,18 +180,16 @@ static lie_status take(void *ctx, size_t i, int rank, const unsigned char *data,
         j->missing[it->frame] = j->n_tiles;
     }
     size_t n = packed_floats(*f, it->first, it->count);
-    lie_render_stats fs;
-    if (size != sizeof fs + n * sizeof(float))
+    if (size != sizeof h + n * sizeof(float))
         return lie_error_set(err, LIE_ERR_FORMAT, NULL, "rank %d sent %zu bytes for tiles %u..%u of frame %d, "
                              "expected %zu", rank, size, it->first, it->first + it->count, it->frame,
-                             sizeof fs + n * sizeof(float));
-    memcpy(&fs, data, sizeof fs);
-    lie_render_stats_add(&j->rs, &fs);
+                             sizeof h + n * sizeof(float));
+    lie_render_stats_add(&j->rs, &h.fs);
     /* the floats may be unaligned in the message: copy through */
     float *tmp = malloc(n * sizeof(float) + 1);
     if (!tmp)
         return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
-    memcpy(tmp, data + sizeof fs, n * sizeof(float));
+    memcpy(tmp, data + sizeof h, n * sizeof(float));
     copy_tiles(*f, it->first, it->count, tmp, 0);
     free(tmp);
     j->missing[it->frame] -= it->count;
@@ -158,8 +197,11 @@ static lie_status take(void *ctx, size_t i, int rank, const unsigned char *data,
         return LIE_OK;
     double t0 = lie_time_now();
     lie_camera cam = frame_camera(j, j->list[it->frame]);
-    lie_status st = j->write(j->write_ctx, j->list[it->frame], &cam, *f, err);
+    uint64_t bytes = 0;
+    lie_status st = j->write(j->write_ctx, j->list[it->frame], &cam, *f, &bytes, err);
     j->t_write += lie_time_now() - t0;
+    j->written[0]++;
+    j->written[1] += bytes;
     lie_frame_destroy(*f);
     *f = NULL;
     return st;
@@ -220,10 +262,12 @@ lie_status render_dist(const lie_scene *s, const lie_rt *rt, const lie_render_op
     j.n_items = plan(&j, n_frames, ranks);
     j.frames = calloc((size_t)n_frames, sizeof *j.frames);
     j.missing = calloc((size_t)n_frames, sizeof *j.missing);
+    free(last_written);
+    last_written = j.written = calloc(2 * (size_t)ranks, sizeof *j.written);
     /* every rank takes part in lie_dist_run, even one that failed here:
      * its items then report the failure */
     lie_error_clear(&j.setup_err);
-    if (!j.items || !j.frames || !j.missing)
+    if (!j.items || !j.frames || !j.missing || !j.written)
         j.setup = lie_error_set(&j.setup_err, LIE_ERR_NOMEM, NULL, "out of memory");
     else
         j.setup = lie_render_frame_create(s, ro, &j.scratch, &j.setup_err);
@@ -251,4 +295,12 @@ void render_dist_stats(FILE *fp, int json)
         fprintf(fp, ",\"bytes_gathered_per_frame\":%.0f", per_frame);
     else
         fprintf(fp, "  %.0f bytes gathered per frame\n", per_frame);
+    for (int r = 0; last_written && r < lie_dist_size(); r++) {
+        unsigned long long fr = (unsigned long long)last_written[2 * r], by = (unsigned long long)last_written[2 * r + 1];
+        if (json)
+            fprintf(fp, "%s{\"rank\":%d,\"frames\":%llu,\"bytes\":%llu}%s", r ? "," : ",\"written\":[", r, fr, by,
+                    r + 1 < lie_dist_size() ? "" : "]");
+        else
+            fprintf(fp, "  rank %d wrote %llu frame%s, %llu bytes\n", r, fr, fr == 1 ? "" : "s", by);
+    }
 }

@@ -565,7 +565,7 @@ static lie_status render_here(args *a, run *r, frame_out *fo, const int *todo, i
         if (r->cpath)
             snprintf(label, sizeof label, "frame %d: render", fo->first + fi);
         lie_phase(prog, verbose, r->cpath ? label : "render", ta);
-        st = write_frame(fo, fi, &fc, frame, &r->err);
+        st = write_frame(fo, fi, &fc, frame, NULL, &r->err);
         lie_frame_destroy(frame);
         if (r->cpath)
             snprintf(label, sizeof label, "frame %d: write", fo->first + fi);

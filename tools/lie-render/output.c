@@ -8,6 +8,7 @@
 
 #include <math.h>
 #include <string.h>
+#include <sys/stat.h>
 
 static const char *exact_name(const lie_render_options *o)
 {
@@ -23,7 +24,6 @@ static const char *rays_name(lie_ray_mode m)
     return m == LIE_RAYS_SINGLE ? "single" : m == LIE_RAYS_PACKET ? "packet" : "stream";
 }
 
-
 void frame_name(const frame_out *o, int fi, char *name, size_t size)
 {
     if (o->path)
@@ -32,7 +32,7 @@ void frame_name(const frame_out *o, int fi, char *name, size_t size)
         snprintf(name, size, "%s", o->output);
 }
 
-lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame, lie_error *err)
+lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame, uint64_t *bytes, lie_error *err)
 {
     const frame_out *o = ctx;
     const lie_render_options *ro = o->ro;
@@ -77,7 +77,11 @@ lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame 
     opt.exr.screen_window_width = ve.screen_window_width;
     opt.exr.attrs = attrs;
     opt.exr.n_attrs = (int)(sizeof attrs / sizeof attrs[0]);
-    return lie_frame_write(name, frame, &opt, err);
+    lie_status st = lie_frame_write(name, frame, &opt, err);
+    struct stat sb;
+    if (bytes)
+        *bytes = st == LIE_OK && strcmp(name, "-") != 0 && stat(name, &sb) == 0 ? (uint64_t)sb.st_size : 0;
+    return st;
 }
 
 

@@ -18,8 +18,10 @@ typedef struct frame_out {
 /* The file of frame fi. */
 void frame_name(const frame_out *o, int fi, char *name, size_t size);
 /* Write frame fi (the path's frame first + fi) of camera fc to its file,
- * its header saying how it was made (docs/tools.md, lie-render). */
-lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame, lie_error *err);
+ * its header saying how it was made (docs/tools.md, lie-render); EXR chunks
+ * are compressed on the render's --threads.  *bytes (may be NULL): the
+ * file's size (0 for stdout). */
+lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame, uint64_t *bytes, lie_error *err);
 
 /* What --stats prints: times are load, bvh, render and write seconds. */
 typedef struct run_stats {

@@ -212,8 +212,10 @@ static lie_status run(const char *input, char **files, int n_files, const lie_up
     if (st == LIE_OK && scene->n_emitters == 0 && !quiet)
         fprintf(stderr, "%s: %s: warning: the edited scene has no emitters: every pixel is black\n", prog, input);
     double ta = lie_time_now();
-    if (st == LIE_OK)
+    if (st == LIE_OK) {
+        lie_cache_log_relative_to(cache, cache->n_edits - n_files, ro->output);
         st = lie_cache_write_with_scene(ro->output, cache, scene, ro->scene_out, &ro->scene_opt, &bytes, err);
+    }
     lie_phase(prog, ro->verbose && st == LIE_OK, "write", ta);
     if (st == LIE_OK && stats) {
         lie_update_get_stats(u, &ust);

@@ -772,6 +772,23 @@ def morph():
     bad = json.loads(json.dumps(g))
     bad["nodes"][1]["weights"] = [1]
     write("morph_bad.gltf", bad)
+    # morph_lit.gltf: the three sheets lit by a square light 3 above them
+    # (facing them) in front of a wall 1 behind them (tests/tools/t0400:
+    # update = rebuild when morph weights push a sheet out to huge
+    # coordinates)
+    lit = json.loads(json.dumps(g))
+    lit["materials"] = [{"pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1], "metallicFactor": 0}},
+                        {"pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1]}, "emissiveFactor": [1, 1, 1]}]
+    sheet = lit["meshes"][0]["primitives"][0]
+    sheet["material"] = 0
+    plain = {"attributes": {"POSITION": pos, "NORMAL": nrm}, "indices": idx}
+    lit["meshes"].append({"name": "Wall", "primitives": [dict(plain, material=0)]})
+    lit["meshes"].append({"name": "Panel", "primitives": [dict(plain, material=1)]})
+    lit["nodes"].append({"name": "Wall", "mesh": 1, "translation": [-2, -2, -1], "scale": [12, 6, 1]})
+    lit["nodes"].append({"name": "Lamp", "mesh": 2, "translation": [1, 2, 3], "rotation": [1, 0, 0, 0],
+                         "scale": [6, 2, 1]})
+    lit["scenes"] = [{"nodes": [0, 1, 2, 3, 4]}]
+    write("morph_lit.gltf", lit)
 
 
 def animated():
