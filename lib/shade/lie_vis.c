@@ -1,5 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Shadow rays answered by local illumination environments (§4.2). */
+/* Shadow rays answered by local illumination environments (§4.2).
+ * Size: one job, the LIE oracle: the leaf lookup, the blocker selection and
+ * the per-blocker tests share the compact blocker layout built here. */
 #include "lie/lie.h"
 #include "shade/bitmask.h"
 #include "shade/internal.h"

@@ -4,7 +4,9 @@
  * back-projected blockers (the pieces are built in polybuild.c).  Double precision throughout: the pieces are
  * cut by lines that nearly coincide (a blocker edge on the emitter's edge,
  * neighbouring blockers sharing an edge), and the edge sum of a thin
- * sliver must come out as thin. */
+ * sliver must come out as thin.
+ * Size: one job, the closed forms over an emitter's pieces: unshadowed,
+ * visible and LTC share the clipping of pieces by planes and blockers. */
 #include "shade/polylight.h"
 #include "shade/ltc.h"
 

@@ -1,5 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* lie-render: render frames with direct lighting.
+ * Size: the option table, its checks against each other and the frame plan,
+ * which share the run's options; the work is in lib/ and in output.c,
+ * cached.c and dist.c.
  *   lie-render CACHE|SCENE.gltf|SCENE.glb|- -o OUT.exr|OUT.png|- [options]
  * From a cache (lie-build), shadow rays are answered by the local
  * illumination environments (--visibility=lie, the default); from a scene,

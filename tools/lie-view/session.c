@@ -351,7 +351,6 @@ static int node_removed(const lie_scene *s, int node)
     return 0;
 }
 
-
 /* One case per script command (lie-view --help), each a few lines: one
  * piece, as the commands share the run's waiting state. */
 int session_script_step(session *S, script_run *R, uint64_t images, int idle)
