@@ -636,17 +636,22 @@ int main(int argc, char **argv)
     lie_cli cli = {.tool = prog, .usage = usage, .missing = "missing input cache or scene",
                    .takes = LIE_CLI_THREADS | LIE_CLI_EXTERNAL | LIE_CLI_STATS};
     int rc = parse_options(&S, &wo, &cli, &camera, &script_path, argc, argv);
-    if (rc >= 0)
+    if (rc >= 0) {
+        lie_file_set_destroy(S.files);
         return rc;
+    }
     lie_error err;
     script_run R;
     memset(&R, 0, sizeof R);
     R.path = script_path;
-    if (script_path && view_script_read(script_path, &R.sc, &err) != LIE_OK)
+    if (script_path && view_script_read(script_path, &R.sc, &err) != LIE_OK) {
+        lie_file_set_destroy(S.files);
         return fail_line(&err);
+    }
     wo.max_depth = S.ro.max_depth; /* the views' mirrors are the frames' */
     if (open_display() != 0) {
         view_script_destroy(R.sc);
+        lie_file_set_destroy(S.files);
         return 1;
     }
     /* after SDL_Init, which installs its own handlers for them */
