@@ -118,6 +118,7 @@ typedef struct lie_shade_ctx {
     const lie_light_bounds *bounds; /* per emitter (sampler.h) */
     int guided;                     /* the LIE's classes share the budget (lie_shade_direct) */
     lie_texlight **texlights;       /* per emitter, NULL where its texture does not guide its samples */
+    int borrowed;                   /* poly, sampler, bounds and texlights are opt->prep's */
 } lie_shade_ctx;
 
 /* Per triangle, the instance it belongs to if that instance is a closed

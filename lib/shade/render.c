@@ -327,16 +327,109 @@ static lie_status options_of(const lie_scene *s, const lie_render_options *opt, 
     return LIE_OK;
 }
 
+/* What depends on the scene alone (and the sampler's kind): the textured
+ * emitters' distributions, the emitters' bounds and the light sampler; the
+ * closed forms.  Made per call, or once (lie_render_prep). */
+static lie_status make_lights(const lie_scene *s, lie_light_sampler_kind kind, lie_texlight ***texlights,
+                              const lie_light_bounds **bounds_out, lie_light_sampler *sampler)
+{
+    const int ne = s->n_emitters;
+    *texlights = calloc((size_t)ne + 1, sizeof **texlights);
+    float *scale = malloc(sizeof *scale * ((size_t)ne + 1));
+    lie_status st = *texlights && scale ? lie_texlight_create_all(s, *texlights) : LIE_ERR_NOMEM;
+    for (int e = 0; st == LIE_OK && e < ne; e++)
+        scale[e] = lie_texlight_power_scale((*texlights)[e]);
+    lie_light_bounds *bounds = NULL;
+    if (st == LIE_OK)
+        st = lie_light_bounds_all(s, scale, &bounds);
+    *bounds_out = bounds;
+    free(scale);
+    if (st == LIE_OK)
+        st = lie_light_sampler_create(s, kind, bounds, sampler);
+    return st;
+}
+
+static lie_status make_poly(const lie_scene *s, lie_polylight ***poly)
+{
+    *poly = calloc((size_t)s->n_emitters + 1, sizeof **poly);
+    lie_status st = *poly ? LIE_OK : LIE_ERR_NOMEM;
+    for (int e = 0; st == LIE_OK && e < s->n_emitters; e++)
+        st = lie_polylight_create(s, e, &(*poly)[e]);
+    return st;
+}
+
+static void free_lights(int ne, lie_texlight **texlights, const lie_light_bounds *bounds, lie_light_sampler *sampler,
+                        lie_polylight **poly)
+{
+    for (int e = 0; e < ne; e++) {
+        if (poly)
+            lie_polylight_destroy(poly[e]);
+        if (texlights)
+            lie_texlight_destroy(texlights[e]);
+    }
+    free(poly);
+    free(texlights);
+    free((void *)bounds);
+    lie_light_sampler_destroy(sampler);
+}
+
+struct lie_render_prep {
+    const lie_scene *s;   /* compared, never read: the scene may be gone when it is destroyed */
+    int ne;
+    uint64_t hash, light; /* the scene it was made for, and its emitters (lie_scene_light_digest) */
+    lie_light_sampler_kind kind;
+    lie_texlight **texlights;
+    const lie_light_bounds *bounds;
+    lie_light_sampler sampler;
+    lie_polylight **poly;
+};
+
+lie_status lie_render_prep_create(const lie_scene *s, lie_light_sampler_kind kind, lie_render_prep **out,
+                                  lie_error *err)
+{
+    *out = NULL;
+    lie_render_prep *p = calloc(1, sizeof *p);
+    if (!p)
+        return lie_error_set(err, LIE_ERR_NOMEM, s->path ? s->path : "", "out of memory");
+    p->s = s;
+    p->ne = s->n_emitters;
+    p->hash = s->hash;
+    p->light = lie_scene_light_digest(s);
+    p->kind = kind;
+    lie_status st = kind == LIE_SAMPLER_PER_EMITTER
+                        ? LIE_OK
+                        : make_lights(s, kind, &p->texlights, &p->bounds, &p->sampler);
+    if (st == LIE_OK)
+        st = make_poly(s, &p->poly);
+    if (st != LIE_OK) {
+        lie_render_prep_destroy(p);
+        return lie_error_set(err, st, s->path ? s->path : "", "out of memory");
+    }
+    *out = p;
+    return LIE_OK;
+}
+
+void lie_render_prep_destroy(lie_render_prep *p)
+{
+    if (!p)
+        return;
+    free_lights(p->ne, p->texlights, p->bounds, &p->sampler, p->poly);
+    free(p);
+}
+
 /* What a frame shares among its workers besides the scratch: the fixed
  * patterns and bitmasks of the per-emitter sampler, the closed forms, the
  * textured emitters' distributions, the emitters' bounds and the light
- * sampler. */
+ * sampler (the last three borrowed from opt->prep when it was made for
+ * this scene and sampler). */
 static lie_status frame_setup(render_job *j, const lie_scene *s, const lie_render_options *opt)
 {
     lie_shade_ctx *c = &j->sc;
     lie_status st = LIE_OK;
     const int ne = s->n_emitters;
     c->sampler_on = opt->sampler != LIE_SAMPLER_PER_EMITTER;
+    const lie_render_prep *p = opt->prep;
+    c->borrowed = p && p->s == s && p->hash == s->hash && p->kind == opt->sampler && p->light == lie_scene_light_digest(s);
     if (!c->sampler_on) {
         lie_light_samples *fixed = calloc((size_t)ne + 1, sizeof *fixed);
         c->fixed = fixed;
@@ -354,19 +447,12 @@ static lie_status frame_setup(render_job *j, const lie_scene *s, const lie_rende
                 lie_light_samples_generate(s, e, n, su, sv, &fixed[e]);
             }
         }
+    } else if (c->borrowed) {
+        c->texlights = opt->prep->texlights;
+        c->bounds = opt->prep->bounds;
+        c->sampler = opt->prep->sampler;
     } else {
-        c->texlights = calloc((size_t)ne + 1, sizeof *c->texlights);
-        float *scale = malloc(sizeof *scale * ((size_t)ne + 1));
-        st = c->texlights && scale ? lie_texlight_create_all(s, c->texlights) : LIE_ERR_NOMEM;
-        for (int e = 0; st == LIE_OK && e < ne; e++)
-            scale[e] = lie_texlight_power_scale(c->texlights[e]);
-        lie_light_bounds *bounds = NULL;
-        if (st == LIE_OK)
-            st = lie_light_bounds_all(s, scale, &bounds);
-        c->bounds = bounds;
-        free(scale);
-        if (st == LIE_OK)
-            st = lie_light_sampler_create(s, opt->sampler, bounds, &c->sampler);
+        st = make_lights(s, opt->sampler, &c->texlights, &c->bounds, &c->sampler);
         /* the LIE's classes share the budget, except in the oracle's mode
          * (the same samples as full visibility) */
         c->guided = opt->visibility == LIE_VIS_LIE && opt->oracle && opt->exact != LIE_EXACT_OFF;
@@ -375,12 +461,8 @@ static lie_status frame_setup(render_job *j, const lie_scene *s, const lie_rende
      * cost less than an edge sum */
     c->analytic = opt->exact == LIE_EXACT_ONLY || opt->light_samples >= LIE_ANALYTIC_MIN_SAMPLES;
     c->exact = opt->visibility == LIE_VIS_LIE && opt->exact != LIE_EXACT_OFF;
-    if (st == LIE_OK && c->analytic) {
-        c->poly = calloc((size_t)ne + 1, sizeof *c->poly);
-        st = c->poly ? LIE_OK : LIE_ERR_NOMEM;
-        for (int e = 0; st == LIE_OK && e < ne; e++)
-            st = lie_polylight_create(s, e, &c->poly[e]);
-    }
+    if (st == LIE_OK && c->analytic)
+        st = c->borrowed ? ((c->poly = p->poly), LIE_OK) : make_poly(s, &c->poly);
     /* all samples at once (bitmask.h): the fixed pattern of each planar
      * emitter in mask order */
     if (st == LIE_OK && !c->sampler_on && opt->visibility == LIE_VIS_LIE && opt->oracle && opt->oracle->occluded_mask &&
@@ -402,19 +484,13 @@ static void frame_free(render_job *j, const lie_scene *s)
     for (int e = 0; e < s->n_emitters; e++) {
         if (c->fixed)
             lie_light_samples_free((lie_light_samples *)&c->fixed[e]);
-        if (c->poly)
-            lie_polylight_destroy(c->poly[e]);
         if (c->bits)
             lie_bitmask_destroy(c->bits[e]);
-        if (c->texlights)
-            lie_texlight_destroy(c->texlights[e]);
     }
     free((void *)c->fixed);
-    free(c->poly);
     free(c->bits);
-    free(c->texlights);
-    free((void *)c->bounds);
-    lie_light_sampler_destroy(&c->sampler);
+    if (!c->borrowed)
+        free_lights(s->n_emitters, c->texlights, c->bounds, &c->sampler, c->poly);
 }
 
 lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_camera *cam,

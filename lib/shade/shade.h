@@ -271,7 +271,22 @@ typedef struct lie_render_options {
     lie_bitmask_mode bitmask; /* all samples at once for partial pairs (bitmask.h) */
     lie_light_sampler_kind sampler; /* how light samples are shared among emitters */
     uint64_t seed;         /* mixed into every per-pixel pattern: renders with two seeds are independent */
+    /* What a call otherwise makes for itself from the scene's emitters (the
+     * closed forms, the textured emitters' distributions, the light
+     * sampler), made once (lie_render_prep_create): used when made for
+     * this scene and sampler with the same emitters (an edit of other
+     * nodes keeps it; lie_scene_light_digest), else ignored; NULL: each
+     * call makes them.  For callers that render a frame in many calls
+     * (lie-view's bands). */
+    const struct lie_render_prep *prep;
 } lie_render_options;
+typedef struct lie_render_prep lie_render_prep;
+/* The scene's share of a render's set-up for `sampler`, for
+ * lie_render_options.prep; *out: lie_render_prep_destroy.  Renders with
+ * it or without give the same bytes. */
+lie_status lie_render_prep_create(const lie_scene *s, lie_light_sampler_kind sampler, lie_render_prep **out,
+                                  lie_error *err);
+void lie_render_prep_destroy(lie_render_prep *p);
 
 #define LIE_RENDER_WIDTH_DEFAULT 512
 #define LIE_RENDER_HEIGHT_DEFAULT 512

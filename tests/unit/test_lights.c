@@ -327,6 +327,64 @@ static void test_render_options_of_an_older_size(void **state)
     lie_scene_destroy(s);
 }
 
+/* A render's set-up made once (lie_render_prep) gives the bytes a render
+ * that makes its own does, with a textured emitter (its distribution is
+ * the costly part); a prep made for other emitters (one moved since) or
+ * another sampler is not used, and the render is still right. */
+static void test_render_prep_gives_the_same_bytes(void **state)
+{
+    (void)state;
+    lie_scene *s = floor_scene("prep", 1.0f, 0);
+    s->textures = calloc(1, sizeof *s->textures);
+    assert_non_null(s->textures);
+    s->n_textures = 1;
+    lie_texture *t = &s->textures[0];
+    t->width = t->height = 16;
+    t->wrap_s = t->wrap_t = LIE_WRAP_CLAMP;
+    t->rgba = calloc(16 * 16 * 4, sizeof(float));
+    assert_non_null(t->rgba);
+    for (int i = 0; i < 16 * 16 * 4; i++)
+        t->rgba[i] = (float)((i * 7) % 5);
+    add_quad(s, "Panel", -1.0f, 1.0f, -1.0f, 1.0f, 1.0f, 1);
+    flatten(s);
+    lie_error err;
+    lie_rt *rt = NULL;
+    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
+    lie_camera cam = lie_scene_default_camera(s);
+    lie_render_options o = test_render_options(12, 12, 24, 2);
+    lie_render_prep *prep = NULL, *other = NULL;
+    assert_int_equal(lie_render_prep_create(s, LIE_SAMPLER_TREE, &prep, &err), LIE_OK);
+    assert_int_equal(lie_render_prep_create(s, LIE_SAMPLER_POWER, &other, &err), LIE_OK);
+    lie_frame *a = NULL, *b = NULL, *c = NULL;
+    assert_int_equal(lie_render(s, rt, &cam, &o, &a, NULL, &err), LIE_OK);
+    o.prep = prep;
+    assert_int_equal(lie_render(s, rt, &cam, &o, &b, NULL, &err), LIE_OK);
+    assert_memory_equal(a->rgb, b->rgb, sizeof(float) * 3 * 144);
+    o.prep = other; /* made for another sampler: not used */
+    assert_int_equal(lie_render(s, rt, &cam, &o, &c, NULL, &err), LIE_OK);
+    assert_memory_equal(a->rgb, c->rgb, sizeof(float) * 3 * 144);
+    lie_frame_destroy(b);
+    lie_frame_destroy(c);
+    /* the emitter's light changes: the prep no longer holds */
+    uint64_t before = lie_scene_light_digest(s);
+    s->emitters[0].radiance[1] *= 2.0f;
+    assert_true(lie_scene_light_digest(s) != before);
+    lie_frame *d = NULL, *e = NULL;
+    o.prep = NULL;
+    assert_int_equal(lie_render(s, rt, &cam, &o, &d, NULL, &err), LIE_OK);
+    o.prep = prep;
+    assert_int_equal(lie_render(s, rt, &cam, &o, &e, NULL, &err), LIE_OK);
+    assert_memory_equal(d->rgb, e->rgb, sizeof(float) * 3 * 144);
+    assert_memory_not_equal(a->rgb, d->rgb, sizeof(float) * 3 * 144);
+    lie_frame_destroy(a);
+    lie_frame_destroy(d);
+    lie_frame_destroy(e);
+    lie_render_prep_destroy(prep);
+    lie_render_prep_destroy(other);
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -336,6 +394,7 @@ int main(void)
         cmocka_unit_test(test_systematic_picks_follow_the_weights),
         cmocka_unit_test(test_light_bounds_cull_only_what_cannot_reach),
         cmocka_unit_test(test_render_options_of_an_older_size),
+        cmocka_unit_test(test_render_prep_gives_the_same_bytes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
