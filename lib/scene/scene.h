@@ -514,6 +514,18 @@ const lie_vec3 *lie_cluster_facing(const lie_scene *s, int c);
 uint32_t lie_cluster_target(const lie_scene *s, int c, float u1, float u2, lie_vec3 p, float far, lie_vec3 *q,
                             lie_vec3 *n, int *one_sided);
 int lie_cluster_can_reach(const lie_scene *s, int c, uint32_t tri, const lie_vec3 V[3], lie_vec3 ng, int two_sided);
+/* The light cluster c sends to a Lambert receiver at p with normal n (and
+ * -n too when two_sided), unshadowed, as the luminance of the irradiance:
+ * an area cluster's triangles by the closed form (Lambert's edge sum,
+ * clipped to the receiver's hemisphere) times its emitter's radiance (an
+ * emissive texture's variation not counted), a delta light's
+ * lie_emitter_light_at times the cosine (`far`: a directional light's
+ * reach).  What lib/lie's cost model weighs a unit's light samples by. */
+double lie_cluster_unshadowed(const lie_scene *s, int c, lie_vec3 p, lie_vec3 n, int two_sided, float far);
+/* A digest of everything lie_cluster_unshadowed reads of every cluster
+ * (emission, punctual parameters, the triangles' positions): equal
+ * digests, equal light at every point.  lib/update watches it. */
+uint64_t lie_scene_light_digest(const lie_scene *s);
 /* Partition every emitter into clusters (s->clusters and the arrays beside
  * it), a function of each emitter's own triangles alone.  Called by
  * lie_scene_flatten; LIE_ERR_NOMEM. */
