@@ -36,6 +36,7 @@ static void workers_free(worker *ws, int n)
         free(ws[i].stamp);
         free(ws[i].cand);
         free(ws[i].hull);
+        free(ws[i].share);
     }
     free(ws);
 }
