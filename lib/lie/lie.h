@@ -303,6 +303,14 @@ lie_status lie_env_build_views(const lie_scene *s, const lie_rt *rt, const lie_b
 lie_status lie_env_build_range_views(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
                                      const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
                                      lie_env_part *out, lie_build_stats *stats, lie_error *err);
+/* The expected cost of building each of units [first_unit, first_unit +
+ * n_units) of lie_env_build_range_views's env, in relative terms: the
+ * estimate a build's workers take triangles by, costliest first (the
+ * leaves a shadow boundary can reach in the unit's patch tree; next to
+ * nothing outside the views).  out[i] is unit first_unit + i's.  For
+ * sharing units out among processes so that they balance. */
+lie_status lie_env_unit_weights(const lie_scene *s, const lie_build_params *p, const lie_pixels *px,
+                                uint64_t first_unit, uint64_t n_units, double *out, lie_error *err);
 /* lie_env_build_range_views, stopped by *stop (may be NULL) as
  * lie_build_control.stop stops a build: units the stop reaches are left
  * LIE_CLASS_NONE and counted in stats->units_interrupted.  An asynchronous
