@@ -81,7 +81,7 @@ for c in "zip 64x104 7 --half" "piz 48x200 7"; do
     fi
 done
 
-# A path: 5 frames on 3 ranks (whole frames, each written by its rank, then the last ones by tiles),
+# A path: 5 frames on 3 ranks (whole frames, each written by its rank, then the last ones in bands),
 # the glTF on stdin, its .bin and the camera path readable by rank 0 only
 cat >"$A/path.yaml" <<'YAML'
 interpolation: smooth
@@ -104,10 +104,13 @@ written=$(grep -o '"written":\[[^]]*\]' "$TMP/err")
 wf=$(( $(printf '%s' "$written" | grep -o '"frames":[0-9]*' | sed 's/.*://' | paste -sd+) ))
 wb=$(( $(printf '%s' "$written" | grep -o '"bytes":[0-9]*' | sed 's/.*://' | paste -sd+) ))
 others=$(printf '%s' "$written" | grep -o '"rank":[12],"frames":[1-9]' | wc -l)
-if [ "$wf" -eq 5 ] && [ "$wb" -eq "$(cat "$TMP"/p3/*.exr | wc -c)" ] && [ "$others" -ge 1 ]; then
-    ok "--stats=json: frames and bytes written per rank ($written)"
+# the last 2 frames (3 ranks) in bands of one row of tiles: 2 x 3 chunks
+# compressed by the ranks that rendered them
+if [ "$wf" -eq 5 ] && [ "$wb" -eq "$(cat "$TMP"/p3/*.exr | wc -c)" ] && [ "$others" -ge 1 ] &&
+    [ "$(json_member exr_chunks_gathered)" = 6 ]; then
+    ok "--stats=json: frames and bytes written per rank ($written), the last 2 frames' 6 chunks from bands"
 else
-    not_ok "frames written per rank: $written"
+    not_ok "frames written per rank: $written; chunks from bands $(json_member exr_chunks_gathered)"
 fi
 
 [ "$(json_member files_broadcast)" = 3 ] && ok "the glTF from stdin, its .bin and the path broadcast" ||
