@@ -65,6 +65,18 @@ else
     not_ok "--stats=json per-rank tiles: $(cat "$TMP/err")"
 fi
 
+# PNG has no chunks: a frame's pieces are ranges of tiles, sent as floats
+# and copied into rank 0's frame (the tiles' rows and columns, the last ones short)
+"$B/lie-render" "$A/m-1.lie" -q --size 90x70 --light-samples 4 -o "$TMP/t1.png" || not_ok "one-process PNG"
+run $MPI_NOLEAK -np 3 "$B/lie-render" "$A/m-1.lie" -q --size 90x70 --light-samples 4 --threads 1 --stats=json \
+    -o "$TMP/t3.png"
+if [ "$rc" -eq 0 ] && cmp -s "$TMP/t1.png" "$TMP/t3.png" && [ "$(json_member exr_chunks_gathered)" = 0 ] &&
+    [ "$(json_member items)" -gt 3 ]; then
+    ok "a PNG frame in ranges of tiles on 3 ranks: one process's bytes"
+else
+    not_ok "PNG frame in tiles (exit $rc): $(head -c 300 "$TMP/err")"
+fi
+
 # A frame in bands of rows, each band's EXR chunks compressed by the rank
 # that rendered it and written by rank 0: zip (16-line chunks, one per row
 # of tiles; the last band short) with half colour and AOVs, and piz
