@@ -87,8 +87,9 @@ static int classify(lie_pair *p, int *unbuilt_seen)
      * serves only where closed forms were asked for (--light-samples
      * exact) and the sampled shading stays the default. */
     const lie_shade_ctx *c = p->c;
-    p->pl = c->analytic && c->poly && (p->sf->lambert || opt->exact == LIE_EXACT_ONLY) ? c->poly[p->e] : NULL;
-    p->bm = p->cls == LIE_CLASS_PARTIAL && c->bits ? c->bits[p->e] : NULL;
+    p->pl = c->analytic && c->poly && (p->sf->lambert || opt->exact == LIE_EXACT_ONLY) && !c->transmit ? c->poly[p->e]
+                                                                                                      : NULL;
+    p->bm = p->cls == LIE_CLASS_PARTIAL && c->bits && !c->transmit ? c->bits[p->e] : NULL;
     return 1;
 }
 

@@ -118,6 +118,12 @@ typedef struct lie_shade_ctx {
     const lie_light_bounds *bounds; /* per emitter (sampler.h) */
     int guided;                     /* the LIE's classes share the budget (lie_shade_direct) */
     lie_texlight **texlights;       /* per emitter, NULL where its texture does not guide its samples */
+    /* The scene has transmissive surfaces (lie_rt_transmits) and shadows
+     * are on: each sample's light is multiplied by the transmittance of its
+     * shadow segment (lie_rt_transmittance), and the closed forms, exact
+     * shadows and bitmasks, which integrate without samples or in another
+     * sample order, stand aside. */
+    int transmit;
 } lie_shade_ctx;
 
 /* Per triangle, the instance it belongs to if that instance is a closed
