@@ -232,6 +232,8 @@ LIE_HOT void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uin
         shade_guided(&pt, n, u, rgb);
         return;
     }
+    for (int i = 0; i < c->n_delta_apart; i++)
+        shade_emitter(&pt, c->delta_ids[i], 1, 1.0f, rgb);
     int k = c->sampler.cls->distribute(c->sampler.state, pt.o, sf->n, n, u, sc->picks);
     for (int i = 0; i < k; i++) {
         const lie_light_pick *pk = &sc->picks[i];

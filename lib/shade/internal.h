@@ -117,6 +117,12 @@ typedef struct lie_shade_ctx {
     lie_light_sampler sampler;      /* ... and it */
     const lie_light_bounds *bounds; /* per emitter (sampler.h) */
     int guided;                     /* the LIE's classes share the budget (lie_shade_direct) */
+    /* Delta lights apart from the budget: when there are at most n of
+     * them, each takes its one sample at every point (no selection can do
+     * better than a sample that is exact), and the sampler shares the n
+     * samples among the other emitters alone. */
+    const int *delta_ids;
+    int n_delta_apart;
     lie_texlight **texlights;       /* per emitter, NULL where its texture does not guide its samples */
 } lie_shade_ctx;
 

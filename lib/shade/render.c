@@ -357,9 +357,23 @@ static lie_status frame_setup(render_job *j, const lie_scene *s, const lie_rende
     } else {
         c->texlights = calloc((size_t)ne + 1, sizeof *c->texlights);
         float *scale = malloc(sizeof *scale * ((size_t)ne + 1));
-        st = c->texlights && scale ? lie_texlight_create_all(s, c->texlights) : LIE_ERR_NOMEM;
+        st = c->texlights && scale ? lie_texlight_create_all(s, c->texlights, opt->threads) : LIE_ERR_NOMEM;
         for (int e = 0; st == LIE_OK && e < ne; e++)
             scale[e] = lie_texlight_power_scale(c->texlights[e]);
+        int n_delta = 0;
+        for (int e = 0; e < ne; e++)
+            n_delta += lie_emitter_is_delta(&s->emitters[e]);
+        if (st == LIE_OK && n_delta > 0 && n_delta <= opt->light_samples) {
+            int *ids = malloc(sizeof *ids * (size_t)n_delta);
+            st = ids ? LIE_OK : LIE_ERR_NOMEM;
+            for (int e = 0, k = 0; st == LIE_OK && e < ne; e++)
+                if (lie_emitter_is_delta(&s->emitters[e])) {
+                    ids[k++] = e;
+                    scale[e] = 0.0f; /* no share of the budget */
+                }
+            c->delta_ids = ids;
+            c->n_delta_apart = ids ? n_delta : 0;
+        }
         lie_light_bounds *bounds = NULL;
         if (st == LIE_OK)
             st = lie_light_bounds_all(s, scale, &bounds);
@@ -414,6 +428,7 @@ static void frame_free(render_job *j, const lie_scene *s)
     free(c->bits);
     free(c->texlights);
     free((void *)c->bounds);
+    free((void *)c->delta_ids);
     lie_light_sampler_destroy(&c->sampler);
 }
 

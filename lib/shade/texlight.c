@@ -161,9 +161,69 @@ static const lie_texture *texture_of(const lie_scene *s, int e, const lie_materi
     return &s->textures[k];
 }
 
+/* The cells of triangles [k0, k1) of a texlight: their cumulative
+ * weights, and per triangle the sum in cell_sum[k]. */
+typedef struct cells_job {
+    const lie_scene *s;
+    const lie_emitter *em;
+    const lie_material *mat;
+    const lie_texture *tex;
+    const max_pyramid *pyr;
+    lie_texlight *t;
+    double *cell_sum;
+} cells_job;
+
+#define CELLS_TRIS 32 /* triangles per item of the parallel loop */
+
+static void cells_run(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    const cells_job *jb = ctx;
+    const lie_scene *s = jb->s;
+    const lie_emitter *em = jb->em;
+    const lie_material *mat = jb->mat;
+    const lie_texture *tex = jb->tex;
+    const max_pyramid *pyr = jb->pyr;
+    lie_texlight *t = jb->t;
+    uint32_t k0 = (uint32_t)item * CELLS_TRIS, k1 = k0 + CELLS_TRIS < em->n_tris ? k0 + CELLS_TRIS : em->n_tris;
+    for (uint32_t k = k0; k < k1; k++) {
+        uint32_t g = em->first_tri + k;
+        const int R = t->tris[k].res;
+        double *cdf = t->cell_cdf + t->tris[k].first_cell;
+        double sum = 0.0;
+        for (int i = 0; i < R; i++)
+            for (int j = 0; j < R; j++) {
+                /* the cell's corners in texture space bound it (uv is
+                 * affine on the triangle); its weight is the mean light
+                 * at its corners and centre, plus a sixteenth of the
+                 * brightest texel its lookups reach, so that no cell with
+                 * light is left out */
+                float u0 = INFINITY, u1 = -INFINITY, v0 = INFINITY, v1 = -INFINITY, mean = 0.0f;
+                float cv[3][2];
+                subtriangle(R, (uint32_t)(i * R + j), cv);
+                for (int c = 0; c < 4; c++) {
+                    float b1 = c < 3 ? cv[c][0] : (cv[0][0] + cv[1][0] + cv[2][0]) / 3.0f;
+                    float b2 = c < 3 ? cv[c][1] : (cv[0][1] + cv[1][1] + cv[2][1]) / 3.0f;
+                    float tu, tv, rgba[4];
+                    lie_scene_slot_uv(s, mat, LIE_TEX_EMISSIVE, g, b1, b2, &tu, &tv);
+                    u0 = fminf(u0, tu), u1 = fmaxf(u1, tu), v0 = fminf(v0, tv), v1 = fmaxf(v1, tv);
+                    lie_texture_sample(tex, tu, tv, rgba);
+                    const float le[3] = {em->radiance[0] * fmaxf(rgba[0], 0.0f), em->radiance[1] * fmaxf(rgba[1], 0.0f),
+                                         em->radiance[2] * fmaxf(rgba[2], 0.0f)};
+                    mean += lum3(le) / 4.0f;
+                }
+                float m = isfinite(u0 + u1 + v0 + v1) ? max_texel(tex, pyr, u0, u1, v0, v1) : lum3(em->radiance);
+                m = m > 0.0f ? mean + m / 64.0f : 0.0f;
+                sum += m;
+                cdf[i * R + j] = sum;
+            }
+        jb->cell_sum[k] = sum;
+    }
+}
+
 /* The distribution of emitter e over the pyramid of its texture's light. */
 static lie_status texlight_build(const lie_scene *s, int e, const lie_material *mat, const lie_texture *tex,
-                                 const max_pyramid *pyr, lie_texlight **out)
+                                 const max_pyramid *pyr, int threads, lie_texlight **out)
 {
     const lie_emitter *em = &s->emitters[e];
     lie_texlight *t = calloc(1, sizeof *t);
@@ -199,43 +259,30 @@ static lie_status texlight_build(const lie_scene *s, int e, const lie_material *
         lie_texlight_destroy(t);
         return LIE_ERR_NOMEM;
     }
+    /* the cells, triangles in parallel (each writes its own slice) */
+    double *cell_sum = malloc(sizeof *cell_sum * ((size_t)em->n_tris + 1));
+    if (!cell_sum) {
+        lie_texlight_destroy(t);
+        return LIE_ERR_NOMEM;
+    }
+    cells_job jb = {s, em, mat, tex, pyr, t, cell_sum};
+    lie_status st = lie_parallel_for(((size_t)em->n_tris + CELLS_TRIS - 1) / CELLS_TRIS, threads, cells_run, &jb, NULL, NULL);
+    if (st != LIE_OK) {
+        free(cell_sum);
+        lie_texlight_destroy(t);
+        return st;
+    }
     double acc = 0.0, area = 0.0;
     for (uint32_t k = 0; k < em->n_tris; k++) {
         uint32_t g = em->first_tri + k;
         const int R = t->tris[k].res;
-        double *cdf = t->cell_cdf + t->tris[k].first_cell;
-        double sum = 0.0;
-        for (int i = 0; i < R; i++)
-            for (int j = 0; j < R; j++) {
-                /* the cell's corners in texture space bound it (uv is
-                 * affine on the triangle); its weight is the mean light
-                 * at its corners and centre, plus a sixteenth of the
-                 * brightest texel its lookups reach, so that no cell with
-                 * light is left out */
-                float u0 = INFINITY, u1 = -INFINITY, v0 = INFINITY, v1 = -INFINITY, mean = 0.0f;
-                float cv[3][2];
-                subtriangle(R, (uint32_t)(i * R + j), cv);
-                for (int c = 0; c < 4; c++) {
-                    float b1 = c < 3 ? cv[c][0] : (cv[0][0] + cv[1][0] + cv[2][0]) / 3.0f;
-                    float b2 = c < 3 ? cv[c][1] : (cv[0][1] + cv[1][1] + cv[2][1]) / 3.0f;
-                    float tu, tv, rgba[4];
-                    lie_scene_slot_uv(s, mat, LIE_TEX_EMISSIVE, g, b1, b2, &tu, &tv);
-                    u0 = fminf(u0, tu), u1 = fmaxf(u1, tu), v0 = fminf(v0, tv), v1 = fmaxf(v1, tv);
-                    lie_texture_sample(tex, tu, tv, rgba);
-                    const float le[3] = {em->radiance[0] * fmaxf(rgba[0], 0.0f), em->radiance[1] * fmaxf(rgba[1], 0.0f),
-                                         em->radiance[2] * fmaxf(rgba[2], 0.0f)};
-                    mean += lum3(le) / 4.0f;
-                }
-                float m = isfinite(u0 + u1 + v0 + v1) ? max_texel(tex, pyr, u0, u1, v0, v1) : lum3(em->radiance);
-                m = m > 0.0f ? mean + m / 64.0f : 0.0f;
-                sum += m;
-                cdf[i * R + j] = sum;
-            }
+        double sum = cell_sum[k];
         t->tris[k].weight = (float)(s->tri_area[g] * sum / ((double)R * R));
         acc += t->tris[k].weight;
         t->tri_cdf[k] = acc;
         area += s->tri_area[g];
     }
+    free(cell_sum);
     t->total = acc;
     float full = lum3(em->radiance);
     t->scale = area > 0.0 && full > 0.0f ? (float)(acc / (area * full)) : 0.0f;
@@ -253,12 +300,12 @@ lie_status lie_texlight_create(const lie_scene *s, int e, lie_texlight **out)
     max_pyramid pyr;
     if (!pyramid_make(tex, s->emitters[e].radiance, &pyr))
         return LIE_ERR_NOMEM;
-    lie_status st = texlight_build(s, e, mat, tex, &pyr, out);
+    lie_status st = texlight_build(s, e, mat, tex, &pyr, 1, out);
     pyramid_free(&pyr);
     return st;
 }
 
-lie_status lie_texlight_create_all(const lie_scene *s, lie_texlight **out)
+lie_status lie_texlight_create_all(const lie_scene *s, lie_texlight **out, int threads)
 {
     /* emitters of one material share their texture's pyramid: an
      * instanced sign of many emitters makes it once */
@@ -284,7 +331,7 @@ lie_status lie_texlight_create_all(const lie_scene *s, lie_texlight **out)
             have = tex;
             memcpy(rad, r, sizeof rad);
         }
-        st = texlight_build(s, e, mat, tex, &pyr, &out[e]);
+        st = texlight_build(s, e, mat, tex, &pyr, threads, &out[e]);
     }
     pyramid_free(&pyr);
     return st;

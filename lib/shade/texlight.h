@@ -18,7 +18,7 @@ typedef struct lie_texlight lie_texlight;
 lie_status lie_texlight_create(const lie_scene *s, int e, lie_texlight **out);
 void lie_texlight_destroy(lie_texlight *t);
 /* The same for every emitter of s into out[0 .. n_emitters). */
-lie_status lie_texlight_create_all(const lie_scene *s, lie_texlight **out);
+lie_status lie_texlight_create_all(const lie_scene *s, lie_texlight **out, int threads);
 /* The emitter's light relative to the same emitter untextured: the
  * distribution's integral over the emitter's area, over area x the
  * luminance of its emissive factor (a bound on the texture's mean, for
