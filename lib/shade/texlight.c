@@ -76,7 +76,9 @@ static int pyramid_make(const lie_texture *t, const float rad[3], max_pyramid *m
         return 0;
     for (size_t i = 0; i < (size_t)w * (size_t)h; i++) {
         const float *px = t->rgba + 4 * i;
-        const float c[3] = {rad[0] * fmaxf(px[0], 0.0f), rad[1] * fmaxf(px[1], 0.0f), rad[2] * fmaxf(px[2], 0.0f)};
+        /* a NaN texel is dark, as a negative one */
+        const float c[3] = {rad[0] * (px[0] > 0.0f ? px[0] : 0.0f), rad[1] * (px[1] > 0.0f ? px[1] : 0.0f),
+                            rad[2] * (px[2] > 0.0f ? px[2] : 0.0f)};
         l0[i] = lum3(c);
     }
     m->level[0] = l0, m->w[0] = w, m->h[0] = h, m->n = 1;
@@ -94,8 +96,8 @@ static int pyramid_make(const lie_texture *t, const float rad[3], max_pyramid *m
                 for (int dy = 0; dy < 2; dy++)
                     for (int dx = 0; dx < 2; dx++) {
                         int xx = 2 * x + dx, yy = 2 * y + dy;
-                        if (xx < w && yy < h)
-                            v = fmaxf(v, a[(size_t)yy * (size_t)w + (size_t)xx]);
+                        if (xx < w && yy < h && a[(size_t)yy * (size_t)w + (size_t)xx] > v)
+                            v = a[(size_t)yy * (size_t)w + (size_t)xx];
                     }
                 b[(size_t)y * (size_t)w2 + (size_t)x] = v;
             }
@@ -194,26 +196,27 @@ static void cells_run(void *ctx, size_t item, int worker)
         for (int i = 0; i < R; i++)
             for (int j = 0; j < R; j++) {
                 /* the cell's corners in texture space bound it (uv is
-                 * affine on the triangle); its weight is the mean light
-                 * at its corners and centre, plus a sixteenth of the
-                 * brightest texel its lookups reach, so that no cell with
-                 * light is left out */
-                float u0 = INFINITY, u1 = -INFINITY, v0 = INFINITY, v1 = -INFINITY, mean = 0.0f;
+                 * affine on the triangle); its weight is the light at its
+                 * centre, plus a sixty-fourth of the brightest texel its
+                 * lookups reach, so that no cell with light is left out
+                 * and a dark one takes no sample */
+                float u0 = INFINITY, u1 = -INFINITY, v0 = INFINITY, v1 = -INFINITY;
                 float cv[3][2];
                 subtriangle(R, (uint32_t)(i * R + j), cv);
-                for (int c = 0; c < 4; c++) {
-                    float b1 = c < 3 ? cv[c][0] : (cv[0][0] + cv[1][0] + cv[2][0]) / 3.0f;
-                    float b2 = c < 3 ? cv[c][1] : (cv[0][1] + cv[1][1] + cv[2][1]) / 3.0f;
-                    float tu, tv, rgba[4];
-                    lie_scene_slot_uv(s, mat, LIE_TEX_EMISSIVE, g, b1, b2, &tu, &tv);
+                for (int c = 0; c < 3; c++) {
+                    float tu, tv;
+                    lie_scene_slot_uv(s, mat, LIE_TEX_EMISSIVE, g, cv[c][0], cv[c][1], &tu, &tv);
                     u0 = fminf(u0, tu), u1 = fmaxf(u1, tu), v0 = fminf(v0, tv), v1 = fmaxf(v1, tv);
-                    lie_texture_sample(tex, tu, tv, rgba);
-                    const float le[3] = {em->radiance[0] * fmaxf(rgba[0], 0.0f), em->radiance[1] * fmaxf(rgba[1], 0.0f),
-                                         em->radiance[2] * fmaxf(rgba[2], 0.0f)};
-                    mean += lum3(le) / 4.0f;
                 }
+                float tu, tv, rgba[4];
+                lie_scene_slot_uv(s, mat, LIE_TEX_EMISSIVE, g, (cv[0][0] + cv[1][0] + cv[2][0]) / 3.0f,
+                                  (cv[0][1] + cv[1][1] + cv[2][1]) / 3.0f, &tu, &tv);
+                lie_texture_sample(tex, tu, tv, rgba);
+                const float le[3] = {em->radiance[0] * (rgba[0] > 0.0f ? rgba[0] : 0.0f),
+                                     em->radiance[1] * (rgba[1] > 0.0f ? rgba[1] : 0.0f),
+                                     em->radiance[2] * (rgba[2] > 0.0f ? rgba[2] : 0.0f)};
                 float m = isfinite(u0 + u1 + v0 + v1) ? max_texel(tex, pyr, u0, u1, v0, v1) : lum3(em->radiance);
-                m = m > 0.0f ? mean + m / 64.0f : 0.0f;
+                m = m > 0.0f ? lum3(le) + m / 64.0f : 0.0f;
                 sum += m;
                 cdf[i * R + j] = sum;
             }
