@@ -356,28 +356,28 @@ static uint32_t cdf_find(const double *cdf, uint32_t n, double x)
     return lo;
 }
 
-void lie_texlight_sample(const lie_scene *s, int e, const lie_texlight *t, float u1, float u2, lie_emitter_sample *out)
+float lie_texlight_tri_weight(const lie_texlight *t, uint32_t k) { return t->tris[k].weight; }
+
+void lie_texlight_sample_tri(const lie_scene *s, int e, const lie_texlight *t, uint32_t k, float r, float u2,
+                             lie_emitter_sample *out)
 {
     const lie_emitter *em = &s->emitters[e];
     memset(out, 0, sizeof *out);
-    if (!(t->total > 0.0)) {
-        out->p = s->tri_p[3 * (size_t)t->first_tri];
-        out->n = s->tri_ng[t->first_tri];
-        out->tri = t->first_tri;
-        return; /* a black emitter: weight 0 */
-    }
-    /* the triangle by u1, then the cell by the rest of u1 (its row-major
-     * index), the point in the cell by what is left of u1 and by u2 */
-    double x = (double)u1 * t->total;
-    uint32_t k = cdf_find(t->tri_cdf, t->n_tris, x);
-    double lo = k > 0 ? t->tri_cdf[k - 1] : 0.0, w = t->tri_cdf[k] - lo;
-    double r = w > 0.0 ? (x - lo) / w : 0.5;
+    /* the cell by r (its row-major index), the point in the cell by what
+     * is left of r and by u2 */
     const tri_dist *td = &t->tris[k];
     const int R = td->res;
     const double *cdf = t->cell_cdf + td->first_cell;
     const uint32_t nc = (uint32_t)R * (uint32_t)R;
     double csum = cdf[nc - 1];
-    double y = r * csum;
+    uint32_t g = t->first_tri + k;
+    if (!(csum > 0.0)) {
+        out->p = s->tri_p[3 * (size_t)g];
+        out->n = s->tri_ng[g];
+        out->tri = g;
+        return; /* a black triangle: weight 0 */
+    }
+    double y = (double)r * csum;
     uint32_t c = cdf_find(cdf, nc, y);
     double clo = c > 0 ? cdf[c - 1] : 0.0, cw = cdf[c] - clo;
     float r2 = cw > 0.0 ? (float)((y - clo) / cw) : 0.5f;
@@ -387,7 +387,6 @@ void lie_texlight_sample(const lie_scene *s, int e, const lie_texlight *t, float
     lie_sample_triangle(r2, fminf(u2, 0.99999994f), &sb1, &sb2);
     float b1 = cv[0][0] + sb1 * (cv[1][0] - cv[0][0]) + sb2 * (cv[2][0] - cv[0][0]);
     float b2 = cv[0][1] + sb1 * (cv[1][1] - cv[0][1]) + sb2 * (cv[2][1] - cv[0][1]);
-    uint32_t g = t->first_tri + k;
     const lie_vec3 *P = &s->tri_p[3 * (size_t)g];
     float b0 = 1.0f - b1 - b2;
     out->p = lie_v3_add(lie_v3_add(lie_v3_scale(P[0], b0), lie_v3_scale(P[1], b1)), lie_v3_scale(P[2], b2));
@@ -398,7 +397,27 @@ void lie_texlight_sample(const lie_scene *s, int e, const lie_texlight *t, float
     lie_texture_sample(t->tex, tu, tv, rgba);
     for (int q = 0; q < 3; q++)
         out->le[q] = em->radiance[q] * rgba[q];
-    /* density: P(triangle) P(cell | triangle) / (the cell's area) */
-    double pdf = (w / t->total) * (cw / csum) * (double)nc / (double)s->tri_area[g];
+    /* density on the triangle: P(cell) / (the cell's area) */
+    double pdf = (cw / csum) * (double)nc / (double)s->tri_area[g];
     out->inv_pdf = pdf > 0.0 && isfinite(pdf) ? (float)(1.0 / pdf) : 0.0f;
+}
+
+void lie_texlight_sample(const lie_scene *s, int e, const lie_texlight *t, float u1, float u2, lie_emitter_sample *out)
+{
+    if (!(t->total > 0.0)) {
+        memset(out, 0, sizeof *out);
+        out->p = s->tri_p[3 * (size_t)t->first_tri];
+        out->n = s->tri_ng[t->first_tri];
+        out->tri = t->first_tri;
+        return; /* a black emitter: weight 0 */
+    }
+    /* the triangle by u1, then the point in it by the rest of u1 and u2 */
+    double x = (double)u1 * t->total;
+    uint32_t k = cdf_find(t->tri_cdf, t->n_tris, x);
+    double lo = k > 0 ? t->tri_cdf[k - 1] : 0.0, w = t->tri_cdf[k] - lo;
+    double r = w > 0.0 ? (x - lo) / w : 0.5;
+    lie_texlight_sample_tri(s, e, t, k, (float)r, u2, out);
+    /* density: P(triangle) times the density on it */
+    double pt = w / t->total;
+    out->inv_pdf = pt > 0.0 && out->inv_pdf > 0.0f ? (float)((double)out->inv_pdf / pt) : 0.0f;
 }

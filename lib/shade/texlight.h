@@ -28,5 +28,11 @@ float lie_texlight_power_scale(const lie_texlight *t);
  * lie_emitter_sample_point, inv_pdf the inverse of its density in area
  * measure (0 where the point's cell is dark). */
 void lie_texlight_sample(const lie_scene *s, int e, const lie_texlight *t, float u1, float u2, lie_emitter_sample *out);
+/* Triangle k's weight (its area times the mean weight of its texels'
+ * cells), and a point of it from (r, u2), inv_pdf the inverse of its
+ * density on the triangle alone. */
+float lie_texlight_tri_weight(const lie_texlight *t, uint32_t k);
+void lie_texlight_sample_tri(const lie_scene *s, int e, const lie_texlight *t, uint32_t k, float r, float u2,
+                             lie_emitter_sample *out);
 
 #endif

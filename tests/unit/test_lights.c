@@ -383,6 +383,60 @@ static void test_point_lights_apart_from_the_budget(void **state)
     lie_scene_destroy(s);
 }
 
+/* A scene's lights prepared once (lie_lights_create) give the images
+ * that frames preparing their own give, for a budgeted sampler with a
+ * textured emitter, with closed forms on and off; prepared for another
+ * scene state (its hash changed since), they are not used. */
+static void test_prepared_lights_give_the_same_image(void **state)
+{
+    (void)state;
+    lie_scene *s = floor_scene("prepared", 2.0f, 0);
+    s->textures = calloc(1, sizeof *s->textures);
+    assert_non_null(s->textures);
+    s->n_textures = 1;
+    lie_texture *t = &s->textures[0];
+    t->width = t->height = 8;
+    t->wrap_s = t->wrap_t = LIE_WRAP_REPEAT;
+    t->rgba = calloc(8 * 8 * 4, sizeof(float));
+    assert_non_null(t->rgba);
+    for (int i = 0; i < 64; i += 3)
+        for (int c = 0; c < 4; c++)
+            t->rgba[i * 4 + c] = (float)(i % 5);
+    add_quad(s, "Panel", -1.0f, 1.0f, -1.0f, 1.0f, 1.5f, 4);
+    flatten(s);
+    lie_error err;
+    lie_rt *rt = NULL;
+    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
+    lie_camera cam = lie_scene_default_camera(s);
+    const int budgets[2] = {4, 256};
+    for (int b = 0; b < 2; b++) {
+        lie_render_options o = test_render_options(16, 16, budgets[b], 2);
+        lie_lights *l = NULL;
+        assert_int_equal(lie_lights_create(s, &o, &l, &err), LIE_OK);
+        assert_true(lie_lights_fit(l, s));
+        lie_frame *a = NULL, *c = NULL, *d = NULL;
+        assert_int_equal(lie_render(s, rt, &cam, &o, &a, NULL, &err), LIE_OK);
+        o.lights = l;
+        assert_int_equal(lie_render(s, rt, &cam, &o, &c, NULL, &err), LIE_OK);
+        assert_memory_equal(a->rgb, c->rgb, sizeof(float) * 3 * 256);
+        s->hash ^= 1; /* as after an edit */
+        assert_false(lie_lights_fit(l, s));
+        assert_int_equal(lie_render(s, rt, &cam, &o, &d, NULL, &err), LIE_OK);
+        assert_memory_equal(a->rgb, d->rgb, sizeof(float) * 3 * 256);
+        s->hash ^= 1;
+        double sum = 0.0;
+        for (int i = 0; i < 3 * 256; i++)
+            sum += a->rgb[i];
+        assert_true(sum > 0.0); /* the panel lights the floor */
+        lie_frame_destroy(a);
+        lie_frame_destroy(c);
+        lie_frame_destroy(d);
+        lie_lights_destroy(l);
+    }
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -393,6 +447,7 @@ int main(void)
         cmocka_unit_test(test_light_bounds_cull_only_what_cannot_reach),
         cmocka_unit_test(test_render_options_of_an_older_size),
         cmocka_unit_test(test_point_lights_apart_from_the_budget),
+        cmocka_unit_test(test_prepared_lights_give_the_same_image),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
