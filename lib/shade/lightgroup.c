@@ -9,7 +9,7 @@
  * whole strip.  pbrt-v4's BVHLightSampler and Cycles' light tree (Conty
  * Estevez and Kulla 2018) make every emissive triangle a light, so that
  * the tree's importance (distance, orientation) chooses the near ones.
- * Here an emitter of more than GROUP_TRIS triangles is cut in space, as a
+ * Here an emitter of more than GROUP_SPLIT_TRIS triangles is cut in space, as a
  * bounding volume hierarchy is built (the median of the centroids along
  * the longest axis), into groups of at most GROUP_TRIS; each group is a
  * light of the sampler, with its own box, normal cone and power, and its
@@ -37,6 +37,10 @@
  * the group sees it rarely and then as a firefly; alone, the tree's
  * importance (distance, orientation) chooses it. */
 #define GROUP_TRIS 1
+/* An emitter of at most this many triangles stays one light: its closed
+ * form (lib/shade/polylight.h, a few edges) makes its unshadowed light
+ * exact, where groups would add the noise of choosing among them. */
+#define GROUP_SPLIT_TRIS 16
 
 typedef struct keyed {
     float key;
@@ -159,13 +163,14 @@ static void group_bounds(const lie_scene *s, const lie_light_groups *G, const li
         b->phi = 0.0f;
 }
 
-lie_status lie_light_groups_create(const lie_scene *s, lie_texlight *const *tl, const lie_light_bounds *eb,
+lie_status lie_light_groups_create(const lie_scene *s, lie_texlight *const *tl, const lie_light_bounds *eb, int split_on,
                                    lie_light_groups **out)
 {
     *out = NULL;
     lie_light_groups *G = calloc(1, sizeof *G);
     if (!G)
         return LIE_ERR_NOMEM;
+    G->split = split_on;
     size_t slots = 0;
     uint32_t most = 1;
     for (int e = 0; e < s->n_emitters; e++) {
@@ -185,7 +190,8 @@ lie_status lie_light_groups_create(const lie_scene *s, lie_texlight *const *tl, 
         /* a delta light, a small emitter, or one whose light no
          * distribution describes (a texture that could not be read) is
          * one group, sampled as a whole */
-        int whole = lie_emitter_is_delta(em) || em->n_tris <= GROUP_TRIS || (!t && !lie_emitter_uniform(s, e));
+        int whole = !split_on || lie_emitter_is_delta(em) || em->n_tris <= GROUP_SPLIT_TRIS ||
+                    (!t && !lie_emitter_uniform(s, e));
         if (whole) {
             if (!push_group(&b, e, used, 0)) {
                 st = LIE_ERR_NOMEM;

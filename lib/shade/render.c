@@ -388,11 +388,12 @@ static lie_status frame_setup(render_job *j, const lie_scene *s, const lie_rende
         free(scale);
         /* the sampler's lights: the emitters' groups (sampler.h), their
          * bounds as the frame weighs the emitters (delta lights apart) */
-        if (st == LIE_OK && lt && lt->groups) {
+        const int split = opt->exact != LIE_EXACT_ONLY;
+        if (st == LIE_OK && lt && lt->groups && lt->groups->split == split) {
             c->groups = lt->groups;
             c->borrowed_groups = 1;
         } else if (st == LIE_OK) {
-            st = lie_light_groups_create(s, c->texlights, bounds, &c->groups);
+            st = lie_light_groups_create(s, c->texlights, bounds, split, &c->groups);
         }
         lie_light_bounds *gb = NULL;
         if (st == LIE_OK) {
@@ -479,7 +480,7 @@ lie_status lie_lights_create(const lie_scene *s, const lie_render_options *opt, 
         if (st == LIE_OK)
             st = lie_light_bounds_all(s, scale, &eb);
         if (st == LIE_OK)
-            st = lie_light_groups_create(s, l->texlights, eb, &l->groups);
+            st = lie_light_groups_create(s, l->texlights, eb, opt->exact != LIE_EXACT_ONLY, &l->groups);
         free(scale);
         free(eb);
     }

@@ -63,13 +63,16 @@ typedef struct lie_light_groups {
     uint32_t *tris;             /* scene triangles, group by group */
     double *cdf;                /* beside tris: cumulative weight within the group */
     lie_light_bounds *bounds;   /* per group, the emitter's for a whole one */
+    int split;                  /* 0: every emitter whole (closed forms asked for) */
 } lie_light_groups;
 struct lie_texlight;
 /* The groups of every emitter of s: tl[e] (NULL, or tl NULL: by area)
  * weighs emitter e's triangles, eb[e] its bounds (as lie_light_bounds_all
- * gives them) its power.  *out: lie_light_groups_destroy. */
+ * gives them) its power; split 0 keeps every emitter whole (for frames
+ * that ask for closed forms, LIE_EXACT_ONLY).  *out:
+ * lie_light_groups_destroy. */
 lie_status lie_light_groups_create(const lie_scene *s, struct lie_texlight *const *tl, const lie_light_bounds *eb,
-                                   lie_light_groups **out);
+                                   int split, lie_light_groups **out);
 void lie_light_groups_destroy(lie_light_groups *G);
 /* A point of group j (not whole) from (u1, u2), inv_pdf the inverse of its
  * density in area measure over the group; tl its emitter's distribution,
