@@ -230,7 +230,7 @@ bench-build: all build-tests
 # the same for the third-party scenes of ../shared/scenes alone (minutes: scifi_hallway)
 bench-build-scenes: all build-tests
 	@SCENES="$(wildcard ../shared/scenes/bedroom_corner/scene.gltf ../shared/scenes/lights_punctual_lamp/LightsPunctualLamp.gltf ../shared/scenes/scifi_hallway/space_ship_hallway.glb)" \
-	  ATRIUM=0 PAPER=0 ONE=0 VIEW_SCENES=" " sh bench/build.sh
+	  ATRIUM=0 PAPER=0 ONE=0 BREAKEVEN=1 MANYLIGHTS=0 VIEW_SCENES=" " sh bench/build.sh
 
 # lie-view's interactive loop under Xvfb (not a timed test: figures depend on the load)
 bench-view: all

@@ -117,6 +117,58 @@ printf '   1->%st: the default build on 1 thread / on %s, wall time, and cpu: it
 printf '   run'"'"'s critical path (serial CPU + the busiest worker), the speed-up with a core per thread;\n'
 printf '   the atrium skips the paper build; timeouts after %s s)\n' "$TIMEOUT"
 
+# ---- break-even (BREAKEVEN=1; make bench-build-scenes): the third-party
+# scenes from a camera inside their lit part, a build for that view
+# against the frames it serves, side by side in one run: one full-visibility
+# frame and one LIE frame of the view's cache at the same light samples
+# (LS, the default sampler), so at equal quality (the LIE frame's pixels
+# off by more than 2% against the full one are shown); break-even = build
+# seconds / (full frame - LIE frame), target <= 3 frames.  The build's
+# seconds are lie-build's seconds_build (the views' eye rays and the units;
+# loading the scene and Embree's BVH, which a renderer pays as well, not
+# counted; "+load" adds them).  Writes out/bench-build-breakeven.json.
+if [ "${BREAKEVEN:-0}" = 1 ]; then
+    LS=${LS:-100}
+    BSCENES=${BSCENES:-"scifi_hallway|../shared/scenes/scifi_hallway/space_ship_hallway.glb|eye=20.1,0.5,2,target=20.1,0.3,-20
+ccity_buildings|../shared/scenes/ccity_buildings/scene.gltf|eye=400,200,-5800,target=850,380,-6400
+bedroom_corner|../shared/scenes/bedroom_corner/scene.gltf|eye=-12,36,42,target=-45,20,8
+lights_punctual_lamp|../shared/scenes/lights_punctual_lamp/LightsPunctualLamp.gltf|eye=1.3,1.3,1.5,target=0.25,0.9,0"}
+    echo
+    echo "bench-build break-even: a build for one view against its frames, $SIZE, $LS light samples, $THREADS threads (load $(cut -d' ' -f1 /proc/loadavg))"
+    printf '  %-20s | %8s %8s %8s %8s | %8s %8s %8s %8s | %8s %10s\n' scene "build s" "+load s" "cache MB" "unpaid" \
+        "full s" "LIE s" "LIE/full" "off>2%" "frames" "model"
+    echo "[" >out/bench-build-breakeven.json
+    bfirst=1
+    echo "$BSCENES" | while IFS='|' read -r name scene cam; do
+        [ -f "$scene" ] || { echo "  $name: $scene missing, skipped"; continue; }
+        if ! timeout "$TIMEOUT" "$BIN/lie-build" "$scene" $CLARGS --view "$cam" --view-size "$SIZE" --threads "$THREADS" \
+            -q --stats=json -o "$TMP/be.lie" 2>"$TMP/be.json"; then
+            echo "  $name: build failed or timed out after $TIMEOUT s"; continue
+        fi
+        J="$TMP/be.json"
+        tb=$(field seconds_build <"$J")
+        tall=$(awk -v a="$tb" -v b="$(field seconds_load <"$J")" -v c="$(field seconds_bvh <"$J")" 'BEGIN { printf "%.3f", a + b + c }')
+        "$BIN/lie-render" "$TMP/be.lie" --camera "$cam" --visibility=full --light-samples "$LS" --size "$SIZE" \
+            --threads "$THREADS" -q --stats=json -o "$TMP/bf.exr" 2>"$TMP/bf.json"
+        "$BIN/lie-render" "$TMP/be.lie" --camera "$cam" --light-samples "$LS" --size "$SIZE" --threads "$THREADS" -q \
+            --stats=json -o "$TMP/bl.exr" 2>"$TMP/bl.json"
+        tf=$(field seconds_render <"$TMP/bf.json"); tl=$(field seconds_render <"$TMP/bl.json")
+        off=$(build/release/tests/exr-compare "$TMP/bf.exr" "$TMP/bl.exr" 1 1 | sed -n 's/.* by more than 2% (\([0-9.]*%\)).*/\1/p')
+        be=$(awk -v b="$tb" -v f="$tf" -v l="$tl" 'BEGIN { if (f - l > 0) printf "%.1f", b / (f - l); else print "never" }')
+        model=$(field break_even_frames_predicted <"$J")
+        printf '  %-20s | %8s %8s %8s %8s | %8s %8s %8s %8s | %8s %10s\n' "$name" "$tb" "$tall" "$(mb "$(field bytes <"$J")")" \
+            "$(field units_unpaid <"$J")" "$tf" "$tl" "$(ratio "$tl" "$tf")" "$off" "$be" "$model"
+        [ $bfirst = 1 ] || echo "," >>out/bench-build-breakeven.json
+        bfirst=0
+        printf '{"scene":"%s","camera":"%s","build_s":"%s","build_with_load_s":"%s","cache_bytes":"%s","units_unpaid":"%s","full_frame_s":"%s","lie_frame_s":"%s","off_2pct":"%s","break_even_frames":"%s","break_even_frames_model":"%s"}' \
+            "$name" "$cam" "$tb" "$tall" "$(field bytes <"$J")" "$(field units_unpaid <"$J")" "$tf" "$tl" "$off" "$be" \
+            "$model" >>out/bench-build-breakeven.json
+    done
+    echo "]" >>out/bench-build-breakeven.json
+    printf '  (frames: build s / (full s - LIE s), target <= 3; model: lie-build --stats=json'"'"'s prediction from its\n'
+    printf '   CPU model, -1 where the cache saves nothing; unpaid: units the cost model left to Embree)\n'
+fi
+
 # ---- views (§4.3.1, §4.3.3): what a build for the scene's camera costs and
 # saves, whole against --view with the views choosing units only (--frames
 # 0) and with the pixel rule (the default --frames), with the image against

@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 # make bench-mpi: lie-render and lie-build under mpirun against one process,
 # measured side by side in one run on this machine: 1 process x 2 threads
-# against 2 ranks x 1 thread, a 12-frame camera path (each rank writes the
+# against 2 ranks x 1 thread, a 13-frame camera path (4 + 4 + 4 + 1 key frames) (each rank writes the
 # frames it rendered) and a build, with the bytes each sends; and a 1024x1024
 # EXR written on 1 and 2 threads.  Times are wall clock of the whole command (mpirun's
 # start included) and the tool's own (load to last write, from --stats);
@@ -15,8 +15,13 @@ SIZE=${SIZE:-320x240}
 REPEAT=${REPEAT:-3}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 # --bind-to none: a shared machine's other processes sit on the cores too;
-# ranks pinned to one core each cannot move away from them (threads can)
-MPI="mpirun --oversubscribe --bind-to none -np 2"
+# ranks pinned to one core each cannot move away from them (threads can).
+# --mca pml ob1: the point-to-point layer Open MPI picks here anyway (no
+# InfiniBand or Omni-Path device), named so that MPI_Init does not first
+# probe UCX and libfabric for one: 0.25 s of every launch's MPI_Init
+# against 0.04 s (docs/mpi.md, "Measured"); MPI_COMPONENTS= measures the default
+MPI_COMPONENTS=${MPI_COMPONENTS---mca pml ob1}
+MPI="mpirun --oversubscribe --bind-to none $MPI_COMPONENTS -np 2"
 mkdir -p out
 TMP=$(mktemp -d); trap 'rm -rf "$TMP"' EXIT
 
@@ -57,7 +62,7 @@ pair() {
     done
 }
 
-echo "bench-mpi: $SCENE, a 12-frame path at $SIZE; best of $REPEAT (the machine may be shared: compare ratios)"
+echo "bench-mpi: $SCENE, a 13-frame path at $SIZE; best of $REPEAT (the machine may be shared: compare ratios)"
 bin/lie-build "$SCENE" -q -o "$TMP/c.lie"
 mkdir -p "$TMP/a" "$TMP/b"
 R="bin/lie-render $TMP/c.lie -q --size $SIZE --stats=json"
@@ -78,6 +83,10 @@ pair build "$B --threads 2 -o $TMP/b1.lie" "$MPI $B --threads 1 -o $TMP/b2.lie"
 bw1=$w1; bt1=$t1; bw2=$w2; bt2=$t2
 cmp -s "$TMP/b1.lie" "$TMP/b2.lie" && bsame=yes || bsame=no
 bb=$(field bytes_gathered <"$TMP/build2.json"); cache=$(stat -c %s "$TMP/b1.lie")
+# the last 2-rank build's balance: seconds in items per rank, rank 0's service thread
+rank_secs() { grep -o '"rank":[0-9]*,"items":[0-9]*,"[a-z]*":[0-9]*,"seconds":[0-9.]*' "$1" | sed 's/.*"seconds":/ /' | tr -d '\n'; }
+bal=$(rank_secs "$TMP/build2.json"); bsvc=$(field seconds_cpu_service <"$TMP/build2.json")
+pbal=$(rank_secs "$TMP/path2.json"); psvc=$(field seconds_cpu_service <"$TMP/path2.json")
 
 # EXR encoding on threads: a 1024x1024 frame with zip (the default), its
 # chunks compressed on 1 and on 2 threads (--threads; the bytes are the same)
@@ -95,8 +104,8 @@ pair start "bin/lie-render --version" "$MPI bin/lie-render --version"
 sw=$w2
 
 printf '%-34s %12s %12s %8s\n' "" "1 x 2 thr" "2 ranks x 1" "ratio"
-printf '%-34s %12.3f %12.3f %8s\n' "path, 12 frames: tool seconds" "$pt1" "$pt2" "$(ratio "$pt2" "$pt1")"
-printf '%-34s %12.3f %12.3f %8s\n' "path, 12 frames: wall seconds" "$pw1" "$pw2" "$(ratio "$pw2" "$pw1")"
+printf '%-34s %12.3f %12.3f %8s\n' "path, 13 frames: tool seconds" "$pt1" "$pt2" "$(ratio "$pt2" "$pt1")"
+printf '%-34s %12.3f %12.3f %8s\n' "path, 13 frames: wall seconds" "$pw1" "$pw2" "$(ratio "$pw2" "$pw1")"
 printf '%-34s %12.3f %12.3f %8s\n' "one frame ($t_items items): tool s" "$ft1" "$ft2" "$(ratio "$ft2" "$ft1")"
 printf '%-34s %12.3f %12.3f %8s\n' "build: tool seconds" "$bt1" "$bt2" "$(ratio "$bt2" "$bt1")"
 printf '%-34s %12.3f %12.3f %8s\n' "build: wall seconds" "$bw1" "$bw2" "$(ratio "$bw2" "$bw1")"
@@ -104,9 +113,10 @@ printf '%-34s %12.3f %12.3f %8s\n' "EXR 1024x1024 zip write: seconds" "$xw1" "$x
 echo "  (EXR row: 1 thread against 2 threads in one process; the same bytes: $xsame)"
 echo "mpirun -np 2 start and stop: $sw s; path EXR writing: $pwr1 s (2 threads), $pwr2 s (rank 0's own, 1 thread)"
 echo "bytes: per frame gathered $fb, inputs broadcast (cache, scene, its .bin) $fbc (to 1 other rank), per build gathered $bb (cache $cache)"
+echo "2 ranks, last run: seconds in items per rank: path$pbal, build$bal; rank 0's service thread CPU s: path $psvc, build $bsvc"
 echo "identical to one process: path $same, build $bsame"
 cat >out/bench-mpi.json <<JSON
-{"scene":"$SCENE","size":"$SIZE","frames":12,
+{"scene":"$SCENE","size":"$SIZE","frames":13,
  "path":{"one_process_2_threads":{"tool_seconds":$pt1,"wall_seconds":$pw1},"two_ranks_1_thread":{"tool_seconds":$pt2,"wall_seconds":$pw2},"ratio_tool":$(ratio "$pt2" "$pt1"),"identical":"$same"},
  "frame":{"one_process_2_threads":{"tool_seconds":$ft1},"two_ranks_1_thread":{"tool_seconds":$ft2},"items":$t_items},
  "build":{"one_process_2_threads":{"tool_seconds":$bt1,"wall_seconds":$bw1},"two_ranks_1_thread":{"tool_seconds":$bt2,"wall_seconds":$bw2},"ratio_tool":$(ratio "$bt2" "$bt1"),"identical":"$bsame"},

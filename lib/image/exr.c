@@ -221,12 +221,21 @@ static lie_status check_attrs(const lie_attr *attrs, int n_attrs, int *long_name
  * only, so the file is the same for any thread count. */
 
 /* lie_exr_compression's names and OpenEXR codes, in its order. */
+/* lines: scanlines per chunk (the OpenEXR file layout's table; checked
+ * against the library's exr_get_scanlines_per_chunk when writing). */
 static const struct {
     const char *name;
     exr_compression_t c;
-} COMPRESSIONS[] = {{"zip", EXR_COMPRESSION_ZIP}, {"zips", EXR_COMPRESSION_ZIPS}, {"piz", EXR_COMPRESSION_PIZ},
-                    {"rle", EXR_COMPRESSION_RLE}, {"none", EXR_COMPRESSION_NONE}};
+    int lines;
+} COMPRESSIONS[] = {{"zip", EXR_COMPRESSION_ZIP, 16}, {"zips", EXR_COMPRESSION_ZIPS, 1},
+                    {"piz", EXR_COMPRESSION_PIZ, 32}, {"rle", EXR_COMPRESSION_RLE, 1},
+                    {"none", EXR_COMPRESSION_NONE, 1}};
 #define N_COMPRESSIONS (sizeof COMPRESSIONS / sizeof *COMPRESSIONS)
+
+int lie_exr_chunk_lines(lie_exr_compression c)
+{
+    return (unsigned)c < N_COMPRESSIONS ? COMPRESSIONS[c].lines : 0;
+}
 
 int lie_exr_compression_parse(const char *name, lie_exr_compression *out)
 {
@@ -250,8 +259,9 @@ typedef struct chunk_job {
     const lie_frame *f;
     const exr_out_channel *ch;
     int n_ch;
-    const exr_chunk_info_t *cinfo;
+    const exr_chunk_info_t *cinfo; /* the chunks to encode */
     chunk_out *out;
+    const lie_exr_chunk *given;    /* per chunk: compressed elsewhere (data not NULL), or NULL */
 } chunk_job;
 
 static exr_result_t keep_chunk(exr_encode_pipeline_t *enc)
@@ -270,6 +280,8 @@ static void encode_chunk(void *ctx, size_t k, int worker)
     (void)worker;
     const chunk_job *j = ctx;
     const exr_chunk_info_t *ci = &j->cinfo[k];
+    if (j->given && j->given[k].data)
+        return; /* written from the caller's bytes */
     exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
     exr_result_t rv = exr_encoding_initialize(j->ctx, j->part, ci, &enc);
     int have_enc = rv == EXR_ERR_SUCCESS;
@@ -305,26 +317,24 @@ static void encode_chunk(void *ctx, size_t k, int worker)
     j->out[k].rv = rv;
 }
 
-/* Build the whole file in `s`. */
-static lie_status encode_exr(exr_stream *s, const char *path, const lie_frame *f,
-                             const exr_out_channel *ch, int n_ch, const lie_exr_options *opt,
-                             int long_names, lie_error *err)
+/* A write context on `s` with the frame's header written: the channels,
+ * and with attrs the attributes and screen window (chunks compress the
+ * same without them: their bytes depend on the pixels, channels and
+ * compression only).  *lines: scanlines per chunk. */
+static lie_status start_file(exr_stream *s, const char *path, const lie_frame *f, const exr_out_channel *ch,
+                             int n_ch, const lie_exr_options *opt, int long_names, int attrs, exr_context_t *pctx,
+                             int32_t *lines, lie_error *err)
 {
-    const lie_attr *attrs = opt->attrs;
-    int n_attrs = opt->n_attrs;
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = on_exr_error;
     init.user_data = s;
     init.write_fn = stream_write;
     init.zip_level = EXR_ZIP_LEVEL;
-
     exr_context_t ctx = NULL;
     exr_result_t rv = exr_start_write(&ctx, path, EXR_WRITE_FILE_DIRECTLY, &init);
-    if (rv != EXR_ERR_SUCCESS) {
-        exr_finish(&ctx);
+    *pctx = ctx;
+    if (rv != EXR_ERR_SUCCESS)
         return exr_fail(err, LIE_ERR_IO, path, s, rv, "cannot start EXR output");
-    }
-    lie_status st = LIE_OK;
     int part = 0;
     rv = exr_add_part(ctx, NULL, EXR_STORAGE_SCANLINE, &part);
     if (rv == EXR_ERR_SUCCESS)
@@ -332,76 +342,88 @@ static lie_status encode_exr(exr_stream *s, const char *path, const lie_frame *f
                                                  COMPRESSIONS[opt->compression].c);
     if (rv == EXR_ERR_SUCCESS && long_names)
         rv = exr_set_longname_support(ctx, 1);
-    if (rv == EXR_ERR_SUCCESS && opt->screen_window_width > 0.0f) {
+    if (rv == EXR_ERR_SUCCESS && attrs && opt->screen_window_width > 0.0f) {
         exr_attr_v2f_t c = {.x = opt->screen_window_center[0], .y = opt->screen_window_center[1]};
         rv = exr_set_screen_window_center(ctx, part, &c);
         if (rv == EXR_ERR_SUCCESS)
             rv = exr_set_screen_window_width(ctx, part, opt->screen_window_width);
     }
-    if (rv != EXR_ERR_SUCCESS) {
-        st = exr_fail(err, LIE_ERR_IO, path, s, rv, "cannot set up EXR header");
-        goto done;
-    }
+    if (rv != EXR_ERR_SUCCESS)
+        return exr_fail(err, LIE_ERR_IO, path, s, rv, "cannot set up EXR header");
     /* The library keeps the channel list sorted by name; the encoder's
-     * channels are matched back to ours by name below. */
+     * channels are matched back to ours by name (encode_chunk). */
     for (int c = 0; c < n_ch; c++) {
         rv = exr_add_channel(ctx, part, ch[c].name, ch[c].half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT,
                              EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
-        if (rv != EXR_ERR_SUCCESS) {
-            st = exr_fail(err, LIE_ERR_ARG, path, s, rv, "cannot add EXR channel");
-            goto done;
-        }
+        if (rv != EXR_ERR_SUCCESS)
+            return exr_fail(err, LIE_ERR_ARG, path, s, rv, "cannot add EXR channel");
     }
-    for (int i = 0; i < n_attrs; i++) {
-        rv = set_attr(ctx, part, &attrs[i]);
+    for (int i = 0; attrs && i < opt->n_attrs; i++) {
+        rv = set_attr(ctx, part, &opt->attrs[i]);
         if (rv != EXR_ERR_SUCCESS) {
             char what[320];
-            snprintf(what, sizeof what, "attribute '%.255s'", attrs[i].name);
-            st = exr_fail(err, LIE_ERR_ARG, path, s, rv, what);
-            goto done;
+            snprintf(what, sizeof what, "attribute '%.255s'", opt->attrs[i].name);
+            return exr_fail(err, LIE_ERR_ARG, path, s, rv, what);
         }
     }
     rv = exr_write_header(ctx);
-    if (rv != EXR_ERR_SUCCESS) {
-        st = exr_fail(err, LIE_ERR_IO, path, s, rv, "cannot write EXR header");
-        goto done;
-    }
+    if (rv != EXR_ERR_SUCCESS)
+        return exr_fail(err, LIE_ERR_IO, path, s, rv, "cannot write EXR header");
+    rv = exr_get_scanlines_per_chunk(ctx, part, lines);
+    if (rv != EXR_ERR_SUCCESS || *lines != COMPRESSIONS[opt->compression].lines)
+        return exr_fail(err, LIE_ERR_IO, path, s, rv, "cannot plan EXR chunks");
+    return LIE_OK;
+}
 
-    int32_t lines = 0;
-    rv = exr_get_scanlines_per_chunk(ctx, part, &lines);
-    if (rv != EXR_ERR_SUCCESS || lines < 1) {
-        st = exr_fail(err, LIE_ERR_IO, path, s, rv, "cannot plan EXR chunks");
-        goto done;
-    }
-    size_t n_chunks = (size_t)(f->height + lines - 1) / (size_t)lines;
-    exr_chunk_info_t *cinfo = calloc(n_chunks + 1, sizeof *cinfo);
-    chunk_out *out = calloc(n_chunks + 1, sizeof *out);
-    if (!cinfo || !out) {
-        free(cinfo);
-        free(out);
-        st = lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
-        goto done;
-    }
-    for (size_t k = 0; k < n_chunks && rv == EXR_ERR_SUCCESS; k++)
-        rv = exr_write_scanline_chunk_info(ctx, part, (int)k * lines, &cinfo[k]);
+/* Encode chunks [first, first + count) of the file on ctx into out[]
+ * (on opt->threads workers), except those given[] holds. */
+static lie_status encode_range(exr_context_t ctx, const char *path, const exr_stream *s, const lie_frame *f,
+                               const exr_out_channel *ch, int n_ch, const lie_exr_options *opt, int32_t lines,
+                               size_t first, size_t count, const lie_exr_chunk *given, chunk_out *out,
+                               exr_chunk_info_t *cinfo, lie_error *err)
+{
+    exr_result_t rv = EXR_ERR_SUCCESS;
+    for (size_t k = 0; k < count && rv == EXR_ERR_SUCCESS; k++)
+        rv = exr_write_scanline_chunk_info(ctx, 0, (int)(first + k) * lines, &cinfo[k]);
     if (rv == EXR_ERR_SUCCESS) {
-        chunk_job job = {ctx, part, f, ch, n_ch, cinfo, out};
-        if (lie_parallel_for(n_chunks, opt->threads > 0 ? opt->threads : 0, encode_chunk, &job, NULL, NULL) != LIE_OK)
+        chunk_job job = {ctx, 0, f, ch, n_ch, cinfo, out, given};
+        if (lie_parallel_for(count, opt->threads > 0 ? opt->threads : 0, encode_chunk, &job, NULL, NULL) != LIE_OK)
             rv = EXR_ERR_OUT_OF_MEMORY;
     }
-    for (size_t k = 0; k < n_chunks && rv == EXR_ERR_SUCCESS; k++) {
-        rv = out[k].rv;
-        if (rv == EXR_ERR_SUCCESS)
-            rv = exr_write_scanline_chunk(ctx, part, cinfo[k].start_y, out[k].data, out[k].size);
+    for (size_t k = 0; k < count && rv == EXR_ERR_SUCCESS; k++)
+        if (!(given && given[k].data))
+            rv = out[k].rv;
+    return rv == EXR_ERR_SUCCESS ? LIE_OK : exr_fail(err, LIE_ERR_IO, path, s, rv, "cannot encode EXR scanlines");
+}
+
+/* Build the whole file in `s`: chunk k from opt->chunks[k] where given,
+ * the others compressed here. */
+static lie_status encode_exr(exr_stream *s, const char *path, const lie_frame *f,
+                             const exr_out_channel *ch, int n_ch, const lie_exr_options *opt,
+                             int long_names, lie_error *err)
+{
+    exr_context_t ctx = NULL;
+    int32_t lines = 0;
+    lie_status st = start_file(s, path, f, ch, n_ch, opt, long_names, 1, &ctx, &lines, err);
+    size_t n_chunks = st == LIE_OK ? (size_t)(f->height + lines - 1) / (size_t)lines : 0;
+    exr_chunk_info_t *cinfo = st == LIE_OK ? calloc(n_chunks + 1, sizeof *cinfo) : NULL;
+    chunk_out *out = st == LIE_OK ? calloc(n_chunks + 1, sizeof *out) : NULL;
+    if (st == LIE_OK && (!cinfo || !out))
+        st = lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    if (st == LIE_OK)
+        st = encode_range(ctx, path, s, f, ch, n_ch, opt, lines, 0, n_chunks, opt->chunks, out, cinfo, err);
+    exr_result_t rv = EXR_ERR_SUCCESS;
+    for (size_t k = 0; st == LIE_OK && k < n_chunks && rv == EXR_ERR_SUCCESS; k++) {
+        const lie_exr_chunk *g = opt->chunks && opt->chunks[k].data ? &opt->chunks[k] : NULL;
+        rv = exr_write_scanline_chunk(ctx, 0, cinfo[k].start_y, g ? g->data : out[k].data,
+                                      g ? g->size : out[k].size);
     }
-    for (size_t k = 0; k < n_chunks; k++)
+    if (rv != EXR_ERR_SUCCESS)
+        st = exr_fail(err, LIE_ERR_IO, path, s, rv, "cannot encode EXR scanlines");
+    for (size_t k = 0; out && k < n_chunks; k++)
         free(out[k].data);
     free(out);
     free(cinfo);
-    if (rv != EXR_ERR_SUCCESS)
-        st = exr_fail(err, LIE_ERR_IO, path, s, rv, "cannot encode EXR scanlines");
-
-done:
     /* exr_finish writes the chunk offset table. */
     rv = exr_finish(&ctx);
     if (st == LIE_OK && rv != EXR_ERR_SUCCESS)
@@ -422,11 +444,11 @@ static lie_status write_bytes(const char *path, const void *data, size_t size, l
     return lie_atomic_commit(&af, err);
 }
 
-lie_status lie_exr_write(const char *path, const lie_frame *f, const lie_exr_options *opt, lie_error *err)
+/* What every writer checks of the options and the frame, and the frame's
+ * channels (*ch: free). */
+static lie_status check_write(const char *path, const lie_frame *f, const lie_exr_options *opt, int *long_names,
+                              exr_out_channel **ch, int *n_ch, lie_error *err)
 {
-    static const lie_exr_options defaults;
-    if (!opt)
-        opt = &defaults;
     if ((unsigned)opt->compression >= N_COMPRESSIONS || opt->n_attrs < 0 || (opt->n_attrs > 0 && !opt->attrs) ||
         !(opt->screen_window_width >= 0.0f) || !isfinite(opt->screen_window_width) ||
         !isfinite(opt->screen_window_center[0]) || !isfinite(opt->screen_window_center[1]))
@@ -437,24 +459,78 @@ lie_status lie_exr_write(const char *path, const lie_frame *f, const lie_exr_opt
     /* Line strides are int32 in the encoder. */
     if (f->width > INT32_MAX / (LIE_AOV_MAX_CHANNELS * (int)sizeof(float)))
         return lie_error_set(err, LIE_ERR_LIMIT, path, "frame too wide for EXR: %d", f->width);
-    int long_names = 0;
-    lie_status st = check_attrs(opt->attrs, opt->n_attrs, &long_names, path, err);
-    if (st != LIE_OK)
-        return st;
-    exr_out_channel *ch = NULL;
-    int n_ch = 0;
-    st = collect_channels(f, opt->half, &ch, &n_ch, path, err);
-    if (st != LIE_OK)
-        return st;
-    for (int c = 0; c < n_ch; c++)
-        if (strlen(ch[c].name) > EXR_SHORT_NAME_MAX)
-            long_names = 1;
+    *long_names = 0;
+    lie_status st = check_attrs(opt->attrs, opt->n_attrs, long_names, path, err);
+    if (st == LIE_OK)
+        st = collect_channels(f, opt->half, ch, n_ch, path, err);
+    for (int c = 0; st == LIE_OK && c < *n_ch; c++)
+        if (strlen((*ch)[c].name) > EXR_SHORT_NAME_MAX)
+            *long_names = 1;
+    return st;
+}
 
+lie_status lie_exr_write(const char *path, const lie_frame *f, const lie_exr_options *opt, lie_error *err)
+{
+    static const lie_exr_options defaults;
+    if (!opt)
+        opt = &defaults;
+    exr_out_channel *ch = NULL;
+    int n_ch = 0, long_names = 0;
+    lie_status st = check_write(path, f, opt, &long_names, &ch, &n_ch, err);
+    if (st != LIE_OK)
+        return st;
     exr_stream s;
     memset(&s, 0, sizeof s);
     st = encode_exr(&s, path, f, ch, n_ch, opt, long_names, err);
     if (st == LIE_OK)
         st = write_bytes(path, s.data, s.size, err);
+    free(s.data);
+    free(ch);
+    return st;
+}
+
+lie_status lie_exr_encode_chunks(const lie_frame *f, const lie_exr_options *opt, int first, int count,
+                                 lie_exr_chunk *out, lie_error *err)
+{
+    static const lie_exr_options defaults;
+    static const char *const what = "EXR chunks";
+    if (!opt)
+        opt = &defaults;
+    for (int k = 0; out && k < count; k++)
+        out[k] = (lie_exr_chunk){NULL, 0};
+    exr_out_channel *ch = NULL;
+    int n_ch = 0, long_names = 0;
+    lie_status st = check_write(what, f, opt, &long_names, &ch, &n_ch, err);
+    if (st != LIE_OK)
+        return st;
+    int lines = COMPRESSIONS[opt->compression].lines, n_chunks = (f->height + lines - 1) / lines;
+    if (!out || first < 0 || count < 0 || first > n_chunks || count > n_chunks - first) {
+        free(ch);
+        return lie_error_set(err, LIE_ERR_ARG, what, "chunks %d..%d of a %d-chunk image", first, first + count,
+                             n_chunks);
+    }
+    /* the header goes to a scratch stream: only the chunks are kept */
+    exr_stream s;
+    memset(&s, 0, sizeof s);
+    exr_context_t ctx = NULL;
+    int32_t got = 0;
+    st = start_file(&s, what, f, ch, n_ch, opt, long_names, 0, &ctx, &got, err);
+    exr_chunk_info_t *cinfo = calloc((size_t)count + 1, sizeof *cinfo);
+    chunk_out *co = calloc((size_t)count + 1, sizeof *co);
+    if (st == LIE_OK && (!cinfo || !co))
+        st = lie_error_set(err, LIE_ERR_NOMEM, what, "out of memory");
+    if (st == LIE_OK)
+        st = encode_range(ctx, what, &s, f, ch, n_ch, opt, got, (size_t)first, (size_t)count, NULL, co, cinfo,
+                          err);
+    for (int k = 0; co && k < count; k++) {
+        if (st == LIE_OK)
+            out[k] = (lie_exr_chunk){co[k].data, co[k].size};
+        else
+            free(co[k].data);
+    }
+    free(co);
+    free(cinfo);
+    exr_finish(&ctx); /* the scratch file lacks its chunks: only closed */
     free(s.data);
     free(ch);
     return st;

@@ -91,7 +91,30 @@ typedef struct lie_exr_options {
      * window, centre (0, 0) and width 1. */
     float screen_window_center[2];
     float screen_window_width;
+    /* Chunks compressed elsewhere (lie_exr_encode_chunks), one per chunk of
+     * the image (lie_exr_chunk_lines scanlines each, from the top): chunk k
+     * is written from chunks[k] where its data is not NULL, and compressed
+     * here otherwise.  NULL: every chunk here.  The caller keeps them. */
+    const struct lie_exr_chunk *chunks;
 } lie_exr_options;
+/* One compressed EXR scanline chunk, as the file stores it. */
+typedef struct lie_exr_chunk {
+    unsigned char *data;
+    uint64_t size;
+} lie_exr_chunk;
+/* Scanlines per chunk of a compression (OpenEXR's layout: zip 16, piz 32,
+ * zips, rle and none 1); 0 for no compression of lie_exr_compression. */
+int lie_exr_chunk_lines(lie_exr_compression c);
+/* Compress chunks [first, first + count) of the file lie_exr_write(.., f,
+ * opt) writes, on opt->threads workers, into out[0 .. count - 1] (data
+ * malloc'd: the caller frees it).  Only those chunks' rows of f are read;
+ * the attributes do not matter (a chunk's bytes depend on its pixels, the
+ * channels and the compression alone, OpenEXR compressing chunks
+ * independently).  So a frame rendered in bands of rows on several
+ * machines is compressed where each band was rendered and written in one
+ * place with opt.chunks, byte for byte the file one process writes. */
+lie_status lie_exr_encode_chunks(const lie_frame *f, const lie_exr_options *opt, int first, int count,
+                                 lie_exr_chunk *out, lie_error *err);
 
 /* EXR: RGB as 32-bit float channels "R","G","B" plus every AOV, scanline,
  * increasing Y.  Path "-" writes to stdout.

@@ -36,6 +36,7 @@ static void workers_free(worker *ws, int n)
         free(ws[i].stamp);
         free(ws[i].cand);
         free(ws[i].hull);
+        free(ws[i].share);
     }
     free(ws);
 }
@@ -47,6 +48,17 @@ static void workers_free(worker *ws, int n)
  * a patch splits in four until min_patch, so a boundary crosses about
  * sqrt(area / min_area) of the smallest patches).  Pairs outside the views'
  * mask, or copied from an old env, cost next to nothing. */
+/* A pair of triangle tri's expected cost: the leaves along a shadow
+ * boundary its subdivision can reach; a triangle the views do not see
+ * costs next to nothing. */
+static double pair_weight(const build_ctx *c, uint32_t tri)
+{
+    if (!lie_subdiv_seen(c, tri))
+        return 0.05;
+    double ratio = c->min_area > 0.0f ? (double)c->s->tri_area[tri] / (double)c->min_area : 1.0;
+    return 1.0 + (ratio > 1.0 ? pow(ratio, 0.75) : 0.0);
+}
+
 static uint32_t *build_weights(const build_ctx *c, uint32_t n_items, size_t ne)
 {
     uint32_t *w = malloc(sizeof *w * ((size_t)n_items + 1));
@@ -63,11 +75,7 @@ static uint32_t *build_weights(const build_ctx *c, uint32_t n_items, size_t ne)
         if (c->old_unit && !c->node_flags)
             for (size_t u = u0; u < u1; u++)
                 pairs -= c->old_unit[u] >= 0; /* copied */
-        double ratio = c->min_area > 0.0f ? (double)c->s->tri_area[tri] / (double)c->min_area : 1.0;
-        double depth = 1.0 + (ratio > 1.0 ? pow(ratio, 0.75) : 0.0);
-        if (!lie_subdiv_seen(c, tri))
-            depth = 0.05;
-        double v = (double)(pairs ? pairs : 1) * (pairs ? depth : 0.05) * 4.0;
+        double v = (double)(pairs ? pairs : 1) * (pairs ? pair_weight(c, tri) : 0.05) * 4.0;
         w[i] = v < 1.0 ? 1u : v > 1e9 ? 1000000000u : (uint32_t)v;
     }
     return w;
@@ -547,12 +555,10 @@ lie_status lie_env_build_units(const lie_scene *s, const lie_rt *rt, const lie_b
     return build_range(s, rt, p, NULL, px, first_unit, n_units, stop, out, stats, err);
 }
 
-static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
-                              const uint8_t *tri_mask, const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
-                              const volatile sig_atomic_t *stop, lie_env_part *out, lie_build_stats *stats,
+/* Parameters and a unit range a build can take. */
+static lie_status check_range(const lie_scene *s, const lie_build_params *p, uint64_t first_unit, uint64_t n_units,
                               lie_error *err)
 {
-    memset(out, 0, sizeof *out);
     if (lie_build_params_check(p, err) != LIE_OK)
         return LIE_ERR_ARG;
     uint64_t total = (uint64_t)s->n_tris * (uint64_t)s->n_clusters;
@@ -560,6 +566,35 @@ static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_bu
         return lie_error_set(err, LIE_ERR_ARG, s->path, "units %llu..%llu out of range (%llu)",
                              (unsigned long long)first_unit, (unsigned long long)(first_unit + n_units),
                              (unsigned long long)total);
+    return LIE_OK;
+}
+
+lie_status lie_env_unit_weights(const lie_scene *s, const lie_build_params *p, const lie_pixels *px,
+                                uint64_t first_unit, uint64_t n_units, double *out, lie_error *err)
+{
+    if (check_range(s, p, first_unit, n_units, err) != LIE_OK)
+        return err->status;
+    if (px && px->n_tris != s->n_tris)
+        return lie_error_set(err, LIE_ERR_ARG, s->path, "pixels for %u triangles, not %u", px->n_tris, s->n_tris);
+    build_ctx c;
+    memset(&c, 0, sizeof c);
+    c.s = s;
+    c.p = p;
+    c.min_area = p->min_patch * s->max_tri_area;
+    c.pix = px;
+    for (uint64_t i = 0; i < n_units; i++)
+        out[i] = pair_weight(&c, (uint32_t)((first_unit + i) / (uint64_t)s->n_clusters));
+    return LIE_OK;
+}
+
+static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
+                              const uint8_t *tri_mask, const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
+                              const volatile sig_atomic_t *stop, lie_env_part *out, lie_build_stats *stats,
+                              lie_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (check_range(s, p, first_unit, n_units, err) != LIE_OK)
+        return err->status;
     double t0 = lie_time_now();
     lie_env part;
     memset(&part, 0, sizeof part);

@@ -37,6 +37,8 @@ typedef struct worker {
     int over;                 /* the node budget ran out (nomem is set too, to stop) */
     atomic_uint_least64_t *nodes_made; /* shared by all workers */
     uint64_t max_nodes;
+    double *share;            /* lie_unit_shares of the triangle at hand */
+    size_t cap_share;
 } worker;
 
 typedef struct build_ctx {

@@ -128,6 +128,11 @@ typedef struct lie_build_stats {
     uint64_t splits_undone;            /* splits classified but not kept: they did not pay */
     uint64_t units_copied;             /* units copied whole from an old or resumed env */
     uint64_t units_interrupted;        /* units a stop left unbuilt (LIE_CLASS_NONE) */
+    /* views: units left to Embree (LIE_CLASS_NONE) by the cost model,
+     * lie_unit_pays: the triangle unseen; its emitter's light there too
+     * small a share of the point's for the budget's samples to pay for a
+     * first round of segments over the frames served */
+    uint64_t units_unseen, units_unpaid;
     uint64_t splits_pixels;            /* splits not tried: too few pixels see the patch (views) */
     uint64_t splits_kept;              /* splits made */
     /* sampled leaves whose segments said occluded, or visible though
@@ -257,8 +262,9 @@ uint64_t lie_pixels_tri_hash(const lie_pixels *px, uint32_t tri);
 double lie_cost_list_ns(const lie_build_params *p, lie_class cls, size_t n_list);
 
 /* What the model predicts one frame of the views costs in shadow rays:
- * with full visibility and with env (per pixel and emitter: light_samples
- * rays, unlit pairs none, visible and occluded ones nothing with env).
+ * with full visibility and with env (per pixel, light_samples rays shared
+ * among the emitters by their light, lie_unit_shares; unlit pairs none,
+ * visible and occluded ones nothing with env).
  * Times are CPU ns summed over threads. */
 typedef struct lie_prediction {
     double pixels;                        /* pixels the views see */
@@ -269,7 +275,24 @@ typedef struct lie_prediction {
     double list_entries;  /* blocker tests with env: light samples x list length */
     double env_rays;      /* Embree rays with env (complex and unbuilt pairs) */
 } lie_prediction;
-void lie_env_predict(const lie_env *env, const lie_pixels *px, lie_prediction *pred);
+void lie_env_predict(const lie_env *env, const lie_scene *s, const lie_pixels *px, lie_prediction *pred);
+
+/* The cost model's unit rule (§4.3.3, the "simple cost model" of Table 2)
+ * for whole units.  A frame's budget of light_samples per pixel is shared
+ * among the emitters in proportion to their light (the default light
+ * sampler, lib/shade/sampler.h), so the shadow rays a unit (tri, cluster)
+ * can save are its pixels x light_samples x its share: its cluster's
+ * unshadowed light at the triangle's centroid (lie_cluster_unshadowed)
+ * over every cluster's.  share[c] for each cluster: that share, or -1
+ * where the cluster cannot reach the triangle (an unlit unit, which costs
+ * nothing to build).  `far`: lie_pair_ray_far. */
+void lie_unit_shares(const lie_scene *s, uint32_t tri, float far, double *share);
+/* Whether the unit, seen by the views' px, pays for its first round of
+ * segments over the frames served: at best it saves every shadow ray its
+ * share of the budget casts (lie_unit_shares).  A unit that does not is
+ * left unbuilt and the renderer answers it with Embree.  Always 1 without
+ * views or with frames 0. */
+int lie_unit_pays(const lie_build_params *p, const lie_pixels *px, uint32_t tri, double share);
 
 /* Builds for views: as lie_env_build_masked with the triangles px sees (no
  * px: all), and, where px is not NULL, patches only as fine as the cost
@@ -280,6 +303,14 @@ lie_status lie_env_build_views(const lie_scene *s, const lie_rt *rt, const lie_b
 lie_status lie_env_build_range_views(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
                                      const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
                                      lie_env_part *out, lie_build_stats *stats, lie_error *err);
+/* The expected cost of building each of units [first_unit, first_unit +
+ * n_units) of lie_env_build_range_views's env, in relative terms: the
+ * estimate a build's workers take triangles by, costliest first (the
+ * leaves a shadow boundary can reach in the unit's patch tree; next to
+ * nothing outside the views).  out[i] is unit first_unit + i's.  For
+ * sharing units out among processes so that they balance. */
+lie_status lie_env_unit_weights(const lie_scene *s, const lie_build_params *p, const lie_pixels *px,
+                                uint64_t first_unit, uint64_t n_units, double *out, lie_error *err);
 /* lie_env_build_range_views, stopped by *stop (may be NULL) as
  * lie_build_control.stop stops a build: units the stop reaches are left
  * LIE_CLASS_NONE and counted in stats->units_interrupted.  An asynchronous

@@ -75,6 +75,8 @@ void lie_stats_merge(lie_build_stats *dst, const lie_build_stats *src)
     dst->splits_undone += src->splits_undone;
     dst->units_copied += src->units_copied;
     dst->units_interrupted += src->units_interrupted;
+    dst->units_unseen += src->units_unseen;
+    dst->units_unpaid += src->units_unpaid;
     dst->splits_pixels += src->splits_pixels;
     dst->splits_kept += src->splits_kept;
     dst->unproven_occluded += src->unproven_occluded;

@@ -143,15 +143,50 @@ double lie_cost_list_ns(const lie_build_params *p, lie_class cls, size_t n_list)
     }
 }
 
-void lie_env_predict(const lie_env *env, const lie_pixels *px, lie_prediction *pred)
+void lie_unit_shares(const lie_scene *s, uint32_t tri, float far, double *share)
+{
+    const lie_vec3 *V = &s->tri_p[3 * (size_t)tri];
+    lie_vec3 ng = s->tri_ng[tri];
+    int two_sided = lie_pair_two_sided(s, tri);
+    lie_vec3 p = lie_v3_scale(lie_v3_add(lie_v3_add(V[0], V[1]), V[2]), 1.0f / 3.0f);
+    double total = 0.0;
+    for (int c = 0; c < s->n_clusters; c++) {
+        if (!lie_cluster_can_reach(s, c, tri, V, ng, two_sided)) {
+            share[c] = -1.0;
+            continue;
+        }
+        share[c] = lie_cluster_unshadowed(s, c, p, ng, two_sided, far);
+        total += share[c];
+    }
+    for (int c = 0; c < s->n_clusters; c++)
+        if (share[c] >= 0.0)
+            share[c] = total > 0.0 ? share[c] / total : 0.0;
+}
+
+int lie_unit_pays(const lie_build_params *p, const lie_pixels *px, uint32_t tri, double share)
+{
+    if (!px || p->frames == 0 || share < 0.0)
+        return 1; /* no model, or an unlit unit: built at no cost */
+    double pixels = (double)lie_pixels_hits(px, tri, lie_patch_root()) / (double)px->rays_per_pixel;
+    double saving = (double)p->frames * pixels * (double)p->light_samples * share * (double)p->ns_ray;
+    return saving >= (double)p->samples * (double)p->ns_segment;
+}
+
+void lie_env_predict(const lie_env *env, const lie_scene *s, const lie_pixels *px, lie_prediction *pred)
 {
     memset(pred, 0, sizeof *pred);
-    if (!px || px->n_tris != env->n_tris)
+    if (!px || px->n_tris != env->n_tris || s->n_tris != env->n_tris || s->n_clusters != env->n_clusters)
         return;
     const lie_build_params *p = &env->params;
-    double rpp = (double)px->rays_per_pixel, spp = (double)p->light_samples;
+    double rpp = (double)px->rays_per_pixel;
+    double *share = malloc(sizeof *share * ((size_t)env->n_clusters + 1));
+    if (!share)
+        return; /* no prediction: what --stats prints, not what the build makes */
+    float far = lie_pair_ray_far(s);
     pred->pixels = (double)px->n_hits / rpp;
     for (uint32_t t = 0; t < env->n_tris; t++) {
+        if (px->first[t + 1] > px->first[t])
+            lie_unit_shares(s, t, far, share);
         for (uint64_t h = px->first[t]; h < px->first[t + 1]; h++) {
             uint32_t key = px->key[h];
             for (int e = 0; e < env->n_clusters; e++) {
@@ -166,8 +201,10 @@ void lie_env_predict(const lie_env *env, const lie_pixels *px, lie_prediction *p
                     n = &env->nodes[n->child];
                 lie_class cls = (lie_class)n->cls;
                 pred->pair_pixels[cls < LIE_CLASS_COUNT ? cls : LIE_CLASS_COMPLEX] += 1.0 / rpp;
-                if (cls == LIE_CLASS_UNLIT)
+                if (cls == LIE_CLASS_UNLIT || share[e] <= 0.0)
                     continue; /* no shadow ray either way */
+                /* the pixel's budget, shared by light (lie_unit_shares) */
+                double spp = (double)p->light_samples * share[e];
                 double ns = lie_cost_list_ns(p, cls, n->count);
                 pred->full_rays += spp / rpp;
                 pred->full_ns += spp * (double)p->ns_ray / rpp;
@@ -179,4 +216,5 @@ void lie_env_predict(const lie_env *env, const lie_pixels *px, lie_prediction *p
             }
         }
     }
+    free(share);
 }

@@ -528,8 +528,39 @@ void lie_subtree_size(const lie_env *old, uint32_t from, uint32_t *n_nodes, uint
         *n_pool += x->count;
 }
 
+/* The shares of triangle tri's units (lie_unit_shares) in the worker's
+ * scratch, once per triangle; NULL on no memory. */
+static const double *unit_shares(const build_ctx *c, worker *w, uint32_t tri)
+{
+    size_t ne = (size_t)c->s->n_clusters;
+    if (!LIE_GROW(w->share, w->cap_share, ne + 1)) {
+        w->nomem = 1;
+        return NULL;
+    }
+    lie_unit_shares(c->s, tri, c->ray_far, w->share);
+    return w->share;
+}
+
+/* Whether the cost model leaves unit (tri, e) to Embree, counted by
+ * reason: outside the views, or too little of the budget's light samples
+ * to pay for its build (lie_unit_pays). */
+static int left_to_embree(const build_ctx *c, worker *w, uint32_t tri, const double *share, int e)
+{
+    if (!lie_subdiv_seen(c, tri)) {
+        w->st.units_unseen += c->pix != NULL;
+        return 1;
+    }
+    if (share && !lie_unit_pays(c->p, c->pix, tri, share[e])) {
+        w->st.units_unpaid++;
+        return 1;
+    }
+    return 0;
+}
+
 /* An update's triangle whose every unit continues an old one that no edit
- * reached: it is copied at assembly, straight into the new arrays. */
+ * reached: it is copied at assembly, straight into the new arrays.  (The
+ * cost model's decisions hold for it: lib/update/mark.c rebuilds a unit
+ * whose decision an edit of the light changed.) */
 static int copied_whole(const build_ctx *c, uint32_t tri, unit_buf *u)
 {
     size_t ne = (size_t)c->s->n_clusters;
@@ -544,27 +575,6 @@ static int copied_whole(const build_ctx *c, uint32_t tri, unit_buf *u)
         lie_subtree_size(c->old, c->old->root[c->old_unit[(size_t)tri * ne + e]], &u->n_nodes, &u->n_pool);
     u->copied = 1;
     return 1;
-}
-
-/* §4.3.3 with the cost model, for a whole unit: whether the unit (tri, e)
- * can pay for itself over the frames the cache serves.  At best it saves
- * every shadow ray of every pixel that sees the triangle (one a pixel for
- * a punctual light, light_samples for an area light); at least it costs
- * its root's first round of segments.  A unit that cannot pay is left
- * unbuilt (none), and lie-render answers it with Embree, as it does units
- * outside the views: punctual lights on triangles a few pixels cover.  A
- * function of the unit's pixels and the parameters only, growing with the
- * pixels, so that adding views (lib/lie/views.c) and updates find the
- * units a build for the same views builds. */
-int lie_subdiv_unit_pays(const lie_build_params *p, const lie_scene *s, const lie_pixels *px, uint32_t tri, int e)
-{
-    if (!px || p->frames == 0)
-        return 1;
-    const lie_emitter *em = &s->emitters[s->clusters[e].emitter];
-    double pixels = (double)lie_pixels_hits(px, tri, lie_patch_root()) / (double)px->rays_per_pixel;
-    double saving = (double)p->frames * pixels * (double)lie_emitter_sample_count(em, (int)p->light_samples) *
-                    (double)p->ns_ray;
-    return saving >= (double)p->samples * (double)p->ns_segment;
 }
 
 void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
@@ -585,6 +595,10 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
         return;
     }
     int two_sided = lie_pair_two_sided(s, tri);
+    /* the model's shares, where it decides (views and frames) */
+    const double *share = NULL;
+    if (c->pix && c->p->frames && lie_subdiv_seen(c, tri) && !(share = unit_shares(c, w, tri)))
+        return;
     for (size_t e = 0; e < ne; e++) {
         size_t unit = (size_t)tri * ne + e;
         if (unit < c->unit_lo || unit >= c->unit_hi)
@@ -594,8 +608,8 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
             return;
         u->roots[e] = (uint32_t)root;
         int64_t old = c->old_unit && c->old_unit[unit] >= 0 ? (int64_t)c->old->root[c->old_unit[unit]] : -1;
-        if (!lie_subdiv_seen(c, tri) || !lie_subdiv_unit_pays(c->p, s, c->pix, tri, (int)e)) {
-            u->nodes[root].cls = LIE_CLASS_NONE; /* outside the views, or too few pixels: not built */
+        if (left_to_embree(c, w, tri, share, (int)e)) {
+            u->nodes[root].cls = LIE_CLASS_NONE; /* outside the views, or cannot pay: not built */
             w->st.pairs[LIE_CLASS_NONE]++;
             continue;
         }

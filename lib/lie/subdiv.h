@@ -14,9 +14,6 @@ int lie_subdiv_splits(const build_ctx *c, uint32_t tri, lie_patch_path path, int
  * seen by enough pixels for the split to pay (§4.3.3, the cost model). */
 int lie_subdiv_pixels_pay(const build_ctx *c, uint32_t tri, lie_patch_path path, lie_class cls, size_t n_list,
                           uint32_t quality);
-/* With views (px) and the pixel rule (frames): whether unit (tri, e) can
- * pay for its build at all; a unit that cannot is left unbuilt. */
-int lie_subdiv_unit_pays(const lie_build_params *p, const lie_scene *s, const lie_pixels *px, uint32_t tri, int e);
 /* Whether the views see triangle tri (always, in a build without views). */
 int lie_subdiv_seen(const build_ctx *c, uint32_t tri);
 /* lie_parallel_for body: build (or copy) every unit of triangle `item`

@@ -59,15 +59,23 @@ int lie_env_tri_stale(const lie_env *env, const lie_scene *s, const lie_pixels *
         return 0;
     if (old_px->first[tri + 1] == old_px->first[tri])
         return 1; /* not seen before: built now */
+    double *share = malloc(sizeof *share * ((size_t)env->n_clusters + 1));
+    if (!share)
+        return 1; /* decided anew: the rebuild gives the same units */
+    lie_unit_shares(s, tri, lie_pair_ray_far(s), share);
     for (int e = 0; e < env->n_clusters; e++) {
         uint32_t root = env->root[(size_t)tri * (size_t)env->n_clusters + (size_t)e];
         if (env->nodes[root].cls == LIE_CLASS_NONE) {
-            if (lie_subdiv_unit_pays(&env->params, s, new_px, tri, e))
+            if (lie_unit_pays(&env->params, new_px, tri, share[e])) {
+                free(share);
                 return 1;
+            }
         } else if (env->params.frames && flag_node(env, s, old_px, new_px, root, tri, lie_patch_root(), NULL)) {
+            free(share);
             return 1;
         }
     }
+    free(share);
     return 0;
 }
 
@@ -82,21 +90,26 @@ lie_status lie_env_add_views(lie_env *env, const lie_scene *s, const lie_rt *rt,
     size_t ne = (size_t)s->n_clusters, n_units = (size_t)s->n_tris * ne;
     int32_t *old_unit = malloc(sizeof *old_unit * (n_units + 1));
     uint8_t *flags = calloc((size_t)env->n_nodes + 1, 1);
-    if (!old_unit || !flags) {
+    double *share = malloc(sizeof *share * (ne + 1));
+    float far = lie_pair_ray_far(s);
+    if (!old_unit || !flags || !share) {
         free(old_unit);
         free(flags);
+        free(share);
         return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
     }
     lie_status st = LIE_OK;
     for (uint32_t t = 0; t < s->n_tris && st == LIE_OK; t++) {
         int seen_before = old_px->first[t + 1] > old_px->first[t];
+        if (seen_before)
+            lie_unit_shares(s, t, far, share);
         if (!includes(old_px, new_px, t))
             st = lie_error_set(err, LIE_ERR_ARG, s->path, "triangle %u: the new views lose pixels of the old", t);
         for (size_t e = 0; e < ne; e++) {
             size_t u = (size_t)t * ne + e;
             old_unit[u] = (int32_t)u;
             int unpaid = seen_before && env->nodes[env->root[u]].cls == LIE_CLASS_NONE &&
-                         lie_subdiv_unit_pays(&env->params, s, new_px, t, (int)e);
+                         lie_unit_pays(&env->params, new_px, t, share[e]);
             if ((!seen_before && new_px->first[t + 1] > new_px->first[t]) || unpaid) {
                 old_unit[u] = -1; /* not built before (not seen, or too few pixels to pay): built now */
                 as->units_new++;
@@ -118,5 +131,6 @@ lie_status lie_env_add_views(lie_env *env, const lie_scene *s, const lie_rt *rt,
         env->partial = 0;
     free(old_unit);
     free(flags);
+    free(share);
     return st;
 }

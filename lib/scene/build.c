@@ -27,7 +27,8 @@ lie_material lie_material_default(void)
         m.base_color[k] = 1.0f;
     m.metallic = 1.0f;
     m.roughness = 1.0f;
-    m.base_color_tex = m.mr_tex = m.emissive_tex = -1;
+    m.base_color_tex = m.mr_tex = m.emissive_tex = m.normal_tex = m.transmission_tex = -1;
+    m.normal_scale = 1.0f;
     m.alpha_cutoff = 0.5f;
     lie_material_tex_xf_identity(&m);
     return m;
@@ -35,7 +36,7 @@ lie_material lie_material_default(void)
 
 void lie_material_tex_xf_identity(lie_material *m)
 {
-    for (int k = 0; k < 3; k++) {
+    for (int k = 0; k < LIE_TEX_SLOTS; k++) {
         const float id[5] = {0.0f, 0.0f, 0.0f, 1.0f, 1.0f};
         memcpy(m->tex_param[k], id, sizeof id);
     }
@@ -47,7 +48,7 @@ void lie_material_tex_xf_identity(lie_material *m)
  * counter-clockwise in uv space). */
 void lie_material_tex_xf_update(lie_material *m)
 {
-    for (int k = 0; k < 3; k++) {
+    for (int k = 0; k < LIE_TEX_SLOTS; k++) {
         const float *p = m->tex_param[k];
         double c = cos((double)p[2]), s = sin((double)p[2]);
         float *x = m->tex_xf[k];
@@ -108,6 +109,7 @@ void lie_primitive_free(lie_primitive *p)
     free(p->uv);
     free(p->uv1);
     free(p->color);
+    free(p->tan);
     free(p->idx);
     free(p->base_pos);
     free(p->base_nrm);
@@ -125,6 +127,7 @@ int lie_primitive_copy(const lie_primitive *src, lie_primitive *out)
     p.uv = dup_array(src->uv, sizeof(float) * 2 * src->n_verts);
     p.uv1 = dup_array(src->uv1, sizeof(float) * 2 * src->n_verts);
     p.color = dup_array(src->color, sizeof(float) * 4 * src->n_verts);
+    p.tan = dup_array(src->tan, sizeof(float) * 4 * src->n_verts);
     p.idx = dup_array(src->idx, sizeof(uint32_t) * 3 * src->n_tris);
     size_t tn = sizeof(float) * 3 * src->n_verts * (size_t)src->n_targets;
     p.base_pos = dup_array(src->base_pos, sizeof(float) * 3 * src->n_verts);
@@ -134,7 +137,7 @@ int lie_primitive_copy(const lie_primitive *src, lie_primitive *out)
     p.joints = dup_array(src->joints, sizeof(uint16_t) * 4 * src->n_verts);
     p.weights = dup_array(src->weights, sizeof(float) * 4 * src->n_verts);
     if ((src->pos && !p.pos) || (src->nrm && !p.nrm) || (src->uv && !p.uv) || (src->uv1 && !p.uv1) ||
-        (src->color && !p.color) || (src->idx && !p.idx) || (src->base_pos && !p.base_pos) ||
+        (src->color && !p.color) || (src->tan && !p.tan) || (src->idx && !p.idx) || (src->base_pos && !p.base_pos) ||
         (src->base_nrm && !p.base_nrm) || (src->tpos && !p.tpos) || (src->tnrm && !p.tnrm) ||
         (src->joints && !p.joints) || (src->weights && !p.weights)) {
         lie_primitive_free(&p);

@@ -165,8 +165,8 @@ void read_floats(const Accessor &a, float *dst, const std::string &what);
 struct PrimPlan {
     bool skip;                   /* points or lines */
     int mode;
-    Accessor pos, nrm, uv, uv1, col, idx;
-    bool has_nrm, has_uv, has_uv1, has_col, has_idx;
+    Accessor pos, nrm, tan, uv, uv1, col, idx;
+    bool has_nrm, has_tan, has_uv, has_uv1, has_col, has_idx;
     size_t n_verts, n_idx, n_tris;
     /* morph targets: position and normal displacements (index -1: none) */
     std::vector<Accessor> tpos, tnrm;

@@ -156,8 +156,8 @@ float unit_factor(double v, const std::string &what)
  * reads; a higher one reads TEXCOORD_0.  Its KHR_texture_transform, if
  * any, goes to param (offset, rotation in radians, scale: the matrix
  * T R S of the extension's specification). */
-int texture_info(Import &im, const tinygltf::TextureInfo &ti, bool srgb, const std::string &what, float param[5],
-                 int *set)
+template <class Info>
+int texture_info(Import &im, const Info &ti, bool srgb, const std::string &what, float param[5], int *set)
 {
     *set = 0;
     if (ti.index < 0)
@@ -205,6 +205,59 @@ int texture_info(Import &im, const tinygltf::TextureInfo &ti, bool srgb, const s
     return texture_for(im, ti.index, srgb, what);
 }
 
+/* A textureInfo held inside an extension (tinygltf leaves those as JSON
+ * values): index, texCoord and its own extensions, checked as the core's. */
+tinygltf::TextureInfo extension_texture_info(const tinygltf::Value &v, const std::string &what)
+{
+    tinygltf::TextureInfo ti;
+    if (!v.IsObject())
+        fail(LIE_ERR_FORMAT, "%s must be an object", what.c_str());
+    auto integer = [&](const char *key, int *out) {
+        if (!v.Has(key))
+            return;
+        const tinygltf::Value &x = v.Get(key);
+        double d = x.IsNumber() ? x.GetNumberAsDouble() : -1.0;
+        if (!(d >= 0.0 && d <= double(INT_MAX)) || d != std::floor(d))
+            fail(LIE_ERR_FORMAT, "%s: %s must be an integer >= 0", what.c_str(), key);
+        *out = int(d);
+    };
+    if (!v.Has("index"))
+        fail(LIE_ERR_FORMAT, "%s has no index", what.c_str());
+    integer("index", &ti.index);
+    integer("texCoord", &ti.texCoord);
+    if (v.Has("extensions") && v.Get("extensions").IsObject()) {
+        const tinygltf::Value &e = v.Get("extensions");
+        if (e.Has("KHR_texture_transform"))
+            ti.extensions["KHR_texture_transform"] = e.Get("KHR_texture_transform");
+    }
+    return ti;
+}
+
+/* KHR_materials_transmission: transmissionFactor and transmissionTexture
+ * (its R channel), read linear. */
+void import_transmission(Import &im, const tinygltf::Material &g, lie_material &mt, const std::string &w)
+{
+    auto ext = g.extensions.find("KHR_materials_transmission");
+    if (ext == g.extensions.end())
+        return;
+    const tinygltf::Value &v = ext->second;
+    if (!v.IsObject())
+        fail(LIE_ERR_FORMAT, "%s: KHR_materials_transmission must be an object", w.c_str());
+    if (v.Has("transmissionFactor"))
+        mt.transmission = unit_factor(v.Get("transmissionFactor").IsNumber()
+                                          ? v.Get("transmissionFactor").GetNumberAsDouble()
+                                          : std::nan(""),
+                                      w + " transmissionFactor");
+    if (v.Has("transmissionTexture")) {
+        std::string tw = w + " transmissionTexture";
+        tinygltf::TextureInfo ti = extension_texture_info(v.Get("transmissionTexture"), tw);
+        mt.transmission_tex = texture_info(im, ti, false, tw, mt.tex_param[LIE_TEX_TRANSMISSION],
+                                           &mt.tex_set[LIE_TEX_TRANSMISSION]);
+    }
+    if (mt.transmission <= 0.0f)
+        mt.transmission_tex = -1; /* a factor of 0 lets nothing through, whatever the texture */
+}
+
 void import_materials(Import &im)
 {
     const tinygltf::Model &m = im.m;
@@ -250,6 +303,13 @@ void import_materials(Import &im)
         }
         mt.emissive_tex = texture_info(im, g.emissiveTexture, true, w + " emissiveTexture", mt.tex_param[LIE_TEX_EMISSIVE],
                                        &mt.tex_set[LIE_TEX_EMISSIVE]);
+        mt.normal_tex = texture_info(im, g.normalTexture, false, w + " normalTexture", mt.tex_param[LIE_TEX_NORMAL],
+                                     &mt.tex_set[LIE_TEX_NORMAL]);
+        if (!std::isfinite(g.normalTexture.scale) || !(fabs(g.normalTexture.scale) <= 1e6))
+            fail(LIE_ERR_FORMAT, "%s: normalTexture scale is not a finite number", w.c_str());
+        mt.normal_scale = float(g.normalTexture.scale);
+        mt.transmission_tex = -1;
+        import_transmission(im, g, mt, w);
         mt.double_sided = g.doubleSided ? 1 : 0;
         mt.alpha_mask = g.alphaMode == "MASK";
         if (!std::isfinite(g.alphaCutoff))

@@ -291,6 +291,21 @@ PrimPlan plan_primitive(const tinygltf::Model &m, int mi, int pi, lie_scene *s)
             fail(LIE_ERR_FORMAT, "%s: NORMAL has %zu elements, POSITION %zu", what.c_str(), pl.nrm.count,
                  pl.n_verts);
     }
+    int atan = attribute(p, "TANGENT");
+    if ((pl.has_tan = atan >= 0)) {
+        /* glTF 2.0 §3.7.2.1: VEC4, xyz a unit tangent, w +-1 the bitangent's sign */
+        pl.tan = check_accessor(m, atan, what + " TANGENT");
+        bool ok = pl.tan.ncomp == 4 &&
+                  (pl.tan.ctype == TINYGLTF_COMPONENT_TYPE_FLOAT ||
+                   (quant && pl.tan.normalized &&
+                    (pl.tan.ctype == TINYGLTF_COMPONENT_TYPE_BYTE || pl.tan.ctype == TINYGLTF_COMPONENT_TYPE_SHORT)));
+        if (!ok)
+            fail(LIE_ERR_FORMAT, "%s: TANGENT must be VEC4 FLOAT%s", what.c_str(),
+                 quant ? " or (KHR_mesh_quantization) normalized BYTE/SHORT" : "");
+        if (pl.tan.count != pl.n_verts)
+            fail(LIE_ERR_FORMAT, "%s: TANGENT has %zu elements, POSITION %zu", what.c_str(), pl.tan.count,
+                 pl.n_verts);
+    }
     for (int set = 0; set < 2; set++) {
         const char *name = set ? "TEXCOORD_1" : "TEXCOORD_0";
         int at = attribute(p, name);
@@ -391,6 +406,12 @@ void read_primitive(const PrimPlan &pl, int mi, int pi, lie_primitive *out)
     if (pl.has_nrm) {
         out->nrm = alloc_array<float>(pl.n_verts * 3);
         read_floats(pl.nrm, out->nrm, what + " NORMAL");
+    }
+    if (pl.has_tan) {
+        out->tan = alloc_array<float>(pl.n_verts * 4);
+        read_floats(pl.tan, out->tan, what + " TANGENT");
+        for (size_t v = 0; v < pl.n_verts; v++) /* w is +-1; a 0 (quantised rounding) reads as +1 */
+            out->tan[4 * v + 3] = out->tan[4 * v + 3] < 0.0f ? -1.0f : 1.0f;
     }
     if (pl.has_uv) {
         out->uv = alloc_array<float>(pl.n_verts * 2);

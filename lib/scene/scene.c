@@ -9,12 +9,24 @@
 #include <stdlib.h>
 #include <string.h>
 
+#define LIE_XF_ID_PARAM {0.0f, 0.0f, 0.0f, 1.0f, 1.0f}
+#define LIE_XF_ID {1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f}
 static const lie_material default_material = {
     /* glTF 2.0 §3.9.6: the default material is white, metallic 1, roughness 1. */
-    NULL, {1.0f, 1.0f, 1.0f, 1.0f}, -1, 1.0f, 1.0f, -1, {0.0f, 0.0f, 0.0f}, -1, 0, 0, 0.5f,
-    {{0.0f, 0.0f, 0.0f, 1.0f, 1.0f}, {0.0f, 0.0f, 0.0f, 1.0f, 1.0f}, {0.0f, 0.0f, 0.0f, 1.0f, 1.0f}},
-    {{1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f}, {1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f}, {1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f}},
-    {0, 0, 0}};
+    .name = NULL,
+    .base_color = {1.0f, 1.0f, 1.0f, 1.0f},
+    .base_color_tex = -1,
+    .metallic = 1.0f,
+    .roughness = 1.0f,
+    .mr_tex = -1,
+    .emissive_tex = -1,
+    .alpha_cutoff = 0.5f,
+    .tex_param = {LIE_XF_ID_PARAM, LIE_XF_ID_PARAM, LIE_XF_ID_PARAM, LIE_XF_ID_PARAM, LIE_XF_ID_PARAM},
+    .tex_xf = {LIE_XF_ID, LIE_XF_ID, LIE_XF_ID, LIE_XF_ID, LIE_XF_ID},
+    .normal_tex = -1,
+    .normal_scale = 1.0f,
+    .transmission_tex = -1,
+};
 
 lie_scene_options lie_scene_options_default(void)
 {
@@ -38,6 +50,7 @@ static void free_world(lie_scene *s)
     LIE_FREE(s->tri_uv);
     LIE_FREE(s->tri_uv1);
     LIE_FREE(s->tri_color);
+    LIE_FREE(s->tri_tan);
     LIE_FREE(s->tri_ng);
     LIE_FREE(s->tri_area);
     LIE_FREE(s->tri_material);
@@ -265,9 +278,10 @@ static lie_mat4 *node_worlds(const lie_scene *s)
 /* glTF 2.0 §3.7.3.3: a skinned vertex is sum_k weight_k * (world of joint_k)
  * * (inverse bind matrix of joint_k) applied to its position; the skinned
  * node's own transform is not used.  World positions and (unnormalised)
- * normals of every vertex, and per vertex whether its matrix mirrors. */
+ * normals of every vertex (and tangents, of `tan` when not NULL), and per
+ * vertex whether its matrix mirrors. */
 static int skin_vertices(const lie_scene *s, const lie_skin *sk, const lie_primitive *pr, const lie_mat4 *node_world,
-                         lie_vec3 *wp, lie_vec3 *wn, uint8_t *mirror)
+                         const float *tan, lie_vec3 *wp, lie_vec3 *wn, lie_vec3 *wt, uint8_t *mirror)
 {
     lie_mat4 *J = malloc(sizeof *J * (size_t)sk->n_joints);
     if (!J)
@@ -292,6 +306,8 @@ static int skin_vertices(const lie_scene *s, const lie_skin *sk, const lie_primi
             const float *nq = &pr->nrm[3 * (size_t)v];
             wn[v] = lie_mat4_normal(&M, lie_v3(nq[0], nq[1], nq[2]));
         }
+        if (tan) /* a tangent lies in the surface: it moves as positions do */
+            wt[v] = lie_mat4_vector(&M, lie_v3(tan[4 * (size_t)v], tan[4 * (size_t)v + 1], tan[4 * (size_t)v + 2]));
     }
     free(J);
     return 1;
@@ -317,16 +333,37 @@ static void fill_node(lie_scene *s, int nd, const lie_mat4 *world, int dead, voi
             const lie_primitive *pr = &m->prims[pi];
             if (pr->n_tris == 0)
                 continue;
-            lie_vec3 *sk_p = NULL, *sk_n = NULL;
+            /* Tangents where the material has a normal map: the file's, else
+             * made from the normal map's texture coordinates. */
+            const lie_material *pmat = lie_scene_material(s, pr->material);
+            const float *tan = NULL;
+            float *made = NULL;
+            if (s->tri_tan && pmat->normal_tex >= 0 && !dead) {
+                tan = pr->tan;
+                if (!tan) {
+                    made = malloc(sizeof(float) * 4 * ((size_t)pr->n_verts + 1));
+                    if (!made || !lie_primitive_tangents(pr, pmat->tex_set[LIE_TEX_NORMAL], made)) {
+                        free(made);
+                        f->status = LIE_ERR_NOMEM;
+                        return;
+                    }
+                    tan = made;
+                }
+            }
+            lie_vec3 *sk_p = NULL, *sk_n = NULL, *sk_t = NULL;
             uint8_t *sk_m = NULL;
             if (sk && pr->joints && !dead) {
                 sk_p = malloc(sizeof *sk_p * ((size_t)pr->n_verts + 1));
                 sk_n = malloc(sizeof *sk_n * ((size_t)pr->n_verts + 1));
+                sk_t = malloc(sizeof *sk_t * ((size_t)pr->n_verts + 1));
                 sk_m = malloc((size_t)pr->n_verts + 1);
-                if (!sk_p || !sk_n || !sk_m || !skin_vertices(s, sk, pr, f->node_world, sk_p, sk_n, sk_m)) {
+                if (!sk_p || !sk_n || !sk_t || !sk_m ||
+                    !skin_vertices(s, sk, pr, f->node_world, tan, sk_p, sk_n, sk_t, sk_m)) {
                     free(sk_p);
                     free(sk_n);
+                    free(sk_t);
                     free(sk_m);
+                    free(made);
                     f->status = LIE_ERR_NOMEM;
                     return;
                 }
@@ -393,6 +430,22 @@ static void fill_node(lie_scene *s, int nd, const lie_mat4 *world, int dead, voi
                         for (int q = 0; q < 4; q++)
                             col[q] = pr->color ? pr->color[4 * (size_t)v[k] + (size_t)q] : 1.0f;
                     }
+                    if (s->tri_tan) {
+                        /* The tangent moves with the surface (the model
+                         * matrix, not the normal's); a mirroring transform
+                         * turns the frame's handedness around. */
+                        float *tt = &s->tri_tan[12 * (size_t)g + 4 * k];
+                        memset(tt, 0, sizeof(float) * 4);
+                        if (tan) {
+                            const float *q = &tan[4 * (size_t)v[k]];
+                            lie_vec3 w = lie_v3_norm(sk_t ? sk_t[v[k]] : lie_mat4_vector(world, lie_v3(q[0], q[1], q[2])));
+                            int flip = sk_p ? sk_m[v[k]] : mirror;
+                            tt[0] = w.x;
+                            tt[1] = w.y;
+                            tt[2] = w.z;
+                            tt[3] = (q[3] < 0.0f) != flip ? -1.0f : 1.0f;
+                        }
+                    }
                 }
                 s->tri_material[g] = pr->material;
                 s->tri_instance[g] = inst;
@@ -400,7 +453,9 @@ static void fill_node(lie_scene *s, int nd, const lie_mat4 *world, int dead, voi
             }
             free(sk_p);
             free(sk_n);
+            free(sk_t);
             free(sk_m);
+            free(made);
             const lie_material *mat = lie_scene_material(s, pr->material);
             if (!dead && material_emits(mat)) {
                 lie_emitter *e = &s->emitters[s->n_emitters];
@@ -491,6 +546,10 @@ static void hash_world(lie_scene *s, lie_hasher *h)
         lie_hasher_update(h, "COLOR_0", 7);
         lie_hasher_update(h, s->tri_color, sizeof(float) * 12 * n);
     }
+    if (s->tri_tan) { /* likewise tangents, made for normal maps */
+        lie_hasher_update(h, "TANGENT", 7);
+        lie_hasher_update(h, s->tri_tan, sizeof(float) * 12 * n);
+    }
     if (s->tri_uv1) { /* likewise a second texture coordinate set */
         lie_hasher_update(h, "TEXCOORD_1", 10);
         lie_hasher_update(h, s->tri_uv1, sizeof(float) * 6 * n);
@@ -522,6 +581,20 @@ static void hash_world(lie_scene *s, lie_hasher *h)
                 int32_t d[2] = {k + 16, m->tex_set[k]};
                 lie_hasher_update(h, d, sizeof d);
             }
+        /* The normal map and transmission only where a material has them:
+         * other scenes keep their hashes. */
+        if (m->normal_tex >= 0) {
+            int32_t d[3] = {32, m->normal_tex, m->tex_set[LIE_TEX_NORMAL]};
+            lie_hasher_update(h, d, sizeof d);
+            lie_hasher_update(h, &m->normal_scale, sizeof m->normal_scale);
+            lie_hasher_update(h, m->tex_param[LIE_TEX_NORMAL], sizeof m->tex_param[LIE_TEX_NORMAL]);
+        }
+        if (m->transmission > 0.0f) {
+            int32_t d[3] = {33, m->transmission_tex, m->tex_set[LIE_TEX_TRANSMISSION]};
+            lie_hasher_update(h, d, sizeof d);
+            lie_hasher_update(h, &m->transmission, sizeof m->transmission);
+            lie_hasher_update(h, m->tex_param[LIE_TEX_TRANSMISSION], sizeof m->tex_param[LIE_TEX_TRANSMISSION]);
+        }
     }
     lie_hasher_update(h, &nt, sizeof nt);
     for (int i = 0; i < s->n_textures; i++) {
@@ -601,11 +674,16 @@ lie_status lie_scene_flatten(lie_scene *s, lie_error *err)
         }
     s->tri_color = any_color ? malloc(sizeof(float) * 12 * n + 1) : NULL;
     s->tri_uv1 = any_uv1 ? malloc(sizeof(float) * 6 * n + 1) : NULL;
+    int any_normal_map = 0; /* tangents likewise: only for normal maps */
+    for (int i = 0; i < s->n_materials; i++)
+        any_normal_map |= s->materials[i].normal_tex >= 0;
+    s->tri_tan = any_normal_map ? malloc(sizeof(float) * 12 * n + 1) : NULL;
     s->emitters = calloc((size_t)c.instances + (size_t)c.lights + 1, sizeof *s->emitters);
     s->cameras = calloc((size_t)c.cameras + 1, sizeof *s->cameras);
     if (!s->instances || !s->tri_p || !s->tri_n || !s->tri_uv || !s->tri_ng || !s->tri_area ||
         !s->tri_material || !s->tri_instance || !s->tri_removed || !s->tri_emitter || !s->emitters ||
-        !s->cameras || (any_color && !s->tri_color) || (any_uv1 && !s->tri_uv1)) {
+        !s->cameras || (any_color && !s->tri_color) || (any_uv1 && !s->tri_uv1) ||
+        (any_normal_map && !s->tri_tan)) {
         free_world(s);
         return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory for %zu triangles", n);
     }

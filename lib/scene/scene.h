@@ -36,6 +36,17 @@ typedef struct lie_texture {
     lie_wrap wrap_s, wrap_t;
 } lie_texture;
 
+/* The texture slots of a material, each with its texture coordinate set
+ * and KHR_texture_transform. */
+enum {
+    LIE_TEX_BASE_COLOR = 0,
+    LIE_TEX_METALLIC_ROUGHNESS = 1,
+    LIE_TEX_EMISSIVE = 2,
+    LIE_TEX_NORMAL = 3,
+    LIE_TEX_TRANSMISSION = 4,
+    LIE_TEX_SLOTS = 5
+};
+
 typedef struct lie_material {
     char *name;            /* may be NULL */
     float base_color[4];   /* baseColorFactor (linear) */
@@ -55,15 +66,26 @@ typedef struct lie_material {
      * extension), and the matrix they make (lie_material_tex_xf_update):
      * the texture is looked up at (xf[0] u + xf[1] v + xf[2],
      * xf[3] u + xf[4] v + xf[5]) */
-    float tex_param[3][5];
-    float tex_xf[3][6];
+    float tex_param[LIE_TEX_SLOTS][5];
+    float tex_xf[LIE_TEX_SLOTS][6];
     /* The texture coordinate set each slot reads: 0 (TEXCOORD_0) or 1
      * (TEXCOORD_1); the textureInfo's texCoord, or its
      * KHR_texture_transform's. */
-    int tex_set[3];
+    int tex_set[LIE_TEX_SLOTS];
+    /* normalTexture (glTF 2.0 §3.9.3): a tangent-space normal map, read
+     * linear, or -1; its scale multiplies the map's X and Y.  It bends the
+     * shading normal only (lie_surface_from_hit). */
+    int normal_tex;
+    float normal_scale;
+    /* KHR_materials_transmission: the share of light that passes through
+     * the surface (transmissionFactor x the texture's R), 0 without the
+     * extension.  Without KHR_materials_volume the surface is thin: light
+     * crossing it keeps its direction and is tinted by the base colour,
+     * which is how direct light reaches what such a surface encloses
+     * (lie_scene_transmittance). */
+    float transmission;
+    int transmission_tex;
 } lie_material;
-
-enum { LIE_TEX_BASE_COLOR = 0, LIE_TEX_METALLIC_ROUGHNESS = 1, LIE_TEX_EMISSIVE = 2 };
 
 /* A material slot's texture coordinates after its KHR_texture_transform. */
 static inline void lie_material_tex_xf_apply(const float xf[6], float u, float v, float *tu, float *tv)
@@ -85,6 +107,9 @@ typedef struct lie_primitive {
     float *uv;             /* 2 per vertex (TEXCOORD_0) or NULL */
     float *uv1;            /* 2 per vertex (TEXCOORD_1) or NULL */
     float *color;          /* 4 per vertex (COLOR_0, linear RGBA; A = 1 for RGB) or NULL */
+    float *tan;            /* 4 per vertex (TANGENT: xyz unit, w = +-1 the bitangent's sign) or NULL:
+                              lie_scene_flatten computes them from the texture coordinates where a
+                              normal map needs them (lie_primitive_tangents) */
     uint32_t n_tris;
     uint32_t *idx;         /* 3 per triangle; strips and fans already converted */
     int material;          /* material index, or -1 for glTF's default material */
@@ -301,6 +326,9 @@ typedef struct lie_scene {
                                * none); NULL when no primitive has it */
     float *tri_color;         /* 12 per triangle (COLOR_0 RGBA per corner, 1 where a primitive
                                  has none), or NULL when no primitive has COLOR_0 */
+    float *tri_tan;           /* 12 per triangle: world tangent xyz and handedness w per corner
+                                 (zeros on triangles without a normal map), or NULL when no
+                                 material has a normal map */
     lie_vec3 *tri_ng;         /* unit geometric normal (front side) */
     float *tri_area;
     int32_t *tri_material;    /* -1: default material (see lie_scene_material) */
@@ -486,6 +514,18 @@ const lie_vec3 *lie_cluster_facing(const lie_scene *s, int c);
 uint32_t lie_cluster_target(const lie_scene *s, int c, float u1, float u2, lie_vec3 p, float far, lie_vec3 *q,
                             lie_vec3 *n, int *one_sided);
 int lie_cluster_can_reach(const lie_scene *s, int c, uint32_t tri, const lie_vec3 V[3], lie_vec3 ng, int two_sided);
+/* The light cluster c sends to a Lambert receiver at p with normal n (and
+ * -n too when two_sided), unshadowed, as the luminance of the irradiance:
+ * an area cluster's triangles by the closed form (Lambert's edge sum,
+ * clipped to the receiver's hemisphere) times its emitter's radiance (an
+ * emissive texture's variation not counted), a delta light's
+ * lie_emitter_light_at times the cosine (`far`: a directional light's
+ * reach).  What lib/lie's cost model weighs a unit's light samples by. */
+double lie_cluster_unshadowed(const lie_scene *s, int c, lie_vec3 p, lie_vec3 n, int two_sided, float far);
+/* A digest of everything lie_cluster_unshadowed reads of every cluster
+ * (emission, punctual parameters, the triangles' positions): equal
+ * digests, equal light at every point.  lib/update watches it. */
+uint64_t lie_scene_light_digest(const lie_scene *s);
 /* Partition every emitter into clusters (s->clusters and the arrays beside
  * it), a function of each emitter's own triangles alone.  Called by
  * lie_scene_flatten; LIE_ERR_NOMEM. */
@@ -527,6 +567,11 @@ int lie_scene_add_material(lie_scene *s, const lie_material *m);
 /* A deep copy of src's arrays into *out (everything else copied as is);
  * 0 when out of memory, and then nothing is left allocated. */
 int lie_primitive_copy(const lie_primitive *src, lie_primitive *out);
+/* Per-vertex tangents for a normal map read through texture coordinate set
+ * `set` (0 or 1), where the primitive gives none (lib/scene/tangent.c says
+ * how, and how they relate to MikkTSpace): 4 floats per vertex into out
+ * (xyz unit, w = +-1).  0 when out of memory. */
+int lie_primitive_tangents(const lie_primitive *p, int set, float *out);
 /* Frees a primitive's arrays (not the struct). */
 void lie_primitive_free(lie_primitive *p);
 /* pos (and nrm) = base + the weighted target displacements, target by

@@ -6,6 +6,47 @@
 
 #include <string.h>
 
+/* Cosine of the steepest a normal-mapped shading normal may lean from the
+ * geometric normal: a map bending it to or past the surface's plane (in
+ * error, or by scale) would light the surface from behind. */
+#define NORMAL_MAP_HORIZON 0.01f
+
+/* The shading normal bent by material m's normal map at (b1, b2) of
+ * triangle g: n the interpolated normal, ng the geometric one, both on the
+ * front side.  glTF 2.0 §3.9.3: the texel's RGB maps to [-1, 1]^3 in the
+ * frame (tangent, bitangent = cross(n, tangent) * w, n), X and Y times the
+ * scale.  The result is kept NORMAL_MAP_HORIZON above the geometric
+ * plane, as pbrt-v4 and Blender keep shading normals in the geometric
+ * hemisphere: the normal is moved toward ng until it is. */
+static lie_vec3 normal_mapped(const lie_scene *s, const lie_material *m, uint32_t g, float b1, float b2, lie_vec3 n,
+                              lie_vec3 ng)
+{
+    const float *T = &s->tri_tan[12 * (size_t)g];
+    float b0 = 1.0f - b1 - b2;
+    lie_vec3 t = lie_v3(b0 * T[0] + b1 * T[4] + b2 * T[8], b0 * T[1] + b1 * T[5] + b2 * T[9],
+                        b0 * T[2] + b1 * T[6] + b2 * T[10]);
+    t = lie_v3_norm(lie_v3_sub(t, lie_v3_scale(n, lie_v3_dot(n, t))));
+    if (!(lie_v3_dot(t, t) > 0.5f))
+        return n; /* no tangent plane here (a degenerate frame): the map cannot be read */
+    float w = b0 * T[3] + b1 * T[7] + b2 * T[11];
+    lie_vec3 b = lie_v3_scale(lie_v3_cross(n, t), w < 0.0f ? -1.0f : 1.0f);
+    float tx[4], xu, xv;
+    lie_scene_slot_uv(s, m, LIE_TEX_NORMAL, g, b1, b2, &xu, &xv);
+    lie_texture_sample(&s->textures[m->normal_tex], xu, xv, tx);
+    float x = (2.0f * tx[0] - 1.0f) * m->normal_scale, y = (2.0f * tx[1] - 1.0f) * m->normal_scale,
+          z = 2.0f * tx[2] - 1.0f;
+    lie_vec3 nm = lie_v3_norm(lie_v3_add(lie_v3_add(lie_v3_scale(t, x), lie_v3_scale(b, y)), lie_v3_scale(n, z)));
+    if (!(lie_v3_dot(nm, nm) > 0.5f))
+        return n;
+    float c = lie_v3_dot(nm, ng);
+    if (c < NORMAL_MAP_HORIZON) {
+        nm = lie_v3_norm(lie_v3_add(nm, lie_v3_scale(ng, NORMAL_MAP_HORIZON - c)));
+        if (!(lie_v3_dot(nm, nm) > 0.5f))
+            return ng;
+    }
+    return nm;
+}
+
 void lie_surface_from_hit(const lie_scene *s, const lie_hit *hit, lie_vec3 ray_dir, lie_surface *sf)
 {
     uint32_t g = hit->tri;
@@ -22,6 +63,9 @@ void lie_surface_from_hit(const lie_scene *s, const lie_hit *hit, lie_vec3 ray_d
                                         lie_v3_scale(N[2], b2)));
     if (lie_v3_dot(n, n) < 0.5f)
         n = ng;
+    const lie_material *m = lie_scene_material(s, s->tri_material[g]);
+    if (m->normal_tex >= 0 && m->normal_tex < s->n_textures && s->tri_tan)
+        n = normal_mapped(s, m, g, b1, b2, n, ng);
     int front = lie_v3_dot(ng, sf->wo) >= 0.0f;
     if (!front) {
         /* Seen from behind (double-sided, or a ray that was not culled):
@@ -31,7 +75,6 @@ void lie_surface_from_hit(const lie_scene *s, const lie_hit *hit, lie_vec3 ray_d
     }
     sf->ng = ng;
     sf->n = n;
-    const lie_material *m = lie_scene_material(s, s->tri_material[g]);
     float base[4] = {m->base_color[0], m->base_color[1], m->base_color[2], m->base_color[3]};
     if (s->tri_color) { /* COLOR_0 multiplies the base colour (glTF 2.0 §3.7.2.1) */
         const float *col = &s->tri_color[12 * (size_t)g];

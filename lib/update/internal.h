@@ -19,6 +19,7 @@ struct lie_update {
     uint32_t base_tris;
     float base_max_area;
     float base_far;           /* lie_pair_ray_far of the committed scene */
+    uint64_t base_light;      /* lie_scene_light_digest of the committed scene */
     lie_pixels *base_px;      /* a cache built for views: their pixels on the committed scene */
 
     /* Edits since the last commit. */

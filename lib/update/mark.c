@@ -108,6 +108,21 @@ static lie_status map_units(lie_update *u)
     }
     const size_t old_nc = (size_t)u->cache->env->n_clusters;
     int everything = u->opt.full || !(s->max_tri_area == u->base_max_area) || lie_cache_rules_old(c);
+    /* The cost model's decision to build a unit of a view-built cache reads
+     * every emitter's light at the triangle (lie_unit_shares): when the
+     * light changed, a unit whose decision it turned is built afresh (or
+     * left unbuilt), the others kept. */
+    const lie_env *old_env = u->cache->env;
+    double *share = NULL;
+    if (u->px && !everything && old_env->params.frames && lie_scene_light_digest(s) != u->base_light &&
+        !(share = malloc(sizeof *share * ((size_t)s->n_clusters + 1)))) {
+        free(moved);
+        free(emap);
+        free(cmap);
+        free(ofirst);
+        return LIE_ERR_NOMEM;
+    }
+    const float far = lie_pair_ray_far(s);
     u->st.units_views = 0;
     for (uint32_t t = 0; t < s->n_tris; t++) {
         int patch_moved = t >= u->base_tris || moved[s->instances[s->tri_instance[t]].node];
@@ -116,13 +131,24 @@ static lie_status map_units(lie_update *u)
             patch_moved = 1;
             u->st.units_views += (uint64_t)s->n_clusters;
         }
+        int decide = share && !patch_moved && u->px->first[t + 1] > u->px->first[t];
+        if (decide)
+            lie_unit_shares(s, t, far, share);
         for (int k = 0; k < s->n_clusters; k++) {
             size_t unit = (size_t)t * (size_t)s->n_clusters + (size_t)k;
             u->old_unit[unit] = everything || patch_moved || cmap[k] < 0
                                     ? -1
                                     : (int32_t)((size_t)t * old_nc + (size_t)cmap[k]);
+            if (decide && u->old_unit[unit] >= 0) {
+                int built = old_env->nodes[old_env->root[u->old_unit[unit]]].cls != LIE_CLASS_NONE;
+                if (built != lie_unit_pays(&old_env->params, u->px, t, share[k])) {
+                    u->old_unit[unit] = -1;
+                    u->st.units_views++;
+                }
+            }
         }
     }
+    free(share);
     free(moved);
     free(emap);
     free(cmap);

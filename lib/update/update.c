@@ -54,6 +54,7 @@ lie_status lie_update_create(lie_cache *cache, lie_scene *scene, const lie_updat
     u->base_tris = scene->n_tris;
     u->base_max_area = scene->max_tri_area;
     u->base_far = lie_pair_ray_far(scene);
+    u->base_light = lie_scene_light_digest(scene);
     if (!u->opt.full && build_trees(u, err) != LIE_OK) {
         lie_update_destroy(u);
         return err->status;
@@ -257,6 +258,7 @@ static lie_status commit(lie_update *u, lie_error *err)
     u->base_tris = s->n_tris;
     u->base_max_area = s->max_tri_area;
     u->base_far = lie_pair_ray_far(s);
+    u->base_light = lie_scene_light_digest(s);
     u->rst_stale = 1;
     if (u->opt.keep_trees && !u->opt.full)
         return build_trees(u, err) == LIE_OK ? LIE_OK : (u->failed = 1, err->status);

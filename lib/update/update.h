@@ -103,7 +103,8 @@ typedef struct lie_update_stats {
     uint64_t nodes_flagged;    /* patch-tree nodes flagged after the exact hull tests */
     uint64_t nodes_recomputed; /* patch-tree nodes computed by the steps */
     lie_rst_stats rst;         /* the trees the flags came from */
-    uint64_t units_views;      /* of the rebuilt units: their triangle's pixels in the views changed */
+    uint64_t units_views;      /* of the rebuilt units: their triangle's pixels in the views, or the
+                                  cost model's decision (an edit of the light), changed */
     double seconds_rst, seconds_edit, seconds_query, seconds_bvh, seconds_update;
     double seconds_views;      /* sampling a view-built cache's views, before and after the edits */
     /* the recomputation's parallel loops (lie_build_stats): CPU seconds of

@@ -65,6 +65,22 @@ else
     not_ok "--stats=json per-rank tiles: $(cat "$TMP/err")"
 fi
 
+# A frame in bands of rows, each band's EXR chunks compressed by the rank
+# that rendered it and written by rank 0: zip (16-line chunks, one per row
+# of tiles; the last band short) with half colour and AOVs, and piz
+# (32-line chunks, two rows of tiles each)
+for c in "zip 64x104 7 --half" "piz 48x200 7"; do
+    set -- $c
+    BOPTS="-q --size $2 --light-samples 4 --aov depth,normal --compression $1 ${4:-}"
+    "$B/lie-render" "$A/m-1.lie" $BOPTS -o "$TMP/b1.exr" || not_ok "one-process frame ($1)"
+    run $MPI_NOLEAK -np 3 "$B/lie-render" "$A/m-1.lie" $BOPTS --threads 1 --stats=json -o "$TMP/b3.exr"
+    if [ "$rc" -eq 0 ] && cmp -s "$TMP/b1.exr" "$TMP/b3.exr" && [ "$(json_member exr_chunks_gathered)" = "$3" ]; then
+        ok "$1 chunks compressed by the ranks that rendered their rows: one process's bytes ($3 chunks)"
+    else
+        not_ok "$1 chunks compressed apart (exit $rc, chunks $(json_member exr_chunks_gathered)):"; sed 's/^/# /' "$TMP/err" | head -5
+    fi
+done
+
 # A path: 5 frames on 3 ranks (whole frames, each written by its rank, then the last ones by tiles),
 # the glTF on stdin, its .bin and the camera path readable by rank 0 only
 cat >"$A/path.yaml" <<'YAML'

@@ -601,6 +601,73 @@ static void test_exr_chunks_compressed_in_parallel_same_bytes(void **state)
     lie_frame_destroy(f);
 }
 
+/* Chunks compressed apart (lie_exr_encode_chunks: another rank's band of
+ * rows, only those rows valid in its frame) and written with opt.chunks
+ * give lie_exr_write's bytes, for every compression, with half colour and
+ * attributes, when some chunks are given and the rest compressed here; a
+ * range outside the image is refused. */
+static void test_exr_chunks_encoded_apart_same_bytes(void **state)
+{
+    (void)state;
+    const int w = 29, h = 77;
+    lie_frame *f = lie_frame_create(w, h);
+    assert_non_null(f);
+    static const char *const xyz[3] = {"X", "Y", "Z"};
+    float *nrm = lie_frame_add_aov(f, "normal", 3, xyz);
+    assert_non_null(nrm);
+    for (int i = 0; i < w * h * 3; i++) {
+        f->rgb[i] = cosf((float)i * 0.013f) * (float)(i % 31);
+        nrm[i] = (float)(i % 7) - 3.0f;
+    }
+    lie_attr attrs[1] = {{.name = "note", .type = LIE_ATTR_STRING, .s = "made apart"}};
+    lie_error err;
+    for (int c = 0; c <= LIE_EXR_NONE; c++) {
+        for (int half = 0; half < 2; half++) {
+            lie_exr_options o = {.attrs = attrs, .n_attrs = 1, .compression = (lie_exr_compression)c, .threads = 2,
+                                 .half = half};
+            const char *pa = tmp_path("whole.exr"), *pb = tmp_path("apart.exr");
+            assert_int_equal(lie_exr_write(pa, f, &o, &err), LIE_OK);
+            int lines = lie_exr_chunk_lines((lie_exr_compression)c), n = (h + lines - 1) / lines;
+            assert_true(lines == 1 || lines == 16 || lines == 32);
+            lie_exr_chunk *ch = calloc((size_t)n, sizeof *ch);
+            assert_non_null(ch);
+            /* each band from a frame holding its own rows only */
+            for (int first = 0; first < n; first += 2) {
+                int count = n - first < 2 ? n - first : 2;
+                lie_frame *band = lie_frame_create(w, h);
+                float *bn = lie_frame_add_aov(band, "normal", 3, xyz);
+                assert_non_null(bn);
+                size_t y0 = (size_t)first * (size_t)lines, y1 = y0 + (size_t)count * (size_t)lines;
+                if (y1 > (size_t)h)
+                    y1 = (size_t)h;
+                memcpy(band->rgb + y0 * (size_t)w * 3, f->rgb + y0 * (size_t)w * 3,
+                       (y1 - y0) * (size_t)w * 3 * sizeof(float));
+                memcpy(bn + y0 * (size_t)w * 3, nrm + y0 * (size_t)w * 3, (y1 - y0) * (size_t)w * 3 * sizeof(float));
+                lie_exr_options bo = {.compression = (lie_exr_compression)c, .threads = 1, .half = half};
+                assert_int_equal(lie_exr_encode_chunks(band, &bo, first, count, ch + first, &err), LIE_OK);
+                lie_frame_destroy(band);
+            }
+            o.chunks = ch;
+            assert_int_equal(lie_exr_write(pb, f, &o, &err), LIE_OK);
+            assert_files_equal(pa, pb);
+            /* some given, the others compressed by the writer */
+            for (int k = 1; k < n; k += 2) {
+                free(ch[k].data);
+                ch[k].data = NULL;
+            }
+            assert_int_equal(lie_exr_write(pb, f, &o, &err), LIE_OK);
+            assert_files_equal(pa, pb);
+            for (int k = 0; k < n; k++)
+                free(ch[k].data);
+            lie_exr_chunk bad[2];
+            assert_int_equal(lie_exr_encode_chunks(f, &o, n - 1, 2, bad, &err), LIE_ERR_ARG);
+            free(ch);
+        }
+    }
+    assert_int_equal(lie_exr_chunk_lines((lie_exr_compression)99), 0);
+    lie_frame_destroy(f);
+}
+
 static void test_exr_write_to_missing_directory_fails_with_io_error(void **state)
 {
     (void)state;
@@ -1025,6 +1092,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_exr_write_rejects_clashing_attribute),
         cmocka_unit_test(test_exr_write_is_deterministic),
         cmocka_unit_test(test_exr_chunks_compressed_in_parallel_same_bytes),
+        cmocka_unit_test(test_exr_chunks_encoded_apart_same_bytes),
         cmocka_unit_test(test_exr_write_to_missing_directory_fails_with_io_error),
         cmocka_unit_test(test_exr_write_below_a_regular_file_fails_with_io_error),
         cmocka_unit_test(test_exr_write_that_cannot_be_renamed_leaves_no_temp_file),

@@ -693,6 +693,37 @@ static void test_lie_parts_joined_equal_one_build(void **state)
     lie_scene_destroy(s);
 }
 
+/* lie-build under mpirun hands units out costliest first by these
+ * weights: positive, one triangle's clusters alike, growing with the
+ * triangle's area, a range the slice of the whole, a bad range refused. */
+static void test_lie_unit_weights(void **state)
+{
+    (void)state;
+    lie_scene *s = test_scene("cornell.gltf");
+    lie_error err;
+    lie_build_params p = test_params(1e-3f);
+    uint64_t n = (uint64_t)s->n_tris * (uint64_t)s->n_clusters;
+    double *w = calloc((size_t)n + 1, sizeof *w), *part = calloc((size_t)n + 1, sizeof *part);
+    assert_non_null(w);
+    assert_non_null(part);
+    assert_int_equal(lie_env_unit_weights(s, &p, NULL, 0, n, w, &err), LIE_OK);
+    for (uint64_t u = 0; u < n; u++) {
+        uint32_t t = (uint32_t)(u / (uint64_t)s->n_clusters);
+        assert_true(w[u] >= 1.0);
+        assert_true(w[u] == w[(uint64_t)t * (uint64_t)s->n_clusters]);
+        for (uint32_t o = 0; o < s->n_tris; o++)
+            if (s->tri_area[o] < s->tri_area[t])
+                assert_true(w[(uint64_t)o * (uint64_t)s->n_clusters] <= w[u]);
+    }
+    uint64_t first = n / 3, count = n / 2;
+    assert_int_equal(lie_env_unit_weights(s, &p, NULL, first, count, part, &err), LIE_OK);
+    assert_memory_equal(part, w + first, sizeof *w * (size_t)count);
+    assert_int_equal(lie_env_unit_weights(s, &p, NULL, n - 1, 2, part, &err), LIE_ERR_ARG);
+    free(w);
+    free(part);
+    lie_scene_destroy(s);
+}
+
 static void test_patch_children_tile_the_parent(void **state)
 {
     (void)state;
@@ -831,6 +862,7 @@ int main(void)
         cmocka_unit_test(test_lie_build_is_identical_for_any_thread_count),
         cmocka_unit_test(test_lie_rebuilding_units_equals_building),
         cmocka_unit_test(test_lie_parts_joined_equal_one_build),
+        cmocka_unit_test(test_lie_unit_weights),
         cmocka_unit_test(test_patch_children_tile_the_parent),
         cmocka_unit_test(test_patch_names_round_trip),
         cmocka_unit_test(test_lie_many_triangle_emitter_uses_a_flat_oriented_box),

@@ -9,6 +9,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -163,12 +164,24 @@ static size_t put_hits(uint64_t *h, size_t at, uint32_t tri, size_t n)
     return at + n;
 }
 
-/* A unit that cannot pay for its build is left unbuilt: over 10 frames a
- * point light's one shadow ray a pixel on a 2-pixel triangle saves less
- * than the unit's first round of segments costs, an area light's 100 do
- * not; a triangle of 1000 pixels pays for both.  With --frames 0 every
- * seen unit is built.  Adding the pixels that make the point light's unit
- * pay builds it, as one build for all the pixels does. */
+/* Hits enough for the cost model to build a unit of this share: pixels x
+ * light_samples x share x ns_ray over the frames at least the first round
+ * of segments (lie_unit_pays), with 4 hits a pixel. */
+static double pays_from(const lie_build_params *p, double share)
+{
+    return 4.0 * (double)p->samples * (double)p->ns_segment /
+           ((double)p->frames * (double)p->light_samples * share * (double)p->ns_ray);
+}
+
+/* A unit that cannot pay for its build is left unbuilt: a frame's light
+ * samples are shared among the emitters by their unshadowed light, so
+ * over 10 frames the dimmer emitter's share of a small triangle's pixels
+ * saves fewer shadow rays than its unit's first round of segments costs,
+ * where the brighter one's pays.  Shares are fractions of the light at
+ * the triangle, and a unit its emitter cannot reach (unlit) costs nothing
+ * and is always built.  With --frames 0 every seen unit is built.  Adding
+ * the pixels that make the dimmer unit pay builds it, as one build for all
+ * the pixels does. */
 static void test_units_that_cannot_pay_are_left_unbuilt(void **state)
 {
     (void)state;
@@ -177,45 +190,61 @@ static void test_units_that_cannot_pay_are_left_unbuilt(void **state)
     lie_error err;
     assert_int_equal(lie_scene_load("tests/data/gltf/bent_light.gltf", NULL, &s, &err), LIE_OK);
     assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
-    int area = -1, point = -1;
-    for (int c = 0; c < s->n_clusters; c++) {
-        if (lie_emitter_is_delta(&s->emitters[s->clusters[c].emitter]))
-            point = c;
-        else
-            area = c;
-    }
-    assert_true(area >= 0 && point >= 0);
-    uint32_t a = 0, b = 1; /* two triangles no emitter owns */
-    while (s->tri_emitter[a] >= 0)
-        a++;
-    b = a + 1;
-    while (s->tri_emitter[b] >= 0)
-        b++;
-    assert_true(b < s->n_tris);
-    uint64_t *h = malloc(sizeof *h * 8000);
-    assert_non_null(h);
-    size_t n = put_hits(h, put_hits(h, 0, a, 8), b, 4000);
-    lie_pixels *px = NULL, *more = NULL;
-    assert_int_equal(lie_pixels_create(s->n_tris, 4, h, n, &px, &err), LIE_OK);
-    n = put_hits(h, put_hits(h, 0, a, 4000), b, 4000);
-    assert_int_equal(lie_pixels_create(s->n_tris, 4, h, n, &more, &err), LIE_OK);
+    assert_int_equal(s->n_clusters, 2);
     lie_build_params p = lie_build_params_default();
     p.frames = 10;
+    /* a triangle both emitters light, one far more than the other */
+    float far = lie_pair_ray_far(s);
+    double share[2], best = 0.0;
+    uint32_t a = UINT32_MAX;
+    int dim = 0, unlit = 0;
+    for (uint32_t t = 0; t < s->n_tris; t++) {
+        if (s->tri_emitter[t] >= 0)
+            continue;
+        lie_unit_shares(s, t, far, share);
+        for (int c = 0; c < 2; c++) {
+            assert_true(share[c] == -1.0 || (share[c] >= 0.0 && share[c] <= 1.0));
+            unlit += share[c] < 0.0;
+        }
+        if (share[0] > 0.0 && share[1] > 0.0)
+            assert_true(fabs(share[0] + share[1] - 1.0) < 1e-9);
+        double r = share[0] > 0.0 && share[1] > 0.0 ? (share[0] < share[1] ? share[1] / share[0] : share[0] / share[1]) : 0.0;
+        if (r > best) {
+            best = r;
+            a = t;
+            dim = share[0] < share[1] ? 0 : 1;
+        }
+    }
+    assert_true(a != UINT32_MAX && best > 4.0);
+    assert_true(unlit > 0); /* the spot's cone leaves triangles out */
+    lie_unit_shares(s, a, far, share);
+    /* pixels between the two thresholds, then enough for both */
+    double lo = pays_from(&p, share[1 - dim]), hi = pays_from(&p, share[dim]);
+    size_t few = (size_t)ceil(2.0 * lo), many = (size_t)ceil(hi) + 4;
+    assert_true((double)few < hi);
+    uint64_t *h = malloc(sizeof *h * (many + 1));
+    assert_non_null(h);
+    size_t n = put_hits(h, 0, a, (int)few);
+    lie_pixels *px = NULL, *more = NULL;
+    assert_int_equal(lie_pixels_create(s->n_tris, 4, h, n, &px, &err), LIE_OK);
+    n = put_hits(h, 0, a, (int)many);
+    assert_int_equal(lie_pixels_create(s->n_tris, 4, h, n, &more, &err), LIE_OK);
     lie_build_stats st;
+    memset(&st, 0, sizeof st);
     lie_env *e = NULL, *e0 = NULL, *em = NULL;
     assert_int_equal(lie_env_build_views(s, rt, &p, px, NULL, &e, &st, &err), LIE_OK);
     const size_t nc = (size_t)s->n_clusters;
 #define ROOT_CLS(env, t, c) ((env)->nodes[(env)->root[(size_t)(t) * nc + (size_t)(c)]].cls)
-    assert_int_equal(ROOT_CLS(e, a, point), LIE_CLASS_NONE);
-    assert_int_not_equal(ROOT_CLS(e, a, area), LIE_CLASS_NONE);
-    assert_int_not_equal(ROOT_CLS(e, b, point), LIE_CLASS_NONE);
-    assert_int_not_equal(ROOT_CLS(e, b, area), LIE_CLASS_NONE);
+    assert_int_equal(ROOT_CLS(e, a, dim), LIE_CLASS_NONE);
+    assert_int_not_equal(ROOT_CLS(e, a, 1 - dim), LIE_CLASS_NONE);
+    assert_int_equal(st.units_unpaid, 1);
+    assert_int_equal(st.units_unseen, (uint64_t)s->n_tris * nc - 2);
     p.frames = 0;
     assert_int_equal(lie_env_build_views(s, rt, &p, px, NULL, &e0, &st, &err), LIE_OK);
-    assert_int_not_equal(ROOT_CLS(e0, a, point), LIE_CLASS_NONE);
+    assert_int_not_equal(ROOT_CLS(e0, a, dim), LIE_CLASS_NONE);
     p.frames = 10;
     assert_int_equal(lie_env_build_views(s, rt, &p, more, NULL, &em, &st, &err), LIE_OK);
-    assert_int_not_equal(ROOT_CLS(em, a, point), LIE_CLASS_NONE);
+    assert_int_not_equal(ROOT_CLS(em, a, dim), LIE_CLASS_NONE);
     lie_add_stats as;
     assert_int_equal(lie_env_add_views(e, s, rt, px, more, 2, &st, &as, &err), LIE_OK);
     assert_true(as.units_new >= 1);

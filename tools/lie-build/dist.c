@@ -1,10 +1,18 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* lie-build under mpirun: the units (triangle, emitter) in ranges handed
- * out dynamically, so they balance by their measured cost (a rank that
- * finishes early takes more).  Ranges shrink as the work runs out (guided
- * self-scheduling: a quarter of a rank's share of what is left, down to a
- * floor), so the last ones are small.  Rank 0 joins the parts in unit order
- * into the env one process builds (lie_env_join). */
+ * out dynamically (a rank that finishes early takes more), costliest
+ * first by the library's estimate (lie_env_unit_weights, the order a
+ * build's threads take triangles in), so that no long range starts last
+ * while the other ranks idle.  Each range holds about 1/(16 ranks) of the
+ * estimated cost and of the units (or one unit), so the estimate's errors
+ * even out over the last, cheapest ranges.  Rank 0 joins the parts in
+ * unit order into the env one process builds (lie_env_join).
+ *
+ * Why by cost: units differ by orders of magnitude (the large walls and
+ * floors of a room subdivide deepest).  On museum1, units handed out in
+ * unit order in shrinking ranges (a quarter of a rank's share of what is
+ * left) put 70% of the build into the first range: 2 ranks took 1.57
+ * times as long as 2 threads (docs/mpi.md). */
 #include "dist.h"
 
 #include <stdlib.h>
@@ -12,6 +20,8 @@
 
 typedef struct range {
     uint64_t first, count;
+    uint64_t slot;   /* its place in unit order: parts[slot] */
+    double weight;   /* estimated cost */
 } range;
 
 typedef struct job {
@@ -19,11 +29,11 @@ typedef struct job {
     const lie_rt *rt;
     const lie_build_params *p;
     const lie_pixels *px;
-    range *items;
+    range *items;           /* in the order handed out */
     size_t n_items;
-    lie_env_part *parts;    /* rank 0: per item */
+    lie_env_part *parts;    /* rank 0: per range, in unit order */
     lie_build_stats stats;  /* rank 0: the sum */
-    int nomem;              /* this rank could not set up: its items fail */
+    int nomem;              /* this rank could not plan: its items fail */
 } job;
 
 typedef struct part_head {
@@ -31,23 +41,46 @@ typedef struct part_head {
     lie_build_stats stats;
 } part_head;
 
+#define RANGES_PER_RANK 16
 
-static size_t plan(range *out, uint64_t n_units, int ranks)
+static int heavier(const void *a, const void *b)
 {
-    uint64_t floor_ = n_units / (64 * (uint64_t)ranks), k = 0;
-    if (floor_ < 1)
-        floor_ = 1;
-    for (uint64_t u = 0; u < n_units; k++) {
-        uint64_t left = n_units - u, c = (left + 4 * (uint64_t)ranks - 1) / (4 * (uint64_t)ranks);
-        if (c < floor_)
-            c = floor_;
-        if (c > left)
-            c = left;
-        if (out)
-            out[k] = (range){u, c};
-        u += c;
+    const range *x = a, *y = b;
+    if (x->weight != y->weight)
+        return x->weight > y->weight ? -1 : 1;
+    return x->slot < y->slot ? -1 : x->slot > y->slot;
+}
+
+/* The ranges, costliest first (ties in unit order), in j->items; the same
+ * on every rank (the same binary and inputs: lie_dist_check). */
+static lie_status plan(job *j, uint64_t n_units, int ranks, lie_error *err)
+{
+    double *w = malloc(sizeof *w * ((size_t)n_units + 1));
+    j->items = calloc((size_t)n_units + 1, sizeof *j->items);
+    lie_status st = w && j->items ? lie_env_unit_weights(j->s, j->p, j->px, 0, n_units, w, err)
+                                  : lie_error_set(err, LIE_ERR_NOMEM, j->s->path, "out of memory");
+    if (st != LIE_OK) {
+        free(w);
+        return st;
     }
-    return (size_t)k;
+    double total = 0.0;
+    for (uint64_t u = 0; u < n_units; u++)
+        total += w[u];
+    uint64_t parts = RANGES_PER_RANK * (uint64_t)ranks;
+    double max_w = total / (double)parts;
+    uint64_t max_n = (n_units + parts - 1) / parts, k = 0;
+    for (uint64_t u = 0; u < n_units; k++) {
+        range *r = &j->items[k];
+        *r = (range){u, 0, k, 0.0};
+        while (u < n_units && (r->count == 0 || (r->weight + w[u] <= max_w && r->count < max_n))) {
+            r->weight += w[u++];
+            r->count++;
+        }
+    }
+    free(w);
+    j->n_items = (size_t)k;
+    qsort(j->items, j->n_items, sizeof *j->items, heavier);
+    return LIE_OK;
 }
 
 static lie_status run(void *ctx, size_t i, lie_dist_buf *out, lie_error *err)
@@ -88,7 +121,7 @@ static lie_status take(void *ctx, size_t i, int rank, const unsigned char *data,
         return lie_error_set(err, LIE_ERR_FORMAT, NULL, "rank %d sent a part that is not units %llu..%llu", rank,
                              (unsigned long long)j->items[i].first,
                              (unsigned long long)(j->items[i].first + j->items[i].count));
-    lie_env_part *p = &j->parts[i];
+    lie_env_part *p = &j->parts[j->items[i].slot];
     p->first_unit = h.first;
     p->n_units = h.n_units;
     p->n_nodes = (uint32_t)h.n_nodes;
@@ -119,19 +152,23 @@ lie_status build_dist(const lie_scene *s, const lie_rt *rt, const lie_build_para
 {
     *out = NULL;
     double t0 = lie_time_now();
-    int ranks = lie_dist_size();
     job j = {.s = s, .rt = rt, .p = p, .px = px};
     uint64_t n_units = (uint64_t)s->n_tris * (uint64_t)s->n_clusters;
-    j.n_items = plan(NULL, n_units, ranks);
-    j.items = calloc(j.n_items + 1, sizeof *j.items);
-    j.parts = calloc(j.n_items + 1, sizeof *j.parts);
-    /* a rank short of memory still takes part: its items report it */
-    j.nomem = !j.items || !j.parts;
-    if (!j.nomem)
-        plan(j.items, n_units, ranks);
+    /* a rank that cannot plan still takes part: a worker's items then
+     * report it, and rank 0 hands out nothing and reports its own */
+    lie_error plan_err;
+    lie_error_clear(&plan_err);
+    lie_status planned = plan(&j, n_units, lie_dist_size(), &plan_err);
+    if (planned == LIE_OK && !(j.parts = calloc(j.n_items + 1, sizeof *j.parts)))
+        planned = lie_error_set(&plan_err, LIE_ERR_NOMEM, s->path, "out of memory");
+    j.nomem = planned != LIE_OK;
     memset(&j.stats, 0, sizeof j.stats);
-    lie_dist_work w = {j.n_items, &j, run, take, units};
+    lie_dist_work w = {j.nomem ? 0 : j.n_items, &j, run, take, units};
     lie_status st = lie_dist_run(&w, err);
+    if (st == LIE_OK && lie_dist_rank() == 0 && planned != LIE_OK) {
+        *err = plan_err;
+        st = planned;
+    }
     if (st == LIE_OK && lie_dist_rank() == 0)
         st = lie_env_join(s, p, j.parts, j.n_items, out, err);
     for (size_t i = 0; j.parts && i < j.n_items; i++)

@@ -4,6 +4,7 @@
 #include "dist.h"
 #include "job.h"
 
+#include <math.h>
 #include <stdio.h>
 
 /* What both forms print, gathered once. */
@@ -23,6 +24,9 @@ typedef struct summary {
      * gave it; and one frame of the views, with full visibility and with
      * this cache (CPU seconds over all threads; bench/build.sh renders them) */
     double model_build, sp, sm;
+    /* with views: what a frame of them saves (full visibility's shadow CPU
+     * time less the cache's) and the frames the build takes to pay back */
+    double saving, break_even;
     size_t bytes;
 } summary;
 
@@ -64,6 +68,11 @@ static void print_json(FILE *fp, const summary *m)
                 "\"frame_list_entries\":%.0f,\"frame_lie_rays\":%.0f",
                 m->sp, m->sm, m->pred->pixels, 1e-9 * m->pred->full_ns, 1e-9 * m->pred->lie_ns, m->pred->full_rays,
                 m->pred->list_entries, m->pred->env_rays);
+    if (m->pred)
+        fprintf(fp, ",\"units_unseen\":%llu,\"units_unpaid\":%llu,\"saving_s_per_frame_predicted\":%.6f,"
+                    "\"break_even_frames_predicted\":%.3f",
+                (unsigned long long)m->st->units_unseen, (unsigned long long)m->st->units_unpaid, m->saving,
+                isfinite(m->break_even) ? m->break_even : -1.0);
     fprintf(fp, "}");
     fprintf(fp,
             ",\"partial\":%s,\"units_copied\":%llu,\"units_interrupted\":%llu,\"workers\":%d,\"seconds_cpu\":%.6f,"
@@ -125,6 +134,11 @@ static void print_text(const char *prog, const summary *m)
                         "(%.0f pixels) costs %.3f shadow CPU s with full visibility, %.3f with this cache",
                 m->sp, m->sm, m->pred->pixels, 1e-9 * m->pred->full_ns, 1e-9 * m->pred->lie_ns);
     fprintf(stderr, "\n");
+    if (m->pred)
+        fprintf(stderr, "  units left to Embree: %llu unseen, %llu whose light cannot pay for a build; a frame "
+                        "saves %.4f CPU s predicted, the build pays back in %.1f frames\n",
+                (unsigned long long)m->st->units_unseen, (unsigned long long)m->st->units_unpaid, m->saving,
+                m->break_even);
     if (m->as)
         fprintf(stderr, "  into: %llu units kept, %llu refined, %llu new; %llu nodes recomputed\n",
                 (unsigned long long)m->as->units_kept, (unsigned long long)m->as->units_refined,
@@ -140,7 +154,7 @@ lie_status job_print_stats(const lie_cli *cli, build_job *j, double cpu_build, c
     summary m = {.input = j->input, .s = j->scene, .env = j->env, .st = st, .as = j->into ? &j->as : NULL,
                  .t = {t[0], t[1], t[2], t[3]}, .cpu_build = cpu_build, .bytes = j->bytes};
     if (j->px) {
-        lie_env_predict(j->env, j->px, &prediction);
+        lie_env_predict(j->env, j->scene, j->px, &prediction);
         m.pred = &prediction;
     }
     for (int k = 0; k < LIE_CLASS_COUNT; k++)
@@ -149,6 +163,10 @@ lie_status job_print_stats(const lie_cli *cli, build_job *j, double cpu_build, c
         m.patches += st->patches_per_depth[d];
     m.mean = st->pairs[LIE_CLASS_PARTIAL] ? (double)st->blocker_total / (double)st->pairs[LIE_CLASS_PARTIAL] : 0.0;
     m.model_build = 1e-9 * (double)st->segments * (double)j->env->params.ns_segment;
+    if (m.pred) {
+        m.saving = 1e-9 * (prediction.full_ns - prediction.lie_ns);
+        m.break_even = m.saving > 0.0 ? m.model_build / m.saving : INFINITY;
+    }
     m.sp = 1e-9 * st->split_saving_predicted_ns;
     m.sm = 1e-9 * st->split_saving_measured_ns;
     if (cli->stats == 2) {

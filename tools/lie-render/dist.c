@@ -16,6 +16,7 @@
 typedef struct item {
     int frame;             /* index into job.list */
     uint32_t first, count; /* tiles */
+    int32_t chunk_first, chunk_count; /* a band of rows: the EXR chunks compressed where rendered (count 0: floats) */
 } item;
 
 typedef struct job {
@@ -30,14 +31,16 @@ typedef struct job {
     size_t n_tiles;
     lie_frame *scratch;     /* this rank's: tiles are rendered here, then packed */
     lie_frame **frames;     /* rank 0: frames being assembled */
+    lie_exr_chunk **chunks; /* rank 0: their chunks compressed by the ranks (bands) */
     size_t *missing;        /* rank 0: tiles still to come per frame */
-    render_write_fn write;
-    void *write_ctx;
+    const render_out *out;
+    int n_chunks;           /* per frame, when items are bands */
     lie_render_stats rs;
     double t_write;
     lie_status setup;       /* this rank could not set up: its items fail with setup_err */
     lie_error setup_err;
     uint64_t *written;      /* rank 0: per rank, frames and bytes written (2 per rank) */
+    uint64_t chunks_in;     /* rank 0: EXR chunks taken from bands */
 } job;
 
 /* What a rank sends for an item: its statistics, then the tiles' floats,
@@ -50,6 +53,7 @@ typedef struct item_head {
 } item_head;
 
 static int last_frames;         /* of the last render_dist */
+static uint64_t last_chunks;    /* EXR chunks it gathered compressed (bands) */
 static uint64_t *last_written;  /* rank 0: its job's written (2 per rank) */
 
 static int whole(const job *j, const item *it) { return it->first == 0 && it->count == j->n_tiles; }
@@ -116,6 +120,33 @@ static size_t packed_floats(const lie_frame *f, uint32_t first, uint32_t count)
     return px * (size_t)per_px;
 }
 
+/* A band of rows: its EXR chunks compressed here, sent as their sizes
+ * and bytes (a third to a half of the floats for zip). */
+static lie_status run_band(job *j, const item *it, const item_head *h, lie_dist_buf *out, lie_error *err)
+{
+    int n = it->chunk_count;
+    lie_exr_chunk *ch = calloc((size_t)n, sizeof *ch);
+    if (!ch)
+        return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
+    double t0 = lie_time_now();
+    lie_status st = j->out->encode(j->out->ctx, j->scratch, it->chunk_first, n, ch, err);
+    j->t_write += lie_time_now() - t0;
+    size_t at = out->size + sizeof *h; /* the sizes, filled in as the bytes go in (out may move) */
+    if (st == LIE_OK &&
+        (!lie_dist_buf_add(out, h, sizeof *h) || !lie_dist_buf_add(out, NULL, sizeof(uint64_t) * (size_t)n)))
+        st = lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
+    for (int k = 0; st == LIE_OK && k < n; k++) {
+        uint64_t size = ch[k].size;
+        memcpy(out->data + at + sizeof size * (size_t)k, &size, sizeof size);
+        if (!lie_dist_buf_add(out, ch[k].data, (size_t)size))
+            st = lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
+    }
+    for (int k = 0; k < n; k++)
+        free(ch[k].data);
+    free(ch);
+    return st;
+}
+
 static lie_status run(void *ctx, size_t i, lie_dist_buf *out, lie_error *err)
 {
     job *j = ctx;
@@ -133,13 +164,15 @@ static lie_status run(void *ctx, size_t i, lie_dist_buf *out, lie_error *err)
     if (j->path && whole(j, it)) {
         /* a whole frame of a path: written here, rank 0 only hears of it */
         double t0 = lie_time_now();
-        st = j->write(j->write_ctx, j->list[it->frame], &cam, j->scratch, &h.bytes_written, err);
+        st = j->out->write(j->out->ctx, j->list[it->frame], &cam, j->scratch, NULL, &h.bytes_written, err);
         j->t_write += lie_time_now() - t0;
         if (st != LIE_OK)
             return st;
         h.written = 1;
         return lie_dist_buf_add(out, &h, sizeof h) ? LIE_OK : lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
     }
+    if (it->chunk_count > 0)
+        return run_band(j, it, &h, out, err);
     size_t n = packed_floats(j->scratch, it->first, it->count);
     if (!lie_dist_buf_add(out, &h, sizeof h))
         return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
@@ -148,6 +181,64 @@ static lie_status run(void *ctx, size_t i, lie_dist_buf *out, lie_error *err)
         return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
     copy_tiles(j->scratch, it->first, it->count, dst, 1);
     return LIE_OK;
+}
+
+/* A band's chunks, checked against the item and kept for the frame's
+ * write. */
+static lie_status take_band(job *j, const item *it, int rank, const unsigned char *data, size_t size,
+                            lie_error *err)
+{
+    size_t n = (size_t)it->chunk_count, need = sizeof(uint64_t) * n;
+    lie_exr_chunk **cs = &j->chunks[it->frame];
+    if (!*cs && !(*cs = calloc((size_t)j->n_chunks, sizeof **cs)))
+        return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
+    for (size_t k = 0; k < n && need <= size; k++) {
+        uint64_t c;
+        memcpy(&c, data + sizeof c * k, sizeof c);
+        need = c <= size ? need + (size_t)c : SIZE_MAX;
+    }
+    if (need != size)
+        return lie_error_set(err, LIE_ERR_FORMAT, NULL, "rank %d sent %zu bytes for the chunks of rows %u..%u of "
+                             "frame %d, which do not add up", rank, size, it->first, it->first + it->count, it->frame);
+    const unsigned char *q = data + sizeof(uint64_t) * n;
+    for (size_t k = 0; k < n; k++) {
+        lie_exr_chunk *c = &(*cs)[it->chunk_first + (int)k];
+        memcpy(&c->size, data + sizeof c->size * k, sizeof c->size);
+        if (!(c->data = malloc((size_t)c->size + 1)))
+            return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
+        memcpy(c->data, q, (size_t)c->size);
+        q += c->size;
+        j->chunks_in++;
+    }
+    return LIE_OK;
+}
+
+static void free_chunks(job *j, int frame)
+{
+    for (int k = 0; j->chunks[frame] && k < j->n_chunks; k++)
+        free(j->chunks[frame][k].data);
+    free(j->chunks[frame]);
+    j->chunks[frame] = NULL;
+}
+
+/* An item's tiles are in: once its frame has all of them, write it. */
+static lie_status frame_done(job *j, const item *it, lie_error *err)
+{
+    j->missing[it->frame] -= it->count;
+    if (j->missing[it->frame])
+        return LIE_OK;
+    lie_frame **f = &j->frames[it->frame];
+    double t0 = lie_time_now();
+    lie_camera cam = frame_camera(j, j->list[it->frame]);
+    uint64_t bytes = 0;
+    lie_status st = j->out->write(j->out->ctx, j->list[it->frame], &cam, *f, j->chunks[it->frame], &bytes, err);
+    j->t_write += lie_time_now() - t0;
+    j->written[0]++;
+    j->written[1] += bytes;
+    lie_frame_destroy(*f);
+    *f = NULL;
+    free_chunks(j, it->frame);
+    return st;
 }
 
 static lie_status take(void *ctx, size_t i, int rank, const unsigned char *data, size_t size, lie_error *err)
@@ -179,6 +270,13 @@ static lie_status take(void *ctx, size_t i, int rank, const unsigned char *data,
             return st;
         j->missing[it->frame] = j->n_tiles;
     }
+    if (it->chunk_count > 0) {
+        lie_status st = take_band(j, it, rank, data + sizeof h, size - sizeof h, err);
+        if (st != LIE_OK)
+            return st;
+        lie_render_stats_add(&j->rs, &h.fs);
+        return frame_done(j, it, err);
+    }
     size_t n = packed_floats(*f, it->first, it->count);
     if (size != sizeof h + n * sizeof(float))
         return lie_error_set(err, LIE_ERR_FORMAT, NULL, "rank %d sent %zu bytes for tiles %u..%u of frame %d, "
@@ -192,19 +290,7 @@ static lie_status take(void *ctx, size_t i, int rank, const unsigned char *data,
     memcpy(tmp, data + sizeof h, n * sizeof(float));
     copy_tiles(*f, it->first, it->count, tmp, 0);
     free(tmp);
-    j->missing[it->frame] -= it->count;
-    if (j->missing[it->frame])
-        return LIE_OK;
-    double t0 = lie_time_now();
-    lie_camera cam = frame_camera(j, j->list[it->frame]);
-    uint64_t bytes = 0;
-    lie_status st = j->write(j->write_ctx, j->list[it->frame], &cam, *f, &bytes, err);
-    j->t_write += lie_time_now() - t0;
-    j->written[0]++;
-    j->written[1] += bytes;
-    lie_frame_destroy(*f);
-    *f = NULL;
-    return st;
+    return frame_done(j, it, err);
 }
 
 static uint64_t units(void *ctx, size_t i)
@@ -213,8 +299,12 @@ static uint64_t units(void *ctx, size_t i)
     return j->items ? j->items[i].count : 0;
 }
 
-/* Whole frames while at least as many remain as ranks, then ranges of about
- * an eighth of a rank's share of a frame. */
+/* Whole frames while at least as many remain as ranks; the rest in
+ * pieces of about an eighth of a rank's share of a frame: bands of tile
+ * rows for EXR output while there are at least two bands per rank (the
+ * rank that renders a band compresses its chunks: a band is a whole
+ * number of chunks, 16 rows of tiles holding 1 or 16 chunks' scanlines
+ * and 32-line chunks taking two rows), else ranges of tiles. */
 static size_t plan_chunk(size_t n_tiles, int ranks)
 {
     size_t chunk = n_tiles / (8 * (size_t)ranks);
@@ -226,62 +316,89 @@ static size_t plan_whole(int n_frames, int ranks)
     return n_frames >= ranks ? (size_t)(n_frames - (ranks - 1)) : 0;
 }
 
-static size_t plan_count(int n_frames, int ranks, size_t n_tiles)
+/* Tile rows per band item, or 0: ranges of tiles. */
+static int band_rows(const job *j, int ranks)
 {
-    size_t whole = plan_whole(n_frames, ranks), chunk = plan_chunk(n_tiles, ranks);
-    return whole + ((size_t)n_frames - whole) * ((n_tiles + chunk - 1) / chunk);
+    int lines = j->out->chunk_lines, tiles_y = (j->ro->height + LIE_TILE - 1) / LIE_TILE;
+    if (lines <= 0 || !j->out->encode)
+        return 0;
+    /* tile rows a chunk spans; a band holds whole chunks */
+    int unit = lines > LIE_TILE ? (lines + LIE_TILE - 1) / LIE_TILE : 1;
+    if ((unit * LIE_TILE) % lines != 0)
+        return 0;
+    int bands = (tiles_y + unit - 1) / unit;
+    if (bands < 2 * ranks)
+        return 0;
+    int per = bands / (8 * ranks);
+    return (per < 1 ? 1 : per) * unit;
 }
 
 static size_t plan(job *j, int n_frames, int ranks)
 {
     size_t whole = plan_whole(n_frames, ranks), chunk = plan_chunk(j->n_tiles, ranks);
-    size_t n = plan_count(n_frames, ranks, j->n_tiles);
+    int rows = band_rows(j, ranks), tiles_x = (j->ro->width + LIE_TILE - 1) / LIE_TILE;
+    int tiles_y = (j->ro->height + LIE_TILE - 1) / LIE_TILE, lines = j->out->chunk_lines;
+    size_t per_frame = rows ? (size_t)((tiles_y + rows - 1) / rows) : (j->n_tiles + chunk - 1) / chunk;
+    size_t n = whole + ((size_t)n_frames - whole) * per_frame;
+    j->n_chunks = rows ? (j->ro->height + lines - 1) / lines : 0;
     j->items = calloc(n + 1, sizeof *j->items);
     if (!j->items)
-        return 0;
+        return n;
     size_t k = 0;
     for (int f = 0; f < n_frames; f++) {
         if ((size_t)f < whole) {
-            j->items[k++] = (item){f, 0, (uint32_t)j->n_tiles};
-            continue;
+            j->items[k++] = (item){f, 0, (uint32_t)j->n_tiles, 0, 0};
+        } else if (rows) {
+            for (int r = 0; r < tiles_y; r += rows) {
+                int r1 = r + rows < tiles_y ? r + rows : tiles_y;
+                int y0 = r * LIE_TILE, y1 = r1 * LIE_TILE < j->ro->height ? r1 * LIE_TILE : j->ro->height;
+                int c0 = y0 / lines, c1 = (y1 + lines - 1) / lines;
+                j->items[k++] = (item){f, (uint32_t)(r * tiles_x), (uint32_t)((r1 - r) * tiles_x), c0, c1 - c0};
+            }
+        } else {
+            for (size_t t = 0; t < j->n_tiles; t += chunk)
+                j->items[k++] = (item){f, (uint32_t)t, (uint32_t)(j->n_tiles - t < chunk ? j->n_tiles - t : chunk), 0, 0};
         }
-        for (size_t t = 0; t < j->n_tiles; t += chunk)
-            j->items[k++] = (item){f, (uint32_t)t, (uint32_t)(j->n_tiles - t < chunk ? j->n_tiles - t : chunk)};
     }
     return k;
 }
 
 lie_status render_dist(const lie_scene *s, const lie_rt *rt, const lie_render_options *ro,
                        const lie_camera_path *path, const lie_camera *cam, const int *frames, int n_frames,
-                       render_write_fn write, void *write_ctx, lie_render_stats *rs, double *t_write, lie_error *err)
+                       const render_out *out, lie_render_stats *rs, double *t_write, lie_error *err)
 {
-    job j = {.s = s, .rt = rt, .ro = ro, .path = path, .cam = cam, .list = frames, .write = write,
-             .write_ctx = write_ctx};
+    job j = {.s = s, .rt = rt, .ro = ro, .path = path, .cam = cam, .list = frames, .out = out};
     j.n_tiles = lie_render_tile_count(ro->width, ro->height);
     int ranks = lie_dist_size();
     j.n_items = plan(&j, n_frames, ranks);
     j.frames = calloc((size_t)n_frames, sizeof *j.frames);
+    j.chunks = calloc((size_t)n_frames, sizeof *j.chunks);
     j.missing = calloc((size_t)n_frames, sizeof *j.missing);
     free(last_written);
     last_written = j.written = calloc(2 * (size_t)ranks, sizeof *j.written);
     /* every rank takes part in lie_dist_run, even one that failed here:
-     * its items then report the failure */
+     * its items then report the failure (the count is every rank's) */
     lie_error_clear(&j.setup_err);
-    if (!j.items || !j.frames || !j.missing || !j.written)
+    if (!j.items || !j.frames || !j.chunks || !j.missing || !j.written)
         j.setup = lie_error_set(&j.setup_err, LIE_ERR_NOMEM, NULL, "out of memory");
     else
         j.setup = lie_render_frame_create(s, ro, &j.scratch, &j.setup_err);
-    lie_dist_work w = {j.items ? j.n_items : plan_count(n_frames, ranks, j.n_tiles), &j, run, take, units};
+    lie_dist_work w = {j.n_items, &j, run, take, units};
     lie_status st = lie_dist_run(&w, err);
-    for (int f = 0; f < n_frames; f++)
+    for (int f = 0; f < n_frames; f++) {
         lie_frame_destroy(j.frames[f]);
+        if (j.chunks)
+            free_chunks(&j, f);
+    }
     lie_frame_destroy(j.scratch);
     free(j.frames);
+    free(j.chunks);
     free(j.missing);
     free(j.items);
     *rs = j.rs;
     *t_write = j.t_write;
     last_frames = n_frames;
+    last_chunks = j.chunks_in;
     return st;
 }
 
@@ -292,9 +409,11 @@ void render_dist_stats(FILE *fp, int json)
     lie_dist_stats_print(fp, "tiles", json);
     double per_frame = (double)lie_dist_bytes_gathered() / (double)last_frames;
     if (json)
-        fprintf(fp, ",\"bytes_gathered_per_frame\":%.0f", per_frame);
+        fprintf(fp, ",\"bytes_gathered_per_frame\":%.0f,\"exr_chunks_gathered\":%llu", per_frame,
+                (unsigned long long)last_chunks);
     else
-        fprintf(fp, "  %.0f bytes gathered per frame\n", per_frame);
+        fprintf(fp, "  %.0f bytes gathered per frame; %llu EXR chunks compressed by the ranks that rendered them\n",
+                per_frame, (unsigned long long)last_chunks);
     for (int r = 0; last_written && r < lie_dist_size(); r++) {
         unsigned long long fr = (unsigned long long)last_written[2 * r], by = (unsigned long long)last_written[2 * r + 1];
         if (json)

@@ -34,6 +34,26 @@ void frame_name(const frame_out *o, int fi, char *name, size_t size)
 
 lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame, uint64_t *bytes, lie_error *err)
 {
+    return write_frame_chunks(ctx, fi, fc, frame, NULL, bytes, err);
+}
+
+int frame_chunk_lines(const frame_out *o)
+{
+    lie_frame_format f = o->opt.format;
+    if (f == LIE_FORMAT_AUTO && !lie_frame_format_of(o->output, &f))
+        return 0;
+    return f == LIE_FORMAT_EXR ? lie_exr_chunk_lines(o->opt.exr.compression) : 0;
+}
+
+lie_status encode_chunks(void *ctx, const lie_frame *frame, int first, int count, lie_exr_chunk *out, lie_error *err)
+{
+    const frame_out *o = ctx;
+    return lie_exr_encode_chunks(frame, &o->opt.exr, first, count, out, err);
+}
+
+lie_status write_frame_chunks(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame,
+                              const lie_exr_chunk *chunks, uint64_t *bytes, lie_error *err)
+{
     const frame_out *o = ctx;
     const lie_render_options *ro = o->ro;
     char name[4096];
@@ -77,6 +97,7 @@ lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame 
     opt.exr.screen_window_width = ve.screen_window_width;
     opt.exr.attrs = attrs;
     opt.exr.n_attrs = (int)(sizeof attrs / sizeof attrs[0]);
+    opt.exr.chunks = chunks;
     lie_status st = lie_frame_write(name, frame, &opt, err);
     struct stat sb;
     if (bytes)

@@ -22,6 +22,16 @@ void frame_name(const frame_out *o, int fi, char *name, size_t size);
  * are compressed on the render's --threads.  *bytes (may be NULL): the
  * file's size (0 for stdout). */
 lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame, uint64_t *bytes, lie_error *err);
+/* write_frame, EXR chunk k taken from chunks[k] where its data is not NULL
+ * (compressed by another rank: lie_exr_encode_chunks); chunks may be NULL. */
+lie_status write_frame_chunks(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame,
+                              const lie_exr_chunk *chunks, uint64_t *bytes, lie_error *err);
+/* Scanlines per chunk of the frames' files when they are EXR
+ * (lie_exr_chunk_lines), else 0: PNG has no chunks to compress apart. */
+int frame_chunk_lines(const frame_out *o);
+/* Compress chunks [first, first + count) of a frame's EXR as write_frame
+ * would (lie_exr_encode_chunks with the run's options). */
+lie_status encode_chunks(void *ctx, const lie_frame *frame, int first, int count, lie_exr_chunk *out, lie_error *err);
 
 /* What --stats prints: times are load, bvh, render and write seconds. */
 typedef struct run_stats {

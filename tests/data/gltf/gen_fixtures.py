@@ -699,6 +699,94 @@ def alpha_mask():
     write("alpha_mask.gltf", d.embedded())
 
 
+def normal_map():
+    """A floor (4 x 4, normals up, u along +x, v along +z) under a point
+    light, with a box on it, its material's normalTexture an 8 x 8 map of
+    grooves: columns alternately tilted toward +x and -x, the top rows also
+    toward +y of texture space.  Written three ways: tangents computed
+    (normal_map.gltf), the same tangents given as TANGENT
+    (normal_map_tangent.gltf), and no normal map (normal_map_none.gltf)."""
+    def tilt(x, y):
+        z = math.sqrt(max(0.0, 1.0 - x * x - y * y))
+        return tuple(int(round((c + 1) / 2 * 255)) for c in (x, y, z)) + (255,)
+    grooves = [[tilt(0.5 if i % 2 == 0 else -0.5, 0.4 if j < 2 else 0.0) for i in range(8)] for j in range(8)]
+    for variant in ("computed", "tangent", "none"):
+        d = Doc()
+        fl = d.positions([(-2, 0, -2), (-2, 0, 2), (2, 0, 2), (2, 0, -2)])
+        fn = d.accessor(f32(*([0, 1, 0] * 4)), FLOAT, "VEC3", 4)
+        fuv = d.accessor(f32(0, 0, 0, 1, 1, 1, 1, 0), FLOAT, "VEC2", 4)
+        quad = d.indices([0, 1, 2, 0, 2, 3])
+        s = 0.3
+        box = [(-s, 0, -s), (s, 0, -s), (s, 0, s), (-s, 0, s), (-s, 0.6, -s), (s, 0.6, -s), (s, 0.6, s), (-s, 0.6, s)]
+        bp = d.positions(box)
+        bi = d.indices([4, 6, 5, 4, 7, 6, 0, 1, 5, 0, 5, 4, 1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7])
+        attrs = {"POSITION": fl, "NORMAL": fn, "TEXCOORD_0": fuv}
+        if variant == "tangent":
+            attrs["TANGENT"] = d.accessor(f32(*([1, 0, 0, 1] * 4)), FLOAT, "VEC4", 4)
+        floor = {"pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1], "metallicFactor": 0,
+                                          "roughnessFactor": 0.6}}
+        if variant != "none":
+            d.g["images"] = [{"uri": "data:image/png;base64," + base64.b64encode(png(8, 8, grooves)).decode()}]
+            d.g["samplers"] = [{"magFilter": 9728, "minFilter": 9728}]
+            d.g["textures"] = [{"source": 0, "sampler": 0}]
+            floor["normalTexture"] = {"index": 0, "scale": 0.9}
+        d.g["meshes"] = [{"primitives": [{"attributes": attrs, "indices": quad, "material": 0}]},
+                         {"primitives": [{"attributes": {"POSITION": bp}, "indices": bi, "material": 1}]}]
+        d.g["materials"] = [floor, {"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.6, 0.7, 1],
+                                                             "metallicFactor": 0}}]
+        d.g["extensionsUsed"] = ["KHR_lights_punctual"]
+        d.g["extensions"] = {"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 6}]}}
+        d.g["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.9, "znear": 0.05}}]
+        d.g["nodes"] = [{"mesh": 0, "name": "Floor"}, {"mesh": 1, "name": "Box"},
+                        {"name": "Lamp", "translation": [0.4, 1.5, 0.3], "extensions": {"KHR_lights_punctual": {"light": 0}}},
+                        {"camera": 0, "translation": [0, 3, 3], "rotation": [-0.3827, 0, 0, 0.9239]}]
+        d.g["scenes"] = [{"nodes": [0, 1, 2, 3]}]
+        name = {"computed": "normal_map.gltf", "tangent": "normal_map_tangent.gltf", "none": "normal_map_none.gltf"}
+        write(name[variant], d.embedded())
+
+
+def glass_box():
+    """A point light and a small emissive quad inside a closed box of
+    coloured glass (KHR_materials_transmission, no volume: thin) on a
+    floor, with an opaque post outside it; glass_box_opaque.gltf is the
+    same box without transmission.  The floor outside is lit only through
+    the glass, tinted by its base colour."""
+    for variant in ("glass", "opaque"):
+        d = Doc()
+        fl = d.positions([(-3, 0, -3), (-3, 0, 3), (3, 0, 3), (3, 0, -3)])
+        quad = d.indices([0, 1, 2, 0, 2, 3])
+        s = 0.4
+        box = [(-s, 0, -s), (s, 0, -s), (s, 0, s), (-s, 0, s), (-s, 0.8, -s), (s, 0.8, -s), (s, 0.8, s), (-s, 0.8, s)]
+        bp = d.positions(box)
+        bi = d.indices([4, 6, 5, 4, 7, 6, 0, 1, 5, 0, 5, 4, 1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7])
+        post = d.positions([(1.0, 0, -0.1), (1.2, 0, -0.1), (1.2, 0, 0.1), (1.0, 0, 0.1),
+                            (1.0, 1.0, -0.1), (1.2, 1.0, -0.1), (1.2, 1.0, 0.1), (1.0, 1.0, 0.1)])
+        fil = d.positions([(-0.1, 0.45, -0.1), (0.1, 0.45, -0.1), (0.1, 0.45, 0.1), (-0.1, 0.45, 0.1)])
+        glass = {"name": "glass", "doubleSided": True,
+                 "pbrMetallicRoughness": {"baseColorFactor": [1.0, 0.5, 0.25, 1], "metallicFactor": 0,
+                                          "roughnessFactor": 0.05}}
+        if variant == "glass":
+            glass["extensions"] = {"KHR_materials_transmission": {"transmissionFactor": 0.9}}
+        d.g["meshes"] = [{"primitives": [{"attributes": {"POSITION": fl}, "indices": quad, "material": 0}]},
+                         {"primitives": [{"attributes": {"POSITION": bp}, "indices": bi, "material": 1}]},
+                         {"primitives": [{"attributes": {"POSITION": post}, "indices": bi, "material": 0}]},
+                         {"primitives": [{"attributes": {"POSITION": fil}, "indices": quad, "material": 2}]}]
+        d.g["materials"] = [{"pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1], "metallicFactor": 0}},
+                            glass,
+                            {"emissiveFactor": [1, 1, 1], "doubleSided": True,
+                             "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 20}}}]
+        d.g["extensionsUsed"] = ["KHR_lights_punctual", "KHR_materials_emissive_strength"] + (
+            ["KHR_materials_transmission"] if variant == "glass" else [])
+        d.g["extensions"] = {"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 3}]}}
+        d.g["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.9, "znear": 0.05}}]
+        d.g["nodes"] = [{"mesh": 0, "name": "Floor"}, {"mesh": 1, "name": "Glass"}, {"mesh": 2, "name": "Post"},
+                        {"mesh": 3, "name": "Filament"},
+                        {"name": "Bulb", "translation": [0, 0.6, 0], "extensions": {"KHR_lights_punctual": {"light": 0}}},
+                        {"camera": 0, "translation": [0, 3.5, 3.5], "rotation": [-0.3827, 0, 0, 0.9239]}]
+        d.g["scenes"] = [{"nodes": [0, 1, 2, 3, 4, 5]}]
+        write("glass_box.gltf" if variant == "glass" else "glass_box_opaque.gltf", d.embedded())
+
+
 def bent_light():
     """A bent emitter (two quads meeting at 40 degrees: not planar, so
     lie-render tests its blockers in 3D) and a spot light, over a floor
@@ -925,6 +1013,8 @@ def animated():
 
 
 def main():
+    normal_map()
+    glass_box()
     animated()
     morph()
     texcoord1()
