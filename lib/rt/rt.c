@@ -17,6 +17,11 @@ struct lie_rt {
     const lie_scene *s;
     uint8_t *tri_two_sided; /* per triangle: material is double-sided */
     uint8_t *tri_masked;    /* per triangle: alphaMode MASK (NULL: none is) */
+    uint8_t *tri_clear;     /* per triangle: transmissive, no occluder (NULL: none is) */
+    /* The transmissive triangles alone, for lie_rt_transmittance: their
+     * own Embree scene, its primitive k being triangle glass_tri[k]. */
+    RTCScene glass;
+    uint32_t *glass_tri;
     float scale;
     lie_error *pending;     /* where the error callback writes during create */
     /* box queries' hierarchy, built by the first query (the renderer never
@@ -72,14 +77,20 @@ static int hit_is_hole(const lie_rt *rt, const struct RTCFilterFunctionNArgument
            !lie_scene_solid_at(rt->s, prim, HITN_U(args->hit, args->N, i), HITN_V(args->hit, args->N, i));
 }
 
+/* A transmissive triangle occludes nothing (lie_material_transmits): no
+ * shadow query, of the renderer or of lie-build, stops at it. */
+static int is_clear(const lie_rt *rt, unsigned prim) { return rt->tri_clear && rt->tri_clear[prim]; }
+
 /* Occlusion queries carry Embree's plain context; the rt comes with the
- * geometry (set only when some triangle is masked). */
+ * geometry (set only when some triangle is masked or transmissive). */
 static void occluded_filter(const struct RTCFilterFunctionNArguments *args)
 {
     const lie_rt *rt = args->geometryUserPtr;
-    for (unsigned i = 0; i < args->N; i++)
-        if (args->valid[i] == -1 && hit_is_hole(rt, args, i, HITN_PRIM(args->hit, args->N, i)))
+    for (unsigned i = 0; i < args->N; i++) {
+        unsigned prim = HITN_PRIM(args->hit, args->N, i);
+        if (args->valid[i] == -1 && (is_clear(rt, prim) || hit_is_hole(rt, args, i, prim)))
             args->valid[i] = 0;
+    }
 }
 
 static void intersect_filter(const struct RTCFilterFunctionNArguments *args)
@@ -87,12 +98,15 @@ static void intersect_filter(const struct RTCFilterFunctionNArguments *args)
     query_ctx *q = (query_ctx *)args->context;
     if (q->mode == QUERY_CLOSEST && !q->rt->tri_masked)
         return;
+    /* closest hits (camera and mirror rays) see transmissive surfaces;
+     * segment queries (lie-build's blockers) do not */
+    const int see_clear = q->mode == QUERY_CLOSEST || q->mode == QUERY_CULL;
     for (unsigned i = 0; i < args->N; i++) {
         if (args->valid[i] != -1)
             continue;
         unsigned prim = HITN_PRIM(args->hit, args->N, i);
-        if (hit_is_hole(q->rt, args, i, prim)) {
-            args->valid[i] = 0; /* through a hole of an alpha-masked surface */
+        if (hit_is_hole(q->rt, args, i, prim) || (!see_clear && is_clear(q->rt, prim))) {
+            args->valid[i] = 0; /* through a hole of an alpha-masked surface, or glass */
             continue;
         }
         if (q->mode == QUERY_CLOSEST)
@@ -143,6 +157,66 @@ static void intersect_filter(const struct RTCFilterFunctionNArguments *args)
     }
 }
 
+/* lie_rt_transmittance's query: the transmissive triangles a segment
+ * crosses, recorded (at most GLASS_HITS distinct ones) and rejected so that
+ * traversal goes on. */
+#define GLASS_HITS 64
+typedef struct glass_ctx {
+    struct RTCIntersectContext ctx;
+    const lie_rt *rt;
+    uint32_t tri[GLASS_HITS];
+    int n, overflow;
+} glass_ctx;
+
+static void glass_filter(const struct RTCFilterFunctionNArguments *args)
+{
+    glass_ctx *q = (glass_ctx *)args->context;
+    for (unsigned i = 0; i < args->N; i++) {
+        if (args->valid[i] != -1)
+            continue;
+        args->valid[i] = 0;
+        uint32_t t = q->rt->glass_tri[HITN_PRIM(args->hit, args->N, i)];
+        int seen = 0;
+        for (int k = 0; k < q->n && !seen; k++)
+            seen = q->tri[k] == t; /* Embree may report a triangle twice (spatial splits) */
+        if (seen)
+            continue;
+        if (q->n == GLASS_HITS)
+            q->overflow = 1;
+        else
+            q->tri[q->n++] = t;
+    }
+}
+
+/* The scene of the transmissive triangles; NULL on an Embree error. */
+static RTCScene glass_scene(const lie_rt *rt, uint32_t n)
+{
+    RTCScene sc = rtcNewScene(rt->device);
+    if (!sc)
+        return NULL;
+    rtcSetSceneFlags(sc, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(sc, RTC_BUILD_QUALITY_HIGH);
+    RTCGeometry g = rtcNewGeometry(rt->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    if (!g) {
+        rtcReleaseScene(sc);
+        return NULL;
+    }
+    float *vb = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3 * (size_t)n);
+    unsigned *ib = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), n);
+    if (vb && ib) {
+        for (uint32_t k = 0; k < n; k++)
+            memcpy(vb + 9 * (size_t)k, &rt->s->tri_p[3 * (size_t)rt->glass_tri[k]], 9 * sizeof(float));
+        for (size_t i = 0; i < 3 * (size_t)n; i++)
+            ib[i] = (unsigned)i;
+    }
+    rtcSetGeometryIntersectFilterFunction(g, glass_filter);
+    rtcCommitGeometry(g);
+    rtcAttachGeometryByID(sc, g, 0);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(sc);
+    return sc;
+}
+
 lie_status lie_rt_create(const lie_scene *s, lie_rt **out, lie_error *err)
 {
     *out = NULL;
@@ -167,10 +241,25 @@ lie_status lie_rt_create(const lie_scene *s, lie_rt **out, lie_error *err)
         return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
     }
     int any_masked = 0;
+    uint32_t n_clear = 0;
     for (uint32_t i = 0; i < s->n_tris; i++) {
         const lie_material *m = lie_scene_material(s, s->tri_material[i]);
         rt->tri_two_sided[i] = (uint8_t)(m->double_sided != 0);
         any_masked |= m->alpha_mask;
+        n_clear += (uint32_t)(lie_material_transmits(m) && !s->tri_removed[i]);
+    }
+    if (n_clear > 0) {
+        rt->tri_clear = calloc((size_t)s->n_tris + 1, 1);
+        rt->glass_tri = malloc(sizeof *rt->glass_tri * n_clear);
+        if (!rt->tri_clear || !rt->glass_tri) {
+            lie_rt_destroy(rt);
+            return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
+        }
+        for (uint32_t i = 0, k = 0; i < s->n_tris; i++)
+            if (lie_material_transmits(lie_scene_material(s, s->tri_material[i])) && !s->tri_removed[i]) {
+                rt->tri_clear[i] = 1;
+                rt->glass_tri[k++] = i;
+            }
     }
     if (any_masked) {
         rt->tri_masked = malloc((size_t)s->n_tris + 1);
@@ -203,7 +292,7 @@ lie_status lie_rt_create(const lie_scene *s, lie_rt **out, lie_error *err)
                     ib[i] = (unsigned)i;
             }
             rtcSetGeometryIntersectFilterFunction(g, intersect_filter);
-            if (rt->tri_masked) {
+            if (rt->tri_masked || rt->tri_clear) {
                 rtcSetGeometryUserData(g, rt);
                 rtcSetGeometryOccludedFilterFunction(g, occluded_filter);
             }
@@ -214,8 +303,10 @@ lie_status lie_rt_create(const lie_scene *s, lie_rt **out, lie_error *err)
     }
     if (rt->scene)
         rtcCommitScene(rt->scene);
+    if (rt->scene && n_clear > 0)
+        rt->glass = glass_scene(rt, n_clear);
     rt->pending = NULL;
-    if (!rt->scene || local.status != LIE_OK) {
+    if (!rt->scene || (n_clear > 0 && !rt->glass) || local.status != LIE_OK) {
         lie_status st = local.status != LIE_OK ? local.status : LIE_ERR_RT;
         lie_error_set(err, st, s->path, "%s", local.msg[0] ? local.msg : "cannot build the Embree scene");
         lie_rt_destroy(rt);
@@ -231,10 +322,14 @@ void lie_rt_destroy(lie_rt *rt)
         return;
     if (rt->scene)
         rtcReleaseScene(rt->scene);
+    if (rt->glass)
+        rtcReleaseScene(rt->glass);
     if (rt->device)
         rtcReleaseDevice(rt->device);
     free(rt->tri_two_sided);
     free(rt->tri_masked);
+    free(rt->tri_clear);
+    free(rt->glass_tri);
     lie_boxq_destroy(atomic_load(&rt->boxq));
     pthread_mutex_destroy(&rt->boxq_lock);
     free(rt);
@@ -265,9 +360,9 @@ static void init_ray(struct RTCRay *r, lie_vec3 org, lie_vec3 dir, float tnear, 
  * Trumbore 1997) in double precision, compiled once for every CPU (lib/core/hot.h), clamped to
  * the triangle as Embree's watertight test keeps it.  A ray nearly parallel to the plane
  * keeps Embree's values. */
-static void hit_exact(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, lie_hit *hit)
+static int solve_exact(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, uint32_t tri, double tuv[3])
 {
-    const lie_vec3 *P = &rt->s->tri_p[3 * (size_t)hit->tri];
+    const lie_vec3 *P = &rt->s->tri_p[3 * (size_t)tri];
     const double e1[3] = {(double)P[1].x - P[0].x, (double)P[1].y - P[0].y, (double)P[1].z - P[0].z};
     const double e2[3] = {(double)P[2].x - P[0].x, (double)P[2].y - P[0].y, (double)P[2].z - P[0].z};
     const double d[3] = {dir.x, dir.y, dir.z};
@@ -278,17 +373,27 @@ static void hit_exact(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, lie_hit *hit
                        sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]) *
                        sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
     if (!(fabs(det) > 1e-12 * len))
-        return;
+        return 0;
     const double q[3] = {w[1] * e1[2] - w[2] * e1[1], w[2] * e1[0] - w[0] * e1[2], w[0] * e1[1] - w[1] * e1[0]};
     const double inv = 1.0 / det;
     double u = (w[0] * p[0] + w[1] * p[1] + w[2] * p[2]) * inv;
     double v = (d[0] * q[0] + d[1] * q[1] + d[2] * q[2]) * inv;
-    const double t = (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) * inv;
     u = u < 0.0 ? 0.0 : u > 1.0 ? 1.0 : u;
     v = v < 0.0 ? 0.0 : v > 1.0 - u ? 1.0 - u : v;
-    hit->t = (float)t;
-    hit->u = (float)u;
-    hit->v = (float)v;
+    tuv[0] = (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) * inv;
+    tuv[1] = u;
+    tuv[2] = v;
+    return 1;
+}
+
+static void hit_exact(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, lie_hit *hit)
+{
+    double tuv[3];
+    if (!solve_exact(rt, org, dir, hit->tri, tuv))
+        return;
+    hit->t = (float)tuv[0];
+    hit->u = (float)tuv[1];
+    hit->v = (float)tuv[2];
 }
 
 int lie_rt_intersect(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, float tfar,
@@ -490,6 +595,62 @@ int lie_rt_any_hit(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, fl
     return q.found;
 }
 
+int lie_rt_transmits(const lie_rt *rt) { return rt->glass != NULL; }
+
+int lie_rt_transmittance(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, float tfar, float rgb[3])
+{
+    rgb[0] = rgb[1] = rgb[2] = 1.0f;
+    if (!rt->glass)
+        return 0;
+    glass_ctx q;
+    rtcInitIntersectContext(&q.ctx);
+    q.rt = rt;
+    q.n = 0;
+    q.overflow = 0;
+    struct RTCRayHit rh;
+    init_ray(&rh.ray, org, dir, tnear, tfar);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(rt->glass, &q.ctx, &rh);
+    if (q.overflow) { /* more layers than GLASS_HITS: as good as opaque */
+        rgb[0] = rgb[1] = rgb[2] = 0.0f;
+        return 1;
+    }
+    /* in triangle order, whatever order traversal found them in, so that
+     * the product has the same bits on every CPU */
+    for (int i = 1; i < q.n; i++)
+        for (int k = i; k > 0 && q.tri[k - 1] > q.tri[k]; k--) {
+            uint32_t x = q.tri[k];
+            q.tri[k] = q.tri[k - 1];
+            q.tri[k - 1] = x;
+        }
+    for (int i = 0; i < q.n; i++) {
+        double tuv[3] = {0.0, 1.0 / 3.0, 1.0 / 3.0}; /* a segment in the plane: the centre */
+        solve_exact(rt, org, dir, q.tri[i], tuv);
+        float t[3];
+        lie_scene_transmittance(rt->s, q.tri[i], (float)tuv[1], (float)tuv[2], t);
+        for (int k = 0; k < 3; k++)
+            rgb[k] *= t[k];
+    }
+    return q.n > 0;
+}
+
+/* Box queries find shaft candidates (lib/lie/cull.c): transmissive
+ * triangles are never blockers, so they are never candidates. */
+typedef struct box_opaque {
+    const lie_rt *rt;
+    lie_rt_box_fn fn;
+    void *ctx;
+} box_opaque;
+
+static void box_opaque_fn(void *p, uint32_t tri)
+{
+    const box_opaque *b = p;
+    if (!is_clear(b->rt, tri))
+        b->fn(b->ctx, tri);
+}
+
 typedef struct box_query {
     const lie_rt *rt;
     lie_box3 box;
@@ -531,6 +692,11 @@ static const lie_boxq *boxq_get(const lie_rt *crt)
 
 void lie_rt_box_query(const lie_rt *rt, lie_box3 box, lie_rt_box_fn fn, void *ctx)
 {
+    box_opaque op = {rt, fn, ctx};
+    if (rt->tri_clear) {
+        fn = box_opaque_fn;
+        ctx = &op;
+    }
     const lie_boxq *bq = boxq_get(rt);
     if (bq) {
         lie_boxq_query(bq, box, fn, ctx);

@@ -90,8 +90,19 @@ lie_status lie_rt_all_hits8(const lie_rt *rt, const lie_vec3 *org, const lie_vec
 int lie_rt_any_hit(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, float tfar, const uint32_t *exclude,
                    int n_exclude);
 
-/* Calls fn(ctx, tri) for every triangle whose bounding box overlaps `box`
- * (each at most once per call is not guaranteed: callers dedupe). */
+/* Transmissive triangles (lie_material_transmits) are in no occlusion
+ * query above (lie_rt_occluded*, lie_rt_all_hits*, lie_rt_any_hit) nor in
+ * box queries: they block no shadow segment.  Closest hits see them.
+ * Whether the scene has any: */
+int lie_rt_transmits(const lie_rt *rt);
+/* The light a segment [tnear, tfar] keeps across the transmissive
+ * triangles it crosses: rgb = the product of their lie_scene_transmittance
+ * at the crossing, taken in triangle order (the same bits on every CPU), 0
+ * past 64 of them.  Returns whether it crossed any (rgb 1 when not). */
+int lie_rt_transmittance(const lie_rt *rt, lie_vec3 org, lie_vec3 dir, float tnear, float tfar, float rgb[3]);
+
+/* Calls fn(ctx, tri) for every opaque triangle whose bounding box overlaps
+ * `box` (each at most once per call is not guaranteed: callers dedupe). */
 typedef void (*lie_rt_box_fn)(void *ctx, uint32_t tri);
 void lie_rt_box_query(const lie_rt *rt, lie_box3 box, lie_rt_box_fn fn, void *ctx);
 

@@ -45,7 +45,8 @@ const uint64_t MAX_IMAGE_PIXELS = uint64_t(1) << 26;
 
 /* extensionsRequired we honour; any other required extension is refused. */
 const char *const SUPPORTED_REQUIRED[] = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
-                                         "KHR_mesh_quantization", "KHR_texture_transform"};
+                                         "KHR_materials_transmission", "KHR_mesh_quantization",
+                                         "KHR_texture_transform"};
 
 struct ImportError {
     lie_status status;

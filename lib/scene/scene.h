@@ -549,6 +549,22 @@ float lie_texture_code_value(size_t i, size_t levels, int srgb);
  * material is alphaMode MASK and the alpha there is below the cutoff. */
 int lie_scene_solid_at(const lie_scene *s, uint32_t tri, float b1, float b2);
 
+/* Whether light passes through surfaces of material m
+ * (KHR_materials_transmission with a factor above 0).  Such surfaces block
+ * no shadow segment: lib/rt leaves them out of every occlusion query and
+ * shaft, and the renderer multiplies each segment's light by the
+ * lie_scene_transmittance of those it crosses (lie_rt_transmittance). */
+static inline int lie_material_transmits(const lie_material *m) { return m->transmission > 0.0f; }
+/* The share of light, per channel, that crosses transmissive triangle tri
+ * at barycentrics (b1, b2): a thin surface (no KHR_materials_volume) whose
+ * transmission lobe is tinted by its base colour, glTF's dielectric mix
+ * (KHR_materials_transmission): (1 - metallic) x transmission (factor x
+ * the texture's R) x base colour (factor x texture x COLOR_0).  Refraction
+ * and the Fresnel share reflected are not modelled: a thin wall keeps a
+ * ray's direction, and direct light is what this renderer computes.  A
+ * hole of an alpha-masked surface passes everything (1). */
+void lie_scene_transmittance(const lie_scene *s, uint32_t tri, float b1, float b2, float rgb[3]);
+
 /* Camera by name (node or camera name) or by "#index"/decimal index into
  * s->cameras; NULL or "" gives the first camera, or the default camera when
  * the scene has none. */

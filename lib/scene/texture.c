@@ -105,3 +105,38 @@ float lie_texture_code_value(size_t i, size_t levels, int srgb)
     double c = (double)i / (double)(levels - 1);
     return (float)(srgb ? (c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4)) : c);
 }
+
+void lie_scene_transmittance(const lie_scene *s, uint32_t tri, float b1, float b2, float rgb[3])
+{
+    const lie_material *m = lie_scene_material(s, s->tri_material[tri]);
+    rgb[0] = rgb[1] = rgb[2] = 1.0f;
+    if (!lie_scene_solid_at(s, tri, b1, b2))
+        return;
+    float b0 = 1.0f - b1 - b2, tr = m->transmission, metallic = m->metallic;
+    float base[3] = {m->base_color[0], m->base_color[1], m->base_color[2]};
+    float t[4], u, v;
+    if (m->transmission_tex >= 0 && m->transmission_tex < s->n_textures) {
+        lie_scene_slot_uv(s, m, LIE_TEX_TRANSMISSION, tri, b1, b2, &u, &v);
+        lie_texture_sample(&s->textures[m->transmission_tex], u, v, t);
+        tr *= t[0];
+    }
+    if (m->base_color_tex >= 0 && m->base_color_tex < s->n_textures) {
+        lie_scene_slot_uv(s, m, LIE_TEX_BASE_COLOR, tri, b1, b2, &u, &v);
+        lie_texture_sample(&s->textures[m->base_color_tex], u, v, t);
+        for (int k = 0; k < 3; k++)
+            base[k] *= t[k];
+    }
+    if (m->mr_tex >= 0 && m->mr_tex < s->n_textures) {
+        lie_scene_slot_uv(s, m, LIE_TEX_METALLIC_ROUGHNESS, tri, b1, b2, &u, &v);
+        lie_texture_sample(&s->textures[m->mr_tex], u, v, t);
+        metallic *= t[2];
+    }
+    if (s->tri_color) {
+        const float *c = &s->tri_color[12 * (size_t)tri];
+        for (int k = 0; k < 3; k++)
+            base[k] *= b0 * c[k] + b1 * c[4 + k] + b2 * c[8 + k];
+    }
+    float share = (1.0f - fminf(fmaxf(metallic, 0.0f), 1.0f)) * fminf(fmaxf(tr, 0.0f), 1.0f);
+    for (int k = 0; k < 3; k++)
+        rgb[k] = share * fminf(fmaxf(base[k], 0.0f), 1.0f);
+}

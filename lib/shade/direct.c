@@ -87,9 +87,10 @@ static int classify(lie_pair *p, int *unbuilt_seen)
      * serves only where closed forms were asked for (--light-samples
      * exact) and the sampled shading stays the default. */
     const lie_shade_ctx *c = p->c;
-    p->pl = c->analytic && c->poly && p->group < 0 && (p->sf->lambert || opt->exact == LIE_EXACT_ONLY) ? c->poly[p->e]
-                                                                                                    : NULL;
-    p->bm = p->cls == LIE_CLASS_PARTIAL && c->bits ? c->bits[p->e] : NULL;
+    p->pl = c->analytic && c->poly && p->group < 0 && (p->sf->lambert || opt->exact == LIE_EXACT_ONLY) && !c->transmit
+                ? c->poly[p->e]
+                : NULL;
+    p->bm = p->cls == LIE_CLASS_PARTIAL && c->bits && !c->transmit ? c->bits[p->e] : NULL;
     return 1;
 }
 
@@ -131,7 +132,7 @@ static void shade_part(point *pt, int e, int group, int n, float scale, float rg
     p.group = group;
     if (lie_emitter_owns(p.em, pt->sf->tri) || !classify(&p, &pt->unbuilt_seen))
         return; /* an emitter does not light itself */
-    if (group >= 0 && pt->sf->lambert && lie_emitter_uniform(pt->c->s, e)) {
+    if (group >= 0 && pt->sf->lambert && lie_emitter_uniform(pt->c->s, e) && !pt->c->transmit) {
         /* a group of few triangles of one radiance: their closed form,
          * which the samples' visible share scales (lie_pair_combine) */
         const lie_scene *s = pt->c->s;

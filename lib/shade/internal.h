@@ -132,6 +132,12 @@ typedef struct lie_shade_ctx {
     lie_texlight **texlights;       /* per emitter, NULL where its texture does not guide its samples */
     lie_light_groups *groups;       /* what the sampler chooses among (sampler.h) */
     int borrowed_tex, borrowed_poly, borrowed_groups; /* opt->lights', not the frame's to free */
+    /* The scene has transmissive surfaces (lie_rt_transmits) and shadows
+     * are on: each sample's light is multiplied by the transmittance of its
+     * shadow segment (lie_rt_transmittance), and the closed forms, exact
+     * shadows and bitmasks, which integrate without samples or in another
+     * sample order, stand aside. */
+    int transmit;
 } lie_shade_ctx;
 
 struct lie_lights {

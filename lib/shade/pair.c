@@ -420,6 +420,42 @@ const lie_light_samples *lie_pair_samples(lie_pair *p, int bits)
     return bits ? &p->bm->ls : &c->fixed[p->e];
 }
 
+/* Each contributing sample's light times the transmittance of its shadow
+ * segment (the segment lie_shadow_query_segments makes, origin o): light
+ * reaching the point through glass, tinted.  Occluded samples are masked
+ * later, as ever.  A scalar (one colour) pair becomes a per-channel one. */
+static void transmit_samples(const lie_shade_ctx *c, lie_vec3 o, float eps, const lie_light_samples *ls, int n,
+                             lie_shade_scratch *sc)
+{
+    float *wr = sc->contrib_r, *wg = sc->contrib_g, *wb = sc->contrib_b;
+    if (sc->scalar) {
+        for (int i = 0; i < n; i++) {
+            float w = wr[i];
+            wr[i] = w * sc->scale[0];
+            wg[i] = w * sc->scale[1];
+            wb[i] = w * sc->scale[2];
+        }
+        sc->scalar = 0;
+    }
+    for (int i = 0; i < n; i++) {
+        if (!(wr[i] + wg[i] + wb[i] > 0.0f))
+            continue;
+        lie_vec3 d;
+        if (ls) {
+            d = lie_v3(ls->x[i] - o.x, ls->y[i] - o.y, ls->z[i] - o.z);
+            d = lie_v3_scale(d, lie_ray_end_scale(lie_v3_dot(d, d), eps));
+        } else {
+            d = lie_v3_scale(lie_v3(sc->dx[0], sc->dy[0], sc->dz[0]), lie_ray_end(sc->dist[0], eps));
+        }
+        float t[3];
+        if (lie_rt_transmittance(c->rt, o, d, 0.0f, 1.0f, t)) {
+            wr[i] *= t[0];
+            wg[i] *= t[1];
+            wb[i] *= t[2];
+        }
+    }
+}
+
 int lie_pair_kernel(lie_pair *p, const lie_light_samples *ls)
 {
     const int timers = p->c->opt->timers;
@@ -431,6 +467,8 @@ int lie_pair_kernel(lie_pair *p, const lie_light_samples *ls)
     } else {
         kernel_delta(p->c, p->sf, p->o, p->e, p->sc);
     }
+    if (p->c->transmit)
+        transmit_samples(p->c, p->o, p->eps, ls, n, p->sc);
     if (timers)
         p->sc->stats.t_sampled_shading += lie_time_now() - t0;
     p->sc->stats.light_samples += (uint64_t)n;

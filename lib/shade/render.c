@@ -569,6 +569,9 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
         opt->light_samples < LIE_ENV_MIN_SAMPLES && opt->exact != LIE_EXACT_ONLY)
         frame_opt.visibility = LIE_VIS_FULL;
     j.sc.opt = opt;
+    /* glass lets light through, tinted, to what it encloses: every shadow
+     * segment's light is multiplied by what it crosses (lie_pair_kernel) */
+    j.sc.transmit = lie_rt_transmits(rt) && opt->visibility != LIE_VIS_NONE;
     j.sc.ray_far = lie_pair_ray_far(s);
     if (!isfinite(j.sc.ray_far))
         j.sc.ray_far = 1e30f;
