@@ -525,8 +525,7 @@ double lie_cluster_unshadowed(const lie_scene *s, int c, lie_vec3 p, lie_vec3 n,
 /* A digest of everything lie_cluster_unshadowed reads of every cluster
  * (emission, punctual parameters, the triangles' positions) and of which
  * emissive texture an area emitter has: equal digests, equal light at
- * every point.  lib/update watches it; lib/shade's lie_render_prep is kept
- * while it holds. */
+ * every point.  lib/update watches it. */
 uint64_t lie_scene_light_digest(const lie_scene *s);
 /* Partition every emitter into clusters (s->clusters and the arrays beside
  * it), a function of each emitter's own triangles alone.  Called by

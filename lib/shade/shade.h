@@ -271,22 +271,8 @@ typedef struct lie_render_options {
     lie_bitmask_mode bitmask; /* all samples at once for partial pairs (bitmask.h) */
     lie_light_sampler_kind sampler; /* how light samples are shared among emitters */
     uint64_t seed;         /* mixed into every per-pixel pattern: renders with two seeds are independent */
-    /* What a call otherwise makes for itself from the scene's emitters (the
-     * closed forms, the textured emitters' distributions, the light
-     * sampler), made once (lie_render_prep_create): used when made for
-     * this scene and sampler with the same emitters (an edit of other
-     * nodes keeps it; lie_scene_light_digest), else ignored; NULL: each
-     * call makes them.  For callers that render a frame in many calls
-     * (lie-view's bands). */
-    const struct lie_render_prep *prep;
+    const struct lie_lights *lights; /* the scene's lights prepared once (lie_lights_create; NULL: per call) */
 } lie_render_options;
-typedef struct lie_render_prep lie_render_prep;
-/* The scene's share of a render's set-up for `sampler`, for
- * lie_render_options.prep; *out: lie_render_prep_destroy.  Renders with
- * it or without give the same bytes. */
-lie_status lie_render_prep_create(const lie_scene *s, lie_light_sampler_kind sampler, lie_render_prep **out,
-                                  lie_error *err);
-void lie_render_prep_destroy(lie_render_prep *p);
 
 #define LIE_RENDER_WIDTH_DEFAULT 512
 #define LIE_RENDER_HEIGHT_DEFAULT 512
@@ -294,6 +280,25 @@ void lie_render_prep_destroy(lie_render_prep *p);
 #define LIE_MAX_DEPTH_DEFAULT 2
 #define LIE_TILE 16
 lie_render_options lie_render_options_default(void);
+
+/* A scene's lights prepared for shading, once: the textured emitters'
+ * distributions (their texels' light) and the emitters' closed forms
+ * (polylight.h), whose cost grows with texels and triangles, not with
+ * pixels.  lie_render and lie_render_tiles otherwise prepare them at every
+ * call: a camera path, or a frame rendered as many calls of a few tiles
+ * (lie-render under mpirun, lie-view's bands), shares one through
+ * lie_render_options.lights.  It serves while the scene's content hash is
+ * the one it was made for; a call with another scene (an edit since)
+ * prepares its own, so a stale one costs time, never a wrong image.  It
+ * holds what frames with options like `opt` use (the distributions for a
+ * budgeted sampler, the closed forms where `light_samples` or `exact`
+ * turn them on; opt NULL: the defaults'); a frame prepares what it
+ * lacks.  The images are the same with or without it. */
+typedef struct lie_lights lie_lights;
+lie_status lie_lights_create(const lie_scene *s, const lie_render_options *opt, lie_lights **out, lie_error *err);
+void lie_lights_destroy(lie_lights *l);
+/* Whether l was made for s as it is now. */
+int lie_lights_fit(const lie_lights *l, const lie_scene *s);
 
 typedef struct lie_render_stats {
     uint64_t eye_rays, reflection_rays, shadow_rays, shadow_rays_skipped;

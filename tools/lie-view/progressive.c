@@ -27,6 +27,7 @@
 struct view_render {
     view_world *w;
     view_render_options o;
+    lie_lights *lights; /* the render thread's, for the world's scene as it is (lie_lights_fit) */
     pthread_t tid;
     int started;
     pthread_mutex_t m;
@@ -51,11 +52,6 @@ struct view_render {
      * AOV layers are what lie_render_tiles fills) */
     lie_frame *level[LEVELS][3];
     uint8_t *sel_mask;
-    /* the scene's share of every band's set-up, made once for the scene
-     * and its emitters as they are (lie_render_prep) */
-    lie_render_prep *prep;
-    const lie_scene *prep_scene;
-    uint64_t prep_light;
 };
 
 static const int level_div[LEVELS] = {4, 2, 1};
@@ -214,16 +210,18 @@ static void *render_main(void *arg)
                 view_world_read_lock(r->w);
                 view_world_sync_oracle(r->w);
                 const lie_scene *s = view_world_scene(r->w);
-                uint64_t light = lie_scene_light_digest(s);
-                if (!r->prep || r->prep_scene != s || r->prep_light != light) {
-                    lie_render_prep_destroy(r->prep);
-                    lie_error perr;
-                    if (lie_render_prep_create(s, ro.sampler, &r->prep, &perr) != LIE_OK)
-                        r->prep = NULL; /* each band makes its own: slower, the same image */
-                    r->prep_scene = s;
-                    r->prep_light = light;
+                if (!ro.eye_only && !lie_lights_fit(r->lights, s)) {
+                    /* prepared once per scene state with the finest level's
+                     * options; a failure leaves each band to prepare its own */
+                    lie_render_options full = ro;
+                    full.light_samples = r->o.light_samples;
+                    lie_error lerr;
+                    lie_lights_destroy(r->lights);
+                    r->lights = NULL;
+                    if (lie_lights_create(s, &full, &r->lights, &lerr) != LIE_OK)
+                        r->lights = NULL;
                 }
-                ro.prep = r->prep;
+                ro.lights = r->lights;
                 ro.oracle = view_world_oracle(r->w);
                 ro.visibility = ro.oracle ? LIE_VIS_LIE : LIE_VIS_FULL;
                 lie_error err;
@@ -322,7 +320,7 @@ void view_render_stop(view_render *r)
         for (int m = 0; m < 3; m++)
             lie_frame_destroy(r->level[lv][m]);
     lie_frame_destroy(r->full);
-    lie_render_prep_destroy(r->prep);
+    lie_lights_destroy(r->lights);
     free(r->times);
     free(r->display);
     free(r->sel_mask);
