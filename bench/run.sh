@@ -149,4 +149,6 @@ echo "$json}" >out/bench.json
 echo
 echo "bench: wrote out/bench.json"
 echo
+sh bench/lights-scale.sh
+echo
 sh bench/quality.sh

@@ -31,6 +31,7 @@ typedef struct lie_pair {
     lie_class cls;              /* VISIBLE, PARTIAL, COMPLEX (the whole scene) or SPLIT (clusters) */
     int n_blockers;             /* PARTIAL: the selected blockers in sc->blockers */
     int n;                      /* its light samples */
+    int group;                  /* the light group they are drawn from (sampler.h), -1: all the emitter */
     uint64_t key;               /* the pattern's rotation (rotated patterns) */
     const lie_polylight *pl;    /* where a closed form serves, else NULL */
     const lie_bitmask *bm;      /* PARTIAL toward a planar emitter with a fixed pattern, else NULL */
@@ -39,6 +40,7 @@ typedef struct lie_pair {
     /* the unshadowed closed form (lie_pair_closed): omega times kc
      * (Lambert) or kl (the LTC integral) */
     int have_closed;
+    int group_closed;           /* omega and kc are its light group's (no polylight) */
     double omega;
     float kc[3], kl[3];
 } lie_pair;

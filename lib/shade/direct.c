@@ -87,8 +87,9 @@ static int classify(lie_pair *p, int *unbuilt_seen)
      * serves only where closed forms were asked for (--light-samples
      * exact) and the sampled shading stays the default. */
     const lie_shade_ctx *c = p->c;
-    p->pl = c->analytic && c->poly && (p->sf->lambert || opt->exact == LIE_EXACT_ONLY) && !c->transmit ? c->poly[p->e]
-                                                                                                      : NULL;
+    p->pl = c->analytic && c->poly && p->group < 0 && (p->sf->lambert || opt->exact == LIE_EXACT_ONLY) && !c->transmit
+                ? c->poly[p->e]
+                : NULL;
     p->bm = p->cls == LIE_CLASS_PARTIAL && c->bits && !c->transmit ? c->bits[p->e] : NULL;
     return 1;
 }
@@ -116,18 +117,39 @@ static void pair_init(point *pt, int e, int n, lie_pair *p)
     p->e = e;
     p->em = &pt->c->s->emitters[e];
     p->n = lie_emitter_sample_count(p->em, n);
+    p->group = -1;
     p->key = pt->key;
     p->ltc = &pt->ltc;
     p->ltc_ready = &pt->ltc_ready;
 }
 
-/* Emitter e's light at the point from n samples, weighed by `scale`. */
-static void shade_emitter(point *pt, int e, int n, float scale, float rgb[3])
+/* Emitter e's light at the point from n samples (of its light group
+ * `group`, or of all of it: -1), weighed by `scale`. */
+static void shade_part(point *pt, int e, int group, int n, float scale, float rgb[3])
 {
     lie_pair p;
     pair_init(pt, e, n, &p);
+    p.group = group;
     if (lie_emitter_owns(p.em, pt->sf->tri) || !classify(&p, &pt->unbuilt_seen))
         return; /* an emitter does not light itself */
+    if (group >= 0 && pt->sf->lambert && lie_emitter_uniform(pt->c->s, e) && !pt->c->transmit) {
+        /* a group of few triangles of one radiance: their closed form,
+         * which the samples' visible share scales (lie_pair_combine) */
+        const lie_scene *s = pt->c->s;
+        const lie_light_groups *G = pt->c->groups;
+        const lie_light_group *g = &G->g[group];
+        double omega = 0.0;
+        for (uint32_t i = g->first; i < g->first + g->n; i++)
+            omega += lie_triangle_unshadowed(&s->tri_p[3 * (size_t)G->tris[i]], p.em->double_sided, p.o, pt->sf->n,
+                                             pt->sf->ng);
+        if (!(omega > 0.0))
+            return; /* nothing of it above the point's horizon */
+        for (int k = 0; k < 3; k++)
+            p.kc[k] = p.em->radiance[k] * pt->sf->diffuse[k] * (float)M_1_PI;
+        p.omega = omega;
+        p.have_closed = 1;
+        p.group_closed = 1;
+    }
     float prgb[3] = {0.0f, 0.0f, 0.0f};
     answer_pair(&p, prgb);
     for (int k = 0; k < 3; k++)
@@ -148,8 +170,8 @@ static void shade_guided(point *pt, int n, double u, float rgb[3])
     const lie_scene *s = c->s;
     lie_shade_scratch *sc = pt->sc;
     const lie_surface *sf = pt->sf;
-    int m = 0;
-    double total = 0.0;
+    int m = 0, n_tree_e = 0;
+    double total = 0.0, w_tree = 0.0;
     const float brdf = 0.2126f * (sf->diffuse[0] + sf->f0[0]) + 0.7152f * (sf->diffuse[1] + sf->f0[1]) +
                        0.0722f * (sf->diffuse[2] + sf->f0[2]);
     for (int e = 0; e < s->n_emitters; e++) {
@@ -160,6 +182,17 @@ static void shade_guided(point *pt, int n, double u, float rgb[3])
         float w;
         if (lie_emitter_is_delta(p.em) || (p.cls == LIE_CLASS_VISIBLE && p.pl)) {
             answer_pair(&p, rgb);
+            continue;
+        }
+        if (p.cls == LIE_CLASS_COMPLEX && c->groups) {
+            /* the LIE knows nothing of its shadow: the light tree's
+             * groups serve it, as they serve full visibility */
+            float b = lie_light_importance(&c->bounds[e], pt->o, &sf->n);
+            if (b > 0.0f) {
+                sc->by_tree[e] = 1;
+                sc->ids[s->n_emitters - 1 - n_tree_e++] = e; /* from the end: to clear */
+                w_tree += (double)(brdf * (1.0 / (M_PI * M_PI))) * b;
+            }
             continue;
         }
         if (p.pl) {
@@ -185,6 +218,26 @@ static void shade_guided(point *pt, int n, double u, float rgb[3])
         sc->weights[m++] = w;
         total += w;
     }
+    /* the complex pairs' share of the budget, by their bound against the
+     * others' light, drawn from the tree (picks of other emitters are
+     * left out: the sum over the complex ones stays unbiased) */
+    int n_tree = 0;
+    if (w_tree > 0.0) {
+        n_tree = total > 0.0 ? (int)ceil((double)n * w_tree / (w_tree + total)) : n;
+        double ut = (double)lie_hash_to_unit(lie_hash_u64x4(pt->key, (uint64_t)sc->depth, c->opt->seed, 0x74726565ull));
+        int k = c->sampler.cls->distribute(c->sampler.state, pt->o, sf->n, n_tree, ut, sc->picks);
+        const lie_light_groups *G = c->groups;
+        for (int i = 0; i < k; i++) {
+            const lie_light_pick *pk = &sc->picks[i];
+            const lie_light_group *g = &G->g[pk->emitter];
+            if (sc->by_tree[g->emitter])
+                shade_part(pt, g->emitter, g->whole ? -1 : pk->emitter, pk->count,
+                           (float)pk->count / ((float)n_tree * pk->pmf), rgb);
+        }
+        for (int i = 0; i < n_tree_e; i++)
+            sc->by_tree[sc->ids[s->n_emitters - 1 - i]] = 0;
+        n = n - n_tree > 1 ? n - n_tree : 1;
+    }
     if (!(total > 0.0))
         return;
     if (m > n) {
@@ -193,7 +246,7 @@ static void shade_guided(point *pt, int n, double u, float rgb[3])
         int k = lie_light_pick_weights(sc->weights, sc->ids, m, total, n, u, sc->picks);
         for (int i = 0; i < k; i++) {
             const lie_light_pick *pk = &sc->picks[i];
-            shade_emitter(pt, pk->emitter, pk->count, (float)pk->count / ((float)n * pk->pmf), rgb);
+            shade_part(pt, pk->emitter, -1, pk->count, (float)pk->count / ((float)n * pk->pmf), rgb);
         }
         return;
     }
@@ -202,7 +255,7 @@ static void shade_guided(point *pt, int n, double u, float rgb[3])
     int k = n > m ? lie_light_pick_weights(sc->weights, sc->ids, m, total, n - m, u, sc->picks) : 0;
     for (int i = 0, j = 0; i < m; i++) {
         int extra = j < k && sc->picks[j].emitter == sc->ids[i] ? sc->picks[j++].count : 0;
-        shade_emitter(pt, sc->ids[i], 1 + extra, 1.0f, rgb);
+        shade_part(pt, sc->ids[i], -1, 1 + extra, 1.0f, rgb);
     }
 }
 
@@ -224,7 +277,7 @@ LIE_HOT void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uin
     if (!c->sampler_on) {
         pt.key = pixel & ((1ull << 40) - 1); /* the paper's pattern: the same for every eye sample */
         for (int e = 0; e < c->s->n_emitters; e++)
-            shade_emitter(&pt, e, n, 1.0f, rgb);
+            shade_part(&pt, e, -1, n, 1.0f, rgb);
         return;
     }
     /* the point's rotation of the sampler's systematic picks */
@@ -233,9 +286,14 @@ LIE_HOT void lie_shade_direct(const lie_shade_ctx *c, const lie_surface *sf, uin
         shade_guided(&pt, n, u, rgb);
         return;
     }
+    for (int i = 0; i < c->n_delta_apart; i++)
+        shade_part(&pt, c->delta_ids[i], -1, 1, 1.0f, rgb);
     int k = c->sampler.cls->distribute(c->sampler.state, pt.o, sf->n, n, u, sc->picks);
+    const lie_light_groups *G = c->groups;
     for (int i = 0; i < k; i++) {
         const lie_light_pick *pk = &sc->picks[i];
-        shade_emitter(&pt, pk->emitter, pk->count, (float)pk->count / ((float)n * pk->pmf), rgb);
+        const lie_light_group *g = &G->g[pk->emitter];
+        shade_part(&pt, g->emitter, g->whole ? -1 : pk->emitter, pk->count, (float)pk->count / ((float)n * pk->pmf),
+                   rgb);
     }
 }

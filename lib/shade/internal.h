@@ -45,6 +45,7 @@ typedef struct lie_shade_scratch {
     lie_light_pick *picks;
     float *weights;
     int *ids;
+    uint8_t *by_tree;   /* per emitter: its pairs at this point go to the light tree (shade_guided) */
     int depth;                 /* the mirror bounce of the point at hand */
     lie_render_stats stats;
 } lie_shade_scratch;
@@ -99,6 +100,11 @@ static inline int lie_planar_lambert_setup(const lie_light_samples *ls, lie_vec3
  * (tl; NULL: by area). */
 void lie_light_samples_generate_with(const lie_scene *s, int e, int n, float su, float sv, const lie_texlight *tl,
                                      lie_light_samples *out);
+/* The same over light group j (not whole) of G, its emitter's
+ * distribution tl (NULL: by area, or by solid angle from o where o, may be
+ * NULL, is near: lie_light_group_sample). */
+void lie_light_samples_generate_group(const lie_scene *s, const lie_light_groups *G, int j, int n, float su, float sv,
+                                      const lie_texlight *tl, const lie_vec3 *o, lie_light_samples *out);
 
 lie_status lie_shade_scratch_init(lie_shade_scratch *sc, int cap, int max_blockers, int n_emitters);
 void lie_shade_scratch_free(lie_shade_scratch *sc);
@@ -117,7 +123,15 @@ typedef struct lie_shade_ctx {
     lie_light_sampler sampler;      /* ... and it */
     const lie_light_bounds *bounds; /* per emitter (sampler.h) */
     int guided;                     /* the LIE's classes share the budget (lie_shade_direct) */
+    /* Delta lights apart from the budget: when there are at most n of
+     * them, each takes its one sample at every point (no selection can do
+     * better than a sample that is exact), and the sampler shares the n
+     * samples among the other emitters alone. */
+    const int *delta_ids;
+    int n_delta_apart;
     lie_texlight **texlights;       /* per emitter, NULL where its texture does not guide its samples */
+    lie_light_groups *groups;       /* what the sampler chooses among (sampler.h) */
+    int borrowed_tex, borrowed_poly, borrowed_groups; /* opt->lights', not the frame's to free */
     /* The scene has transmissive surfaces (lie_rt_transmits) and shadows
      * are on: each sample's light is multiplied by the transmittance of its
      * shadow segment (lie_rt_transmittance), and the closed forms, exact
@@ -125,6 +139,14 @@ typedef struct lie_shade_ctx {
      * sample order, stand aside. */
     int transmit;
 } lie_shade_ctx;
+
+struct lie_lights {
+    uint64_t hash; /* the scene's content hash it was made for */
+    int n_emitters;
+    lie_texlight **texlights; /* per emitter (lie_texlight_create_all); NULL for the per-emitter sampler */
+    lie_polylight **poly;     /* per emitter (lie_polylight_create); NULL where closed forms are off */
+    lie_light_groups *groups; /* with texlights */
+};
 
 /* Per triangle, the instance it belongs to if that instance is a closed
  * convex mesh with every light outside it (solids.c), else -1; NULL when

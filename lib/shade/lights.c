@@ -55,8 +55,8 @@ void lie_light_samples_generate(const lie_scene *s, int e, int n, float su, floa
     lie_light_samples_generate_with(s, e, n, su, sv, NULL, out);
 }
 
-void lie_light_samples_generate_with(const lie_scene *s, int e, int n, float su, float sv, const lie_texlight *tl,
-                                     lie_light_samples *out)
+static void generate(const lie_scene *s, int e, int n, float su, float sv, const lie_texlight *tl,
+                     const lie_light_groups *G, int group, const lie_vec3 *o, lie_light_samples *out)
 {
     const lie_emitter *em = &s->emitters[e];
     lie_emitter_sample q;
@@ -93,7 +93,9 @@ void lie_light_samples_generate_with(const lie_scene *s, int e, int n, float su,
     for (int i = 0; i < n; i++) {
         float u1 = wrap01(((float)i + 0.5f) / (float)n + su);
         float u2 = wrap01(lie_radical_inverse2((uint32_t)i) + sv);
-        if (tl)
+        if (G)
+            lie_light_group_sample(s, G, group, tl, o, u1, u2, &q);
+        else if (tl)
             lie_texlight_sample(s, e, tl, u1, u2, &q);
         else
             lie_emitter_sample_point(s, e, u1, u2, &q);
@@ -127,4 +129,16 @@ void lie_light_samples_generate_with(const lie_scene *s, int e, int n, float su,
     /* the padding up to a whole vector: (s, t) that no linear form admits */
     for (int i = n; i < lie_light_samples_padded(out); i++)
         out->s[i] = out->t[i] = NAN;
+}
+
+void lie_light_samples_generate_with(const lie_scene *s, int e, int n, float su, float sv, const lie_texlight *tl,
+                                     lie_light_samples *out)
+{
+    generate(s, e, n, su, sv, tl, NULL, -1, NULL, out);
+}
+
+void lie_light_samples_generate_group(const lie_scene *s, const lie_light_groups *G, int j, int n, float su, float sv,
+                                      const lie_texlight *tl, const lie_vec3 *o, lie_light_samples *out)
+{
+    generate(s, G->g[j].emitter, n, su, sv, tl, G, j, o, out);
 }

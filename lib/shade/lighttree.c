@@ -236,13 +236,13 @@ static void tree_destroy(void *state)
     free(t);
 }
 
-static lie_status tree_create(const lie_scene *s, const lie_light_bounds *B, void **state)
+static lie_status tree_create(const lie_light_bounds *B, int n_lights, void **state)
 {
     light_tree *t = calloc(1, sizeof *t);
-    int *ids = malloc(sizeof(int) * ((size_t)s->n_emitters + 1));
+    int *ids = malloc(sizeof(int) * ((size_t)n_lights + 1));
     if (t) {
-        t->nodes = malloc(sizeof *t->nodes * (2 * (size_t)s->n_emitters + 1));
-        t->infinite = malloc(sizeof(int) * ((size_t)s->n_emitters + 1));
+        t->nodes = malloc(sizeof *t->nodes * (2 * (size_t)n_lights + 1));
+        t->infinite = malloc(sizeof(int) * ((size_t)n_lights + 1));
     }
     if (!t || !ids || !t->nodes || !t->infinite) {
         free(ids);
@@ -250,7 +250,7 @@ static lie_status tree_create(const lie_scene *s, const lie_light_bounds *B, voi
         return LIE_ERR_NOMEM;
     }
     int n = 0;
-    for (int e = 0; e < s->n_emitters; e++) {
+    for (int e = 0; e < n_lights; e++) {
         if (!(B[e].phi > 0.0f))
             continue; /* no light: never chosen */
         if (B[e].infinite)

@@ -47,7 +47,8 @@ lie_status lie_shade_scratch_init(lie_shade_scratch *sc, int cap, int max_blocke
         lie_light_samples_alloc(&sc->rotated, cap) != LIE_OK || lie_polylight_work_init(&sc->poly, max_blockers) != LIE_OK ||
         !(sc->picks = malloc(sizeof *sc->picks * ((size_t)n_emitters + 1))) ||
         !(sc->weights = malloc(sizeof *sc->weights * ((size_t)n_emitters + 1))) ||
-        !(sc->ids = malloc(sizeof *sc->ids * ((size_t)n_emitters + 1)))) {
+        !(sc->ids = malloc(sizeof *sc->ids * ((size_t)n_emitters + 1))) ||
+        !(sc->by_tree = calloc((size_t)n_emitters + 1, 1))) {
         lie_shade_scratch_free(sc);
         return LIE_ERR_NOMEM;
     }
@@ -73,6 +74,7 @@ void lie_shade_scratch_free(lie_shade_scratch *sc)
     free(sc->picks);
     free(sc->weights);
     free(sc->ids);
+    free(sc->by_tree);
     memset(sc, 0, sizeof *sc);
 }
 
@@ -404,6 +406,13 @@ const lie_light_samples *lie_pair_samples(lie_pair *p, int bits)
         /* this point's own rotation of the pattern (Cranley and Patterson
          * 1976): a hash of the pixel, the emitter, the depth and the seed */
         uint64_t h = lie_hash_u64x4(p->key, (uint64_t)p->e, (uint64_t)p->sc->depth, 0x726f74ull ^ opt->seed);
+        if (p->group >= 0) {
+            h = lie_hash_u64x4(h, (uint64_t)p->group, 0, 0x67726f7570ull);
+            lie_light_samples_generate_group(c->s, c->groups, p->group, p->n, lie_hash_to_unit(h),
+                                             lie_hash_to_unit(h << 24), c->texlights ? c->texlights[p->e] : NULL,
+                                             &p->o, &p->sc->rotated);
+            return &p->sc->rotated;
+        }
         lie_light_samples_generate_with(c->s, p->e, p->n, lie_hash_to_unit(h), lie_hash_to_unit(h << 24),
                                         c->texlights ? c->texlights[p->e] : NULL, &p->sc->rotated);
         return &p->sc->rotated;
@@ -490,7 +499,7 @@ void lie_pair_blockers(lie_pair *p, lie_shadow_query *q)
 void lie_pair_combine(lie_pair *p, const uint32_t *occ, int bits, int n, float rgb[3])
 {
     lie_shade_scratch *sc = p->sc;
-    if (p->pl && p->sf->lambert) {
+    if ((p->pl || p->group_closed) && p->sf->lambert) {
         /* the ratio estimator: the closed form times the share of the
          * samples' weight that is visible (sc->scalar: a Lambert receiver
          * under an emitter of one colour; Heitz, Hill, McGuire 2018) */

@@ -307,6 +307,34 @@ static int clip3(d3 *q, int nq, d3 k, double c, int keep_above, d3 *tmp)
     return m;
 }
 
+double lie_triangle_unshadowed(const lie_vec3 P[3], int two_sided, lie_vec3 o, lie_vec3 n, lie_vec3 ng)
+{
+    const d3 O = d3_of(o);
+    d3 q[8], tmp[8];
+    for (int k = 0; k < 3; k++)
+        q[k] = d3_sub(d3_of(P[k]), O);
+    /* seen from its front (or either side, two-sided) */
+    d3 fn = d3_cross(d3_sub(q[1], q[0]), d3_sub(q[2], q[0]));
+    double side = d3_dot(fn, q[0]);
+    if (!(side < 0.0) && !(two_sided && side > 0.0))
+        return 0.0;
+    /* the part above both tangent planes */
+    int m = clip3(q, 3, d3_of(n), 0.0, 1, tmp);
+    if (m >= 3)
+        m = clip3(q, m, d3_of(ng), 0.0, 1, tmp);
+    if (m < 3)
+        return 0.0;
+    const d3 N = d3_of(n);
+    double sum = 0.0;
+    for (int i = 0, j = m - 1; i < m; j = i++) {
+        d3 c = d3_cross(q[j], q[i]);
+        double cl = sqrt(d3_dot(c, c));
+        if (cl > 0.0)
+            sum += atan2(cl, d3_dot(q[j], q[i])) * (d3_dot(N, c) / cl);
+    }
+    return 0.5 * fabs(sum);
+}
+
 /* A shadow: forms whose common non-negative part it is, and its box. */
 typedef struct shadow {
     int nf;

@@ -138,4 +138,11 @@ struct lie_ltc_shading;
 void lie_polylight_ltc(const lie_polylight *L, const struct lie_ltc_shading *sh, lie_vec3 o,
                        const lie_polylight_work *w, float out[3]);
 
+/* The projected solid angle (sr) about n of triangle P seen from o, its
+ * part above the tangent planes of n and ng, 0 from behind a one-sided
+ * triangle (its front: counter-clockwise): one triangle's closed form
+ * (Lambert's edge sum, as lie_polylight_unshadowed), for the light groups
+ * of the budgeted samplers (sampler.h). */
+double lie_triangle_unshadowed(const lie_vec3 P[3], int two_sided, lie_vec3 o, lie_vec3 n, lie_vec3 ng);
+
 #endif

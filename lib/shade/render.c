@@ -336,6 +336,7 @@ static lie_status frame_setup(render_job *j, const lie_scene *s, const lie_rende
     lie_shade_ctx *c = &j->sc;
     lie_status st = LIE_OK;
     const int ne = s->n_emitters;
+    const lie_lights *lt = opt->lights && lie_lights_fit(opt->lights, s) ? opt->lights : NULL;
     c->sampler_on = opt->sampler != LIE_SAMPLER_PER_EMITTER;
     if (!c->sampler_on) {
         lie_light_samples *fixed = calloc((size_t)ne + 1, sizeof *fixed);
@@ -355,18 +356,56 @@ static lie_status frame_setup(render_job *j, const lie_scene *s, const lie_rende
             }
         }
     } else {
-        c->texlights = calloc((size_t)ne + 1, sizeof *c->texlights);
         float *scale = malloc(sizeof *scale * ((size_t)ne + 1));
-        st = c->texlights && scale ? lie_texlight_create_all(s, c->texlights) : LIE_ERR_NOMEM;
+        if (lt && lt->texlights) {
+            c->texlights = lt->texlights;
+            c->borrowed_tex = 1;
+        } else {
+            c->texlights = calloc((size_t)ne + 1, sizeof *c->texlights);
+            st = c->texlights && scale ? lie_texlight_create_all(s, c->texlights, opt->threads) : LIE_ERR_NOMEM;
+        }
+        st = st == LIE_OK && !scale ? LIE_ERR_NOMEM : st;
         for (int e = 0; st == LIE_OK && e < ne; e++)
             scale[e] = lie_texlight_power_scale(c->texlights[e]);
+        int n_delta = 0;
+        for (int e = 0; e < ne; e++)
+            n_delta += lie_emitter_is_delta(&s->emitters[e]);
+        if (st == LIE_OK && n_delta > 0 && n_delta <= opt->light_samples) {
+            int *ids = malloc(sizeof *ids * (size_t)n_delta);
+            st = ids ? LIE_OK : LIE_ERR_NOMEM;
+            for (int e = 0, k = 0; st == LIE_OK && e < ne; e++)
+                if (lie_emitter_is_delta(&s->emitters[e])) {
+                    ids[k++] = e;
+                    scale[e] = 0.0f; /* no share of the budget */
+                }
+            c->delta_ids = ids;
+            c->n_delta_apart = ids ? n_delta : 0;
+        }
         lie_light_bounds *bounds = NULL;
         if (st == LIE_OK)
             st = lie_light_bounds_all(s, scale, &bounds);
         c->bounds = bounds;
         free(scale);
+        /* the sampler's lights: the emitters' groups (sampler.h), their
+         * bounds as the frame weighs the emitters (delta lights apart) */
+        const int split = opt->exact != LIE_EXACT_ONLY;
+        if (st == LIE_OK && lt && lt->groups && lt->groups->split == split) {
+            c->groups = lt->groups;
+            c->borrowed_groups = 1;
+        } else if (st == LIE_OK) {
+            st = lie_light_groups_create(s, c->texlights, bounds, split, &c->groups);
+        }
+        lie_light_bounds *gb = NULL;
+        if (st == LIE_OK) {
+            const lie_light_groups *G = c->groups;
+            gb = malloc(sizeof *gb * ((size_t)G->n + 1));
+            st = gb ? LIE_OK : LIE_ERR_NOMEM;
+            for (int g = 0; st == LIE_OK && g < G->n; g++)
+                gb[g] = G->g[g].whole ? bounds[G->g[g].emitter] : G->bounds[g];
+        }
         if (st == LIE_OK)
-            st = lie_light_sampler_create(s, opt->sampler, bounds, &c->sampler);
+            st = lie_light_sampler_create(opt->sampler, gb, c->groups->n, &c->sampler);
+        free(gb);
         /* the LIE's classes share the budget, except in the oracle's mode
          * (the same samples as full visibility) */
         c->guided = opt->visibility == LIE_VIS_LIE && opt->oracle && opt->exact != LIE_EXACT_OFF;
@@ -375,7 +414,10 @@ static lie_status frame_setup(render_job *j, const lie_scene *s, const lie_rende
      * cost less than an edge sum */
     c->analytic = opt->exact == LIE_EXACT_ONLY || opt->light_samples >= LIE_ANALYTIC_MIN_SAMPLES;
     c->exact = opt->visibility == LIE_VIS_LIE && opt->exact != LIE_EXACT_OFF;
-    if (st == LIE_OK && c->analytic) {
+    if (st == LIE_OK && c->analytic && lt && lt->poly) {
+        c->poly = lt->poly;
+        c->borrowed_poly = 1;
+    } else if (st == LIE_OK && c->analytic) {
         c->poly = calloc((size_t)ne + 1, sizeof *c->poly);
         st = c->poly ? LIE_OK : LIE_ERR_NOMEM;
         for (int e = 0; st == LIE_OK && e < ne; e++)
@@ -396,24 +438,93 @@ static lie_status frame_setup(render_job *j, const lie_scene *s, const lie_rende
     return st;
 }
 
+static void lights_free(int n, lie_texlight **texlights, lie_polylight **poly)
+{
+    for (int e = 0; e < n; e++) {
+        if (poly)
+            lie_polylight_destroy(poly[e]);
+        if (texlights)
+            lie_texlight_destroy(texlights[e]);
+    }
+    free(poly);
+    free(texlights);
+}
+
+lie_status lie_lights_create(const lie_scene *s, const lie_render_options *opt, lie_lights **out, lie_error *err)
+{
+    *out = NULL;
+    const char *path = s->path ? s->path : "";
+    lie_render_options o = lie_render_options_default();
+    if (opt && options_of(s, opt, &o, err) != LIE_OK)
+        return LIE_ERR_ARG;
+    opt = &o;
+    lie_lights *l = calloc(1, sizeof *l);
+    const int ne = s->n_emitters;
+    if (!l)
+        return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
+    l->hash = s->hash;
+    l->n_emitters = ne;
+    /* what frames with these options use: the distributions for a
+     * budgeted sampler, the closed forms where they are on */
+    const int sampler = opt->sampler != LIE_SAMPLER_PER_EMITTER;
+    const int analytic = opt->exact == LIE_EXACT_ONLY || opt->light_samples >= LIE_ANALYTIC_MIN_SAMPLES;
+    lie_status st = LIE_OK;
+    if (sampler) {
+        l->texlights = calloc((size_t)ne + 1, sizeof *l->texlights);
+        st = l->texlights ? lie_texlight_create_all(s, l->texlights, opt->threads) : LIE_ERR_NOMEM;
+        float *scale = malloc(sizeof *scale * ((size_t)ne + 1));
+        lie_light_bounds *eb = NULL;
+        st = st == LIE_OK && !scale ? LIE_ERR_NOMEM : st;
+        for (int e = 0; st == LIE_OK && e < ne; e++)
+            scale[e] = lie_texlight_power_scale(l->texlights[e]);
+        if (st == LIE_OK)
+            st = lie_light_bounds_all(s, scale, &eb);
+        if (st == LIE_OK)
+            st = lie_light_groups_create(s, l->texlights, eb, opt->exact != LIE_EXACT_ONLY, &l->groups);
+        free(scale);
+        free(eb);
+    }
+    if (st == LIE_OK && analytic) {
+        l->poly = calloc((size_t)ne + 1, sizeof *l->poly);
+        st = l->poly ? LIE_OK : LIE_ERR_NOMEM;
+        for (int e = 0; st == LIE_OK && e < ne; e++)
+            st = lie_polylight_create(s, e, &l->poly[e]);
+    }
+    if (st != LIE_OK) {
+        lie_lights_destroy(l);
+        return lie_error_set(err, st, path, "%s", lie_status_str(st));
+    }
+    *out = l;
+    return LIE_OK;
+}
+
+void lie_lights_destroy(lie_lights *l)
+{
+    if (!l)
+        return;
+    lights_free(l->n_emitters, l->texlights, l->poly);
+    lie_light_groups_destroy(l->groups);
+    free(l);
+}
+
+int lie_lights_fit(const lie_lights *l, const lie_scene *s) { return l && l->hash == s->hash && l->n_emitters == s->n_emitters; }
+
 static void frame_free(render_job *j, const lie_scene *s)
 {
     lie_shade_ctx *c = &j->sc;
     for (int e = 0; e < s->n_emitters; e++) {
         if (c->fixed)
             lie_light_samples_free((lie_light_samples *)&c->fixed[e]);
-        if (c->poly)
-            lie_polylight_destroy(c->poly[e]);
         if (c->bits)
             lie_bitmask_destroy(c->bits[e]);
-        if (c->texlights)
-            lie_texlight_destroy(c->texlights[e]);
     }
+    lights_free(s->n_emitters, c->borrowed_tex ? NULL : c->texlights, c->borrowed_poly ? NULL : c->poly);
+    if (!c->borrowed_groups)
+        lie_light_groups_destroy(c->groups);
     free((void *)c->fixed);
-    free(c->poly);
     free(c->bits);
-    free(c->texlights);
     free((void *)c->bounds);
+    free((void *)c->delta_ids);
     lie_light_sampler_destroy(&c->sampler);
 }
 
@@ -478,9 +589,11 @@ lie_status lie_render_tiles(const lie_scene *s, const lie_rt *rt, const lie_came
     if (j.scratch)
         memset(j.scratch, 0, sizeof *j.scratch * (size_t)threads);
     st = j.scratch ? frame_setup(&j, s, opt) : LIE_ERR_NOMEM;
+    /* picks: one per emitter (the LIE's guided budget) or light group */
+    int lights = j.sc.groups && j.sc.groups->n > s->n_emitters ? j.sc.groups->n : s->n_emitters;
     for (int t = 0; st == LIE_OK && t < threads; t++)
         st = lie_shade_scratch_init(&j.scratch[t], opt->light_samples, opt->oracle ? opt->oracle->max_blockers : 0,
-                                    s->n_emitters);
+                                    lights);
     if (st == LIE_OK) {
         j.tiles_x = (opt->width + LIE_TILE - 1) / LIE_TILE;
         tile_range r = {&j, first};

@@ -201,15 +201,15 @@ typedef struct table_sampler {
     int n;
 } table_sampler;
 
-static lie_status table_create(const lie_scene *s, const lie_light_bounds *b, int by_power, void **state)
+static lie_status table_create(const lie_light_bounds *b, int n, int by_power, void **state)
 {
     table_sampler *t = calloc(1, sizeof *t);
-    if (!t || !(t->w = calloc((size_t)s->n_emitters + 1, sizeof *t->w))) {
+    if (!t || !(t->w = calloc((size_t)n + 1, sizeof *t->w))) {
         free(t);
         return LIE_ERR_NOMEM;
     }
-    t->n = s->n_emitters;
-    for (int e = 0; e < s->n_emitters; e++) {
+    t->n = n;
+    for (int e = 0; e < n; e++) {
         t->w[e] = by_power ? b[e].phi : (b[e].phi > 0.0f ? 1.0f : 0.0f);
         t->total += t->w[e];
     }
@@ -217,14 +217,8 @@ static lie_status table_create(const lie_scene *s, const lie_light_bounds *b, in
     return LIE_OK;
 }
 
-static lie_status uniform_create(const lie_scene *s, const lie_light_bounds *b, void **state)
-{
-    return table_create(s, b, 0, state);
-}
-static lie_status power_create(const lie_scene *s, const lie_light_bounds *b, void **state)
-{
-    return table_create(s, b, 1, state);
-}
+static lie_status uniform_create(const lie_light_bounds *b, int n, void **state) { return table_create(b, n, 0, state); }
+static lie_status power_create(const lie_light_bounds *b, int n, void **state) { return table_create(b, n, 1, state); }
 
 static void table_destroy(void *state)
 {
@@ -246,14 +240,14 @@ static int table_distribute(const void *state, lie_vec3 p, lie_vec3 n_, int n, d
 const lie_light_sampler_class lie_light_sampler_uniform = {"uniform", uniform_create, table_destroy, table_distribute};
 const lie_light_sampler_class lie_light_sampler_power = {"power", power_create, table_destroy, table_distribute};
 
-lie_status lie_light_sampler_create(const lie_scene *s, lie_light_sampler_kind k, const lie_light_bounds *bounds,
+lie_status lie_light_sampler_create(lie_light_sampler_kind k, const lie_light_bounds *bounds, int n,
                                     lie_light_sampler *out)
 {
     out->cls = k == LIE_SAMPLER_UNIFORM ? &lie_light_sampler_uniform
                : k == LIE_SAMPLER_POWER ? &lie_light_sampler_power
                                         : &lie_light_sampler_tree;
     out->state = NULL;
-    return out->cls->create(s, bounds, &out->state);
+    return out->cls->create(bounds, n, &out->state);
 }
 
 void lie_light_sampler_destroy(lie_light_sampler *ls)

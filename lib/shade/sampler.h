@@ -46,14 +46,50 @@ lie_status lie_light_bounds_all(const lie_scene *s, const float *texture_power, 
  * LightBounds::Importance); 0 only where nothing of b can reach p. */
 float lie_light_importance(const lie_light_bounds *b, lie_vec3 p, const lie_vec3 *n);
 
+/* Light groups (lightgroup.c): what the samplers choose among.  An emitter
+ * of more than a few triangles is cut in space into groups of a few, each
+ * a light with its own bounds; a delta light or a small emitter is one
+ * group, `whole`, sampled as the emitter. */
+typedef struct lie_light_group {
+    int emitter;
+    uint32_t first, n;     /* its triangles: tris[first .. first + n) of its groups */
+    double total;          /* their summed weight (texels' light, or area) */
+    double emitter_total;  /* the same over its emitter's groups */
+    int whole;
+} lie_light_group;
+typedef struct lie_light_groups {
+    int n;
+    lie_light_group *g;
+    uint32_t *tris;             /* scene triangles, group by group */
+    double *cdf;                /* beside tris: cumulative weight within the group */
+    lie_light_bounds *bounds;   /* per group, the emitter's for a whole one */
+    int split;                  /* 0: every emitter whole (closed forms asked for) */
+} lie_light_groups;
+struct lie_texlight;
+/* The groups of every emitter of s: tl[e] (NULL, or tl NULL: by area)
+ * weighs emitter e's triangles, eb[e] its bounds (as lie_light_bounds_all
+ * gives them) its power; split 0 keeps every emitter whole (for frames
+ * that ask for closed forms, LIE_EXACT_ONLY).  *out:
+ * lie_light_groups_destroy. */
+lie_status lie_light_groups_create(const lie_scene *s, struct lie_texlight *const *tl, const lie_light_bounds *eb,
+                                   int split, lie_light_groups **out);
+void lie_light_groups_destroy(lie_light_groups *G);
+/* A point of group j (not whole) from (u1, u2), inv_pdf the inverse of its
+ * density in area measure over the group; tl its emitter's distribution,
+ * or NULL for an emitter of one radiance, whose triangles are then sampled
+ * by the solid angle they subtend from o where o (may be NULL) is near. */
+void lie_light_group_sample(const lie_scene *s, const lie_light_groups *G, int j, const struct lie_texlight *tl,
+                            const lie_vec3 *o, float u1, float u2, lie_emitter_sample *out);
+
 typedef struct lie_light_sampler lie_light_sampler;
 typedef struct lie_light_sampler_class {
     const char *name;
-    lie_status (*create)(const lie_scene *s, const lie_light_bounds *bounds, void **state);
+    /* over n lights of the given bounds */
+    lie_status (*create)(const lie_light_bounds *bounds, int n, void **state);
     void (*destroy)(void *state);
-    /* n samples at point p with normal n_ among the emitters, from the
-     * rotation u in [0, 1): picks in out (room for min(n, emitters)),
-     * returns how many */
+    /* n samples at point p with normal n_ among the lights, from the
+     * rotation u in [0, 1): picks in out (room for min(n, lights)),
+     * returns how many; a pick's `emitter` is the light's index */
     int (*distribute)(const void *state, lie_vec3 p, lie_vec3 n_, int n, double u, lie_light_pick *out);
 } lie_light_sampler_class;
 
@@ -64,8 +100,8 @@ struct lie_light_sampler {
 
 extern const lie_light_sampler_class lie_light_sampler_uniform, lie_light_sampler_power, lie_light_sampler_tree;
 
-/* The sampler of kind k (not LIE_SAMPLER_PER_EMITTER) over s. */
-lie_status lie_light_sampler_create(const lie_scene *s, lie_light_sampler_kind k, const lie_light_bounds *bounds,
+/* The sampler of kind k (not LIE_SAMPLER_PER_EMITTER) over n lights. */
+lie_status lie_light_sampler_create(lie_light_sampler_kind k, const lie_light_bounds *bounds, int n,
                                     lie_light_sampler *out);
 void lie_light_sampler_destroy(lie_light_sampler *ls);
 

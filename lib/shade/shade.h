@@ -271,6 +271,7 @@ typedef struct lie_render_options {
     lie_bitmask_mode bitmask; /* all samples at once for partial pairs (bitmask.h) */
     lie_light_sampler_kind sampler; /* how light samples are shared among emitters */
     uint64_t seed;         /* mixed into every per-pixel pattern: renders with two seeds are independent */
+    const struct lie_lights *lights; /* the scene's lights prepared once (lie_lights_create; NULL: per call) */
 } lie_render_options;
 
 #define LIE_RENDER_WIDTH_DEFAULT 512
@@ -279,6 +280,25 @@ typedef struct lie_render_options {
 #define LIE_MAX_DEPTH_DEFAULT 2
 #define LIE_TILE 16
 lie_render_options lie_render_options_default(void);
+
+/* A scene's lights prepared for shading, once: the textured emitters'
+ * distributions (their texels' light) and the emitters' closed forms
+ * (polylight.h), whose cost grows with texels and triangles, not with
+ * pixels.  lie_render and lie_render_tiles otherwise prepare them at every
+ * call: a camera path, or a frame rendered as many calls of a few tiles
+ * (lie-render under mpirun, lie-view's bands), shares one through
+ * lie_render_options.lights.  It serves while the scene's content hash is
+ * the one it was made for; a call with another scene (an edit since)
+ * prepares its own, so a stale one costs time, never a wrong image.  It
+ * holds what frames with options like `opt` use (the distributions for a
+ * budgeted sampler, the closed forms where `light_samples` or `exact`
+ * turn them on; opt NULL: the defaults'); a frame prepares what it
+ * lacks.  The images are the same with or without it. */
+typedef struct lie_lights lie_lights;
+lie_status lie_lights_create(const lie_scene *s, const lie_render_options *opt, lie_lights **out, lie_error *err);
+void lie_lights_destroy(lie_lights *l);
+/* Whether l was made for s as it is now. */
+int lie_lights_fit(const lie_lights *l, const lie_scene *s);
 
 typedef struct lie_render_stats {
     uint64_t eye_rays, reflection_rays, shadow_rays, shadow_rays_skipped;

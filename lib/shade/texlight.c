@@ -76,7 +76,9 @@ static int pyramid_make(const lie_texture *t, const float rad[3], max_pyramid *m
         return 0;
     for (size_t i = 0; i < (size_t)w * (size_t)h; i++) {
         const float *px = t->rgba + 4 * i;
-        const float c[3] = {rad[0] * fmaxf(px[0], 0.0f), rad[1] * fmaxf(px[1], 0.0f), rad[2] * fmaxf(px[2], 0.0f)};
+        /* a NaN texel is dark, as a negative one */
+        const float c[3] = {rad[0] * (px[0] > 0.0f ? px[0] : 0.0f), rad[1] * (px[1] > 0.0f ? px[1] : 0.0f),
+                            rad[2] * (px[2] > 0.0f ? px[2] : 0.0f)};
         l0[i] = lum3(c);
     }
     m->level[0] = l0, m->w[0] = w, m->h[0] = h, m->n = 1;
@@ -94,8 +96,8 @@ static int pyramid_make(const lie_texture *t, const float rad[3], max_pyramid *m
                 for (int dy = 0; dy < 2; dy++)
                     for (int dx = 0; dx < 2; dx++) {
                         int xx = 2 * x + dx, yy = 2 * y + dy;
-                        if (xx < w && yy < h)
-                            v = fmaxf(v, a[(size_t)yy * (size_t)w + (size_t)xx]);
+                        if (xx < w && yy < h && a[(size_t)yy * (size_t)w + (size_t)xx] > v)
+                            v = a[(size_t)yy * (size_t)w + (size_t)xx];
                     }
                 b[(size_t)y * (size_t)w2 + (size_t)x] = v;
             }
@@ -161,9 +163,70 @@ static const lie_texture *texture_of(const lie_scene *s, int e, const lie_materi
     return &s->textures[k];
 }
 
+/* The cells of triangles [k0, k1) of a texlight: their cumulative
+ * weights, and per triangle the sum in cell_sum[k]. */
+typedef struct cells_job {
+    const lie_scene *s;
+    const lie_emitter *em;
+    const lie_material *mat;
+    const lie_texture *tex;
+    const max_pyramid *pyr;
+    lie_texlight *t;
+    double *cell_sum;
+} cells_job;
+
+#define CELLS_TRIS 32 /* triangles per item of the parallel loop */
+
+static void cells_run(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    const cells_job *jb = ctx;
+    const lie_scene *s = jb->s;
+    const lie_emitter *em = jb->em;
+    const lie_material *mat = jb->mat;
+    const lie_texture *tex = jb->tex;
+    const max_pyramid *pyr = jb->pyr;
+    lie_texlight *t = jb->t;
+    uint32_t k0 = (uint32_t)item * CELLS_TRIS, k1 = k0 + CELLS_TRIS < em->n_tris ? k0 + CELLS_TRIS : em->n_tris;
+    for (uint32_t k = k0; k < k1; k++) {
+        uint32_t g = em->first_tri + k;
+        const int R = t->tris[k].res;
+        double *cdf = t->cell_cdf + t->tris[k].first_cell;
+        double sum = 0.0;
+        for (int i = 0; i < R; i++)
+            for (int j = 0; j < R; j++) {
+                /* the cell's corners in texture space bound it (uv is
+                 * affine on the triangle); its weight is the light at its
+                 * centre, plus a sixty-fourth of the brightest texel its
+                 * lookups reach, so that no cell with light is left out
+                 * and a dark one takes no sample */
+                float u0 = INFINITY, u1 = -INFINITY, v0 = INFINITY, v1 = -INFINITY;
+                float cv[3][2];
+                subtriangle(R, (uint32_t)(i * R + j), cv);
+                for (int c = 0; c < 3; c++) {
+                    float tu, tv;
+                    lie_scene_slot_uv(s, mat, LIE_TEX_EMISSIVE, g, cv[c][0], cv[c][1], &tu, &tv);
+                    u0 = fminf(u0, tu), u1 = fmaxf(u1, tu), v0 = fminf(v0, tv), v1 = fmaxf(v1, tv);
+                }
+                float tu, tv, rgba[4];
+                lie_scene_slot_uv(s, mat, LIE_TEX_EMISSIVE, g, (cv[0][0] + cv[1][0] + cv[2][0]) / 3.0f,
+                                  (cv[0][1] + cv[1][1] + cv[2][1]) / 3.0f, &tu, &tv);
+                lie_texture_sample(tex, tu, tv, rgba);
+                const float le[3] = {em->radiance[0] * (rgba[0] > 0.0f ? rgba[0] : 0.0f),
+                                     em->radiance[1] * (rgba[1] > 0.0f ? rgba[1] : 0.0f),
+                                     em->radiance[2] * (rgba[2] > 0.0f ? rgba[2] : 0.0f)};
+                float m = isfinite(u0 + u1 + v0 + v1) ? max_texel(tex, pyr, u0, u1, v0, v1) : lum3(em->radiance);
+                m = m > 0.0f ? lum3(le) + m / 64.0f : 0.0f;
+                sum += m;
+                cdf[i * R + j] = sum;
+            }
+        jb->cell_sum[k] = sum;
+    }
+}
+
 /* The distribution of emitter e over the pyramid of its texture's light. */
 static lie_status texlight_build(const lie_scene *s, int e, const lie_material *mat, const lie_texture *tex,
-                                 const max_pyramid *pyr, lie_texlight **out)
+                                 const max_pyramid *pyr, int threads, lie_texlight **out)
 {
     const lie_emitter *em = &s->emitters[e];
     lie_texlight *t = calloc(1, sizeof *t);
@@ -199,43 +262,30 @@ static lie_status texlight_build(const lie_scene *s, int e, const lie_material *
         lie_texlight_destroy(t);
         return LIE_ERR_NOMEM;
     }
+    /* the cells, triangles in parallel (each writes its own slice) */
+    double *cell_sum = malloc(sizeof *cell_sum * ((size_t)em->n_tris + 1));
+    if (!cell_sum) {
+        lie_texlight_destroy(t);
+        return LIE_ERR_NOMEM;
+    }
+    cells_job jb = {s, em, mat, tex, pyr, t, cell_sum};
+    lie_status st = lie_parallel_for(((size_t)em->n_tris + CELLS_TRIS - 1) / CELLS_TRIS, threads, cells_run, &jb, NULL, NULL);
+    if (st != LIE_OK) {
+        free(cell_sum);
+        lie_texlight_destroy(t);
+        return st;
+    }
     double acc = 0.0, area = 0.0;
     for (uint32_t k = 0; k < em->n_tris; k++) {
         uint32_t g = em->first_tri + k;
         const int R = t->tris[k].res;
-        double *cdf = t->cell_cdf + t->tris[k].first_cell;
-        double sum = 0.0;
-        for (int i = 0; i < R; i++)
-            for (int j = 0; j < R; j++) {
-                /* the cell's corners in texture space bound it (uv is
-                 * affine on the triangle); its weight is the mean light
-                 * at its corners and centre, plus a sixteenth of the
-                 * brightest texel its lookups reach, so that no cell with
-                 * light is left out */
-                float u0 = INFINITY, u1 = -INFINITY, v0 = INFINITY, v1 = -INFINITY, mean = 0.0f;
-                float cv[3][2];
-                subtriangle(R, (uint32_t)(i * R + j), cv);
-                for (int c = 0; c < 4; c++) {
-                    float b1 = c < 3 ? cv[c][0] : (cv[0][0] + cv[1][0] + cv[2][0]) / 3.0f;
-                    float b2 = c < 3 ? cv[c][1] : (cv[0][1] + cv[1][1] + cv[2][1]) / 3.0f;
-                    float tu, tv, rgba[4];
-                    lie_scene_slot_uv(s, mat, LIE_TEX_EMISSIVE, g, b1, b2, &tu, &tv);
-                    u0 = fminf(u0, tu), u1 = fmaxf(u1, tu), v0 = fminf(v0, tv), v1 = fmaxf(v1, tv);
-                    lie_texture_sample(tex, tu, tv, rgba);
-                    const float le[3] = {em->radiance[0] * fmaxf(rgba[0], 0.0f), em->radiance[1] * fmaxf(rgba[1], 0.0f),
-                                         em->radiance[2] * fmaxf(rgba[2], 0.0f)};
-                    mean += lum3(le) / 4.0f;
-                }
-                float m = isfinite(u0 + u1 + v0 + v1) ? max_texel(tex, pyr, u0, u1, v0, v1) : lum3(em->radiance);
-                m = m > 0.0f ? mean + m / 64.0f : 0.0f;
-                sum += m;
-                cdf[i * R + j] = sum;
-            }
+        double sum = cell_sum[k];
         t->tris[k].weight = (float)(s->tri_area[g] * sum / ((double)R * R));
         acc += t->tris[k].weight;
         t->tri_cdf[k] = acc;
         area += s->tri_area[g];
     }
+    free(cell_sum);
     t->total = acc;
     float full = lum3(em->radiance);
     t->scale = area > 0.0 && full > 0.0f ? (float)(acc / (area * full)) : 0.0f;
@@ -253,12 +303,12 @@ lie_status lie_texlight_create(const lie_scene *s, int e, lie_texlight **out)
     max_pyramid pyr;
     if (!pyramid_make(tex, s->emitters[e].radiance, &pyr))
         return LIE_ERR_NOMEM;
-    lie_status st = texlight_build(s, e, mat, tex, &pyr, out);
+    lie_status st = texlight_build(s, e, mat, tex, &pyr, 1, out);
     pyramid_free(&pyr);
     return st;
 }
 
-lie_status lie_texlight_create_all(const lie_scene *s, lie_texlight **out)
+lie_status lie_texlight_create_all(const lie_scene *s, lie_texlight **out, int threads)
 {
     /* emitters of one material share their texture's pyramid: an
      * instanced sign of many emitters makes it once */
@@ -284,7 +334,7 @@ lie_status lie_texlight_create_all(const lie_scene *s, lie_texlight **out)
             have = tex;
             memcpy(rad, r, sizeof rad);
         }
-        st = texlight_build(s, e, mat, tex, &pyr, &out[e]);
+        st = texlight_build(s, e, mat, tex, &pyr, threads, &out[e]);
     }
     pyramid_free(&pyr);
     return st;
@@ -306,28 +356,28 @@ static uint32_t cdf_find(const double *cdf, uint32_t n, double x)
     return lo;
 }
 
-void lie_texlight_sample(const lie_scene *s, int e, const lie_texlight *t, float u1, float u2, lie_emitter_sample *out)
+float lie_texlight_tri_weight(const lie_texlight *t, uint32_t k) { return t->tris[k].weight; }
+
+void lie_texlight_sample_tri(const lie_scene *s, int e, const lie_texlight *t, uint32_t k, float r, float u2,
+                             lie_emitter_sample *out)
 {
     const lie_emitter *em = &s->emitters[e];
     memset(out, 0, sizeof *out);
-    if (!(t->total > 0.0)) {
-        out->p = s->tri_p[3 * (size_t)t->first_tri];
-        out->n = s->tri_ng[t->first_tri];
-        out->tri = t->first_tri;
-        return; /* a black emitter: weight 0 */
-    }
-    /* the triangle by u1, then the cell by the rest of u1 (its row-major
-     * index), the point in the cell by what is left of u1 and by u2 */
-    double x = (double)u1 * t->total;
-    uint32_t k = cdf_find(t->tri_cdf, t->n_tris, x);
-    double lo = k > 0 ? t->tri_cdf[k - 1] : 0.0, w = t->tri_cdf[k] - lo;
-    double r = w > 0.0 ? (x - lo) / w : 0.5;
+    /* the cell by r (its row-major index), the point in the cell by what
+     * is left of r and by u2 */
     const tri_dist *td = &t->tris[k];
     const int R = td->res;
     const double *cdf = t->cell_cdf + td->first_cell;
     const uint32_t nc = (uint32_t)R * (uint32_t)R;
     double csum = cdf[nc - 1];
-    double y = r * csum;
+    uint32_t g = t->first_tri + k;
+    if (!(csum > 0.0)) {
+        out->p = s->tri_p[3 * (size_t)g];
+        out->n = s->tri_ng[g];
+        out->tri = g;
+        return; /* a black triangle: weight 0 */
+    }
+    double y = (double)r * csum;
     uint32_t c = cdf_find(cdf, nc, y);
     double clo = c > 0 ? cdf[c - 1] : 0.0, cw = cdf[c] - clo;
     float r2 = cw > 0.0 ? (float)((y - clo) / cw) : 0.5f;
@@ -337,7 +387,6 @@ void lie_texlight_sample(const lie_scene *s, int e, const lie_texlight *t, float
     lie_sample_triangle(r2, fminf(u2, 0.99999994f), &sb1, &sb2);
     float b1 = cv[0][0] + sb1 * (cv[1][0] - cv[0][0]) + sb2 * (cv[2][0] - cv[0][0]);
     float b2 = cv[0][1] + sb1 * (cv[1][1] - cv[0][1]) + sb2 * (cv[2][1] - cv[0][1]);
-    uint32_t g = t->first_tri + k;
     const lie_vec3 *P = &s->tri_p[3 * (size_t)g];
     float b0 = 1.0f - b1 - b2;
     out->p = lie_v3_add(lie_v3_add(lie_v3_scale(P[0], b0), lie_v3_scale(P[1], b1)), lie_v3_scale(P[2], b2));
@@ -348,7 +397,27 @@ void lie_texlight_sample(const lie_scene *s, int e, const lie_texlight *t, float
     lie_texture_sample(t->tex, tu, tv, rgba);
     for (int q = 0; q < 3; q++)
         out->le[q] = em->radiance[q] * rgba[q];
-    /* density: P(triangle) P(cell | triangle) / (the cell's area) */
-    double pdf = (w / t->total) * (cw / csum) * (double)nc / (double)s->tri_area[g];
+    /* density on the triangle: P(cell) / (the cell's area) */
+    double pdf = (cw / csum) * (double)nc / (double)s->tri_area[g];
     out->inv_pdf = pdf > 0.0 && isfinite(pdf) ? (float)(1.0 / pdf) : 0.0f;
+}
+
+void lie_texlight_sample(const lie_scene *s, int e, const lie_texlight *t, float u1, float u2, lie_emitter_sample *out)
+{
+    if (!(t->total > 0.0)) {
+        memset(out, 0, sizeof *out);
+        out->p = s->tri_p[3 * (size_t)t->first_tri];
+        out->n = s->tri_ng[t->first_tri];
+        out->tri = t->first_tri;
+        return; /* a black emitter: weight 0 */
+    }
+    /* the triangle by u1, then the point in it by the rest of u1 and u2 */
+    double x = (double)u1 * t->total;
+    uint32_t k = cdf_find(t->tri_cdf, t->n_tris, x);
+    double lo = k > 0 ? t->tri_cdf[k - 1] : 0.0, w = t->tri_cdf[k] - lo;
+    double r = w > 0.0 ? (x - lo) / w : 0.5;
+    lie_texlight_sample_tri(s, e, t, k, (float)r, u2, out);
+    /* density: P(triangle) times the density on it */
+    double pt = w / t->total;
+    out->inv_pdf = pt > 0.0 && out->inv_pdf > 0.0f ? (float)((double)out->inv_pdf / pt) : 0.0f;
 }

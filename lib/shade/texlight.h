@@ -18,7 +18,7 @@ typedef struct lie_texlight lie_texlight;
 lie_status lie_texlight_create(const lie_scene *s, int e, lie_texlight **out);
 void lie_texlight_destroy(lie_texlight *t);
 /* The same for every emitter of s into out[0 .. n_emitters). */
-lie_status lie_texlight_create_all(const lie_scene *s, lie_texlight **out);
+lie_status lie_texlight_create_all(const lie_scene *s, lie_texlight **out, int threads);
 /* The emitter's light relative to the same emitter untextured: the
  * distribution's integral over the emitter's area, over area x the
  * luminance of its emissive factor (a bound on the texture's mean, for
@@ -28,5 +28,11 @@ float lie_texlight_power_scale(const lie_texlight *t);
  * lie_emitter_sample_point, inv_pdf the inverse of its density in area
  * measure (0 where the point's cell is dark). */
 void lie_texlight_sample(const lie_scene *s, int e, const lie_texlight *t, float u1, float u2, lie_emitter_sample *out);
+/* Triangle k's weight (its area times the mean weight of its texels'
+ * cells), and a point of it from (r, u2), inv_pdf the inverse of its
+ * density on the triangle alone. */
+float lie_texlight_tri_weight(const lie_texlight *t, uint32_t k);
+void lie_texlight_sample_tri(const lie_scene *s, int e, const lie_texlight *t, uint32_t k, float r, float u2,
+                             lie_emitter_sample *out);
 
 #endif

@@ -327,6 +327,116 @@ static void test_render_options_of_an_older_size(void **state)
     lie_scene_destroy(s);
 }
 
+/* Point lights take one sample each at every point, apart from the
+ * budget, while there are no more of them than samples: with a panel
+ * beside them, two seeds differ only by the panel's share, so the point
+ * lights' light is the same in both (the panel off: identical images);
+ * with more point lights than samples, they are chosen by the sampler and
+ * the mean over seeds is still their sum. */
+static void add_point(lie_scene *s, const char *name, float x, float y, float z, float I)
+{
+    lie_light_def l;
+    memset(&l, 0, sizeof l);
+    l.type = LIE_LIGHT_POINT;
+    l.color[0] = l.color[1] = l.color[2] = 1.0f;
+    l.intensity = I;
+    int li = lie_scene_add_light_def(s, &l);
+    double t[3] = {x, y, z}, q[4] = {0, 0, 0, 1}, sc[3] = {1, 1, 1};
+    lie_mat4 m = lie_mat4_from_trs(t, q, sc);
+    assert_true(lie_scene_add_node(s, name, -1, &m, -1, -1, li) >= 0);
+}
+
+static void test_point_lights_apart_from_the_budget(void **state)
+{
+    (void)state;
+    /* the exact light of point lights of intensity I at height h, offset
+     * d along x from the floor point: 0.5/pi * I cos / r^2 */
+    const float I[3] = {2.0f, 5.0f, 9.0f}, X[3] = {0.5f, -1.0f, 2.0f};
+    double want = 0.0;
+    for (int k = 0; k < 3; k++) {
+        double r2 = X[k] * X[k] + 4.0, c = 2.0 / sqrt(r2);
+        want += 0.5 / M_PI * I[k] * c / r2;
+    }
+    lie_scene *s = floor_scene("points", 0.0f, -1); /* a black panel: no light of its own */
+    add_quad(s, "Panel", 3.0f, 4.0f, -0.5f, 0.5f, 2.0f, 1);
+    for (int k = 0; k < 3; k++) {
+        char name[8];
+        snprintf(name, sizeof name, "P%d", k);
+        add_point(s, name, X[k], 2.0f, 0.0f, I[k]);
+    }
+    flatten(s);
+    /* 3 point lights, a budget of 4: each its own sample, whatever the seed */
+    float a = render_point(s, 0.0f, 0.0f, LIE_SAMPLER_TREE, 4, 1), b = render_point(s, 0.0f, 0.0f, LIE_SAMPLER_TREE, 4, 2);
+    assert_true(a == b);
+    assert_true(fabs(a - want) <= 1e-4 * want);
+    /* a budget of 2: the sampler shares it among the 3, unbiased */
+    double sum = 0.0;
+    const int seeds = 64;
+    int differ = 0;
+    for (int sd = 0; sd < seeds; sd++) {
+        float v = render_point(s, 0.0f, 0.0f, LIE_SAMPLER_TREE, 2, (uint64_t)sd + 1);
+        differ += v != a;
+        sum += v;
+    }
+    assert_true(differ > 0);
+    assert_true(fabs(sum / seeds - want) <= 0.03 * want);
+    lie_scene_destroy(s);
+}
+
+/* A scene's lights prepared once (lie_lights_create) give the images
+ * that frames preparing their own give, for a budgeted sampler with a
+ * textured emitter, with closed forms on and off; prepared for another
+ * scene state (its hash changed since), they are not used. */
+static void test_prepared_lights_give_the_same_image(void **state)
+{
+    (void)state;
+    lie_scene *s = floor_scene("prepared", 2.0f, 0);
+    s->textures = calloc(1, sizeof *s->textures);
+    assert_non_null(s->textures);
+    s->n_textures = 1;
+    lie_texture *t = &s->textures[0];
+    t->width = t->height = 8;
+    t->wrap_s = t->wrap_t = LIE_WRAP_REPEAT;
+    t->rgba = calloc(8 * 8 * 4, sizeof(float));
+    assert_non_null(t->rgba);
+    for (int i = 0; i < 64; i += 3)
+        for (int c = 0; c < 4; c++)
+            t->rgba[i * 4 + c] = (float)(i % 5);
+    add_quad(s, "Panel", -1.0f, 1.0f, -1.0f, 1.0f, 1.5f, 4);
+    flatten(s);
+    lie_error err;
+    lie_rt *rt = NULL;
+    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
+    lie_camera cam = lie_scene_default_camera(s);
+    const int budgets[2] = {4, 256};
+    for (int b = 0; b < 2; b++) {
+        lie_render_options o = test_render_options(16, 16, budgets[b], 2);
+        lie_lights *l = NULL;
+        assert_int_equal(lie_lights_create(s, &o, &l, &err), LIE_OK);
+        assert_true(lie_lights_fit(l, s));
+        lie_frame *a = NULL, *c = NULL, *d = NULL;
+        assert_int_equal(lie_render(s, rt, &cam, &o, &a, NULL, &err), LIE_OK);
+        o.lights = l;
+        assert_int_equal(lie_render(s, rt, &cam, &o, &c, NULL, &err), LIE_OK);
+        assert_memory_equal(a->rgb, c->rgb, sizeof(float) * 3 * 256);
+        s->hash ^= 1; /* as after an edit */
+        assert_false(lie_lights_fit(l, s));
+        assert_int_equal(lie_render(s, rt, &cam, &o, &d, NULL, &err), LIE_OK);
+        assert_memory_equal(a->rgb, d->rgb, sizeof(float) * 3 * 256);
+        s->hash ^= 1;
+        double sum = 0.0;
+        for (int i = 0; i < 3 * 256; i++)
+            sum += a->rgb[i];
+        assert_true(sum > 0.0); /* the panel lights the floor */
+        lie_frame_destroy(a);
+        lie_frame_destroy(c);
+        lie_frame_destroy(d);
+        lie_lights_destroy(l);
+    }
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -336,6 +446,8 @@ int main(void)
         cmocka_unit_test(test_systematic_picks_follow_the_weights),
         cmocka_unit_test(test_light_bounds_cull_only_what_cannot_reach),
         cmocka_unit_test(test_render_options_of_an_older_size),
+        cmocka_unit_test(test_point_lights_apart_from_the_budget),
+        cmocka_unit_test(test_prepared_lights_give_the_same_image),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -649,6 +649,16 @@ static int render_all(args *a, run *r, const lie_cli *cli)
     lie_render_stats rs;
     memset(&rs, 0, sizeof rs);
     double t_render = 0.0, t_write = 0.0;
+    /* the lights prepared once for every frame and tile (its time is the
+     * render's) */
+    double tl = lie_time_now();
+    lie_lights *lights = NULL;
+    if (!ro->eye_only && (st = lie_lights_create(r->scene, ro, &lights, &r->err)) != LIE_OK) {
+        free(todo);
+        return st;
+    }
+    ro->lights = lights;
+    t_render += lie_time_now() - tl;
     if (a->cache_file) {
         cached_run cr = {a->cache_file, a->input, a->view_w ? a->view_w : 512, a->view_h ? a->view_h : 512, r->scene,
                          r->rt, r->cpath, ro, cli->quiet, cli->verbose, a->frame_a < 0, 0, 0};
@@ -662,11 +672,13 @@ static int render_all(args *a, run *r, const lie_cli *cli)
         double ta = lie_time_now();
         render_out out = {write_frame_chunks, encode_chunks, frame_chunk_lines(&fo), &fo};
         st = render_dist(r->scene, r->rt, ro, r->cpath, &r->cam, todo, n_todo, &out, &rs, &t_write, &r->err);
-        t_render = lie_time_now() - ta - t_write;
+        t_render += lie_time_now() - ta - t_write;
         rendered = n_todo;
     } else {
         st = render_here(a, r, &fo, todo, n_todo, cli->verbose, &rs, &t_render, &t_write, &rendered);
     }
+    ro->lights = NULL;
+    lie_lights_destroy(lights);
     free(todo);
     if (st == LIE_OK && cli->stats) {
         run_stats rst = {a->input, rendered, skipped, t1 - t0, t2 - t1, t_render, t_write,

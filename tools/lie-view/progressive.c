@@ -27,6 +27,7 @@
 struct view_render {
     view_world *w;
     view_render_options o;
+    lie_lights *lights; /* the render thread's, for the world's scene as it is (lie_lights_fit) */
     pthread_t tid;
     int started;
     pthread_mutex_t m;
@@ -209,6 +210,18 @@ static void *render_main(void *arg)
                 view_world_read_lock(r->w);
                 view_world_sync_oracle(r->w);
                 const lie_scene *s = view_world_scene(r->w);
+                if (!ro.eye_only && !lie_lights_fit(r->lights, s)) {
+                    /* prepared once per scene state with the finest level's
+                     * options; a failure leaves each band to prepare its own */
+                    lie_render_options full = ro;
+                    full.light_samples = r->o.light_samples;
+                    lie_error lerr;
+                    lie_lights_destroy(r->lights);
+                    r->lights = NULL;
+                    if (lie_lights_create(s, &full, &r->lights, &lerr) != LIE_OK)
+                        r->lights = NULL;
+                }
+                ro.lights = r->lights;
                 ro.oracle = view_world_oracle(r->w);
                 ro.visibility = ro.oracle ? LIE_VIS_LIE : LIE_VIS_FULL;
                 lie_error err;
@@ -307,6 +320,7 @@ void view_render_stop(view_render *r)
         for (int m = 0; m < 3; m++)
             lie_frame_destroy(r->level[lv][m]);
     lie_frame_destroy(r->full);
+    lie_lights_destroy(r->lights);
     free(r->times);
     free(r->display);
     free(r->sel_mask);
