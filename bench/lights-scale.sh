@@ -32,7 +32,7 @@ time_of() {
         i=$((i + 1))
     done
     awk -v r="$(field shadow_rays <"$TMP/s.json")" -v p="$(field shading_points <"$TMP/s.json")" \
-        'BEGIN { printf "%.1f", p > 0 ? r / p : 0 }' >"$TMP/rays"
+        'BEGIN { printf "%.1f", (p > 0 ? r / p : 0) }' >"$TMP/rays"
     echo "$t"
 }
 
@@ -47,7 +47,7 @@ for m in "full tree|--visibility=full" "LIE tree|" "full per-emitter|--visibilit
     t1=$(time_of "$TMP/l1.lie" --light-samples "$N" $args); r1=$(cat "$TMP/rays")
     # shellcheck disable=SC2086
     t20=$(time_of "$TMP/l20.lie" --light-samples "$N" $args); r20=$(cat "$TMP/rays")
-    ratio=$(awk -v a="$t20" -v b="$t1" 'BEGIN { printf "%.2f", b > 0 ? a / b : 0 }')
+    ratio=$(awk -v a="$t20" -v b="$t1" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }')
     printf '  %-28s %10.3f %10.3f %8s %6s -> %5s\n' "$name" "$t1" "$t20" "$ratio" "$r1" "$r20"
     [ $first -eq 1 ] || json="$json,"
     first=0

@@ -409,6 +409,13 @@ static lie_status frame_setup(render_job *j, const lie_scene *s, const lie_rende
         /* the LIE's classes share the budget, except in the oracle's mode
          * (the same samples as full visibility) */
         c->guided = opt->visibility == LIE_VIS_LIE && opt->oracle && opt->exact != LIE_EXACT_OFF;
+        /* ... while it costs less than the budget: it visits every
+         * emitter at every point, where the tree's n picks cost O(n log
+         * lights); with more emitters than samples the tree chooses and
+         * the LIE answers each pick (occluded: no ray; seen whole: its
+         * closed form; partial: its blockers) */
+        if (c->guided && s->n_emitters > opt->light_samples && opt->exact != LIE_EXACT_ONLY)
+            c->guided = 0;
     }
     /* closed forms from LIE_ANALYTIC_MIN_SAMPLES on: below, a few samples
      * cost less than an edge sum */
