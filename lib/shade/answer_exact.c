@@ -10,7 +10,7 @@ static int exact_applies(const lie_pair *p) { return p->cls == LIE_CLASS_PARTIAL
 
 static double exact_cost(const lie_pair *p)
 {
-    return p->c->opt->exact == LIE_EXACT_ONLY ? 2.0 * LIE_COST_FORCED : lie_cost_exact(p->n_blockers);
+    return p->c->opt->exact == LIE_EXACT_ONLY ? 2.0 * LIE_COST_FORCED : lie_cost_exact_pieces(p->n_blockers, p->pl->n_polys);
 }
 
 static int exact_shade(lie_pair *p, float rgb[3])

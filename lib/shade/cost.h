@@ -29,6 +29,12 @@
  * depends on how early it is culled, which b does not see). */
 static inline double lie_cost_samples(int n, int b) { return (double)n * (4.0 + 2.0 * b); }
 static inline double lie_cost_exact(int b) { return 1400.0 + 2700.0 * b; }
+/* The fit is of emitters of one convex piece (the museums' quads); an
+ * emitter of m pieces (lib/shade/polybuild.c) back-projects every blocker
+ * onto each, so its exact shadow costs m times as much (ccity_buildings'
+ * signs of hundreds of pieces went exact at a hundred times the cost of
+ * their samples). */
+static inline double lie_cost_exact_pieces(int b, int pieces) { return lie_cost_exact(b) * (pieces > 1 ? pieces : 1); }
 static inline int lie_cost_exact_pays(int n, int b) { return lie_cost_samples(n, b) >= lie_cost_exact(b); }
 /* A bitmask's cost in the same units, fitted the same way: a set-up and
  * the sum over the fewer of the blocked and the visible samples, 500, and

@@ -206,7 +206,7 @@ static void shade_guided(point *pt, int n, double u, float rgb[3])
         if (!(w > 0.0f))
             continue; /* nothing of it reaches the point */
         if (p.pl && lie_answer_exact.applies(&p) &&
-            (c->opt->exact == LIE_EXACT_ONLY || lie_cost_exact(p.n_blockers) <= lie_cost_embree(LIE_GUIDED_SAMPLES))) {
+            (c->opt->exact == LIE_EXACT_ONLY || lie_cost_exact_pieces(p.n_blockers, p.pl->n_polys) <= lie_cost_embree(LIE_GUIDED_SAMPLES))) {
             float prgb[3] = {0.0f, 0.0f, 0.0f};
             if (lie_answer_exact.shade(&p, prgb)) {
                 for (int k = 0; k < 3; k++)

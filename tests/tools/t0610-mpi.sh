@@ -65,6 +65,18 @@ else
     not_ok "--stats=json per-rank tiles: $(cat "$TMP/err")"
 fi
 
+# PNG has no chunks: a frame's pieces are ranges of tiles, sent as floats
+# and copied into rank 0's frame (the tiles' rows and columns, the last ones short)
+"$B/lie-render" "$A/m-1.lie" -q --size 90x70 --light-samples 4 -o "$TMP/t1.png" || not_ok "one-process PNG"
+run $MPI_NOLEAK -np 3 "$B/lie-render" "$A/m-1.lie" -q --size 90x70 --light-samples 4 --threads 1 --stats=json \
+    -o "$TMP/t3.png"
+if [ "$rc" -eq 0 ] && cmp -s "$TMP/t1.png" "$TMP/t3.png" && [ "$(json_member exr_chunks_gathered)" = 0 ] &&
+    [ "$(json_member items)" -gt 3 ]; then
+    ok "a PNG frame in ranges of tiles on 3 ranks: one process's bytes"
+else
+    not_ok "PNG frame in tiles (exit $rc): $(head -c 300 "$TMP/err")"
+fi
+
 # A frame in bands of rows, each band's EXR chunks compressed by the rank
 # that rendered it and written by rank 0: zip (16-line chunks, one per row
 # of tiles; the last band short) with half colour and AOVs, and piz
@@ -81,7 +93,7 @@ for c in "zip 64x104 7 --half" "piz 48x200 7"; do
     fi
 done
 
-# A path: 5 frames on 3 ranks (whole frames, each written by its rank, then the last ones by tiles),
+# A path: 5 frames on 3 ranks (whole frames, each written by its rank, then the last ones in bands),
 # the glTF on stdin, its .bin and the camera path readable by rank 0 only
 cat >"$A/path.yaml" <<'YAML'
 interpolation: smooth
@@ -104,10 +116,13 @@ written=$(grep -o '"written":\[[^]]*\]' "$TMP/err")
 wf=$(( $(printf '%s' "$written" | grep -o '"frames":[0-9]*' | sed 's/.*://' | paste -sd+) ))
 wb=$(( $(printf '%s' "$written" | grep -o '"bytes":[0-9]*' | sed 's/.*://' | paste -sd+) ))
 others=$(printf '%s' "$written" | grep -o '"rank":[12],"frames":[1-9]' | wc -l)
-if [ "$wf" -eq 5 ] && [ "$wb" -eq "$(cat "$TMP"/p3/*.exr | wc -c)" ] && [ "$others" -ge 1 ]; then
-    ok "--stats=json: frames and bytes written per rank ($written)"
+# the last 2 frames (3 ranks) in bands of one row of tiles: 2 x 3 chunks
+# compressed by the ranks that rendered them
+if [ "$wf" -eq 5 ] && [ "$wb" -eq "$(cat "$TMP"/p3/*.exr | wc -c)" ] && [ "$others" -ge 1 ] &&
+    [ "$(json_member exr_chunks_gathered)" = 6 ]; then
+    ok "--stats=json: frames and bytes written per rank ($written), the last 2 frames' 6 chunks from bands"
 else
-    not_ok "frames written per rank: $written"
+    not_ok "frames written per rank: $written; chunks from bands $(json_member exr_chunks_gathered)"
 fi
 
 [ "$(json_member files_broadcast)" = 3 ] && ok "the glTF from stdin, its .bin and the path broadcast" ||

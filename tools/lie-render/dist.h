@@ -15,12 +15,15 @@ typedef lie_status (*render_encode_fn)(void *ctx, const lie_frame *f, int first,
                                        lie_error *err);
 
 /* Where frames go: write() (and encode(), with the same ctx) and, for EXR
- * output, the scanlines per chunk (lie_exr_chunk_lines; 0: not EXR). */
+ * output, the scanlines per chunk (lie_exr_chunk_lines; 0: not EXR) and
+ * the compression's cost as a share of a frame's render time
+ * (frame_encode_share). */
 typedef struct render_out {
     render_write_fn write;
     render_encode_fn encode;
     int chunk_lines;
     void *ctx;
+    double w;
 } render_out;
 
 /* Render frames[0 .. n_frames - 1] (the path's frames, or 0: the one
@@ -28,8 +31,8 @@ typedef struct render_out {
  * encoded and written by the rank that rendered it, which sends rank 0 its
  * statistics and the bytes written; the last frames (or a lone frame) go
  * out in pieces, which rank 0 assembles and writes: for EXR output, bands
- * of rows whose chunks the rank that rendered them compresses, while there
- * are at least two bands per rank; otherwise ranges of tiles, sent as
+ * of rows whose chunks the rank that rendered them compresses, when there
+ * are enough bands (dist.c, band_rows); otherwise ranges of tiles, sent as
  * floats.  Rank 0 hands out the items in frame order and checks every
  * result.  Sums of the render statistics are every rank's; the seconds
  * spent writing (and compressing chunks) are rank 0's own. */

@@ -670,7 +670,7 @@ static int render_all(args *a, run *r, const lie_cli *cli)
         lie_dist_bcast(&n_todo, sizeof n_todo);
         lie_dist_bcast(todo, sizeof *todo * (size_t)n_todo);
         double ta = lie_time_now();
-        render_out out = {write_frame_chunks, encode_chunks, frame_chunk_lines(&fo), &fo};
+        render_out out = {write_frame_chunks, encode_chunks, frame_chunk_lines(&fo), &fo, frame_encode_share(&fo)};
         st = render_dist(r->scene, r->rt, ro, r->cpath, &r->cam, todo, n_todo, &out, &rs, &t_write, &r->err);
         t_render += lie_time_now() - ta - t_write;
         rendered = n_todo;

@@ -47,6 +47,18 @@ int frame_chunk_lines(const frame_out *o)
     return f == LIE_FORMAT_EXR ? lie_exr_chunk_lines(o->opt.exr.compression) : 0;
 }
 
+double frame_encode_share(const frame_out *o)
+{
+    /* measured, one core: a 512x512 museum1 frame renders in 0.78 s and
+     * its EXR compresses in 0.165 s with zip, 0.039 s with rle (zips and
+     * piz are taken as zip) */
+    switch (o->opt.exr.compression) {
+    case LIE_EXR_NONE: return 0.0;
+    case LIE_EXR_RLE: return 0.05;
+    default: return 0.2;
+    }
+}
+
 lie_status encode_chunks(void *ctx, const lie_frame *frame, int first, int count, lie_exr_chunk *out, lie_error *err)
 {
     const frame_out *o = ctx;

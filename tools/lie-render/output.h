@@ -36,6 +36,9 @@ lie_status write_frame_chunks(void *ctx, int fi, const lie_camera *fc, const lie
  * has a frame whose exposure comes from all its pixels (--exposure auto:
  * the writer needs the whole frame). */
 int frame_chunk_lines(const frame_out *o);
+/* The EXR compression's cost as a share of a frame's render time, for
+ * sharing out a frame's pieces (tools/lie-render/dist.c). */
+double frame_encode_share(const frame_out *o);
 /* Compress chunks [first, first + count) of a frame's EXR as write_frame
  * would (lie_exr_encode_chunks with the run's options). */
 lie_status encode_chunks(void *ctx, const lie_frame *frame, int first, int count, lie_exr_chunk *out, lie_error *err);
