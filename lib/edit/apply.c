@@ -179,6 +179,10 @@ static lie_status add_from(lie_scene *s, const lie_scene *src, int src_node, con
             m.mr_tex += tex_base;
         if (m.emissive_tex >= 0)
             m.emissive_tex += tex_base;
+        if (m.normal_tex >= 0)
+            m.normal_tex += tex_base;
+        if (m.transmission_tex >= 0)
+            m.transmission_tex += tex_base;
         if (lie_scene_add_material(s, &m) < 0) {
             free(sub);
             return lie_error_set(err, LIE_ERR_NOMEM, file, "out of memory");
@@ -208,6 +212,12 @@ static lie_status add_from(lie_scene *s, const lie_scene *src, int src_node, con
                         lie_primitive *dp = &s->meshes[mi].prims[0];
                         dp->uv1 = dup_mem(q->uv1, sizeof(float) * 2 * q->n_verts);
                         if (!dp->uv1)
+                            mi = -1;
+                    }
+                    if (mi >= 0 && q->tan) {
+                        lie_primitive *dp = &s->meshes[mi].prims[0];
+                        dp->tan = dup_mem(q->tan, sizeof(float) * 4 * q->n_verts);
+                        if (!dp->tan)
                             mi = -1;
                     }
                 } else {

@@ -108,7 +108,7 @@ void png_bytes(Png &png, const std::string &name)
     lie_png_pixels px = {png.width, png.height, png.bits, png.channels,
                          png.bits == 16 ? static_cast<const void *>(png.b16.data())
                                         : static_cast<const void *>(png.b8.data()),
-                         0};
+                         0, nullptr, 0};
     unsigned char *buf = nullptr;
     size_t n = 0;
     lie_error e{};

@@ -1,7 +1,9 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Frame buffers, the sRGB transfer curves and writing by extension. */
+/* Frame buffers, the sRGB transfer curves, writing by extension and auto
+ * exposure. */
 #include "image/image.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -160,4 +162,54 @@ int lie_frame_format_of(const char *path, lie_frame_format *out)
     else
         return 0;
     return 1;
+}
+
+lie_auto_exposure lie_frame_auto_exposure(const lie_frame *f, float key)
+{
+    lie_auto_exposure r = {0.0f, key, 0.0, 0};
+    if (!f || !f->rgb)
+        return r;
+    /* the coverage channel: the default layer's "A" */
+    const lie_aov *cov = lie_frame_find_aov(f, "");
+    int ca = -1;
+    for (int c = 0; cov && c < cov->n_channels; c++)
+        if (strcmp(cov->channel[c], "A") == 0)
+            ca = c;
+    size_t n = (size_t)f->width * (size_t)f->height;
+    /* two passes in row order: the mean luminance (delta's scale), then the
+     * mean log */
+    double mean = 0.0, sum = 0.0;
+    for (int pass = 0; pass < 2; pass++) {
+        const double delta = LIE_EXPOSURE_DELTA * mean;
+        r.pixels = 0;
+        for (size_t i = 0; i < n; i++) {
+            if (ca >= 0 && !(cov->data[i * (size_t)cov->n_channels + (size_t)ca] > 0.0f))
+                continue;
+            const float *p = &f->rgb[3 * i];
+            double l = 0.2126 * (double)p[0] + 0.7152 * (double)p[1] + 0.0722 * (double)p[2];
+            if (!(l >= 0.0)) /* NaN or negative: no light */
+                l = 0.0;
+            if (isinf(l))
+                continue;
+            if (pass == 0)
+                mean += l;
+            else
+                sum += log(delta + l);
+            r.pixels++;
+        }
+        if (r.pixels == 0)
+            return r;
+        if (pass == 0)
+            mean /= (double)r.pixels;
+        if (!(mean > 0.0)) { /* no light at all: nothing to expose for */
+            r.pixels = 0;
+            return r;
+        }
+    }
+    if (r.pixels == 0)
+        return r;
+    r.log_average = exp(sum / (double)r.pixels);
+    double ev = log2((double)key / r.log_average);
+    r.ev = (float)(ev < -64.0 ? -64.0 : ev > 64.0 ? 64.0 : ev);
+    return r;
 }

@@ -139,10 +139,40 @@ lie_status lie_exr_read(const char *path, lie_frame **out, lie_error *err);
 lie_status lie_exr_read_string_attr(const char *path, const char *name, char *buf, size_t size,
                                     lie_error *err);
 
-/* How a PNG preview is made (zeroed or NULL: exposure 0). */
+/* A PNG tEXt chunk: keyword (1 to 79 Latin-1 characters) and text. */
+typedef struct lie_png_text {
+    const char *key, *text;
+} lie_png_text;
+
+/* How a PNG preview is made (zeroed or NULL: exposure 0, no text). */
 typedef struct lie_png_options {
     float exposure; /* stops: radiance is scaled by 2^exposure */
+    const lie_png_text *text; /* tEXt chunks, in this order (lie-render's auto exposure) */
+    int n_text;
 } lie_png_options;
+
+/* Auto exposure, from the image's log-average luminance as Reinhard, Stark,
+ * Shirley and Ferwerda (2002, "Photographic Tone Reproduction for Digital
+ * Images", eq. 1) define it: Lw = exp(mean(log(delta + L))) over the
+ * pixels, L the Rec. 709 luminance of the linear RGB and delta, keeping
+ * black pixels finite, LIE_EXPOSURE_DELTA times the pixels' mean
+ * luminance rather than a constant: scenes lit in physical units (nits
+ * from lux and candela) span many decades, and a scene k times brighter
+ * then gets exactly log2(k) stops less; the exposure that maps Lw to the
+ * key is log2(key / Lw) stops.  Pixels that a frame's coverage
+ * channel (an AOV of the default layer, channel "A") says no eye ray hit
+ * are left out: the empty background is no part of the scene's exposure.
+ * The sum runs over the pixels in row order, in double: the same frame
+ * gives the same bits for any thread or rank count that made it. */
+#define LIE_EXPOSURE_KEY 0.18f
+#define LIE_EXPOSURE_DELTA 1e-4
+typedef struct lie_auto_exposure {
+    float ev;            /* stops, within [-64, 64]; 0 when no pixel counts or none is lit */
+    float key;
+    double log_average;  /* Lw */
+    uint64_t pixels;     /* the pixels counted */
+} lie_auto_exposure;
+lie_auto_exposure lie_frame_auto_exposure(const lie_frame *f, float key);
 
 /* PNG preview: 8-bit RGB, radiance x 2^exposure, clamped, sRGB transfer
  * curve, with an sRGB chunk.  Written atomically. */
@@ -155,10 +185,12 @@ typedef struct lie_png_pixels {
     int width, height, bits, channels;
     const void *data;
     int srgb; /* 1: an sRGB chunk (with gAMA and cHRM); 0: no colour chunk */
+    const lie_png_text *text; /* tEXt chunks before the pixels, or NULL */
+    int n_text;
 } lie_png_pixels;
 
 /* Encode a PNG in memory: *out (malloc'd; the caller frees it) of *size
- * bytes, a function of the pixels alone (no time or text chunks).  `path`
+ * bytes, a function of the pixels and the text given (no time chunk).  `path`
  * names the file in messages. */
 lie_status lie_png_encode(const lie_png_pixels *px, const char *path, unsigned char **out, size_t *size,
                           lie_error *err);

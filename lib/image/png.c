@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* PNG through libpng: encoded in memory (lie_png_encode), previews written
- * atomically.  No tIME or text chunks: the bytes are a function of the
- * pixels. */
+ * atomically.  No tIME chunk, and text chunks only those asked for: the
+ * bytes are a function of the pixels and that text. */
 #include "image/image.h"
 
 #include <math.h>
@@ -64,6 +64,15 @@ static int encode_png(png_sink *s, const lie_png_pixels *px)
     /* sRGB chunk plus the matching gAMA/cHRM for readers that ignore sRGB. */
     if (px->srgb)
         png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+    for (int k = 0; k < px->n_text && px->text; k++) {
+        png_text t;
+        memset(&t, 0, sizeof t);
+        t.compression = PNG_TEXT_COMPRESSION_NONE;
+        t.key = (png_charp)px->text[k].key;
+        t.text = (png_charp)px->text[k].text;
+        t.text_length = strlen(px->text[k].text);
+        png_set_text(png, info, &t, 1);
+    }
     png_write_info(png, info);
     if (px->bits == 16) {
         /* PNG stores 16-bit samples big-endian; ours are in host order */
@@ -105,15 +114,12 @@ lie_status lie_png_encode(const lie_png_pixels *px, const char *path, unsigned c
     return LIE_OK;
 }
 
-lie_status lie_png_write_rgb8(const char *path, int width, int height, const uint8_t *rgb,
-                              lie_error *err)
+/* Encode px and write it to path atomically. */
+static lie_status png_write_pixels(const char *path, const lie_png_pixels *px, lie_error *err)
 {
-    if (!path || !rgb || width <= 0 || height <= 0)
-        return lie_error_set(err, LIE_ERR_ARG, path, "no image to write");
-    lie_png_pixels px = {width, height, 8, 3, rgb, 1};
     unsigned char *data = NULL;
     size_t size = 0;
-    lie_status st = lie_png_encode(&px, path, &data, &size, err);
+    lie_status st = lie_png_encode(px, path, &data, &size, err);
     if (st != LIE_OK)
         return st;
     lie_atomic_file af;
@@ -129,6 +135,16 @@ lie_status lie_png_write_rgb8(const char *path, int width, int height, const uin
     free(data);
     return st;
 }
+
+lie_status lie_png_write_rgb8(const char *path, int width, int height, const uint8_t *rgb,
+                              lie_error *err)
+{
+    if (!path || !rgb || width <= 0 || height <= 0)
+        return lie_error_set(err, LIE_ERR_ARG, path, "no image to write");
+    lie_png_pixels px = {width, height, 8, 3, rgb, 1, NULL, 0};
+    return png_write_pixels(path, &px, err);
+}
+
 /* clamp(srgb(x)) to 8 bits, rounded to nearest; NaN gives 0. */
 static uint8_t encode_8bit(float x)
 {
@@ -151,7 +167,8 @@ lie_status lie_png_write(const char *path, const lie_frame *f, const lie_png_opt
     float scale = exp2f(opt ? opt->exposure : 0.0f);
     for (size_t i = 0; i < n; i++)
         rgb[i] = encode_8bit(f->rgb[i] * scale);
-    lie_status st = lie_png_write_rgb8(path, f->width, f->height, rgb, err);
+    lie_png_pixels px = {f->width, f->height, 8, 3, rgb, 1, opt ? opt->text : NULL, opt ? opt->n_text : 0};
+    lie_status st = png_write_pixels(path, &px, err);
     free(rgb);
     return st;
 }

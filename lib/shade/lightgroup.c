@@ -38,9 +38,13 @@
  * importance (distance, orientation) chooses it. */
 #define GROUP_TRIS 1
 /* An emitter of at most this many triangles stays one light: its closed
- * form (lib/shade/polylight.h, a few edges) makes its unshadowed light
- * exact, where groups would add the noise of choosing among them. */
-#define GROUP_SPLIT_TRIS 16
+ * form (lib/shade/polylight.h, a few dozen edges) makes its unshadowed
+ * light exact, where groups would add the noise of choosing among them.
+ * Measured (docs/measurements.md, "Light groups"): at 16, ccity_buildings'
+ * windows and signs split and lost (p99 0.87 against 0.77 whole, same
+ * time); at 64 and 256 both it and scifi_hallway (strips of 320 and 1,250
+ * triangles) keep the better of the two. */
+#define GROUP_SPLIT_TRIS 64
 
 typedef struct keyed {
     float key;

@@ -958,15 +958,67 @@ static void test_png_exposure_plus_one_doubles_radiance(void **state)
     f->rgb[9] = 0.5f;
     lie_error err;
     const char *path = tmp_path("exposure.png");
-    assert_int_equal(lie_png_write(path, f, &(lie_png_options){1.0f}, &err), LIE_OK);
+    assert_int_equal(lie_png_write(path, f, &(lie_png_options){.exposure = 1.0f}, &err), LIE_OK);
     decoded_png p = read_png(path);
     assert_int_equal(p.rgb[0], 188); /* 0.25 x 2 = 0.5 */
     assert_int_equal(p.rgb[9], 255); /* 0.5 x 2 = 1 */
     free(p.rgb);
-    assert_int_equal(lie_png_write(path, f, &(lie_png_options){-1.0f}, &err), LIE_OK);
+    assert_int_equal(lie_png_write(path, f, &(lie_png_options){.exposure = -1.0f}, &err), LIE_OK);
     p = read_png(path);
     assert_int_equal(p.rgb[9], 137); /* 0.5 / 2 = 0.25 */
     free(p.rgb);
+    lie_frame_destroy(f);
+}
+
+/* Reinhard et al. (2002): the log-average luminance of the covered pixels,
+ * delta a share of their mean (so that k times the light is log2 k stops
+ * less), the exposure taking it to the key; uncovered pixels left out. */
+static void test_auto_exposure_from_log_average_of_covered_pixels(void **state)
+{
+    (void)state;
+    lie_frame *f = lie_frame_create(2, 1);
+    const char *a[] = {"A"};
+    float *cov = lie_frame_add_aov(f, "", 1, a);
+    for (int c = 0; c < 3; c++) {
+        f->rgb[c] = 0.5f;      /* L 0.5 */
+        f->rgb[3 + c] = 2.0f;  /* L 2, uncovered */
+    }
+    cov[0] = 1.0f;
+    cov[1] = 0.0f;
+    lie_auto_exposure e = lie_frame_auto_exposure(f, LIE_EXPOSURE_KEY);
+    assert_int_equal(e.pixels, 1);
+    assert_true(fabs(e.log_average - 0.5 * (1.0 + LIE_EXPOSURE_DELTA)) < 1e-9);
+    assert_true(fabsf(e.ev - (float)log2(0.18 / (0.5 * (1.0 + LIE_EXPOSURE_DELTA)))) < 1e-5f);
+    for (int i = 0; i < 6; i++)
+        f->rgb[i] *= 1024.0f;
+    lie_auto_exposure b = lie_frame_auto_exposure(f, LIE_EXPOSURE_KEY);
+    assert_true(fabsf(e.ev - b.ev - 10.0f) < 1e-4f);
+    memset(f->rgb, 0, sizeof(float) * 6); /* no light: no exposure to choose */
+    b = lie_frame_auto_exposure(f, LIE_EXPOSURE_KEY);
+    assert_true(b.ev == 0.0f);
+    lie_frame_destroy(f);
+}
+
+/* A tEXt chunk asked for is in the file, before the pixels. */
+static void test_png_text_chunk_written(void **state)
+{
+    (void)state;
+    lie_frame *f = lie_frame_create(1, 1);
+    const lie_png_text t = {"lie.exposure", "auto: 1.5 stops"};
+    lie_png_options o = {0.0f, &t, 1};
+    lie_error err;
+    const char *path = tmp_path("text.png");
+    assert_int_equal(lie_png_write(path, f, &o, &err), LIE_OK);
+    FILE *fp = fopen(path, "rb");
+    assert_non_null(fp);
+    unsigned char buf[4096];
+    size_t n = fread(buf, 1, sizeof buf, fp);
+    fclose(fp);
+    const char want[] = "tEXtlie.exposure\0auto: 1.5 stops";
+    int found = 0;
+    for (size_t i = 0; i + sizeof want - 1 <= n && !found; i++)
+        found = memcmp(buf + i, want, sizeof want - 1) == 0;
+    assert_true(found);
     lie_frame_destroy(f);
 }
 
@@ -1104,6 +1156,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_png_pixels_are_srgb_encoded_and_rounded),
         cmocka_unit_test(test_png_exposure_plus_one_doubles_radiance),
         cmocka_unit_test(test_png_write_rgb8_stores_pixels_unchanged),
+        cmocka_unit_test(test_auto_exposure_from_log_average_of_covered_pixels),
+        cmocka_unit_test(test_png_text_chunk_written),
         cmocka_unit_test(test_frame_write_chooses_format_by_extension),
         cmocka_unit_test(test_frame_write_dash_writes_exr_to_stdout),
     };

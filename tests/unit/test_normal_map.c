@@ -13,6 +13,7 @@
 
 #include <cmocka.h>
 
+#include "edit/edit.h"
 #include "scene/scene.h"
 #include "shade/shade.h"
 
@@ -141,6 +142,30 @@ static void test_normal_map_bends_shading_normal_above_horizon(void **state)
     lie_scene_destroy(flat);
 }
 
+/* An `add` edit brings a normal-mapped object with its map, its tangents
+ * and its texture indices moved past the scene's own. */
+static void test_added_object_keeps_its_normal_map(void **state)
+{
+    (void)state;
+    lie_scene *s = load("materials.gltf"), *src = load("normal_map_tangent.gltf");
+    assert_true(s->n_textures > 0); /* so that the added texture indices move */
+    const char text[] = "- add: {file: normal_map_tangent.gltf, node: Floor, as: Floor2}\n";
+    lie_edit *e = NULL;
+    lie_error err;
+    lie_error_clear(&err);
+    assert_int_equal(lie_edit_parse((const unsigned char *)text, sizeof text - 1, DATA "add.yaml", &e, &err), LIE_OK);
+    assert_int_equal(lie_edit_apply(s, e, NULL, NULL, &err), LIE_OK);
+    assert_int_equal(lie_scene_flatten(s, &err), LIE_OK);
+    const lie_material *m = lie_scene_material(s, s->tri_material[s->n_tris - 1]);
+    assert_true(m->normal_tex >= 0 && m->normal_tex < s->n_textures);
+    assert_int_equal(s->textures[m->normal_tex].width, src->textures[src->materials[0].normal_tex].width);
+    assert_non_null(s->tri_tan);
+    assert_memory_equal(&s->tri_tan[12 * (size_t)(s->n_tris - 2)], src->tri_tan, sizeof(float) * 24);
+    lie_edit_destroy(e);
+    lie_scene_destroy(s);
+    lie_scene_destroy(src);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -148,6 +173,7 @@ int main(void)
         cmocka_unit_test(test_normal_map_tangents_made_match_given),
         cmocka_unit_test(test_tangents_follow_texture_space_handedness),
         cmocka_unit_test(test_normal_map_bends_shading_normal_above_horizon),
+        cmocka_unit_test(test_added_object_keeps_its_normal_map),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -102,7 +102,10 @@ static void usage(FILE *fp)
             "      --compression C     EXR compression, all lossless: zip (default), zips, piz,\n"
             "                          rle (several times faster to write than zip, files a\n"
             "                          little larger) or none\n"
-            "      --exposure EV       PNG exposure in stops (default 0)\n"
+            "      --exposure EV|auto  PNG exposure in stops (default 0); auto: the stops that\n"
+            "                          take the frame's log-average luminance to 0.18\n"
+            "                          (Reinhard et al. 2002), per frame, written in the\n"
+            "                          file (PNG tEXt and EXR lie.exposure) and in --stats\n"
             "      --default-light L   a scene without emitters: headlight (a point light at\n"
             "                          the camera, 1 lux at the scene's centre) or sun (1 lux\n"
             "                          from above); a scene input only\n"
@@ -305,6 +308,7 @@ typedef struct args {
     int view_w, view_h;    /* --view-size */
     long frame_a, frame_b; /* --frames, or -1 */
     int skip_existing, visibility_set, pattern_set;
+    int exposure_auto;     /* --exposure auto */
 } args;
 
 /* A render option of the command line, not a mode (pick_mode): 1 when it
@@ -393,8 +397,9 @@ static int parse_options(args *a, lie_cli *cli, int argc, char **argv)
                 return usage_error("--compression: expected zip, zips, piz, rle or none, got '%s'", optarg);
             break;
         case OPT_EXPOSURE:
-            if (!lie_parse_float(optarg, -64.0f, 64.0f, &a->fopt.png.exposure))
-                return usage_error("--exposure: expected a number of stops, got '%s'", optarg);
+            a->exposure_auto = strcmp(optarg, "auto") == 0;
+            if (!a->exposure_auto && !lie_parse_float(optarg, -64.0f, 64.0f, &a->fopt.png.exposure))
+                return usage_error("--exposure: expected a number of stops or auto, got '%s'", optarg);
             break;
         case OPT_SCENE: a->scene_override = optarg; break;
         case OPT_DEFAULT_LIGHT: {
@@ -624,8 +629,9 @@ static int render_all(args *a, run *r, const lie_cli *cli)
     int *todo = NULL, n_todo = 0, rendered = 0, skipped = 0;
     st = plan_frames(a, r, &todo, &n_todo, &skipped, &r->err);
     /* with --cache, the frames say what lie-render of the cache says */
+    lie_auto_exposure last_auto = {0.0f, LIE_EXPOSURE_KEY, 0.0, 0};
     frame_out fo = {a->output, a->cache_file ? a->cache_file : a->input, hash, ro, r->cpath != NULL, a->fopt,
-                    r->cpath ? r->cpath->first : 0};
+                    r->cpath ? r->cpath->first : 0, a->exposure_auto, &last_auto};
     /* no output may be an input (the cache, the scene's files, the path),
      * nor a frame --cache: every name is checked before the first is
      * written (an interrupted run's --cache is read by cached_render, not
@@ -676,7 +682,8 @@ static int render_all(args *a, run *r, const lie_cli *cli)
     lie_lights_destroy(lights);
     free(todo);
     if (st == LIE_OK && cli->stats) {
-        run_stats rst = {a->input, rendered, skipped, t1 - t0, t2 - t1, t_render, t_write};
+        run_stats rst = {a->input, rendered, skipped, t1 - t0, t2 - t1, t_render, t_write,
+                         a->exposure_auto && rendered > 0 ? &last_auto : NULL};
         st = print_stats(cli, &rst, r->scene, ro, &rs, &r->err);
     }
     return st;

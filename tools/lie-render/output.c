@@ -39,6 +39,8 @@ lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame 
 
 int frame_chunk_lines(const frame_out *o)
 {
+    if (o->exposure_auto)
+        return 0;
     lie_frame_format f = o->opt.format;
     if (f == LIE_FORMAT_AUTO && !lie_frame_format_of(o->output, &f))
         return 0;
@@ -110,6 +112,28 @@ lie_status write_frame_chunks(void *ctx, int fi, const lie_camera *fc, const lie
     opt.exr.attrs = attrs;
     opt.exr.n_attrs = (int)(sizeof attrs / sizeof attrs[0]);
     opt.exr.chunks = chunks;
+    /* --exposure auto: the frame's own, said in the file whichever format */
+    lie_attr with_auto[sizeof attrs / sizeof attrs[0] + 3];
+    char text[160];
+    lie_png_text png_text = {"lie.exposure", text};
+    if (o->exposure_auto) {
+        lie_auto_exposure ae = lie_frame_auto_exposure(frame, LIE_EXPOSURE_KEY);
+        *o->last_auto = ae;
+        opt.png.exposure = ae.ev;
+        snprintf(text, sizeof text,
+                 "auto: %.4f stops, from a log-average luminance of %.6g over %llu pixels and the key %.2f "
+                 "(Reinhard et al. 2002)",
+                 (double)ae.ev, ae.log_average, (unsigned long long)ae.pixels, (double)ae.key);
+        opt.png.text = &png_text;
+        opt.png.n_text = 1;
+        memcpy(with_auto, attrs, sizeof attrs);
+        int n = (int)(sizeof attrs / sizeof attrs[0]);
+        with_auto[n++] = (lie_attr){.name = "lie.exposure", .type = LIE_ATTR_FLOAT, .f = ae.ev};
+        with_auto[n++] = (lie_attr){.name = "lie.exposureMode", .type = LIE_ATTR_STRING, .s = "auto"};
+        with_auto[n++] = (lie_attr){.name = "lie.logAverageLuminance", .type = LIE_ATTR_FLOAT, .f = (float)ae.log_average};
+        opt.exr.attrs = with_auto;
+        opt.exr.n_attrs = n;
+    }
     lie_status st = lie_frame_write(name, frame, &opt, err);
     struct stat sb;
     if (bytes)
@@ -165,6 +189,9 @@ lie_status print_stats(const lie_cli *cli, const run_stats *r, const lie_scene *
                 ro->timers ? "true" : "false", rs->t_analytic,
                 rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, pairs[7], rs->t_bitmask,
                 lie_light_sampler_name(ro->sampler));
+        if (r->exposure)
+            fprintf(fp, ",\"exposure_auto\":%.6f,\"log_average_luminance\":%.9g,\"exposure_pixels\":%llu",
+                    (double)r->exposure->ev, r->exposure->log_average, (unsigned long long)r->exposure->pixels);
         render_dist_stats(fp, 1);
         fprintf(fp, "}\n");
         return lie_stats_json_end(cli, &js, err);
@@ -198,6 +225,10 @@ lie_status print_stats(const lie_cli *cli, const run_stats *r, const lie_scene *
                     "  worker seconds: closed form %.3f, exact shadows %.3f, blocker samples %.3f,\n"
                     "    Embree %.3f, sampled shading %.3f, bitmasks %.3f\n",
                     rs->t_analytic, rs->t_exact, rs->t_blockers, rs->t_embree, rs->t_sampled_shading, rs->t_bitmask);
+        if (r->exposure)
+            fprintf(stderr, "  exposure auto: %.3f stops (log-average luminance %.6g over %llu pixels, key %.2f%s)\n",
+                    (double)r->exposure->ev, r->exposure->log_average, (unsigned long long)r->exposure->pixels,
+                    (double)r->exposure->key, rendered > 1 ? "; the last frame's" : "");
         render_dist_stats(stderr, 0);
     }
     return LIE_OK;

@@ -13,6 +13,11 @@ typedef struct frame_out {
     int path;
     lie_frame_options opt; /* the attributes are set per frame */
     int first; /* the number of the path's frame 0 */
+    /* --exposure auto: each frame's exposure from its log-average
+     * luminance (lie_frame_auto_exposure), recorded in its file; the last
+     * frame written's in *last_auto */
+    int exposure_auto;
+    lie_auto_exposure *last_auto;
 } frame_out;
 
 /* The file of frame fi. */
@@ -27,7 +32,9 @@ lie_status write_frame(void *ctx, int fi, const lie_camera *fc, const lie_frame 
 lie_status write_frame_chunks(void *ctx, int fi, const lie_camera *fc, const lie_frame *frame,
                               const lie_exr_chunk *chunks, uint64_t *bytes, lie_error *err);
 /* Scanlines per chunk of the frames' files when they are EXR
- * (lie_exr_chunk_lines), else 0: PNG has no chunks to compress apart. */
+ * (lie_exr_chunk_lines), else 0: PNG has no chunks to compress apart, nor
+ * has a frame whose exposure comes from all its pixels (--exposure auto:
+ * the writer needs the whole frame). */
 int frame_chunk_lines(const frame_out *o);
 /* The EXR compression's cost as a share of a frame's render time, for
  * sharing out a frame's pieces (tools/lie-render/dist.c). */
@@ -41,6 +48,7 @@ typedef struct run_stats {
     const char *input;
     int rendered, skipped;
     double t_load, t_bvh, t_render, t_write;
+    const lie_auto_exposure *exposure; /* --exposure auto: the last frame's; else NULL */
 } run_stats;
 
 /* --stats (text on stderr) or --stats=json (lie_stats_json_end: stderr or --stats-file). */
