@@ -411,10 +411,11 @@ static lie_status frame_setup(render_job *j, const lie_scene *s, const lie_rende
         c->guided = opt->visibility == LIE_VIS_LIE && opt->oracle && opt->exact != LIE_EXACT_OFF;
         /* ... while it costs less than the budget: it visits every
          * emitter at every point, where the tree's n picks cost O(n log
-         * lights); with more emitters than samples the tree chooses and
-         * the LIE answers each pick (occluded: no ray; seen whole: its
-         * closed form; partial: its blockers) */
-        if (c->guided && s->n_emitters > opt->light_samples && opt->exact != LIE_EXACT_ONLY)
+         * lights); with more emitters than LIE_GUIDED_EMITTER_SAMPLES of
+         * them, the tree chooses and the LIE answers each pick (occluded:
+         * no ray; seen whole: its closed form; partial: its blockers) */
+        if (c->guided && (long long)s->n_emitters * LIE_GUIDED_EMITTER_SAMPLES > opt->light_samples &&
+            opt->exact != LIE_EXACT_ONLY)
             c->guided = 0;
     }
     /* closed forms from LIE_ANALYTIC_MIN_SAMPLES on: below, a few samples
