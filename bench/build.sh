@@ -119,54 +119,81 @@ printf '   the atrium skips the paper build; timeouts after %s s)\n' "$TIMEOUT"
 
 # ---- break-even (BREAKEVEN=1; make bench-build-scenes): the third-party
 # scenes from a camera inside their lit part, a build for that view
-# against the frames it serves, side by side in one run: one full-visibility
-# frame and one LIE frame of the view's cache at the same light samples
-# (LS, the default sampler), so at equal quality (the LIE frame's pixels
-# off by more than 2% against the full one are shown); break-even = build
-# seconds / (full frame - LIE frame), target <= 3 frames.  The build's
-# seconds are lie-build's seconds_build (the views' eye rays and the units;
-# loading the scene and Embree's BVH, which a renderer pays as well, not
-# counted; "+load" adds them).  Writes out/bench-build-breakeven.json.
+# against the frames it serves, at equal quality, side by side in one run
+# (BSIZE, THREADS threads).  Quality is the p99 per-pixel error over lit
+# pixels against a converged image (full visibility at TRUTH light samples,
+# another seed; kept in out/truth/): full visibility at LS light samples
+# sets the p99, and the LIE frame is the cheapest of LS x 4, 2, 1, 1/2,
+# 1/4, 1/8 samples whose p99 is no worse.  Break-even = build seconds /
+# (full frame - that LIE frame), target <= 3 frames.  The build's seconds
+# are lie-build's seconds_build (the view's eye rays and the units; loading
+# the scene and Embree's BVH, which a renderer pays as well, not counted;
+# "+load" adds them).  Writes out/bench-build-breakeven.json.
 if [ "${BREAKEVEN:-0}" = 1 ]; then
     LS=${LS:-100}
+    TRUTH=${TRUTH:-1024}
+    BSIZE=${BSIZE:-256x256}
+    CMP=build/release/tests/exr-compare
     BSCENES=${BSCENES:-"scifi_hallway|../shared/scenes/scifi_hallway/space_ship_hallway.glb|eye=20.1,0.5,2,target=20.1,0.3,-20
 ccity_buildings|../shared/scenes/ccity_buildings/scene.gltf|eye=400,200,-5800,target=850,380,-6400
 bedroom_corner|../shared/scenes/bedroom_corner/scene.gltf|eye=-12,36,42,target=-45,20,8
 lights_punctual_lamp|../shared/scenes/lights_punctual_lamp/LightsPunctualLamp.gltf|eye=1.3,1.3,1.5,target=0.25,0.9,0"}
+    mkdir -p out/truth
+    # frame OUT.exr INPUT ARGS...: render, print its seconds
+    frame() {
+        o=$1; shift
+        "$BIN/lie-render" "$@" --size "$BSIZE" --threads "$THREADS" -q --stats=json -o "$o" 2>"$TMP/fr.json"
+        field seconds_render <"$TMP/fr.json"
+    }
+    p99() { "$CMP" --error "$1" "$2" | field p99; }
     echo
-    echo "bench-build break-even: a build for one view against its frames, $SIZE, $LS light samples, $THREADS threads (load $(cut -d' ' -f1 /proc/loadavg))"
-    printf '  %-20s | %8s %8s %8s %8s | %8s %8s %8s %8s | %8s %10s\n' scene "build s" "+load s" "cache MB" "unpaid" \
-        "full s" "LIE s" "LIE/full" "off>2%" "frames" "model"
+    echo "bench-build break-even: a build for one view against its frames at equal quality, $BSIZE, $THREADS threads (load $(cut -d' ' -f1 /proc/loadavg))"
+    printf '  %-20s | %8s %8s %8s %8s | %8s %8s | %5s %8s %8s %8s | %8s %8s\n' scene "build s" "+load s" "cache MB" \
+        "unpaid" "full s" "p99" "LIE N" "LIE s" "p99" "LIE/full" "frames" "model"
     echo "[" >out/bench-build-breakeven.json
     bfirst=1
     echo "$BSCENES" | while IFS='|' read -r name scene cam; do
         [ -f "$scene" ] || { echo "  $name: $scene missing, skipped"; continue; }
-        if ! timeout "$TIMEOUT" "$BIN/lie-build" "$scene" $CLARGS --view "$cam" --view-size "$SIZE" --threads "$THREADS" \
+        if ! timeout "$TIMEOUT" "$BIN/lie-build" "$scene" $CLARGS --view "$cam" --view-size "$BSIZE" --threads "$THREADS" \
             -q --stats=json -o "$TMP/be.lie" 2>"$TMP/be.json"; then
             echo "  $name: build failed or timed out after $TIMEOUT s"; continue
         fi
         J="$TMP/be.json"
         tb=$(field seconds_build <"$J")
         tall=$(awk -v a="$tb" -v b="$(field seconds_load <"$J")" -v c="$(field seconds_bvh <"$J")" 'BEGIN { printf "%.3f", a + b + c }')
-        "$BIN/lie-render" "$TMP/be.lie" --camera "$cam" --visibility=full --light-samples "$LS" --size "$SIZE" \
-            --threads "$THREADS" -q --stats=json -o "$TMP/bf.exr" 2>"$TMP/bf.json"
-        "$BIN/lie-render" "$TMP/be.lie" --camera "$cam" --light-samples "$LS" --size "$SIZE" --threads "$THREADS" -q \
-            --stats=json -o "$TMP/bl.exr" 2>"$TMP/bl.json"
-        tf=$(field seconds_render <"$TMP/bf.json"); tl=$(field seconds_render <"$TMP/bl.json")
-        off=$(build/release/tests/exr-compare "$TMP/bf.exr" "$TMP/bl.exr" 1 1 | sed -n 's/.* by more than 2% (\([0-9.]*%\)).*/\1/p')
-        be=$(awk -v b="$tb" -v f="$tf" -v l="$tl" 'BEGIN { if (f - l > 0) printf "%.1f", b / (f - l); else print "never" }')
+        truth=out/truth/breakeven-$name-$BSIZE-$TRUTH.exr
+        if [ ! -f "$truth" ] || [ "$scene" -nt "$truth" ]; then
+            frame "$TMP/truth.exr" "$scene" --camera "$cam" --visibility=full --light-samples "$TRUTH" --seed 99 >/dev/null
+            mv "$TMP/truth.exr" "$truth"
+        fi
+        tf=$(frame "$TMP/bf.exr" "$TMP/be.lie" --camera "$cam" --visibility=full --light-samples "$LS")
+        pf=$(p99 "$truth" "$TMP/bf.exr")
+        # the LIE's budgets, from 4 LS down: the cheapest as good as full
+        bn=-; btl=-; bpl=-
+        for k in 4 2 1 0.5 0.25 0.125; do
+            n=$(awk -v l="$LS" -v k="$k" 'BEGIN { printf "%d", l * k }')
+            [ "$n" -ge 1 ] || break
+            tl=$(frame "$TMP/bl.exr" "$TMP/be.lie" --camera "$cam" --light-samples "$n")
+            pl=$(p99 "$truth" "$TMP/bl.exr")
+            awk -v a="$pl" -v b="$pf" 'BEGIN { exit !(a <= b) }' || break
+            bn=$n; btl=$tl; bpl=$pl
+        done
+        be=$(awk -v b="$tb" -v f="$tf" -v l="$btl" 'BEGIN { if (l != "-" && f - l > 0) printf "%.1f", b / (f - l); else print "never" }')
         model=$(field break_even_frames_predicted <"$J")
-        printf '  %-20s | %8s %8s %8s %8s | %8s %8s %8s %8s | %8s %10s\n' "$name" "$tb" "$tall" "$(mb "$(field bytes <"$J")")" \
-            "$(field units_unpaid <"$J")" "$tf" "$tl" "$(ratio "$tl" "$tf")" "$off" "$be" "$model"
+        printf '  %-20s | %8.2f %8.2f %8s %8s | %8.3f %8.4f | %5s %8s %8s %8s | %8s %8s\n' "$name" "$tb" "$tall" \
+            "$(mb "$(field bytes <"$J")")" "$(field units_unpaid <"$J")" "$tf" "$pf" "$bn" "$btl" "$bpl" \
+            "$(ratio "$btl" "$tf")" "$be" "$model"
         [ $bfirst = 1 ] || echo "," >>out/bench-build-breakeven.json
         bfirst=0
-        printf '{"scene":"%s","camera":"%s","build_s":"%s","build_with_load_s":"%s","cache_bytes":"%s","units_unpaid":"%s","full_frame_s":"%s","lie_frame_s":"%s","off_2pct":"%s","break_even_frames":"%s","break_even_frames_model":"%s"}' \
-            "$name" "$cam" "$tb" "$tall" "$(field bytes <"$J")" "$(field units_unpaid <"$J")" "$tf" "$tl" "$off" "$be" \
-            "$model" >>out/bench-build-breakeven.json
+        printf '{"scene":"%s","camera":"%s","size":"%s","build_s":"%s","build_with_load_s":"%s","cache_bytes":"%s","units_unpaid":"%s","full_samples":"%s","full_frame_s":"%s","full_p99":"%s","lie_samples":"%s","lie_frame_s":"%s","lie_p99":"%s","break_even_frames":"%s","break_even_frames_model":"%s"}' \
+            "$name" "$cam" "$BSIZE" "$tb" "$tall" "$(field bytes <"$J")" "$(field units_unpaid <"$J")" "$LS" "$tf" "$pf" \
+            "$bn" "$btl" "$bpl" "$be" "$model" >>out/bench-build-breakeven.json
     done
     echo "]" >>out/bench-build-breakeven.json
-    printf '  (frames: build s / (full s - LIE s), target <= 3; model: lie-build --stats=json'"'"'s prediction from its\n'
-    printf '   CPU model, -1 where the cache saves nothing; unpaid: units the cost model left to Embree)\n'
+    printf '  (p99: per-pixel error against full visibility at %s samples; full at %s samples; LIE N: the fewest\n' "$TRUTH" "$LS"
+    printf '   samples of 4x .. 1/8x %s whose p99 is no worse, - if none; frames: build s / (full s - LIE s),\n' "$LS"
+    printf '   target <= 3; model: lie-build --stats=json'"'"'s prediction, -1 where it predicts no saving;\n'
+    printf '   unpaid: units the cost model left to Embree)\n'
 fi
 
 # ---- views (§4.3.1, §4.3.3): what a build for the scene's camera costs and

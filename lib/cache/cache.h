@@ -122,6 +122,16 @@ lie_status lie_cache_sections(const unsigned char *data, size_t size, const char
  * Absolute names, names whose folder does not exist, and "-" (stdout) stay
  * as they are. */
 void lie_cache_log_relative_to(lie_cache *c, int first, const char *cache_path);
+/* A log read from the cache at from_path, to be written to to_path: the
+ * names of edits 0 .. n - 1 recorded relative (absolute ones stay) are
+ * resolved as lie_cache_load_scene resolves them from here (as recorded,
+ * or relative to from_path's folder) and recorded relative to to_path's
+ * folder instead, so that their `add` files resolve from the new cache's
+ * folder as rst-update's log does (lie_cache_log_relative_to).  `files`:
+ * as lie_scene_options.files (NULL: the file system).  LIE_ERR_NOMEM, or a
+ * logged edit that does not parse. */
+lie_status lie_cache_log_move(lie_cache *c, int n, const char *from_path, const char *to_path,
+                              const lie_file_set *files, lie_error *err);
 /* Load the scene the cache describes: its glTF file (`override`, or the
  * recorded path as given, or that path relative to the cache's folder),
  * checked against scene_hash, with the edit log replayed and the result

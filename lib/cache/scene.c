@@ -57,6 +57,30 @@ void lie_cache_log_relative_to(lie_cache *c, int first, const char *cache_path)
     }
 }
 
+lie_status lie_cache_log_move(lie_cache *c, int n, const char *from_path, const char *to_path,
+                              const lie_file_set *files, lie_error *err)
+{
+    if (strcmp(to_path, "-") == 0)
+        return LIE_OK;
+    for (int i = 0; i < n && i < c->n_edits; i++) {
+        if (c->edits[i].name[0] == '/')
+            continue;
+        lie_edit *e = NULL;
+        lie_status st = lie_edit_parse(c->edits[i].text, c->edits[i].size, c->edits[i].name, &e, err);
+        if (st == LIE_OK)
+            st = log_name(e, from_path, files, err);
+        char *rel = st == LIE_OK ? lie_path_relative_to_folder_of(e->name, to_path) : NULL;
+        lie_edit_destroy(e);
+        if (st != LIE_OK)
+            return st;
+        if (rel) { /* else a folder that does not resolve: kept as recorded */
+            free(c->edits[i].name);
+            c->edits[i].name = rel;
+        }
+    }
+    return LIE_OK;
+}
+
 lie_status lie_cache_load_scene(const lie_cache *c, const char *cache_path, const char *override,
                                 const lie_scene_options *so, lie_scene **out, lie_error *err)
 {

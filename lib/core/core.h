@@ -347,6 +347,9 @@ lie_status lie_read_file(const char *path, unsigned char **data, size_t *size, l
  * there: a malloc'd string, or NULL when either folder cannot be resolved
  * (realpath) or memory runs out.  An absolute path comes back as it is. */
 char *lie_path_from_folder_of(const char *path, const char *other);
+/* The same for an absolute `path` too: the relative path that names it
+ * from the folder of `other`. */
+char *lie_path_relative_to_folder_of(const char *path, const char *other);
 
 /* ---- file sets: inputs held in memory (fileset.c) ------------------------
  * The files a load read (a scene with its buffers and images, a cache, a

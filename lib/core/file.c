@@ -647,8 +647,11 @@ static char *real_folder(const char *path)
 
 char *lie_path_from_folder_of(const char *path, const char *other)
 {
-    if (path[0] == '/')
-        return strdup(path);
+    return path[0] == '/' ? strdup(path) : lie_path_relative_to_folder_of(path, other);
+}
+
+char *lie_path_relative_to_folder_of(const char *path, const char *other)
+{
     char *from = real_folder(other), *to = real_folder(path);
     char *out = NULL;
     if (from && to) {

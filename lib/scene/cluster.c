@@ -427,7 +427,9 @@ uint64_t lie_scene_light_digest(const lie_scene *s)
         float f[20] = {em->radiance[0], em->radiance[1], em->radiance[2], em->position.x, em->position.y,
                        em->position.z, em->direction.x, em->direction.y, em->direction.z, em->intensity[0],
                        em->intensity[1], em->intensity[2], em->cos_inner, em->cos_outer, em->range,
-                       (float)em->double_sided, (float)cl->dark, (float)cl->n_tris, (float)lie_emitter_is_delta(em), 0.0f};
+                       (float)em->double_sided, (float)cl->dark, (float)cl->n_tris, (float)lie_emitter_is_delta(em),
+                       /* its emissive texture, which the renderer's set-up reads (lib/shade/texlight.c) */
+                       em->n_tris ? (float)lie_scene_material(s, s->tri_material[em->first_tri])->emissive_tex : -2.0f};
         h = lie_hash_bytes(f, sizeof f, h);
         for (uint32_t k = 0; k < cl->n_tris; k++)
             h = lie_hash_bytes(&s->tri_p[3 * (size_t)s->cluster_tris[cl->first + k]], sizeof(lie_vec3) * 3, h);

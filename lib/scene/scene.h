@@ -538,8 +538,9 @@ int lie_cluster_can_reach(const lie_scene *s, int c, uint32_t tri, const lie_vec
  * reach).  What lib/lie's cost model weighs a unit's light samples by. */
 double lie_cluster_unshadowed(const lie_scene *s, int c, lie_vec3 p, lie_vec3 n, int two_sided, float far);
 /* A digest of everything lie_cluster_unshadowed reads of every cluster
- * (emission, punctual parameters, the triangles' positions): equal
- * digests, equal light at every point.  lib/update watches it. */
+ * (emission, punctual parameters, the triangles' positions) and of which
+ * emissive texture an area emitter has: equal digests, equal light at
+ * every point.  lib/update watches it. */
 uint64_t lie_scene_light_digest(const lie_scene *s);
 /* Partition every emitter into clusters (s->clusters and the arrays beside
  * it), a function of each emitter's own triangles alone.  Called by

@@ -115,4 +115,32 @@ if [ "$rc" = 0 ]; then ok "SIGTERM ends the session (exit 0)"; else
     not_ok "SIGTERM: exit $rc"; sed 's/^/# /' "$TMP/term.err" | head -5; fi
 run "$B/lie-inspect" verify "$TMP/term.lie"
 expect_rc 0 "SIGTERM: the saved cache is valid"
+
+# 6. a partial cache of an edited scene (an add, its file relative to the
+# edit file's folder) opened and saved into another folder: the saved log
+# keeps the edit, named relative to the saved cache's folder as
+# rst-update's is, so the cache opens from anywhere and the constructor
+# finishes it into lie-build --edit's units
+mkdir -p "$TMP/edits" "$TMP/assets" "$TMP/elsewhere" "$TMP/saved"
+cp "$S/cornell.gltf" "$S/cornell.bin" "$TMP/assets/"
+printf '%s\n' '- add: {file: ../assets/cornell.gltf, node: TallBlock, as: Tower, transform: {translation: [0.5, 0, 1.0], scale: [0.5, 0.5, 0.5]}}' >"$TMP/edits/add.yaml"
+"$B/lie-build" "$M1" --edit "$TMP/edits/add.yaml" --min-patch 1e-5 --threads 1 -q -o "$TMP/addref.lie"
+(cd "$TMP" && env --default-signal=INT "$B/lie-build" "$M1" --edit edits/add.yaml --min-patch 1e-5 --threads 1 \
+    --partial -q -o addpart.lie 2>/dev/null & pid=$!; sleep 0.4; kill -INT $pid 2>/dev/null; wait $pid)
+if "$B/lie-inspect" summary "$TMP/addpart.lie" | grep -q '^partial  *yes'; then
+    printf 'pause\nquit\n' >"$TMP/pauseq.txt"
+    run xvfb_run "$B/lie-view" "$TMP/addpart.lie" $VIEW --script "$TMP/pauseq.txt" --save "$TMP/saved/addsaved.lie"
+    expect_rc 0 "a partial cache with an add opened and saved into another folder"
+    if "$B/lie-inspect" dump "$TMP/saved/addsaved.lie" | grep -q '^edit 0 .* name \.\./edits/add\.yaml$'; then
+        ok "the saved log keeps the add, named relative to the saved cache's folder"
+    else
+        not_ok "the saved log: $("$B/lie-inspect" dump "$TMP/saved/addsaved.lie" | grep '^edit')"
+    fi
+    (cd "$TMP/elsewhere" && xvfb_run "$B/lie-view" ../saved/addsaved.lie $VIEW --script "$TMP/finish.txt" \
+        --save "$TMP/addfinished.lie" >/dev/null 2>&1)
+    run "$B/lie-inspect" diff "$TMP/addfinished.lie" "$TMP/addref.lie"
+    expect_rc 0 "opened from another folder, the constructor finishes it into lie-build --edit's units"
+else
+    not_ok "the interrupted build left no partial cache"
+fi
 finish

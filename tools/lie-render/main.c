@@ -119,8 +119,9 @@ static void usage(FILE *fp)
             "  -h, --help              this help\n"
             "      --version           print the version\n"
             "\n"
-            "Under mpirun the ranks share the frames out (tiles, or whole frames of a path)\n"
-            "and rank 0 writes the bytes one process writes (docs/mpi.md).\n",
+            "Under mpirun the ranks share the frames out (whole frames of a path, each\n"
+            "written by its rank; bands of rows, their EXR chunks compressed by the rank\n"
+            "that rendered them) and write the bytes one process writes (docs/mpi.md).\n",
             prog, d.width, d.height, d.spp, d.light_samples, d.max_depth);
 }
 

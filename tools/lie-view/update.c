@@ -382,32 +382,58 @@ lie_status view_world_write_record(view_world *w, lie_error *err)
 
 /* The edit log of a saved cache: the input's n0 entries, then the
  * session's edits as one entry (when there are any), as rst-update CACHE
- * EDITS.yaml writes it.  *log and *text (the session's written form, which
- * the last entry points into) are the caller's to free. */
+ * EDITS.yaml writes it, each named relative to the folder of `path` (the
+ * saved cache), so that an `add` file resolves from there as rst-update's
+ * log does.  *log (its names too: log_free) and *text (the session's
+ * written form, which the last entry points into) are the caller's. */
+static void log_free(lie_cache_edit *log, int n)
+{
+    for (int i = 0; log && i < n; i++)
+        free(log[i].name);
+    free(log);
+}
+
 static lie_status session_log(view_world *w, const lie_cache_edit *edits0, int n0, lie_cache_edit **log, int *n,
                               unsigned char **text, const char *path, lie_error *err)
 {
     size_t size = 0;
     *log = NULL;
+    *n = 0;
     *text = NULL;
     lie_status st = lie_edit_write(w->applied, text, &size, err);
     if (st != LIE_OK)
         return st;
-    *log = malloc(sizeof **log * ((size_t)n0 + 1));
-    if (!*log) {
+    lie_cache c;
+    memset(&c, 0, sizeof c);
+    c.edits = calloc((size_t)n0 + 1, sizeof *c.edits);
+    int ok = c.edits != NULL;
+    for (int i = 0; ok && i < n0; i++) {
+        c.edits[i] = edits0[i];
+        ok = (c.edits[i].name = strdup(edits0[i].name)) != NULL;
+        c.n_edits += ok;
+    }
+    if (ok && w->applied->n_ops) {
+        ok = (c.edits[n0].name = strdup(edit_name(w))) != NULL;
+        c.edits[n0].text = *text;
+        c.edits[n0].size = size;
+        c.n_edits += ok;
+    }
+    if (!ok) {
+        log_free(c.edits, c.n_edits);
         free(*text);
         *text = NULL;
         return lie_error_set(err, LIE_ERR_NOMEM, path, "out of memory");
     }
-    if (n0)
-        memcpy(*log, edits0, sizeof **log * (size_t)n0);
-    *n = n0;
-    if (w->applied->n_ops) {
-        (*log)[n0].name = (char *)edit_name(w);
-        (*log)[n0].text = *text;
-        (*log)[n0].size = size;
-        (*n)++;
+    st = lie_cache_log_move(&c, n0, w->input, path, w->opt.so.files, err);
+    if (st != LIE_OK) {
+        log_free(c.edits, c.n_edits);
+        free(*text);
+        *text = NULL;
+        return st;
     }
+    lie_cache_log_relative_to(&c, n0, path);
+    *log = c.edits;
+    *n = c.n_edits;
     return LIE_OK;
 }
 
@@ -429,7 +455,7 @@ static lie_status save_ctor(view_world *w, const char *path, lie_error *err)
         st = lie_ctor_cache(w->ctor, &prov, &c, err);
         pthread_rwlock_unlock(&w->lock);
     }
-    free(prov.edits);
+    log_free(prov.edits, prov.n_edits);
     free(text);
     if (st == LIE_OK)
         st = lie_cache_write(path, c, NULL, err);
@@ -450,6 +476,7 @@ static lie_status save_partial(view_world *w, const char *path, lie_error *err)
     lie_env *env = NULL;
     lie_status st = session_log(w, c.edits, w->n_edits0, &c.edits, &c.n_edits, &text, path, err);
     lie_cache_edit *log = st == LIE_OK ? c.edits : NULL;
+    int n_log = st == LIE_OK ? c.n_edits : 0;
     if (st == LIE_OK)
         st = lie_env_compact_units(w->render_env, &env, err);
     c.emitters = NULL;
@@ -463,7 +490,7 @@ static lie_status save_partial(view_world *w, const char *path, lie_error *err)
     pthread_rwlock_unlock(&w->lock);
     free(c.emitters);
     lie_env_destroy(env);
-    free(log);
+    log_free(log, n_log);
     free(text);
     return st;
 }
@@ -489,7 +516,7 @@ lie_status view_world_save(view_world *w, const char *path, lie_error *err)
     if (st == LIE_OK)
         st = lie_cache_write(path, &c, NULL, err);
     pthread_rwlock_unlock(&w->lock);
-    free(c.edits);
+    log_free(c.edits, c.n_edits); /* session_log's (NULL when it failed) */
     free(text);
     return st;
 }

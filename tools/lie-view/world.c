@@ -208,6 +208,8 @@ lie_status view_world_open(const char *input, const view_world_options *opt, vie
         st = lie_error_set(err, LIE_ERR_UNSUPPORTED, input, "a glTF scene cannot be read from stdin");
     if (st == LIE_OK)
         st = load_base(w, &w->scene, err);
+    if (st == LIE_OK && w->cache)
+        w->n_edits0 = w->cache->n_edits; /* the log as loaded, which --save keeps */
     if (st == LIE_OK)
         st = lie_rt_create(w->scene, &w->rt, err);
     if (st == LIE_OK)
@@ -222,7 +224,6 @@ lie_status view_world_open(const char *input, const view_world_options *opt, vie
         co.max_depth = opt->max_depth;
         st = lie_ctor_create(w->scene, w->rt, &co, w->cache, &w->ctor, err);
     } else if (st == LIE_OK && w->cache) {
-        w->n_edits0 = w->cache->n_edits;
         lie_update_options uo = lie_update_options_default();
         uo.threads = opt->threads;
         uo.keep_trees = 1; /* the next edit finds the trees ready */
