@@ -360,7 +360,7 @@ static void test_point_lights_apart_from_the_budget(void **state)
     lie_scene *s = floor_scene("points", 0.0f, -1); /* a black panel: no light of its own */
     add_quad(s, "Panel", 3.0f, 4.0f, -0.5f, 0.5f, 2.0f, 1);
     for (int k = 0; k < 3; k++) {
-        char name[8];
+        char name[16];
         snprintf(name, sizeof name, "P%d", k);
         add_point(s, name, X[k], 2.0f, 0.0f, I[k]);
     }
