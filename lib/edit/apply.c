@@ -163,6 +163,7 @@ static lie_status add_from(lie_scene *s, const lie_scene *src, int src_node, con
         s->textures = nt;
         for (int i = 0; i < src->n_textures; i++) {
             lie_texture t = src->textures[i];
+            t.image = -1; /* its file's image stays with its file: written as decoded */
             t.rgba = dup_mem(t.rgba, sizeof(float) * 4 * (size_t)t.width * (size_t)t.height);
             if (!t.rgba) {
                 free(sub);

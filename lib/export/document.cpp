@@ -71,6 +71,9 @@ tinygltf::Primitive export_primitive(Export &ex, const lie_primitive &p)
     if (p.nrm)
         g.attributes["NORMAL"] = add_accessor(ex, p.nrm, p.n_verts, TINYGLTF_TYPE_VEC3,
                                               TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TARGET_ARRAY_BUFFER);
+    if (p.tan)
+        g.attributes["TANGENT"] = add_accessor(ex, p.tan, p.n_verts, TINYGLTF_TYPE_VEC4, TINYGLTF_COMPONENT_TYPE_FLOAT,
+                                               TINYGLTF_TARGET_ARRAY_BUFFER);
     if (p.uv)
         g.attributes["TEXCOORD_0"] = add_accessor(ex, p.uv, p.n_verts, TINYGLTF_TYPE_VEC2,
                                                   TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TARGET_ARRAY_BUFFER);
@@ -105,7 +108,7 @@ void export_materials(Export &ex, const std::map<int, int> &gl_texture)
         auto it = gl_texture.find(t * 2 + srgb);
         return it == gl_texture.end() ? -1 : it->second;
     };
-    bool strength_used = false, transform_used = false;
+    bool strength_used = false, transform_used = false, transmission_used = false;
     for (int i = 0; i < ex.s.n_materials; i++) {
         const lie_material &mt = ex.s.materials[i];
         tinygltf::Material g;
@@ -149,14 +152,11 @@ void export_materials(Export &ex, const std::map<int, int> &gl_texture)
             g.alphaMode = "MASK";
             g.alphaCutoff = short_float(mt.alpha_cutoff);
         }
-        tinygltf::TextureInfo *slots[3] = {&pbr.baseColorTexture, &pbr.metallicRoughnessTexture,
-                                           &g.emissiveTexture};
-        for (int k = 0; k < 3; k++)
-            if (slots[k]->index >= 0)
-                slots[k]->texCoord = mt.tex_set[k];
-        for (int k = 0; k < 3; k++) {
-            if (slots[k]->index < 0 || lie_material_tex_xf_is_identity(&mt, k))
-                continue;
+        /* each slot's set and KHR_texture_transform, the core slots, the
+         * normal map and the transmission texture alike */
+        auto transform = [&](int k, tinygltf::ExtensionMap &ext) {
+            if (lie_material_tex_xf_is_identity(&mt, k))
+                return;
             const float *p = mt.tex_param[k];
             tinygltf::Value::Object o;
             o["offset"] = tinygltf::Value(tinygltf::Value::Array{tinygltf::Value(short_float(p[0])),
@@ -164,8 +164,41 @@ void export_materials(Export &ex, const std::map<int, int> &gl_texture)
             o["rotation"] = tinygltf::Value(short_float(p[2]));
             o["scale"] = tinygltf::Value(tinygltf::Value::Array{tinygltf::Value(short_float(p[3])),
                                                                 tinygltf::Value(short_float(p[4]))});
-            slots[k]->extensions["KHR_texture_transform"] = tinygltf::Value(o);
+            ext["KHR_texture_transform"] = tinygltf::Value(o);
             transform_used = true;
+        };
+        tinygltf::TextureInfo *slots[3] = {&pbr.baseColorTexture, &pbr.metallicRoughnessTexture,
+                                           &g.emissiveTexture};
+        for (int k = 0; k < 3; k++)
+            if (slots[k]->index >= 0) {
+                slots[k]->texCoord = mt.tex_set[k];
+                transform(k, slots[k]->extensions);
+            }
+        g.normalTexture.index = tex(mt.normal_tex, false);
+        if (g.normalTexture.index >= 0) {
+            g.normalTexture.texCoord = mt.tex_set[LIE_TEX_NORMAL];
+            g.normalTexture.scale = short_float(mt.normal_scale);
+            transform(LIE_TEX_NORMAL, g.normalTexture.extensions);
+        }
+        if (lie_material_transmits(&mt)) {
+            tinygltf::Value::Object o;
+            o["transmissionFactor"] = tinygltf::Value(short_float(mt.transmission));
+            int ti = tex(mt.transmission_tex, false);
+            if (ti >= 0) {
+                tinygltf::Value::Object info;
+                info["index"] = tinygltf::Value(ti);
+                info["texCoord"] = tinygltf::Value(mt.tex_set[LIE_TEX_TRANSMISSION]);
+                tinygltf::ExtensionMap ext;
+                transform(LIE_TEX_TRANSMISSION, ext);
+                if (!ext.empty()) {
+                    tinygltf::Value::Object e;
+                    e["KHR_texture_transform"] = ext["KHR_texture_transform"];
+                    info["extensions"] = tinygltf::Value(e);
+                }
+                o["transmissionTexture"] = tinygltf::Value(info);
+            }
+            g.extensions["KHR_materials_transmission"] = tinygltf::Value(o);
+            transmission_used = true;
         }
         ex.m.materials.push_back(g);
     }
@@ -173,6 +206,8 @@ void export_materials(Export &ex, const std::map<int, int> &gl_texture)
         ex.m.extensionsUsed.push_back("KHR_materials_emissive_strength");
     if (transform_used)
         ex.m.extensionsUsed.push_back("KHR_texture_transform");
+    if (transmission_used)
+        ex.m.extensionsUsed.push_back("KHR_materials_transmission");
 }
 
 /* The cameras kept nodes use (camera_map[i] >= 0), in their order;

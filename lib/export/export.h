@@ -22,7 +22,9 @@ extern "C" {
  *     and one BIN chunk holding every vertex, index and image (PNG
  *     bufferViews with their mimeType); no other file is written.
  *   any other name, "DIR/NAME.gltf": JSON, plus DIR/NAME.bin (every vertex
- *     and index) and DIR/NAME_texN.png (image N).  The .gltf lists those
+ *     and index) and DIR/NAME_imgN.EXT (image N: the bytes of the file's own
+ *     image, PNG, JPEG or any other, as they were) or DIR/NAME_texN.png (a
+ *     texture made in memory, as its code values).  The .gltf lists those
  *     side files with the XXH3-64 hash of each (asset.extras "lie.files").
  *     A side file that exists already is replaced only when it is ours: the
  *     DIR/NAME.gltf being replaced is this exporter's and lists it with the
@@ -35,12 +37,22 @@ extern "C" {
  * Left out: removed nodes with their subtrees, nodes outside the default
  * scene, unused meshes, cameras and lights, and textures no material
  * uses.  Every material is
- * written, so material indices stay.  Texture pixels go back to the code
- * values they were decoded from (8-bit when every value is an 8-bit code's,
- * else 16-bit), in the colour space of the slot that uses them.  "-"
+ * written, so material indices stay, with its normal map, TANGENT,
+ * KHR_materials_transmission, KHR_texture_transform and
+ * KHR_materials_emissive_strength.  An image read from the file is
+ * written as the file's bytes; a texture made otherwise (an object an edit
+ * added) goes back to the code values it was decoded from (8-bit when every
+ * value is an 8-bit code's, else 16-bit), in the colour space of the slot
+ * that uses it.  "-"
  * (stdout) is refused. */
 typedef struct lie_gltf_export_options {
     int force;           /* replace side files that are not this exporter's (above) */
+    /* Called once per thing of the scene's file that the export does not
+     * write, with one line saying what (the library prints nothing): what
+     * the import did not read (lie_scene.not_read), animations, morph
+     * targets (written as the morphed meshes).  NULL: not told. */
+    void (*warn)(void *ctx, const char *msg);
+    void *warn_ctx;
     lie_file_set *files; /* the run's inputs and outputs (lib/core): every side file is claimed there
                           * (lie_file_set_claim) before anything is written; the caller claims `path`.
                           * NULL: no check */

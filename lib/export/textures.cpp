@@ -126,6 +126,45 @@ void png_bytes(Png &png, const std::string &name)
     std::vector<uint16_t>().swap(png.b16);
 }
 
+/* An image file of the export: a bufferView of the .glb, else a side file
+ * named `name`. */
+void add_image(Export &ex, Png &file, const std::string &name, const std::string &mime)
+{
+    tinygltf::Image im;
+    im.mimeType = mime;
+    if (ex.glb) { /* glTF 2.0 §3.9.1: an image in a bufferView names its mimeType */
+        im.bufferView = add_view(ex, file.bytes.data(), file.bytes.size(), 0);
+    } else {
+        im.uri = file.uri = uri_escape(name);
+        file.path = ex.dir + name;
+        ex.pngs.push_back(std::move(file));
+    }
+    ex.m.images.push_back(im);
+}
+
+/* The glTF image of scene image k: its file's bytes as they were (a JPEG
+ * stays that JPEG), once however many textures use it. */
+int kept_image(Export &ex, int k, std::map<int, int> &image_of)
+{
+    auto found = image_of.find(k);
+    if (found != image_of.end())
+        return found->second;
+    const lie_image &src = ex.s.images[k];
+    std::string mime = src.mime ? src.mime : "";
+    std::string ext = mime == "image/png" ? ".png" : mime == "image/jpeg" ? ".jpg" : mime == "image/webp" ? ".webp"
+                                                                                   : mime == "image/ktx2" ? ".ktx2"
+                                                                                                          : ".bin";
+    int image = int(ex.m.images.size());
+    std::string name = ex.stem + "_img" + std::to_string(image) + ext;
+    Png file;
+    file.bytes.assign(src.bytes, src.bytes + src.size);
+    add_image(ex, file, name, mime);
+    if (src.name)
+        ex.m.images.back().name = src.name;
+    image_of[k] = image;
+    return image;
+}
+
 std::map<int, int> export_textures(Export &ex)
 {
     const lie_scene &s = ex.s;
@@ -138,7 +177,10 @@ std::map<int, int> export_textures(Export &ex)
         mark(s.materials[i].base_color_tex, true);
         mark(s.materials[i].mr_tex, false);
         mark(s.materials[i].emissive_tex, true);
+        mark(s.materials[i].normal_tex, false);
+        mark(s.materials[i].transmission_tex, false);
     }
+    std::map<int, int> image_of; /* s.images -> glTF image: a file's image written once, as it was */
     std::map<int, int> gl_texture;
     std::map<std::pair<int, int>, int> sampler_of;
     CodeTables tables;
@@ -156,21 +198,15 @@ std::map<int, int> export_textures(Export &ex)
                 ex.m.samplers.push_back(sm);
                 found = sampler_of.emplace(wrap, int(ex.m.samplers.size() - 1)).first;
             }
-            int image = int(ex.m.images.size());
-            std::string name = ex.stem + "_tex" + std::to_string(image) + ".png";
-            Png png;
-            encode_texture(lt, srgb != 0, tables, png);
-            png_bytes(png, name);
-            tinygltf::Image im;
-            im.mimeType = "image/png";
-            if (ex.glb) { /* glTF 2.0 §3.9.1: an image in a bufferView names its mimeType */
-                im.bufferView = add_view(ex, png.bytes.data(), png.bytes.size(), 0);
-            } else {
-                im.uri = png.uri = uri_escape(name);
-                png.path = ex.dir + name;
-                ex.pngs.push_back(std::move(png));
+            int image = lt.image >= 0 && lt.image < s.n_images ? kept_image(ex, lt.image, image_of) : -1;
+            if (image < 0) { /* made in memory: its code values as a PNG */
+                image = int(ex.m.images.size());
+                std::string name = ex.stem + "_tex" + std::to_string(image) + ".png";
+                Png png;
+                encode_texture(lt, srgb != 0, tables, png);
+                png_bytes(png, name);
+                add_image(ex, png, name, "image/png");
             }
-            ex.m.images.push_back(im);
             tinygltf::Texture tx;
             tx.sampler = found->second;
             tx.source = image;

@@ -229,14 +229,28 @@ extern "C" lie_status lie_gltf_export_group(const lie_scene *s, const char *path
     bool glb = ends_with_glb(base);
     if (base.empty() || base == "." || base == "..")
         return lie_error_set(err, LIE_ERR_ARG, path, "not a file name");
-    if (!glb && (base == stem + ".bin" || (base.compare(0, stem.size() + 4, stem + "_tex") == 0 &&
-                                           base.size() > 4 && base.compare(base.size() - 4, 4, ".png") == 0)))
+    if (!glb && (base == stem + ".bin" || base.compare(0, stem.size() + 4, stem + "_tex") == 0 ||
+                 base.compare(0, stem.size() + 4, stem + "_img") == 0))
         return lie_error_set(err, LIE_ERR_ARG, path, "the glTF would share its name with its .bin or a texture");
 
     lie_status st = LIE_OK;
     try {
         Export ex{*s, dir, stem, glb, tinygltf::Model(), {}, {}};
         export_document(ex);
+        if (o.warn) {
+            for (int i = 0; i < s->n_not_read; i++)
+                o.warn(o.warn_ctx, (std::string("not written: ") + s->not_read[i] + " (not read)").c_str());
+            if (s->n_animations > 0)
+                o.warn(o.warn_ctx, ("not written: " + std::to_string(s->n_animations) +
+                                    " animation(s) (lie-animate turns them into edit files)")
+                                       .c_str());
+            bool morph = false;
+            for (int i = 0; i < s->n_meshes; i++)
+                for (int k = 0; k < s->meshes[i].n_prims; k++)
+                    morph = morph || s->meshes[i].prims[k].n_targets > 0;
+            if (morph)
+                o.warn(o.warn_ctx, "not written: morph targets (meshes are written morphed, with their weights)");
+        }
         std::string json = export_json(ex);
         if (glb) {
             std::string bytes = glb_container(json, ex.bin);

@@ -24,6 +24,7 @@ struct Import {
     const std::map<int, std::vector<unsigned char>> &encoded; /* from load_model: images' bytes */
     std::map<int, tinygltf::Image> decoded;                    /* those decoded so far (decode_image) */
     std::map<int, int> texture_of; /* glTF texture * 2 + srgb -> s->textures index */
+    std::map<int, int> image_of;   /* glTF image -> s->images index */
     std::set<int> warned;          /* images warned about */
 };
 
@@ -34,6 +35,54 @@ void scene_warn(lie_scene *s, const std::string &msg)
         snprintf(s->warnings[s->n_warnings], sizeof s->warnings[0], "%s", msg.c_str());
     if (s->n_warnings < INT_MAX)
         s->n_warnings++;
+}
+
+/* Something the import does not read: warned of once, and kept in
+ * s->not_read for lib/export to say it is not written. */
+void not_read(lie_scene *s, const std::string &what, const std::string &why, bool warn = true)
+{
+    for (int i = 0; i < s->n_not_read; i++)
+        if (what == s->not_read[i])
+            return;
+    char **grown = static_cast<char **>(realloc(s->not_read, sizeof *grown * (size_t(s->n_not_read) + 1)));
+    if (!grown)
+        throw std::bad_alloc();
+    s->not_read = grown;
+    s->not_read[s->n_not_read] = dup_name(what);
+    if (!s->not_read[s->n_not_read])
+        throw std::bad_alloc();
+    s->n_not_read++;
+    if (warn)
+        scene_warn(s, "not read: " + what + " (" + why + ")");
+}
+
+/* The file's bytes of glTF image `source`, kept in s->images once. */
+int keep_image(Import &im, int source)
+{
+    auto found = im.image_of.find(source);
+    if (found != im.image_of.end())
+        return found->second;
+    auto enc = im.encoded.find(source);
+    if (enc == im.encoded.end() || enc->second.empty())
+        return -1;
+    const tinygltf::Image &meta = im.m.images[size_t(source)];
+    const std::vector<unsigned char> &b = enc->second;
+    std::string mime = meta.mimeType;
+    if (mime.empty())
+        mime = b.size() >= 8 && memcmp(b.data(), "\x89PNG", 4) == 0 ? "image/png"
+               : b.size() >= 3 && b[0] == 0xFF && b[1] == 0xD8 && b[2] == 0xFF ? "image/jpeg"
+                                                                               : "application/octet-stream";
+    lie_image &img = im.s->images[im.s->n_images];
+    img.bytes = alloc_array<unsigned char>(b.size());
+    img.size = b.size();
+    memcpy(img.bytes, b.data(), b.size());
+    img.mime = dup_name(mime);
+    if (!img.mime)
+        throw std::bad_alloc();
+    img.name = meta.name.empty() ? nullptr : dup_name(meta.name);
+    int index = im.s->n_images++;
+    im.image_of[source] = index;
+    return index;
 }
 
 lie_wrap wrap_mode(int mode, const std::string &what)
@@ -78,6 +127,7 @@ int texture_for(Import &im, int ti, bool srgb, const std::string &what)
              * are refused earlier. */
             im.warned.insert(tex.source);
             scene_warn(im.s, why + "; its textures fall back to their factors");
+            not_read(im.s, iw, "the decoder cannot read it", false); /* warned of just above */
         }
     }
     const tinygltf::Image &img = dec->second;
@@ -125,7 +175,9 @@ int texture_for(Import &im, int ti, bool srgb, const std::string &what)
     t.rgba = rgba;
     t.wrap_s = ws;
     t.wrap_t = wt;
+    t.image = -1;
     int index = im.s->n_textures++;
+    t.image = keep_image(im, tex.source);
     im.texture_of[ti * 2 + srgb] = index;
 
     const unsigned char *src = img.image.data();
@@ -165,6 +217,8 @@ int texture_info(Import &im, const Info &ti, bool srgb, const std::string &what,
     if (ti.texCoord < 0)
         fail(LIE_ERR_FORMAT, "%s: texCoord must be >= 0", what.c_str());
     *set = ti.texCoord == 1 ? 1 : 0;
+    if (ti.texCoord > 1)
+        not_read(im.s, "texCoord " + std::to_string(ti.texCoord), "such slots read TEXCOORD_0");
     auto ext = ti.extensions.find("KHR_texture_transform");
     if (ext != ti.extensions.end()) {
         const tinygltf::Value &v = ext->second;
@@ -265,6 +319,7 @@ void import_materials(Import &im)
     if (m.textures.size() > size_t(INT_MAX / 2) || m.materials.size() > size_t(INT_MAX))
         fail(LIE_ERR_LIMIT, "too many materials or textures");
     s->textures = alloc_array<lie_texture>(m.textures.size() * 2); /* at most one per colour space */
+    s->images = alloc_array<lie_image>(m.images.size());
     s->materials = alloc_array<lie_material>(m.materials.size());
     s->n_materials = int(m.materials.size());
     for (size_t i = 0; i < m.materials.size(); i++) {
@@ -310,6 +365,10 @@ void import_materials(Import &im)
         mt.normal_scale = float(g.normalTexture.scale);
         mt.transmission_tex = -1;
         import_transmission(im, g, mt, w);
+        if (g.occlusionTexture.index >= 0)
+            not_read(s, "occlusionTexture", "ambient occlusion has no part in direct light");
+        if (g.alphaMode == "BLEND")
+            not_read(s, "alphaMode BLEND", "such surfaces are opaque");
         mt.double_sided = g.doubleSided ? 1 : 0;
         mt.alpha_mask = g.alphaMode == "MASK";
         if (!std::isfinite(g.alphaCutoff))
@@ -694,6 +753,39 @@ void import_document(const tinygltf::Model &m, lie_scene *s, const lie_scene_opt
 
 using namespace lie_gltf;
 
+/* The rest of what the file holds and the import does not read, warned of
+ * once each (docs/gltf.md lists what is read): extensions only used,
+ * attributes past the sets read, morph targets' TANGENT, points and lines. */
+void warn_not_read(const tinygltf::Model &m, lie_scene *s)
+{
+    static const char *const read[] = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
+                                       "KHR_materials_transmission", "KHR_mesh_quantization",
+                                       "KHR_texture_transform"};
+    for (const std::string &e : m.extensionsUsed) {
+        bool known = false;
+        for (const char *r : read)
+            known = known || e == r;
+        if (!known)
+            not_read(s, "extension " + clean(e), e == "KHR_materials_volume" ? "transmissive surfaces are thin"
+                                                                            : "the file is read without it");
+    }
+    for (const tinygltf::Mesh &g : m.meshes)
+        for (const tinygltf::Primitive &p : g.primitives) {
+            for (const auto &a : p.attributes) {
+                const std::string &n = a.first;
+                bool read_it = n == "POSITION" || n == "NORMAL" || n == "TANGENT" || n == "TEXCOORD_0" ||
+                               n == "TEXCOORD_1" || n == "COLOR_0" || n == "JOINTS_0" || n == "WEIGHTS_0";
+                if (!read_it)
+                    not_read(s, "attribute " + clean(n), "the sets read are TEXCOORD_0/1, COLOR_0, JOINTS_0, WEIGHTS_0");
+            }
+            for (const auto &t : p.targets)
+                if (t.count("TANGENT"))
+                    not_read(s, "morph target TANGENT", "tangents are not morphed");
+        }
+    if (s->stats.points_skipped || s->stats.lines_skipped)
+        not_read(s, "points and lines", "only triangles are drawn");
+}
+
 extern "C" lie_status lie_gltf_import(lie_scene *s, const char *path, const lie_scene_options *opt,
                                       lie_error *err)
 {
@@ -710,12 +802,13 @@ extern "C" lie_status lie_gltf_import(lie_scene *s, const char *path, const lie_
         s->stats.points_skipped = s->stats.lines_skipped = s->stats.prims_without_material = 0;
         import_document(model, s, o);
         s->n_warnings = 0;
-        Import im{model, s, image_errors, encoded, {}, {}, {}};
+        Import im{model, s, image_errors, encoded, {}, {}, {}, {}};
         import_materials(im);
         import_cameras(model, s);
         import_lights(model, s);
         import_skins(model, s);
         import_animations(model, s);
+        warn_not_read(model, s);
         return LIE_OK;
     } catch (const ImportError &e) {
         if (e.line > 0)

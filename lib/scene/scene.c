@@ -116,6 +116,15 @@ void lie_scene_destroy(lie_scene *s)
     for (int i = 0; i < s->n_textures; i++)
         free(s->textures[i].rgba);
     free(s->textures);
+    for (int i = 0; i < s->n_images; i++) {
+        free(s->images[i].bytes);
+        free(s->images[i].mime);
+        free(s->images[i].name);
+    }
+    free(s->images);
+    for (int i = 0; i < s->n_not_read; i++)
+        free(s->not_read[i]);
+    free(s->not_read);
     for (int i = 0; i < s->n_camera_defs; i++)
         free(s->camera_defs[i].name);
     free(s->camera_defs);

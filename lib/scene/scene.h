@@ -34,7 +34,17 @@ typedef struct lie_texture {
     int width, height;
     float *rgba;  /* width * height * 4 */
     lie_wrap wrap_s, wrap_t;
+    int image;    /* the lie_scene.images entry it was decoded from, or -1 (made in memory) */
 } lie_texture;
+
+/* An image as the file held it, kept so that lib/export writes it back
+ * byte for byte (a JPEG stays that JPEG). */
+typedef struct lie_image {
+    unsigned char *bytes;
+    size_t size;
+    char *mime;   /* "image/png", "image/jpeg", ...: the file's mimeType, else by its signature */
+    char *name;   /* may be NULL */
+} lie_image;
 
 /* The texture slots of a material, each with its texture coordinate set
  * and KHR_texture_transform. */
@@ -312,6 +322,11 @@ typedef struct lie_scene {
     lie_mesh *meshes;         int n_meshes;
     lie_material *materials;  int n_materials;
     lie_texture *textures;    int n_textures;
+    lie_image *images;        int n_images;   /* the images textures were decoded from */
+    /* What the import did not read (an extension, occlusionTexture, a
+     * third texture coordinate set, ...), one short phrase each: it warned
+     * of each once, and lib/export says each is not written. */
+    char **not_read;          int n_not_read;
     lie_camera_def *camera_defs; int n_camera_defs;
     lie_light_def *light_defs;   int n_light_defs;
     lie_skin *skins;          int n_skins;

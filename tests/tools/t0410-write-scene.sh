@@ -18,7 +18,8 @@ run "$B/rst-update" "$TMP/m2.lie" "$TMP/e.yaml" -q -o "$TMP/u.lie" --write-scene
 expect_rc 0 "rst-update --write-scene"
 expect_file "$TMP/scene/out.gltf" "the .gltf is written"
 expect_file "$TMP/scene/out.bin" "its .bin beside it"
-expect_file "$TMP/scene/out_tex0.png" "its texture beside it"
+expect_file "$TMP/scene/out_img0.png" "its image beside it, the bytes the scene read"
+expect_same "$TMP/scene/out_img0.png" "$S/museum2_floor.png" "the PNG written is the file read, byte for byte"
 expect_no_temp "$TMP/scene" "no temporary files left"
 
 run "$B/lie-build" "$TMP/scene/out.gltf" -q --min-patch 1e-2 -o "$TMP/b.lie"
@@ -70,7 +71,7 @@ expect_no_file "$TMP/scene/other.gltf" "no .gltf"
 [ "$(cat "$TMP/scene/other.bin")" = mine ] && ok "the .bin is untouched" || not_ok "the .bin was replaced"
 run "$B/rst-update" "$TMP/m2.lie" "$TMP/e.yaml" -q -o "$TMP/u3.lie" --write-scene "$TMP/scene/other.gltf" --force
 expect_rc 0 "--force replaces it"
-expect_file "$TMP/scene/other_tex0.png" "with the rest"
+expect_file "$TMP/scene/other_img0.png" "with the rest"
 
 run "$B/rst-update" --help
 if grep -q -- '--write-scene OUT.gltf' "$TMP/out" && grep -q -- '--force' "$TMP/out"; then

@@ -217,10 +217,26 @@ static void test_export_museum2_round_trip_keeps_hash(void **state)
 {
     /* the parquet texture (sRGB), the mirror, an emitter with strength > 1 */
     expect_round_trip(state, SCENES "museum2.gltf");
-    assert_true(has_text(in_dir(state, "out.gltf"), "\"uri\": \"out_tex0.png\""));
+    assert_true(has_text(in_dir(state, "out.gltf"), "\"uri\": \"out_img0.png\""));
     assert_true(has_text(in_dir(state, "out.gltf"), "\"uri\": \"out.bin\""));
     assert_true(has_text(in_dir(state, "out.gltf"), "\"generator\": \"lie\""));
     assert_true(has_text(in_dir(state, "out.gltf"), "KHR_materials_emissive_strength"));
+}
+
+/* A normal map through KHR_texture_transform, TANGENT, glass with a
+ * transmission texture; a JPEG written as the file's bytes. */
+static void test_export_normal_map_glass_and_jpeg_keep_hash_and_bytes(void **state)
+{
+    expect_round_trip(state, FIXTURES "fidelity.gltf");
+    assert_true(has_text(in_dir(state, "out.gltf"), "normalTexture"));
+    assert_true(has_text(in_dir(state, "out.gltf"), "\"TANGENT\""));
+    assert_true(has_text(in_dir(state, "out.gltf"), "transmissionTexture"));
+    size_t n, m;
+    unsigned char *a = slurp(in_dir(state, "out_img0.jpg"), &n), *b = slurp(FIXTURES "checker.jpg", &m);
+    assert_int_equal(n, m);
+    assert_memory_equal(a, b, n);
+    free(a);
+    free(b);
 }
 
 static void test_export_cornell_round_trip_keeps_hash(void **state)
@@ -234,11 +250,11 @@ static void test_export_textures_in_both_colour_spaces_and_16_bit_keep_hash(void
      * metallic-roughness; a 16-bit grey image; clamp/mirror wrap modes */
     expect_round_trip(state, FIXTURES "materials.gltf");
     size_t n;
-    unsigned char *png = slurp(in_dir(state, "out_tex2.png"), &n);
+    unsigned char *png = slurp(in_dir(state, "out_img1.png"), &n);
     assert_true(n > 25);
-    assert_int_equal(png[24], 16); /* IHDR bit depth: no 8-bit code gives 40000/65535 */
+    assert_int_equal(png[24], 16); /* the file's own 16-bit image, written as it was read */
     free(png);
-    png = slurp(in_dir(state, "out_tex0.png"), &n);
+    png = slurp(in_dir(state, "out_img0.png"), &n);
     assert_int_equal(png[24], 8);
     free(png);
 }
@@ -371,7 +387,7 @@ static void test_export_scene_built_in_memory_with_unusual_texture(void **state)
 /* x.gltf, x.bin and x_tex0.png of folders a and b are byte for byte the same. */
 static void assert_same_export(void **state, const char *a, const char *b)
 {
-    const char *names[] = {"x.gltf", "x.bin", "x_tex0.png"};
+    const char *names[] = {"x.gltf", "x.bin", "x_img0.png"};
     for (size_t i = 0; i < sizeof names / sizeof *names; i++) {
         char pa[PATH_MAX], pb[PATH_MAX];
         snprintf(pa, sizeof pa, "%s/%s", a, names[i]);
@@ -416,8 +432,8 @@ static void test_export_file_names_are_uri_escaped(void **state)
     lie_scene *s = load(SCENES "museum2.gltf");
     lie_scene *r = round_trip(state, s, "my scene%.gltf");
     assert_true(r->hash == s->hash);
-    assert_true(has_text(in_dir(state, "my scene%.gltf"), "my%20scene%25_tex0.png"));
-    assert_int_equal(access(in_dir(state, "my scene%_tex0.png"), F_OK), 0);
+    assert_true(has_text(in_dir(state, "my scene%.gltf"), "my%20scene%25_img0.png"));
+    assert_int_equal(access(in_dir(state, "my scene%_img0.png"), F_OK), 0);
     lie_scene_destroy(r);
     lie_scene_destroy(s);
 }
@@ -564,7 +580,7 @@ static void test_export_side_files_of_another_are_refused_unless_forced(void **s
     const char *out = in_dir(state, "x.gltf");
     char bin[PATH_MAX], png[PATH_MAX];
     snprintf(bin, sizeof bin, "%s", in_dir(state, "x.bin"));
-    snprintf(png, sizeof png, "%s", in_dir(state, "x_tex0.png"));
+    snprintf(png, sizeof png, "%s", in_dir(state, "x_img0.png"));
     lie_error err;
     lie_error_clear(&err);
 
@@ -615,6 +631,7 @@ int main(void)
         T(test_export_failure_part_way_removes_files_written),
         T(test_export_to_stdout_or_own_sidecar_name_refused),
         T(test_export_glb_round_trip_keeps_hash_and_textures),
+        T(test_export_normal_map_glass_and_jpeg_keep_hash_and_bytes),
         T(test_export_gltf_to_glb_to_gltf_gives_the_same_files),
         T(test_export_side_files_of_another_are_refused_unless_forced),
     };

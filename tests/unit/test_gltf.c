@@ -514,7 +514,7 @@ static void test_texture_sample_wraps_and_blends(void **state)
 {
     (void)state;
     float px[2 * 1 * 4] = {0, 0, 0, 1, 1, 1, 1, 1}; /* 2x1: black, white */
-    lie_texture t = {2, 1, px, LIE_WRAP_REPEAT, LIE_WRAP_REPEAT};
+    lie_texture t = {2, 1, px, LIE_WRAP_REPEAT, LIE_WRAP_REPEAT, -1};
     float c[4];
     lie_texture_sample(&t, 0.25f, 0.5f, c); /* texel centre */
     assert_near(c[0], 0.0, 1e-6);

@@ -26,9 +26,11 @@ static void usage(FILE *fp)
             "      --full            recompute everything (the reference for update = rebuild)\n"
             "      --write-scene OUT.gltf|OUT.glb  also write the edited scene: .glb is one\n"
             "                        binary glTF file (images inside); .gltf also writes\n"
-            "                        OUT.bin and OUT_texN.png beside it\n"
+            "                        OUT.bin and its images beside it (OUT_imgN.jpg, .png:\n"
+            "                        the file's own bytes; OUT_texN.png: textures an edit\n"
+            "                        added); one warning line per thing not written\n"
             "      --force           let --write-scene replace side files (OUT.bin,\n"
-            "                        OUT_texN.png) that are not its own; its own are the\n"
+            "                        images) that are not its own; its own are the\n"
             "                        ones the OUT.gltf being replaced lists, with the hash\n"
             "                        of the bytes they still hold (lie wrote them)\n"
             "      --threads N       worker threads (default: all cores)\n"
@@ -168,6 +170,12 @@ static lie_status claim_outputs(lie_file_set *set, const char *input, const run_
     return st;
 }
 
+/* What --write-scene does not write, one warning line each. */
+static void scene_warn(void *ctx, const char *msg)
+{
+    fprintf(stderr, "%s: %s: warning: %s\n", prog, (const char *)ctx, msg);
+}
+
 static lie_status run(const char *input, char **files, int n_files, const lie_update_options *uo_in,
                       const run_opts *ro_in, lie_error *err)
 {
@@ -178,6 +186,10 @@ static lie_status run(const char *input, char **files, int n_files, const lie_up
     lie_file_set *set = lie_file_set_create(LIE_FILES_NAMES); /* the run's inputs and outputs */
     uo_copy.scene.files = ro_copy.scene_opt.files = set;
     int quiet = ro->quiet, stats = ro->stats;
+    if (!quiet && ro->scene_out) {
+        ro_copy.scene_opt.warn = scene_warn;
+        ro_copy.scene_opt.warn_ctx = (void *)ro->scene_out;
+    }
     double t0 = lie_time_now();
     lie_cache *cache = NULL;
     lie_scene *scene = NULL;

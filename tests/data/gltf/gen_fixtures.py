@@ -787,6 +787,63 @@ def glass_box():
         write("glass_box.gltf" if variant == "glass" else "glass_box_opaque.gltf", d.embedded())
 
 
+def fidelity():
+    """What --write-scene must keep: a floor with a JPEG base colour
+    (checker.jpg beside the file, written once by oiiotool), a normal map
+    (PNG, scale 0.9, KHR_texture_transform) and TANGENT, and an
+    occlusionTexture, which is not read; a glass box
+    (KHR_materials_transmission with a texture) holding a point light
+    (KHR_lights_punctual) and an emissive quad
+    (KHR_materials_emissive_strength)."""
+    def tilt(x, y):
+        z = math.sqrt(max(0.0, 1.0 - x * x - y * y))
+        return tuple(int(round((c + 1) / 2 * 255)) for c in (x, y, z)) + (255,)
+    grooves = [[tilt(0.5 if i % 2 == 0 else -0.5, 0.0) for i in range(4)] for j in range(4)]
+    d = Doc()
+    fl = d.positions([(-2, 0, -2), (-2, 0, 2), (2, 0, 2), (2, 0, -2)])
+    fn = d.accessor(f32(*([0, 1, 0] * 4)), FLOAT, "VEC3", 4)
+    ft = d.accessor(f32(*([1, 0, 0, 1] * 4)), FLOAT, "VEC4", 4)
+    fuv = d.accessor(f32(0, 0, 0, 1, 1, 1, 1, 0), FLOAT, "VEC2", 4)
+    quad = d.indices([0, 1, 2, 0, 2, 3])
+    s = 0.4
+    box = [(-s, 0, -s), (s, 0, -s), (s, 0, s), (-s, 0, s), (-s, 0.8, -s), (s, 0.8, -s), (s, 0.8, s), (-s, 0.8, s)]
+    bp = d.positions(box)
+    buv = d.accessor(f32(0, 0, 1, 0, 1, 1, 0, 1, 0, 0, 1, 0, 1, 1, 0, 1), FLOAT, "VEC2", 8)
+    bi = d.indices([4, 6, 5, 4, 7, 6, 0, 1, 5, 0, 5, 4, 1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7])
+    fil = d.positions([(-0.1, 0.45, -0.1), (0.1, 0.45, -0.1), (0.1, 0.45, 0.1), (-0.1, 0.45, 0.1)])
+    d.g["images"] = [{"uri": "data:image/png;base64," + base64.b64encode(png(4, 4, grooves)).decode()},
+                     {"uri": "checker.jpg", "name": "checker"}]
+    d.g["samplers"] = [{"wrapS": 33648, "wrapT": 10497}]
+    d.g["textures"] = [{"source": 0}, {"source": 1, "sampler": 0}]
+    d.g["meshes"] = [
+        {"primitives": [{"attributes": {"POSITION": fl, "NORMAL": fn, "TANGENT": ft, "TEXCOORD_0": fuv},
+                         "indices": quad, "material": 0}]},
+        {"primitives": [{"attributes": {"POSITION": bp, "TEXCOORD_0": buv}, "indices": bi, "material": 1}]},
+        {"primitives": [{"attributes": {"POSITION": fil}, "indices": quad, "material": 2}]}]
+    d.g["materials"] = [
+        {"name": "floor",
+         "pbrMetallicRoughness": {"baseColorTexture": {"index": 1}, "metallicFactor": 0, "roughnessFactor": 0.7},
+         "normalTexture": {"index": 0, "scale": 0.9,
+                           "extensions": {"KHR_texture_transform": {"scale": [2, 2], "rotation": 0.5}}},
+         "occlusionTexture": {"index": 0}},
+        {"name": "glass", "doubleSided": True,
+         "pbrMetallicRoughness": {"baseColorFactor": [1.0, 0.5, 0.25, 1], "metallicFactor": 0,
+                                  "roughnessFactor": 0.05},
+         "extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.9,
+                                                       "transmissionTexture": {"index": 0, "texCoord": 0}}}},
+        {"emissiveFactor": [1, 0.9, 0.8], "doubleSided": True,
+         "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 20}}}]
+    d.g["extensionsUsed"] = ["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_transmission",
+                             "KHR_texture_transform"]
+    d.g["extensions"] = {"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 3, "color": [1, 0.9, 0.7]}]}}
+    d.g["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.9, "znear": 0.05}}]
+    d.g["nodes"] = [{"mesh": 0, "name": "Floor"}, {"mesh": 1, "name": "Glass"}, {"mesh": 2, "name": "Filament"},
+                    {"name": "Bulb", "translation": [0, 0.6, 0], "extensions": {"KHR_lights_punctual": {"light": 0}}},
+                    {"camera": 0, "translation": [0, 3.5, 3.5], "rotation": [-0.3827, 0, 0, 0.9239]}]
+    d.g["scenes"] = [{"nodes": [0, 1, 2, 3, 4]}]
+    write("fidelity.gltf", d.embedded())
+
+
 def bent_light():
     """A bent emitter (two quads meeting at 40 degrees: not planar, so
     lie-render tests its blockers in 3D) and a spot light, over a floor
@@ -1015,6 +1072,7 @@ def animated():
 def main():
     normal_map()
     glass_box()
+    fidelity()
     animated()
     morph()
     texcoord1()
