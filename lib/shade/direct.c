@@ -206,7 +206,8 @@ static void shade_guided(point *pt, int n, double u, float rgb[3])
         if (!(w > 0.0f))
             continue; /* nothing of it reaches the point */
         if (p.pl && lie_answer_exact.applies(&p) &&
-            (c->opt->exact == LIE_EXACT_ONLY || lie_cost_exact_pieces(p.n_blockers, p.pl->n_polys) <= lie_cost_embree(LIE_GUIDED_SAMPLES))) {
+            (c->opt->exact == LIE_EXACT_ONLY ||
+             lie_cost_exact_pieces(p.n_blockers, p.pl->n_polys) <= lie_cost_embree(LIE_GUIDED_SAMPLES))) {
             float prgb[3] = {0.0f, 0.0f, 0.0f};
             if (lie_answer_exact.shade(&p, prgb)) {
                 for (int k = 0; k < 3; k++)
@@ -224,7 +225,8 @@ static void shade_guided(point *pt, int n, double u, float rgb[3])
     int n_tree = 0;
     if (w_tree > 0.0) {
         n_tree = total > 0.0 ? (int)ceil((double)n * w_tree / (w_tree + total)) : n;
-        double ut = (double)lie_hash_to_unit(lie_hash_u64x4(pt->key, (uint64_t)sc->depth, c->opt->seed, 0x74726565ull));
+        double ut =
+            (double)lie_hash_to_unit(lie_hash_u64x4(pt->key, (uint64_t)sc->depth, c->opt->seed, 0x74726565ull));
         int k = c->sampler.cls->distribute(c->sampler.state, pt->o, sf->n, n_tree, ut, sc->picks);
         const lie_light_groups *G = c->groups;
         for (int i = 0; i < k; i++) {
@@ -234,10 +236,10 @@ static void shade_guided(point *pt, int n, double u, float rgb[3])
                 shade_part(pt, g->emitter, g->whole ? -1 : pk->emitter, pk->count,
                            (float)pk->count / ((float)n_tree * pk->pmf), rgb);
         }
-        for (int i = 0; i < n_tree_e; i++)
-            sc->by_tree[sc->ids[s->n_emitters - 1 - i]] = 0;
         n = n - n_tree > 1 ? n - n_tree : 1;
     }
+    for (int i = 0; i < n_tree_e; i++)
+        sc->by_tree[sc->ids[s->n_emitters - 1 - i]] = 0; /* for the next point */
     if (!(total > 0.0))
         return;
     if (m > n) {
