@@ -22,8 +22,9 @@
  *
  * A group is a part of its emitter: the emitter's LIE class holds for it
  * (a part of a visible emitter is visible, of an occluded one occluded, and
- * a partial pair's blocker list holds every blocker of a part).  Closed
- * forms describe whole emitters, so a pair of a part is sampled. */
+ * a partial pair's blocker list holds every blocker of a part).  The
+ * emitter's polylight describes the whole, so a part's pair takes its own
+ * triangles' closed form instead, and no exact shadow or bitmask. */
 #include "shade/sampler.h"
 #include "shade/spherical.h"
 #include "shade/texlight.h"
