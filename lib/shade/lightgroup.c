@@ -128,40 +128,8 @@ static int split(builder *b, int e, uint32_t first, uint32_t n)
 static void group_bounds(const lie_scene *s, const lie_light_groups *G, const lie_light_group *g, double emitter_total,
                          const lie_light_bounds *eb, lie_light_bounds *b)
 {
-    const lie_emitter *em = &s->emitters[g->emitter];
     memset(b, 0, sizeof *b);
-    for (int a = 0; a < 3; a++)
-        b->lo[a] = INFINITY, b->hi[a] = -INFINITY;
-    double ax = 0, ay = 0, az = 0;
-    for (uint32_t i = g->first; i < g->first + g->n; i++) {
-        uint32_t t = G->tris[i];
-        const lie_vec3 *P = &s->tri_p[3 * (size_t)t];
-        for (int k = 0; k < 3; k++) {
-            const float q[3] = {P[k].x, P[k].y, P[k].z};
-            for (int a = 0; a < 3; a++) {
-                b->lo[a] = fminf(b->lo[a], q[a]);
-                b->hi[a] = fmaxf(b->hi[a], q[a]);
-            }
-        }
-        lie_vec3 n = s->tri_ng[t];
-        double w = s->tri_area[t];
-        ax += w * n.x, ay += w * n.y, az += w * n.z;
-    }
-    double len = sqrt(ax * ax + ay * ay + az * az);
-    b->two_sided = em->double_sided;
-    if (!(len > 0.0) || em->double_sided) {
-        b->axis[2] = 1.0f;
-        b->cos_o = -1.0f;
-    } else {
-        b->axis[0] = (float)(ax / len), b->axis[1] = (float)(ay / len), b->axis[2] = (float)(az / len);
-        float c = 1.0f;
-        for (uint32_t i = g->first; i < g->first + g->n; i++) {
-            lie_vec3 n = s->tri_ng[G->tris[i]];
-            c = fminf(c, n.x * b->axis[0] + n.y * b->axis[1] + n.z * b->axis[2]);
-        }
-        b->cos_o = c > -1.0f ? fmaxf(c - 1e-4f, -1.0f) : -1.0f;
-    }
-    b->cos_e = 0.0f;
+    lie_light_bounds_tris(s, G->tris, g->first, g->n, s->emitters[g->emitter].double_sided, b);
     double share = emitter_total > 0.0 ? g->total / emitter_total : 0.0;
     b->phi = (float)((double)eb->phi * share);
     if (!isfinite(b->phi) || !(b->phi > 0.0f))

@@ -146,6 +146,24 @@ static void lambert_colour(const lie_surface *sf, const lie_light_samples *ls, l
     sc->scale[2] = ls->b[0] * sf->diffuse[2] * (float)M_1_PI;
 }
 
+/* A Lambert receiver's geometric term cos_r cos_e / d^2 toward a sample
+ * at offset d, 0 where a cosine (or the geometric normal's) is not
+ * positive or d is 0; sgn -1 takes |cos_e| (a two-sided emitter).  Inline
+ * in kernel_area's vector loops. */
+static inline float lambert_g(float dx, float dy, float dz, float lnx, float lny, float lnz, float nx, float ny,
+                              float nz, float gx, float gy, float gz, float sgn)
+{
+    float d2 = dx * dx + dy * dy + dz * dz;
+    float inv = 1.0f / sqrtf(d2);
+    float cr = (nx * dx + ny * dy + nz * dz) * inv;
+    float cg = gx * dx + gy * dy + gz * dz;
+    float ce = -(lnx * dx + lny * dy + lnz * dz) * inv;
+    ce = ce > sgn * ce ? ce : sgn * ce;
+    int ok = (cr > 0.0f) & (cg > 0.0f) & (ce > 0.0f) & (d2 > 0.0f);
+    float G = cr * ce * (inv * inv);
+    return ok ? G : 0.0f;
+}
+
 /* Unshadowed contributions of an area emitter's samples, seen from origin o
  * (the surface point lifted off the surface).  Branch-free: invalid samples
  * get weight 0 by selection, so NaNs from degenerate geometry never leak. */
@@ -184,18 +202,9 @@ LIE_HOT static void kernel_area(const lie_surface *sf, lie_vec3 o, const lie_lig
          * once, to the sum (sc->scalar). */
         float *restrict G_out = sc->contrib_r;
 #pragma omp simd
-        for (int i = 0; i < n; i++) {
-            float dx = lx[i] - px, dy = ly[i] - py, dz = lz[i] - pz;
-            float d2 = dx * dx + dy * dy + dz * dz;
-            float inv = 1.0f / sqrtf(d2);
-            float cr = (nx * dx + ny * dy + nz * dz) * inv;
-            float cg = gx * dx + gy * dy + gz * dz;
-            float ce = -(lnx[i] * dx + lny[i] * dy + lnz[i] * dz) * inv;
-            ce = ce > sgn * ce ? ce : sgn * ce;
-            int ok = (cr > 0.0f) & (cg > 0.0f) & (ce > 0.0f) & (d2 > 0.0f);
-            float G = cr * ce * (inv * inv);
-            G_out[i] = ok ? G : 0.0f;
-        }
+        for (int i = 0; i < n; i++)
+            G_out[i] =
+                lambert_g(lx[i] - px, ly[i] - py, lz[i] - pz, lnx[i], lny[i], lnz[i], nx, ny, nz, gx, gy, gz, sgn);
         lambert_colour(sf, ls, sc);
         return;
     }
@@ -205,16 +214,8 @@ LIE_HOT static void kernel_area(const lie_surface *sf, lie_vec3 o, const lie_lig
                     kb = sf->diffuse[2] * (float)M_1_PI;
 #pragma omp simd
         for (int i = 0; i < n; i++) {
-            float dx = lx[i] - px, dy = ly[i] - py, dz = lz[i] - pz;
-            float d2 = dx * dx + dy * dy + dz * dz;
-            float inv = 1.0f / sqrtf(d2);
-            float cr = (nx * dx + ny * dy + nz * dz) * inv;
-            float cg = gx * dx + gy * dy + gz * dz;
-            float ce = -(lnx[i] * dx + lny[i] * dy + lnz[i] * dz) * inv;
-            ce = ce > sgn * ce ? ce : sgn * ce;
-            int ok = (cr > 0.0f) & (cg > 0.0f) & (ce > 0.0f) & (d2 > 0.0f);
-            float G = cr * ce * (inv * inv);
-            G = ok ? G : 0.0f;
+            float G =
+                lambert_g(lx[i] - px, ly[i] - py, lz[i] - pz, lnx[i], lny[i], lnz[i], nx, ny, nz, gx, gy, gz, sgn);
             wr[i] = lr[i] * G * kr;
             wg[i] = lg[i] * G * kg;
             wb[i] = lb[i] * G * kb;

@@ -36,12 +36,14 @@ const char *lie_light_sampler_name(lie_light_sampler_kind k)
 
 static float luminance(const float c[3]) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
 
-/* An area emitter's box and normal cone: the axis is the area-weighted
- * mean normal, theta_o the widest angle of a triangle's normal from it. */
-static void area_bounds(const lie_scene *s, const lie_emitter *em, lie_light_bounds *b)
+void lie_light_bounds_tris(const lie_scene *s, const uint32_t *tris, uint32_t first, uint32_t n, int two_sided,
+                           lie_light_bounds *b)
 {
+    for (int a = 0; a < 3; a++)
+        b->lo[a] = INFINITY, b->hi[a] = -INFINITY;
     double ax = 0, ay = 0, az = 0;
-    for (uint32_t t = em->first_tri; t < em->first_tri + em->n_tris; t++) {
+    for (uint32_t i = first; i < first + n; i++) {
+        uint32_t t = tris ? tris[i] : i;
         const lie_vec3 *P = &s->tri_p[3 * (size_t)t];
         for (int k = 0; k < 3; k++) {
             const float q[3] = {P[k].x, P[k].y, P[k].z};
@@ -55,17 +57,17 @@ static void area_bounds(const lie_scene *s, const lie_emitter *em, lie_light_bou
         ax += w * g.x, ay += w * g.y, az += w * g.z;
     }
     double len = sqrt(ax * ax + ay * ay + az * az);
-    b->two_sided = em->double_sided;
+    b->two_sided = two_sided;
     b->cos_e = 0.0f; /* Lambertian: light leaves within 90 degrees of the normal */
-    if (!(len > 0.0) || em->double_sided) {
+    if (!(len > 0.0) || two_sided) {
         b->axis[0] = 0.0f, b->axis[1] = 0.0f, b->axis[2] = 1.0f;
         b->cos_o = -1.0f; /* every direction */
         return;
     }
     b->axis[0] = (float)(ax / len), b->axis[1] = (float)(ay / len), b->axis[2] = (float)(az / len);
     float c = 1.0f;
-    for (uint32_t t = em->first_tri; t < em->first_tri + em->n_tris; t++) {
-        lie_vec3 g = s->tri_ng[t];
+    for (uint32_t i = first; i < first + n; i++) {
+        lie_vec3 g = s->tri_ng[tris ? tris[i] : i];
         c = fminf(c, g.x * b->axis[0] + g.y * b->axis[1] + g.z * b->axis[2]);
     }
     /* a little wider than measured, against the rounding of the normals */
@@ -89,7 +91,7 @@ lie_status lie_light_bounds_all(const lie_scene *s, const float *texture_power, 
         for (int a = 0; a < 3; a++)
             b->lo[a] = INFINITY, b->hi[a] = -INFINITY;
         if (!lie_emitter_is_delta(em)) {
-            area_bounds(s, em, b);
+            lie_light_bounds_tris(s, NULL, em->first_tri, em->n_tris, em->double_sided, b);
             continue;
         }
         float sphere[4];

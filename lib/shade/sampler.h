@@ -41,6 +41,13 @@ typedef struct lie_light_bounds {
  * power by the mean of its emissive texture (lib/shade/texlight.h).
  * *out: free(). */
 lie_status lie_light_bounds_all(const lie_scene *s, const float *texture_power, lie_light_bounds **out);
+/* The box and normal cone of triangles tris[first .. first + n) of s (tris
+ * NULL: triangles first .. first + n): the axis is the area-weighted mean
+ * normal, theta_o the widest angle of a triangle's normal from it (every
+ * direction when two-sided), theta_e 90 degrees (Lambertian emitters).
+ * Leaves phi and `infinite` alone. */
+void lie_light_bounds_tris(const lie_scene *s, const uint32_t *tris, uint32_t first, uint32_t n, int two_sided,
+                           lie_light_bounds *b);
 /* A bound on the light of b at point p with normal n (NULL: any
  * direction), in the units of phi / distance^2 (pbrt-v4's
  * LightBounds::Importance); 0 only where nothing of b can reach p. */
