@@ -39,7 +39,7 @@ static void usage(FILE *fp)
             "      --max-depth D       mirror reflection depth (default %d)\n"
             "      --camera SPEC       start from a scene camera or eye=..,target=..[,up=..][,fov=..]\n"
             "      --threads N         render threads (default: all cores)\n"
-            "      --constructor-threads N  threads rebuilding flagged units (default 1)\n"
+            "      --constructor-threads N  threads building units (default: all cores)\n"
             "      --script FILE       run commands from FILE (below), then keep the window\n"
             "                          open unless it says quit\n"
             "      --record EDITS.yaml write the session's edits there (formats/edit.md);\n"
@@ -71,7 +71,8 @@ static void usage(FILE *fp)
             "drag DX DY DZ, rotate AX AY AZ DEG, set-material FIELDS, set-emission FIELDS\n"
             "(FIELDS as in edit files: base-color: [r, g, b], roughness: r, strength: s),\n"
             "remove (the selection), undo, redo, wait (until no unit is pending),\n"
-            "wait-at-most S (as wait, S seconds at most), pause and resume (units stop\n"
+            "wait-at-most S (as wait, S seconds at most), wait-units N (until N units have\n"
+            "landed, or none is pending), pause and resume (units stop\n"
             "landing in between), redraw N (the full frame N times more, each timed),\n"
             "screenshot FILE.png (of what has landed), quit.\n",
             prog, 512, 512, LIE_LIGHT_SAMPLES_DEFAULT, LIE_MAX_DEPTH_DEFAULT);
@@ -629,7 +630,7 @@ int main(int argc, char **argv)
     memset(&wo, 0, sizeof wo);
     wo.so = lie_scene_options_default();
     wo.so.files = S.files = lie_file_set_create(LIE_FILES_NAMES);
-    wo.threads = 1;
+    wo.threads = 0; /* the constructor's: a thread a core, as rst-update */
     wo.view_width = wo.view_height = 512;
     wo.max_depth = S.ro.max_depth;
     const char *camera = NULL, *script_path = NULL;

@@ -10,12 +10,17 @@
  *
  * Units the constructor lands (§4.3.1) do not make a frame stale: a
  * unit not yet landed is answered by Embree, so the image is the same,
- * only slower.  When the request is done and units have landed since its
- * full frame began, the full frame is rendered again over the one shown
- * (no coarse levels): the view refines to full quality at once and its
- * frames get faster as units land.  A full frame during which no unit
- * landed is *clean*: the frame lie-render makes from a cache of what had
- * landed; screenshots hold the constructor and take one. */
+ * only slower.  A view that moves uses every unit landed by its next
+ * band.  A still view is already at full quality; its full frame is
+ * rendered again over the one shown (no coarse levels) only when that
+ * pays for the cores it takes from the constructor (landed_due): once the
+ * constructor has caught up with the view, or when half of what was
+ * pending has landed and the renderer has rested as long as its last full
+ * frame took.  Redrawing on every landing kept both cores rendering the
+ * same picture while the constructor's threads waited for them.  A full
+ * frame during which no unit landed is *clean*: the frame lie-render
+ * makes from a cache of what had landed; screenshots hold the constructor
+ * and take one. */
 #include "view.h"
 
 #include <stdlib.h>
@@ -123,6 +128,24 @@ static void mask_rows(view_render *r, const lie_scene *s, const lie_rt *rt, cons
         }
 }
 
+/* The last full frame: the units pending when it began, when it ended
+ * and how long it took. */
+typedef struct last_full {
+    int64_t pending0;
+    double end, seconds;
+} last_full;
+
+/* Whether units landed since the shown full frame (units_seen) make it
+ * worth rendering again (see the top of this file). */
+static int landed_due(view_render *r, uint64_t units_seen, const last_full *last)
+{
+    if (view_world_units_version(r->w) == units_seen)
+        return 0;
+    int64_t pending = view_world_pending(r->w);
+    return pending == 0 ||
+           (2 * pending <= last->pending0 && lie_time_now() - last->end >= last->seconds);
+}
+
 /* A full frame's time, kept for --stats (m held). */
 static void note_time(view_render *r, int level, double t0, double t1, int clean)
 {
@@ -150,10 +173,11 @@ static void *render_main(void *arg)
 {
     view_render *r = arg;
     uint64_t done_gen = 0, done_version = 0, done_units = 0, done_force = 0;
+    last_full last = {0, 0.0, 0.0};
     for (;;) {
         pthread_mutex_lock(&r->m);
         while (!r->quit && r->gen == done_gen && view_world_version(r->w) == done_version &&
-               view_world_units_version(r->w) == done_units && r->force == done_force) {
+               !landed_due(r, done_units, &last) && r->force == done_force) {
             struct timespec ts;
             clock_gettime(CLOCK_REALTIME, &ts);
             ts.tv_nsec += 10 * 1000 * 1000; /* the world's version is polled */
@@ -177,6 +201,7 @@ static void *render_main(void *arg)
         int abandoned = 0;
         for (int lv = again ? LEVELS - 1 : 0; lv < LEVELS && !abandoned; lv++) {
             double t_level = lie_time_now();
+            int64_t pending0 = lv == LEVELS - 1 ? view_world_pending(r->w) : 0;
             int div = level_div[lv];
             int lw = (r->o.width + div - 1) / div, lh = (r->o.height + div - 1) / div;
             lie_render_options ro = lie_render_options_default();
@@ -263,7 +288,10 @@ static void *render_main(void *arg)
                 r->full_force = force;
                 r->full_clean = view_world_units_version(r->w) == units;
             }
-            note_time(r, lv, t_level, lie_time_now(), view_world_units_version(r->w) == units);
+            double t_end = lie_time_now();
+            note_time(r, lv, t_level, t_end, view_world_units_version(r->w) == units);
+            if (lv == LEVELS - 1)
+                last = (last_full){pending0, t_end, t_end - t_level};
             pthread_cond_broadcast(&r->cv);
             pthread_mutex_unlock(&r->m);
         }

@@ -60,8 +60,9 @@ typedef struct script_run {
     view_script *sc;
     const char *path;
     int next;
-    int waiting;            /* 0 none, 1 frames, 2 pending, 3 full frames redrawn */
+    int waiting;            /* 0 none, 1 frames, 2 pending, 3 full frames redrawn, 4 units landed */
     uint64_t until_images;
+    uint64_t until_units;   /* wait-units */
     int paused;             /* the script holds the constructor */
     int redraws;            /* redraw: frames still to ask for */
     double deadline;        /* wait-at-most: when waiting ends anyway (0: never) */

@@ -48,7 +48,7 @@ void view_thread_quit(pthread_mutex_t *m, pthread_cond_t *cv, int *quit, pthread
 typedef struct view_world view_world;
 
 typedef struct view_world_options {
-    int threads;           /* constructor threads (0: one) */
+    int threads;           /* constructor threads (0: one a core) */
     int view_width, view_height, max_depth; /* how the constructor samples views (lie-build --view-size) */
     const char *record;    /* --record EDITS.yaml, or NULL */
     lie_scene_options so;
@@ -79,6 +79,7 @@ lie_ctor *view_world_ctor(const view_world *w);
 /* Changes on every edit and every constructor step: frames older than it are stale. */
 uint64_t view_world_version(const view_world *w);
 int64_t view_world_pending(const view_world *w);   /* units not yet rebuilt */
+uint64_t view_world_units_built(const view_world *w); /* units the constructor has landed (0 without one) */
 int view_world_busy(const view_world *w);          /* units pending, or the update not yet committed */
 int64_t view_world_pending_max(const view_world *w);
 double view_world_last_update_ms(const view_world *w);
@@ -166,7 +167,7 @@ typedef enum view_cmd_kind {
     VIEW_CMD_FRAMES, VIEW_CMD_ORBIT, VIEW_CMD_DOLLY, VIEW_CMD_SELECT, VIEW_CMD_PICK, VIEW_CMD_DRAG,
     VIEW_CMD_ROTATE, VIEW_CMD_SET_MATERIAL, VIEW_CMD_SET_EMISSION, VIEW_CMD_UNDO, VIEW_CMD_REDO, VIEW_CMD_WAIT,
     VIEW_CMD_SCREENSHOT, VIEW_CMD_QUIT, VIEW_CMD_REMOVE, VIEW_CMD_PAUSE, VIEW_CMD_RESUME, VIEW_CMD_REDRAW,
-    VIEW_CMD_WAIT_AT_MOST
+    VIEW_CMD_WAIT_AT_MOST, VIEW_CMD_WAIT_UNITS
 } view_cmd_kind;
 
 typedef struct view_cmd {

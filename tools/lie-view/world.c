@@ -80,6 +80,14 @@ int64_t view_world_pending(const view_world *w)
     }
     return atomic_load(&((view_world *)w)->n_pending);
 }
+uint64_t view_world_units_built(const view_world *w)
+{
+    if (!w->ctor)
+        return 0;
+    lie_ctor_stats cs;
+    lie_ctor_get_stats(w->ctor, &cs);
+    return cs.units_built;
+}
 int view_world_busy(const view_world *w)
 {
     view_world *m = (view_world *)w;
