@@ -53,6 +53,7 @@ struct view_render {
     view_frame_time *times;          /* every full frame's time */
     size_t n_times, cap_times;
     lie_frame *full;
+    float auto_ev;                   /* --exposure auto: the last finished image's (m) */
     /* the render thread's own: a frame per level and view mode (the modes'
      * AOV layers are what lie_render_tiles fills) */
     lie_frame *level[LEVELS][3];
@@ -88,7 +89,7 @@ static void blit(view_render *r, const lie_frame *f, int div, int mode, int y0, 
     }
     int W = r->o.width, H = r->o.height, lw = f->width;
     const uint8_t *m = r->sel_mask;
-    float scale = exp2f(r->o.exposure);
+    float scale = exp2f(r->o.exposure_auto ? r->auto_ev : r->o.exposure);
     for (int y = y0; y < y1; y++)
         for (int x = 0; x < lw; x++) {
             size_t i = (size_t)y * (size_t)lw + (size_t)x;
@@ -275,7 +276,22 @@ static void *render_main(void *arg)
             }
             if (abandoned)
                 break;
+            /* --exposure auto: the image's own exposure, as lie-render
+             * gives its frame; the bands drawn with the last image's are
+             * drawn again if it differs */
+            lie_auto_exposure ae = {0.0f, LIE_EXPOSURE_KEY, 0.0, 0};
+            if (r->o.exposure_auto && mode == VIEW_MODE_SHADE)
+                ae = lie_frame_auto_exposure(f, LIE_EXPOSURE_KEY);
             pthread_mutex_lock(&r->m);
+            if (r->o.exposure_auto && mode == VIEW_MODE_SHADE && ae.ev != r->auto_ev && r->gen == gen) {
+                r->auto_ev = ae.ev;
+                uint8_t *keep = r->sel_mask;
+                if (sel < 0)
+                    r->sel_mask = NULL;
+                blit(r, f, div, mode, 0, lh);
+                r->sel_mask = keep;
+                r->dirty = 1;
+            }
             r->images++;
             r->level_pixels = (uint64_t)lw * (uint64_t)lh;
             r->image_version = version;
@@ -323,8 +339,9 @@ lie_status view_render_start(view_world *w, const view_render_options *opt, view
     size_t n = (size_t)opt->width * (size_t)opt->height;
     r->display = calloc(n, sizeof *r->display);
     r->sel_mask = calloc(n, 1);
-    r->full = lie_frame_create(opt->width, opt->height);
-    if (!r->display || !r->sel_mask || !r->full) {
+    /* r->full: the first full frame rendered (a frame lie_render_frame_create
+     * made, with the coverage --exposure auto leaves the background out by) */
+    if (!r->display || !r->sel_mask) {
         view_render_stop(r);
         return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory for %dx%d frames", opt->width, opt->height);
     }
@@ -406,9 +423,18 @@ void view_render_set_exposure(view_render *r, float ev)
 {
     pthread_mutex_lock(&r->m);
     r->o.exposure = ev;
+    r->o.exposure_auto = 0;
     r->force++; /* the full frame again, exposed anew */
     pthread_cond_broadcast(&r->cv);
     pthread_mutex_unlock(&r->m);
+}
+
+float view_render_exposure(view_render *r)
+{
+    pthread_mutex_lock(&r->m);
+    float ev = r->o.exposure_auto ? r->auto_ev : r->o.exposure;
+    pthread_mutex_unlock(&r->m);
+    return ev;
 }
 
 void view_render_again(view_render *r)
@@ -459,6 +485,16 @@ lie_status view_render_screenshot(view_render *r, const char *path, lie_error *e
     lie_frame_options fo;
     memset(&fo, 0, sizeof fo);
     fo.png.exposure = r->o.exposure;
+    /* --exposure auto: the frame's own, said in the file as lie-render says it */
+    char text[160];
+    lie_png_text png_text = {"lie.exposure", text};
+    if (r->o.exposure_auto) {
+        lie_auto_exposure ae = lie_frame_auto_exposure(r->full, LIE_EXPOSURE_KEY);
+        fo.png.exposure = ae.ev;
+        lie_auto_exposure_text(&ae, text, sizeof text);
+        fo.png.text = &png_text;
+        fo.png.n_text = 1;
+    }
     lie_status st = lie_frame_write(path, r->full, &fo, err);
     pthread_mutex_unlock(&r->m);
     view_world_release(r->w);

@@ -41,6 +41,7 @@ typedef struct session {
     int refining;           /* the camera changed: time until every level is done */
     double start_t;         /* the program started */
     double first_image_ms;  /* to the first image on screen (-1: none yet) */
+    float exposure_shown;   /* at exit: the stops the view was shown with (--exposure auto: the last image's) */
     lie_camera looked;      /* the camera the constructor last built for */
     double cam_change_t;
     int looked_set;

@@ -69,7 +69,8 @@ void view_world_sync_oracle(view_world *w);
  * stay right, and get faster when rendered again. */
 uint64_t view_world_units_version(const view_world *w);
 /* Stop units landing until the release (screenshots, pause); returns at once
- * (a unit in progress is dropped). */
+ * (a unit in progress is dropped; a whole cache's update step in progress
+ * ends first). */
 void view_world_hold(view_world *w);
 void view_world_release(view_world *w);
 /* The camera now: the constructor builds what it sees first. */
@@ -120,6 +121,7 @@ typedef struct view_render view_render;
 typedef struct view_render_options {
     int width, height, light_samples, max_depth, threads;
     float exposure;        /* stops, as lie-render --exposure */
+    int exposure_auto;     /* --exposure auto: each image's own (lie_frame_auto_exposure), as lie-render's */
 } view_render_options;
 
 /* A full frame: when it ended (lie_time_now), how long it took, whether
@@ -151,8 +153,10 @@ lie_status view_render_screenshot(view_render *r, const char *path, lie_error *e
 void view_render_again(view_render *r);
 /* Full frames finished so far. */
 uint64_t view_render_full_count(view_render *r);
-/* The shaded view's exposure, in stops. */
+/* The shaded view's exposure, in stops (auto exposure off). */
 void view_render_set_exposure(view_render *r, float ev);
+/* The exposure the shaded view is shown with now, in stops (auto's last). */
+float view_render_exposure(view_render *r);
 /* Every image finished so far, each level (a copy: free it). */
 view_frame_time *view_render_times(view_render *r, size_t *n);
 
