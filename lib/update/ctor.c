@@ -1066,26 +1066,55 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
     pthread_rwlock_wrlock(&c->env_lock);
     if (restart)
         env_reset(c);
-    for (uint32_t t = 0; t < s->n_tris; t++) {
-        int again = restart || moved[t];
-        if (!again && c->state[t] == TRI_BUILT) {
-            lie_box3 tb = tri_box(&s->tri_p[3 * (size_t)t]);
-            for (size_t k = 0; k < c->ne && !again; k++) {
+    /* Which landed units the moved geometry may reach, as rst-update finds
+     * them (§5.3): a box holding each unit's shafts (its triangle's and its
+     * cluster's) against the moved triangles' boxes picks the candidates,
+     * then each candidate root's exact hull against the boxes
+     * (lie_rst_refine, as lib/update tightens the ray segment trees'
+     * answer) keeps those whose segments can meet moved geometry.  The box
+     * of a large emitter holds most of a room: the box test alone sent
+     * every unit of the view back. */
+    uint8_t *flags = restart ? NULL : calloc((size_t)c->env.n_nodes + 1, 1);
+    uint64_t candidates = 0;
+    for (uint32_t t = 0; flags && t < s->n_tris; t++) {
+        if (moved[t] || c->state[t] != TRI_BUILT)
+            continue;
+        lie_box3 tb = tri_box(&s->tri_p[3 * (size_t)t]);
+        for (size_t k = 0; k < c->ne; k++) {
+            uint32_t r = c->env.root[(size_t)t * c->ne + k];
+            if (r == 0 || lie_box3_is_empty(&cb[k]))
+                continue; /* unbuilt, or a cluster with no shafts */
+            int meets = !isfinite(cb[k].lo.x);
+            if (!meets) {
                 lie_box3 u = tb;
-                if (lie_box3_is_empty(&cb[k]) || !isfinite(cb[k].lo.x)) {
-                    again = !lie_box3_is_empty(&cb[k]);
-                    continue;
-                }
                 lie_box3_grow(&u, cb[k].lo);
                 lie_box3_grow(&u, cb[k].hi);
-                again = boxes_meet(&u, &before) || boxes_meet(&u, &after);
+                meets = boxes_meet(&u, &before) || boxes_meet(&u, &after);
             }
+            flags[r] = (uint8_t)meets;
+            candidates += (uint64_t)meets;
         }
+    }
+    const lie_box3 moved_boxes[2] = {before, after};
+    int n_moved_boxes = 0;
+    lie_box3 mb[2];
+    for (int i = 0; i < 2; i++)
+        if (!lie_box3_is_empty(&moved_boxes[i]))
+            mb[n_moved_boxes++] = moved_boxes[i];
+    if (flags && candidates)
+        lie_rst_refine(s, &c->env, mb, n_moved_boxes, flags, 0);
+    for (uint32_t t = 0; t < s->n_tris; t++) {
+        int again = restart || moved[t] || !flags;
+        for (size_t k = 0; !again && k < c->ne; k++)
+            again = flags[c->env.root[(size_t)t * c->ne + k]];
+        if (!again && c->state[t] != TRI_BUILT)
+            continue;
         if (again)
             unland(c, t);
         if (again && c->state[t] == TRI_BUILT)
             set_state(c, t, TRI_PENDING);
     }
+    free(flags);
     c->env.scene_hash = s->hash;
     pthread_rwlock_unlock(&c->env_lock);
     /* the views' pixels on the edited scene: sampled by a constructor
