@@ -59,7 +59,7 @@ screenshot $TMP/ready.png
 frames 1000000
 EOF
         cat >"$TMP/sig.sh" <<EOF
-timeout 120 "$B/lie-view" "$in" $VIEW --script "$TMP/sig.txt" --save "$TMP/sig.lie" 2>"$TMP/sig.err" &
+timeout --foreground 120 "$B/lie-view" "$in" $VIEW --script "$TMP/sig.txt" --save "$TMP/sig.lie" 2>"$TMP/sig.err" &
 pid=\$!
 i=0
 while [ ! -s "$TMP/ready.png" ] && [ \$i -lt 600 ]; do sleep 0.1; i=\$((i + 1)); done
