@@ -6,7 +6,11 @@
 # (the budget, shared among the emitters), full visibility and the LIE,
 # side by side in one run, best of REPEAT: with a light tree a frame's cost
 # should grow with log(emitters), not with their number.  The per-emitter
-# sampler (the paper's N of every emitter) is the row it replaces.
+# sampler (the paper's N of every emitter) is the row it replaces.  A point's
+# picks (pairs/point: at most N) grow with the emitters until the budget caps
+# them, and each costs a lookup and a closed form or a few samples: the LIE's
+# ratio follows them (docs/measurements.md, "Equal quality on the real
+# scenes, quiet machine").
 # Writes out/bench-lights-scale.json.
 set -e
 cd "$(dirname "$0")/.."
