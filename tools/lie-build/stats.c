@@ -52,13 +52,21 @@ static void print_json(FILE *fp, const summary *m)
         fprintf(fp, "%s%llu", b ? "," : "", (unsigned long long)m->st->list_hist[b]);
     fprintf(fp,
             "],\"mean_list_length\":%.3f,\"segments\":%llu,\"splits_undone\":%llu,\"splits_kept\":%llu,"
-            "\"splits_pixels\":%llu,\"unproven_occluded\":%llu,\"unproven_visible\":%llu,\"nodes\":%u,\"pool\":%u,"
+            "\"splits_pixels\":%llu,\"unproven_occluded\":%llu,\"unproven_visible\":%llu,\"nodes\":%llu,"
+            "\"nodes_stored\":%u,\"pool\":%u,"
             "\"seconds_load\":%.6f,\"seconds_bvh\":%.6f,\"seconds_build\":%.6f,\"seconds_write\":%.6f,"
             "\"bytes\":%zu",
             m->mean, (unsigned long long)m->st->segments, (unsigned long long)m->st->splits_undone,
             (unsigned long long)m->st->splits_kept, (unsigned long long)m->st->splits_pixels,
             (unsigned long long)m->st->unproven_occluded, (unsigned long long)m->st->unproven_visible,
-            m->env->n_nodes, m->env->n_pool, m->t[0], m->t[1], m->t[2], m->t[3], m->bytes);
+            (unsigned long long)m->patches, m->env->n_nodes, m->env->n_pool, m->t[0], m->t[1], m->t[2], m->t[3],
+            m->bytes);
+    fprintf(fp, ",\"complex_units\":{\"predict\":\"%s\",\"predicted\":%llu,\"measured\":%llu",
+            m->env->params.complex_predict ? "on" : m->st->complex_predicted ? "audit" : "off",
+            (unsigned long long)m->st->complex_predicted, (unsigned long long)m->st->complex_measured);
+    if (!m->env->params.complex_predict)
+        fprintf(fp, ",\"predicted_and_measured\":%llu", (unsigned long long)m->st->complex_predicted_measured);
+    fprintf(fp, "}");
     fprintf(fp, ",\"model\":{\"build_cpu_s_predicted\":%.6f,\"build_cpu_s_measured\":%.6f", m->model_build,
             m->cpu_build);
     if (m->pred)
@@ -112,10 +120,20 @@ static void print_text(const char *prog, const summary *m)
                 fprintf(stderr, " %u-%u:%llu", lo, hi, (unsigned long long)m->st->list_hist[b]);
         }
     fprintf(stderr, "\n  segments cast %llu; splits kept %llu, undone (did not shorten lists) %llu, not tried "
-                    "(too few pixels) %llu; %u nodes, %u pooled blockers, %zu bytes written\n",
+                    "(too few pixels) %llu; %llu nodes (%u stored: lone units share theirs), %u pooled blockers, %zu bytes "
+            "written\n",
             (unsigned long long)m->st->segments, (unsigned long long)m->st->splits_kept,
-            (unsigned long long)m->st->splits_undone, (unsigned long long)m->st->splits_pixels, m->env->n_nodes, m->env->n_pool,
-            m->bytes);
+            (unsigned long long)m->st->splits_undone, (unsigned long long)m->st->splits_pixels,
+            (unsigned long long)m->patches, m->env->n_nodes, m->env->n_pool, m->bytes);
+    if (m->env->params.complex_predict)
+        fprintf(stderr, "  complex units: %llu predicted and left one complex leaf each (Embree answers them); "
+                        "%llu built that came out complex throughout (missed)\n",
+                (unsigned long long)m->st->complex_predicted, (unsigned long long)m->st->complex_measured);
+    else if (m->st->complex_predicted || m->st->complex_measured)
+        fprintf(stderr, "  complex units (prediction off, built anyway): %llu predicted, %llu came out complex "
+                        "throughout, %llu of them predicted\n",
+                (unsigned long long)m->st->complex_predicted, (unsigned long long)m->st->complex_measured,
+                (unsigned long long)m->st->complex_predicted_measured);
     if (m->st->unproven_occluded || m->st->unproven_visible)
         fprintf(stderr, "  sampled leaves not proven, given exact lists: %llu called occluded, %llu visible\n",
                 (unsigned long long)m->st->unproven_occluded, (unsigned long long)m->st->unproven_visible);
