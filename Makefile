@@ -178,6 +178,11 @@ BENCH_LAMBERT := $(BUILD)/bench-lambert
 $(BENCH_LAMBERT): $(BUILD)/bench/lambert.o $(LIB_A)
 	$(CC_LD) $^ $(LDLIBS_ALL) -o $@
 
+# what the best LIE could save on a scene, by an oracle (bench/light-classes.c)
+BENCH_CLASSES := $(BUILD)/bench-light-classes
+$(BENCH_CLASSES): $(BUILD)/bench/light-classes.o $(LIB_A)
+	$(CC_LD) $^ $(LDLIBS_ALL) -o $@
+
 # ---- LTC tables (lib/shade/ltc.h): fitted by scripts/ltc-fit.c, the data committed ----
 LTC_FIT := $(BUILD)/ltc-fit
 $(LTC_FIT): scripts/ltc-fit.c

@@ -152,3 +152,5 @@ echo
 sh bench/lights-scale.sh
 echo
 sh bench/quality.sh
+echo
+sh bench/light-bound.sh

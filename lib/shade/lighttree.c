@@ -21,6 +21,7 @@
 
 typedef struct tree_node {
     lie_light_bounds b;
+    lie_light_cone k; /* b as the importance reads it */
     int child[2];  /* interior; -1 at a leaf */
     int emitter;   /* leaf */
 } tree_node;
@@ -261,6 +262,8 @@ static lie_status tree_create(const lie_light_bounds *B, int n_lights, void **st
     build_ctx bc = {t, B, ids};
     t->root = n > 0 ? build(&bc, 0, n) : -1;
     free(ids);
+    for (int i = 0; i < t->n_nodes; i++)
+        lie_light_cone_of(&t->nodes[i].b, &t->nodes[i].k);
     *state = t;
     return LIE_OK;
 }
@@ -274,10 +277,12 @@ typedef struct descent {
     int k;
 } descent;
 
-/* The samples in [lo, hi) of node i, reached with probability pmf. */
-static void descend(descent *d, int i, double lo, double hi, double pmf)
+/* The samples in [lo, hi) of node i, reached with probability pmf; blo
+ * and bhi are the systematic counts below lo and hi (a split point's
+ * count is found once, for both children). */
+static void descend(descent *d, int i, double lo, double hi, int blo, int bhi, double pmf)
 {
-    int have = lie_systematic_below(hi, d->count, d->u) - lie_systematic_below(lo, d->count, d->u);
+    int have = bhi - blo;
     if (have <= 0 || !(pmf > 0.0))
         return;
     const tree_node *nd = &d->t->nodes[i];
@@ -288,16 +293,21 @@ static void descend(descent *d, int i, double lo, double hi, double pmf)
         d->k++;
         return;
     }
-    float w0 = lie_light_importance(&d->t->nodes[nd->child[0]].b, d->p, &d->n);
-    float w1 = lie_light_importance(&d->t->nodes[nd->child[1]].b, d->p, &d->n);
+    float w0 = lie_light_cone_importance(&d->t->nodes[nd->child[0]].k, d->p, &d->n);
+    float w1 = lie_light_cone_importance(&d->t->nodes[nd->child[1]].k, d->p, &d->n);
     double sum = (double)w0 + (double)w1;
     if (!(sum > 0.0))
         return; /* nothing below can reach p */
     double p0 = w0 / sum, split = lo + (hi - lo) * p0;
-    if (w0 > 0.0f)
-        descend(d, nd->child[0], lo, w1 > 0.0f ? split : hi, pmf * p0);
-    if (w1 > 0.0f)
-        descend(d, nd->child[1], w0 > 0.0f ? split : lo, hi, pmf * (1.0 - p0));
+    if (w0 > 0.0f && w1 > 0.0f) {
+        int bs = lie_systematic_below(split, d->count, d->u);
+        descend(d, nd->child[0], lo, split, blo, bs, pmf * p0);
+        descend(d, nd->child[1], split, hi, bs, bhi, pmf * (1.0 - p0));
+    } else if (w0 > 0.0f) {
+        descend(d, nd->child[0], lo, hi, blo, bhi, pmf * p0);
+    } else {
+        descend(d, nd->child[1], lo, hi, blo, bhi, pmf * (1.0 - p0));
+    }
 }
 
 static int tree_distribute(const void *state, lie_vec3 p, lie_vec3 n_, int n, double u, lie_light_pick *out)
@@ -317,9 +327,10 @@ static int tree_distribute(const void *state, lie_vec3 p, lie_vec3 n_, int n, do
         }
     }
     if (t->root >= 0) {
-        float w = lie_light_importance(&t->nodes[t->root].b, p, &n_);
+        float w = lie_light_cone_importance(&t->nodes[t->root].k, p, &n_);
         if (w > 0.0f)
-            descend(&d, t->root, p_inf, 1.0, 1.0 - p_inf);
+            descend(&d, t->root, p_inf, 1.0, lie_systematic_below(p_inf, n, u), lie_systematic_below(1.0, n, u),
+                    1.0 - p_inf);
     }
     return d.k;
 }

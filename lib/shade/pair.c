@@ -504,9 +504,12 @@ void lie_pair_combine(lie_pair *p, const uint32_t *occ, int bits, int n, float r
         /* the ratio estimator: the closed form times the share of the
          * samples' weight that is visible (sc->scalar: a Lambert receiver
          * under an emitter of one colour; Heitz, Hill, McGuire 2018) */
-        lie_pair_closed(p);
         float all = plain_sum(sc->contrib_r, n);
         float vis = visible_sum(sc, sc->contrib_r, occ, bits, n);
+        if (all > 0.0f && vis == 0.0f && !p->have_closed)
+            return; /* every sample blocked: the closed form times 0 adds nothing (a point in the
+                       umbra of a partial pair, often, at the few samples a pick takes) */
+        lie_pair_closed(p);
         add_scaled(p->kc, all > 0.0f ? p->omega * (double)(vis / all) : p->omega, rgb);
         return;
     }

@@ -197,24 +197,31 @@ static int part_pieces(const lie_polylight *L, int part, lie_vec3 o, lie_vec3 n,
     const form fr = form_of(vw, d3_of(n)), fg = form_of(vw, d3_of(ng));
     int m = 0;
     double fv[LIE_POLY_MAXV], lo, hi;
+    /* a piece is read where it lies and written once, to out[m] (a
+     * point sees most pieces whole: copies were most of this loop) */
     for (int k = P->first; k < P->first + P->n; k++) {
-        lie_poly2 a = L->polys[k], b;
-        eval(&a, fr, fv, &lo, &hi);
+        const lie_poly2 *a = &L->polys[k];
+        lie_poly2 b;
+        eval(a, fr, fv, &lo, &hi);
         if (hi <= 0.0)
             continue;
         if (lo < 0.0) {
-            split(&a, fv, &b, NULL); /* room kept at create: no overflow */
-            a = b;
+            split(a, fv, &out[m], NULL); /* room kept at create: no overflow */
+            a = &out[m];
         }
-        eval(&a, fg, fv, &lo, &hi);
+        eval(a, fg, fv, &lo, &hi);
         if (hi <= 0.0)
             continue;
         if (lo < 0.0) {
-            split(&a, fv, &b, NULL);
-            a = b;
+            split(a, fv, &b, NULL);
+            out[m] = b;
+            a = &out[m];
         }
-        if (a.n >= 3)
-            out[m++] = a;
+        if (a->n >= 3) {
+            if (a != &out[m])
+                out[m] = *a;
+            m++;
+        }
     }
     return m;
 }

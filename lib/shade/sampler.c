@@ -124,19 +124,38 @@ lie_status lie_light_bounds_all(const lie_scene *s, const float *texture_power, 
 static inline float cos_sub_clamped(float sa, float ca, float sb, float cb) { return ca > cb ? 1.0f : ca * cb + sa * sb; }
 static inline float sin_sub_clamped(float sa, float ca, float sb, float cb) { return ca > cb ? 0.0f : sa * cb - ca * sb; }
 
-float lie_light_importance(const lie_light_bounds *b, lie_vec3 p, const lie_vec3 *n)
+void lie_light_cone_of(const lie_light_bounds *b, lie_light_cone *k)
+{
+    memset(k, 0, sizeof *k);
+    k->infinite = b->infinite;
+    k->phi = b->phi;
+    if (b->infinite)
+        return;
+    const float ext[3] = {b->hi[0] - b->lo[0], b->hi[1] - b->lo[1], b->hi[2] - b->lo[2]};
+    for (int a = 0; a < 3; a++) {
+        k->c[a] = 0.5f * (b->lo[a] + b->hi[a]);
+        k->axis[a] = b->axis[a];
+    }
+    k->r2 = 0.25f * (ext[0] * ext[0] + ext[1] * ext[1] + ext[2] * ext[2]); /* the box's sphere */
+    /* as pbrt-v4: the distance is at least half the box's diagonal, so
+     * that points near or in a light's box do not get unbounded weight */
+    k->dmin = 0.5f * sqrtf(4.0f * k->r2);
+    k->cos_o = b->cos_o;
+    k->sin_o = sqrtf(lie_maxf(1.0f - b->cos_o * b->cos_o, 0.0f));
+    k->cos_e = b->cos_e;
+    k->two_sided = b->two_sided;
+}
+
+/* (lie_maxf rather than fmaxf: the baseline build calls libm for fmaxf, and
+ * no argument here is NaN but a first one, which both map to the second) */
+float lie_light_cone_importance(const lie_light_cone *b, lie_vec3 p, const lie_vec3 *n)
 {
     if (b->infinite)
         return b->phi;
-    const float c[3] = {0.5f * (b->lo[0] + b->hi[0]), 0.5f * (b->lo[1] + b->hi[1]), 0.5f * (b->lo[2] + b->hi[2])};
-    const float ext[3] = {b->hi[0] - b->lo[0], b->hi[1] - b->lo[1], b->hi[2] - b->lo[2]};
-    const float r2 = 0.25f * (ext[0] * ext[0] + ext[1] * ext[1] + ext[2] * ext[2]); /* the box's sphere */
-    float v[3] = {p.x - c[0], p.y - c[1], p.z - c[2]};
+    const float r2 = b->r2;
+    float v[3] = {p.x - b->c[0], p.y - b->c[1], p.z - b->c[2]};
     float d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-    /* as pbrt-v4: the distance is at least half the box's diagonal, so
-     * that points near or in a light's box do not get unbounded weight */
-    float dmin = 0.5f * sqrtf(4.0f * r2);
-    float dd = fmaxf(d2, dmin);
+    float dd = lie_maxf(d2, b->dmin);
     if (!(d2 > 0.0f)) {
         v[0] = 0.0f, v[1] = 0.0f, v[2] = 1.0f;
     } else {
@@ -148,15 +167,14 @@ float lie_light_importance(const lie_light_bounds *b, lie_vec3 p, const lie_vec3
     if (d2 > r2) {
         float s2 = r2 / d2;
         sin_b = sqrtf(s2);
-        cos_b = sqrtf(fmaxf(1.0f - s2, 0.0f));
+        cos_b = sqrtf(lie_maxf(1.0f - s2, 0.0f));
     }
     float cos_w = v[0] * b->axis[0] + v[1] * b->axis[1] + v[2] * b->axis[2];
     if (b->two_sided)
         cos_w = fabsf(cos_w);
-    float sin_w = sqrtf(fmaxf(1.0f - cos_w * cos_w, 0.0f));
-    float sin_o = sqrtf(fmaxf(1.0f - b->cos_o * b->cos_o, 0.0f));
-    float cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, b->cos_o);
-    float sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, b->cos_o);
+    float sin_w = sqrtf(lie_maxf(1.0f - cos_w * cos_w, 0.0f));
+    float cos_x = cos_sub_clamped(sin_w, cos_w, b->sin_o, b->cos_o);
+    float sin_x = sin_sub_clamped(sin_w, cos_w, b->sin_o, b->cos_o);
     float cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
     if (cos_p <= b->cos_e)
         return 0.0f;
@@ -165,11 +183,18 @@ float lie_light_importance(const lie_light_bounds *b, lie_vec3 p, const lie_vec3
         /* the receiver's cosine toward the box, at best (one-sided: an
          * opaque surface takes light from above only) */
         float cos_i = -(v[0] * n->x + v[1] * n->y + v[2] * n->z);
-        float sin_i = sqrtf(fmaxf(1.0f - cos_i * cos_i, 0.0f));
+        float sin_i = sqrtf(lie_maxf(1.0f - cos_i * cos_i, 0.0f));
         float cos_pi = cos_sub_clamped(sin_i, cos_i, sin_b, cos_b);
-        imp *= fmaxf(cos_pi, 0.0f);
+        imp *= lie_maxf(cos_pi, 0.0f);
     }
     return imp > 0.0f && isfinite(imp) ? imp : 0.0f;
+}
+
+float lie_light_importance(const lie_light_bounds *b, lie_vec3 p, const lie_vec3 *n)
+{
+    lie_light_cone k;
+    lie_light_cone_of(b, &k);
+    return lie_light_cone_importance(&k, p, n);
 }
 
 int lie_light_pick_weights(const float *w, const int *ids, int m, double total, int n, double u, lie_light_pick *out)

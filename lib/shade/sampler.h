@@ -52,6 +52,19 @@ void lie_light_bounds_tris(const lie_scene *s, const uint32_t *tris, uint32_t fi
  * direction), in the units of phi / distance^2 (pbrt-v4's
  * LightBounds::Importance); 0 only where nothing of b can reach p. */
 float lie_light_importance(const lie_light_bounds *b, lie_vec3 p, const lie_vec3 *n);
+/* The same bounds with what the importance derives from them alone made
+ * once (a light tree asks each node's at every point): its centre, sphere
+ * and the sine of theta_o.  lie_light_cone_importance gives exactly
+ * lie_light_importance's value. */
+typedef struct lie_light_cone {
+    float c[3], r2, dmin;
+    float axis[3];
+    float cos_o, sin_o, cos_e;
+    float phi;
+    int two_sided, infinite;
+} lie_light_cone;
+void lie_light_cone_of(const lie_light_bounds *b, lie_light_cone *k);
+float lie_light_cone_importance(const lie_light_cone *k, lie_vec3 p, const lie_vec3 *n);
 
 /* Light groups (lightgroup.c): what the samplers choose among.  An emitter
  * of more than a few triangles is cut in space into groups of a few, each
