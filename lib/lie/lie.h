@@ -82,7 +82,9 @@ typedef struct lie_build_params {
 #define LIE_MIN_PATCH_DEFAULT 1e-4f
 #define LIE_SPLIT_GAIN_DEFAULT 0.25f
 #define LIE_FRAMES_DEFAULT 10u
-#define LIE_COMPLEX_PREDICT_DEFAULT 1u
+/* Off: on scifi_hallway the probes cost more than the subtrees they save
+ * (docs/measurements.md, "Complex units predicted") */
+#define LIE_COMPLEX_PREDICT_DEFAULT 0u
 #define LIE_MODEL_LIGHT_SAMPLES_DEFAULT 100u
 /* Measured on museum3 at 512x512 (CPU time per event; bench/build.sh
  * prints the measured values beside these).  A blocker test is an
@@ -208,8 +210,9 @@ typedef struct lie_build_control {
      * env->partial set (unless every unit was done). */
     const volatile sig_atomic_t *stop;
     /* Name the units complex_predict would leave unbuilt without leaving
-     * them (params->complex_predict 0): what the prediction says beside
-     * what the build measures (lie_build_stats.complex_predicted_measured). */
+     * them (params->complex_predict 0; lie-build --complex-predict audit):
+     * what the prediction says beside what the build measures
+     * (lie_build_stats.complex_predicted_measured). */
     int audit_complex;
 } lie_build_control;
 lie_status lie_env_build_with(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,

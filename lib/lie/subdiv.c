@@ -303,7 +303,12 @@ static int split_pays(const build_ctx *c, worker *w, uint32_t tri, lie_patch_pat
  * lists it would have had are lost (lie-build --stats shows both counts).
  * The probes lie inside the root's shaft, so the ray segment trees flag
  * the unit whenever an edit could change the prediction (update ≡
- * rebuild).  w->hits is kept. */
+ * rebuild).  w->hits is kept.  Only a triangle larger than
+ * LIE_COMPLEX_KEEP_SPLITTING of the largest is probed: a smaller complex
+ * root is settled at its first level (split_pays weighs its children's
+ * exact lists), so its probes would cost as much as they save (on
+ * scifi_hallway, probing every splitting root made the view build 2.6
+ * times slower). */
 static int predict_complex(const build_ctx *c, worker *w, uint32_t tri, int e, int two_sided, size_t n_list)
 {
     static const int corner[4] = {3, 0, 1, 2}; /* the centre first: a corner is likelier to differ */
@@ -381,7 +386,8 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
     size_t n_list = nc.n_list;
     int exact_done = 0; /* w->hits holds the leaf's exact list */
     int splits = lie_subdiv_splits(c, tri, path, e, nc.cls, w->hits, n_list);
-    if (splits && path.depth == 0 && (c->p->complex_predict || c->audit_complex)) {
+    if (splits && path.depth == 0 && (c->p->complex_predict || c->audit_complex) &&
+        c->s->tri_area[tri] > LIE_COMPLEX_KEEP_SPLITTING * c->s->max_tri_area) {
         w->root_predicted = predict_complex(c, w, tri, e, two_sided, n_list);
         if (w->nomem)
             return;

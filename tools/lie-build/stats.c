@@ -28,6 +28,7 @@ typedef struct summary {
      * time less the cache's) and the frames the build takes to pay back */
     double saving, break_even;
     size_t bytes;
+    int audit;                    /* --complex-predict audit */
 } summary;
 
 static void print_json(FILE *fp, const summary *m)
@@ -62,9 +63,9 @@ static void print_json(FILE *fp, const summary *m)
             (unsigned long long)m->patches, m->env->n_nodes, m->env->n_pool, m->t[0], m->t[1], m->t[2], m->t[3],
             m->bytes);
     fprintf(fp, ",\"complex_units\":{\"predict\":\"%s\",\"predicted\":%llu,\"measured\":%llu",
-            m->env->params.complex_predict ? "on" : m->st->complex_predicted ? "audit" : "off",
+            m->env->params.complex_predict ? "on" : m->audit ? "audit" : "off",
             (unsigned long long)m->st->complex_predicted, (unsigned long long)m->st->complex_measured);
-    if (!m->env->params.complex_predict)
+    if (m->audit)
         fprintf(fp, ",\"predicted_and_measured\":%llu", (unsigned long long)m->st->complex_predicted_measured);
     fprintf(fp, "}");
     fprintf(fp, ",\"model\":{\"build_cpu_s_predicted\":%.6f,\"build_cpu_s_measured\":%.6f", m->model_build,
@@ -129,8 +130,8 @@ static void print_text(const char *prog, const summary *m)
         fprintf(stderr, "  complex units: %llu predicted and left one complex leaf each (Embree answers them); "
                         "%llu built that came out complex throughout (missed)\n",
                 (unsigned long long)m->st->complex_predicted, (unsigned long long)m->st->complex_measured);
-    else if (m->st->complex_predicted || m->st->complex_measured)
-        fprintf(stderr, "  complex units (prediction off, built anyway): %llu predicted, %llu came out complex "
+    else if (m->audit)
+        fprintf(stderr, "  complex units (audit: built anyway): %llu predicted, %llu came out complex "
                         "throughout, %llu of them predicted\n",
                 (unsigned long long)m->st->complex_predicted, (unsigned long long)m->st->complex_measured,
                 (unsigned long long)m->st->complex_predicted_measured);
@@ -170,7 +171,8 @@ lie_status job_print_stats(const lie_cli *cli, build_job *j, double cpu_build, c
     const lie_build_stats *st = &j->st;
     lie_prediction prediction;
     summary m = {.input = j->input, .s = j->scene, .env = j->env, .st = st, .as = j->into ? &j->as : NULL,
-                 .t = {t[0], t[1], t[2], t[3]}, .cpu_build = cpu_build, .bytes = j->bytes};
+                 .t = {t[0], t[1], t[2], t[3]}, .cpu_build = cpu_build, .bytes = j->bytes,
+                 .audit = j->audit_complex && !j->bp.complex_predict};
     if (j->px) {
         lie_env_predict(j->env, j->scene, j->px, &prediction);
         m.pred = &prediction;
