@@ -72,7 +72,8 @@ fi
 
 # The asynchronous constructor (§4.3.1) on third-party scenes opened as
 # glTF (../shared/scenes): the time to the first image; the full frame's
-# time first (every shadow ray Embree's) and once the constructor has
+# time first (every shadow ray Embree's: the constructor paused until
+# then) and once the constructor has
 # caught up with the view (CATCHUP seconds at most; "pending" says what it
 # had not built by then); on bedroom_corner, a drag's catch-up against
 # rst-update of the same edit on the cache of the same view.
@@ -88,7 +89,10 @@ printf '%-16s %8s %9s %9s %7s %9s %10s %10s\n' "target" "<= 1 s" "" "" ">= 5" ""
 echo "$CSCENES" | while IFS='|' read -r name scene cam pick; do
     [ -f "$scene" ] || { echo "$name: $scene missing"; continue; }
     {
+        echo "pause"      # the first full frames with every shadow ray Embree's
         echo "frames 1"
+        echo "redraw 1"
+        echo "resume"
         echo "wait-at-most $CATCHUP"
         echo "redraw 3"
         if [ -n "$pick" ]; then

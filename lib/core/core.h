@@ -73,6 +73,11 @@ static inline lie_vec3 lie_v3_scale(lie_vec3 a, float s) { return lie_v3(a.x * s
  * calls on x86 for their NaN rules).  A NaN `a` gives b. */
 static inline float lie_maxf(float a, float b) { return a > b ? a : b; }
 static inline float lie_minf(float a, float b) { return a < b ? a : b; }
+/* fminf and fmaxf to the bit, inline: glibc's results for every input
+ * (the other argument where one is NaN, b where they compare equal, as
+ * between 0 and -0), where the same results must come out as before. */
+static inline float lie_fminf(float a, float b) { return a < b || b != b ? a : b; }
+static inline float lie_fmaxf(float a, float b) { return a > b || b != b ? a : b; }
 /* The largest coordinate magnitude of v (NaN coordinates count as 0). */
 static inline float lie_v3_maxabs(lie_vec3 v)
 {

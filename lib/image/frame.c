@@ -4,6 +4,7 @@
 #include "image/image.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -212,4 +213,12 @@ lie_auto_exposure lie_frame_auto_exposure(const lie_frame *f, float key)
     double ev = log2((double)key / r.log_average);
     r.ev = (float)(ev < -64.0 ? -64.0 : ev > 64.0 ? 64.0 : ev);
     return r;
+}
+
+void lie_auto_exposure_text(const lie_auto_exposure *ae, char *buf, size_t size)
+{
+    snprintf(buf, size,
+             "auto: %.4f stops, from a log-average luminance of %.6g over %llu pixels and the key %.2f "
+             "(Reinhard et al. 2002)",
+             (double)ae->ev, ae->log_average, (unsigned long long)ae->pixels, (double)ae->key);
 }

@@ -173,6 +173,10 @@ typedef struct lie_auto_exposure {
     uint64_t pixels;     /* the pixels counted */
 } lie_auto_exposure;
 lie_auto_exposure lie_frame_auto_exposure(const lie_frame *f, float key);
+/* The sentence a file says its auto exposure with (PNG tEXt lie.exposure):
+ * every program that writes an auto-exposed frame says it alike, so that
+ * the same frame gives the same bytes from any of them. */
+void lie_auto_exposure_text(const lie_auto_exposure *ae, char *buf, size_t size);
 
 /* PNG preview: 8-bit RGB, radiance x 2^exposure, clamped, sRGB transfer
  * curve, with an sRGB chunk.  Written atomically. */

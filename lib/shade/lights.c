@@ -110,10 +110,10 @@ static void generate(const lie_scene *s, int e, int n, float su, float sv, const
             float ps = (float)(qx * U.x + qy * U.y + qz * U.z), pt = (float)(qx * V.x + qy * V.y + qz * V.z);
             out->s[i] = ps;
             out->t[i] = pt;
-            out->smin = fminf(out->smin, ps);
-            out->smax = fmaxf(out->smax, ps);
-            out->tmin = fminf(out->tmin, pt);
-            out->tmax = fmaxf(out->tmax, pt);
+            out->smin = lie_fminf(out->smin, ps);
+            out->smax = lie_fmaxf(out->smax, ps);
+            out->tmin = lie_fminf(out->tmin, pt);
+            out->tmax = lie_fmaxf(out->tmax, pt);
             p = lie_v3(O.x + ps * U.x + pt * V.x, O.y + ps * U.y + pt * V.y, O.z + ps * U.z + pt * V.z);
         }
         out->x[i] = p.x;

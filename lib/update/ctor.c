@@ -37,7 +37,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { TRI_UNSEEN = 0, TRI_PENDING = 1, TRI_BUSY = 2, TRI_BUILT = 3 };
+/* READY: built, waiting to land (counted pending, as BUSY is) */
+enum { TRI_UNSEEN = 0, TRI_PENDING = 1, TRI_BUSY = 2, TRI_BUILT = 3, TRI_READY = 4 };
 
 /* Pixels shared by the workers building from them and the constructor,
  * freed by whoever lets go last. */
@@ -45,6 +46,13 @@ typedef struct pxref {
     lie_pixels *px;
     int refs;
 } pxref;
+
+/* A triangle's units, built, waiting for the write side of env_lock. */
+typedef struct ready_part {
+    uint32_t t;
+    lie_env_part part;
+    pxref *px; /* the pixels it was built for */
+} ready_part;
 
 struct lie_ctor {
     lie_scene *s;
@@ -79,7 +87,9 @@ struct lie_ctor {
     int hold, quit, busy, failed;
     lie_error err;
     volatile sig_atomic_t stop;
-    uint64_t pending;       /* triangles pending or being built */
+    uint64_t pending;       /* triangles pending, being built or ready */
+    ready_part *ready;      /* built, not landed yet (see land_ready) */
+    size_t n_ready, cap_ready;
     uint64_t units_built;
     double t0;
     lie_ctor_sample *samples;
@@ -96,7 +106,7 @@ lie_ctor_options lie_ctor_options_default(void)
 {
     lie_ctor_options o;
     memset(&o, 0, sizeof o);
-    o.threads = 1;
+    o.threads = 0;
     o.params = lie_build_params_default();
     o.view_width = o.view_height = 512;
     o.max_depth = LIE_MAX_DEPTH_DEFAULT;
@@ -224,8 +234,8 @@ static void sample_stats(lie_ctor *c)
 static void set_state(lie_ctor *c, uint32_t t, int st)
 {
     int was = c->state[t];
-    c->pending -= (uint64_t)(was == TRI_PENDING || was == TRI_BUSY);
-    c->pending += (uint64_t)(st == TRI_PENDING || st == TRI_BUSY);
+    c->pending -= (uint64_t)(was == TRI_PENDING || was == TRI_BUSY || was == TRI_READY);
+    c->pending += (uint64_t)(st == TRI_PENDING || st == TRI_BUSY || st == TRI_READY);
     c->state[t] = (uint8_t)st;
     if (st == TRI_PENDING)
         c->order_dirty = 1;
@@ -391,12 +401,19 @@ static void take_resample(lie_ctor *c)
     lie_status st = cams ? LIE_OK : lie_error_set(&err, LIE_ERR_NOMEM, c->s->path, "out of memory");
     if (st == LIE_OK && n)
         st = lie_camera_pixels(c->s, c->rt, cams, n, c->o.view_width, c->o.view_height, c->o.max_depth, &px, &err);
-    if (st == LIE_OK && has_cur)
+    /* the current view is often the only view (one still camera): its
+     * pixels are the views' */
+    int cur_is_views = has_cur && n == 1 && same_camera(&cams[0], &cam);
+    if (st == LIE_OK && has_cur && !cur_is_views)
         st = lie_camera_pixels(c->s, c->rt, &cam, 1, c->o.view_width, c->o.view_height, c->o.max_depth, &cur, &err);
     free(cams);
     pxref *npx = st == LIE_OK && px ? px_wrap(px) : NULL, *ncur = st == LIE_OK && cur ? px_wrap(cur) : NULL;
     if (st == LIE_OK && ((px && !npx) || (cur && !ncur)))
         st = lie_error_set(&err, LIE_ERR_NOMEM, c->s->path, "out of memory");
+    if (st == LIE_OK && cur_is_views && npx) {
+        ncur = npx;
+        npx->refs++;
+    }
     pthread_mutex_lock(&c->m);
     c->busy--;
     c->resampling = 0;
@@ -444,7 +461,52 @@ static void take_resample(lie_ctor *c)
     pthread_cond_broadcast(&c->cv);
 }
 
-/* Build triangle t (m held on entry and exit). */
+/* Land what is ready (m held on entry and exit).  Landing takes env_lock
+ * for writing, which a renderer holds for reading while it draws a band
+ * (a tenth of a second and more): a builder that waited for it would build
+ * one triangle a band.  So builders only try the lock (wait 0) and go on
+ * building; what they could not land waits here, and lands at the next
+ * try: a builder's next triangle, an idle builder's poll, a reader between
+ * two bands (lie_ctor_read_lock) or a hold.  wait: block for the lock (a
+ * hold: every unit built must be in the env before the scene changes or
+ * the env is saved).  A triangle built for pixels the views have since
+ * outgrown goes again if the new ones change it. */
+static void land_ready(lie_ctor *c, int wait)
+{
+    if (c->n_ready == 0)
+        return;
+    if (wait)
+        pthread_rwlock_wrlock(&c->env_lock);
+    else if (pthread_rwlock_trywrlock(&c->env_lock) != 0)
+        return;
+    for (size_t i = 0; i < c->n_ready; i++) {
+        ready_part *r = &c->ready[i];
+        if (c->failed || !land(c, &r->part)) {
+            if (!c->failed) {
+                lie_error err;
+                lie_error_set(&err, LIE_ERR_NOMEM, c->s->path, "out of memory for the constructor's environments");
+                fail(c, &err);
+            }
+            set_state(c, r->t, TRI_PENDING);
+        } else if (r->px && r->px != c->px && lie_env_tri_stale(&c->env, c->s, r->px->px, c->px->px, r->t)) {
+            unland(c, r->t);
+            set_state(c, r->t, TRI_PENDING);
+        } else {
+            set_state(c, r->t, TRI_BUILT);
+            c->units_built += c->ne;
+        }
+        lie_env_part_free(&r->part);
+        px_drop(r->px);
+    }
+    c->n_ready = 0;
+    pthread_rwlock_unlock(&c->env_lock);
+    sample_stats(c);
+    atomic_fetch_add(&c->version, 1);
+    pthread_cond_broadcast(&c->idle_cv);
+}
+
+/* Build triangle t (m held on entry and exit); it lands when the env is
+ * free (land_ready). */
 static void build_tri(lie_ctor *c, uint32_t t)
 {
     set_state(c, t, TRI_BUSY);
@@ -459,35 +521,37 @@ static void build_tri(lie_ctor *c, uint32_t t)
     lie_status st = lie_env_build_units(c->s, c->rt, &c->p, px ? px->px : NULL, (uint64_t)t * c->ne, c->ne, &c->stop,
                                         &part, &bs, &err);
     int interrupted = st == LIE_OK && bs.units_interrupted > 0;
-    if (st == LIE_OK && !interrupted) {
-        pthread_rwlock_wrlock(&c->env_lock);
-        if (!land(c, &part))
-            st = lie_error_set(&err, LIE_ERR_NOMEM, c->s->path, "out of memory for the constructor's environments");
-        pthread_rwlock_unlock(&c->env_lock);
-    }
-    lie_env_part_free(&part);
     pthread_mutex_lock(&c->m);
     c->busy--;
+    if (st == LIE_OK && !interrupted &&
+        !reserve((void **)&c->ready, &c->cap_ready, c->n_ready + 1, sizeof *c->ready))
+        st = lie_error_set(&err, LIE_ERR_NOMEM, c->s->path, "out of memory for the constructor's environments");
     if (st != LIE_OK) {
+        lie_env_part_free(&part);
         set_state(c, t, TRI_PENDING);
         fail(c, &err);
+        px_drop(px);
     } else if (interrupted) {
+        lie_env_part_free(&part);
         set_state(c, t, TRI_PENDING); /* a hold stopped it: again later */
+        px_drop(px);
     } else {
-        set_state(c, t, TRI_BUILT);
-        c->units_built += c->ne;
-        /* built for older views: go again if the new pixels change it */
-        if (px && px != c->px && lie_env_tri_stale(&c->env, c->s, px->px, c->px->px, t)) {
-            pthread_rwlock_wrlock(&c->env_lock);
-            unland(c, t);
-            pthread_rwlock_unlock(&c->env_lock);
-            set_state(c, t, TRI_PENDING);
-        }
-        sample_stats(c);
-        atomic_fetch_add(&c->version, 1);
+        c->ready[c->n_ready++] = (ready_part){t, part, px};
+        set_state(c, t, TRI_READY);
+        land_ready(c, 0);
     }
-    px_drop(px);
     pthread_cond_broadcast(&c->idle_cv);
+}
+
+/* Wait on cv for at most `seconds` (m held). */
+static void timed_wait(pthread_cond_t *cv, pthread_mutex_t *m, double seconds)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    double ns = (double)ts.tv_nsec + seconds * 1e9;
+    ts.tv_sec += (time_t)(ns / 1e9);
+    ts.tv_nsec = (long)fmod(ns, 1e9);
+    pthread_cond_timedwait(cv, m, &ts);
 }
 
 static void *worker_main(void *arg)
@@ -512,6 +576,13 @@ static void *worker_main(void *arg)
             continue;
         }
         int64_t t = next_tri(c);
+        if (t < 0 && c->n_ready) {
+            /* nothing to build but what waits to land: poll the lock */
+            land_ready(c, 0);
+            if (c->n_ready)
+                timed_wait(&c->cv, &c->m, 0.002);
+            continue;
+        }
         if (t < 0) {
             if (c->order_dirty)
                 c->failed = 1; /* out of memory for the order */
@@ -556,6 +627,11 @@ void lie_ctor_destroy(lie_ctor *c)
     free(c->state);
     free(c->order);
     free(c->samples);
+    for (size_t i = 0; i < c->n_ready; i++) {
+        lie_env_part_free(&c->ready[i].part);
+        px_drop(c->ready[i].px);
+    }
+    free(c->ready);
     free(c->tri_p);
     pthread_rwlock_destroy(&c->env_lock);
     pthread_mutex_destroy(&c->m);
@@ -699,7 +775,7 @@ lie_status lie_ctor_create(lie_scene *s, const lie_rt *rt, const lie_ctor_option
         sample_stats(c);
         if (st == LIE_OK && opt->n_views > 0 && !from)
             st = fixed_views(c, opt->views, opt->n_views, err);
-        int n = opt->manual ? 0 : opt->threads > 0 ? opt->threads : 1;
+        int n = opt->manual ? 0 : opt->threads > 0 ? opt->threads : lie_cpu_count();
         c->tids = calloc((size_t)n + 1, sizeof *c->tids);
         if (!c->tids)
             st = lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
@@ -721,7 +797,14 @@ lie_status lie_ctor_create(lie_scene *s, const lie_rt *rt, const lie_ctor_option
 
 /* ---- using it ---------------------------------------------------------------------- */
 
-void lie_ctor_read_lock(lie_ctor *c) { pthread_rwlock_rdlock(&c->env_lock); }
+void lie_ctor_read_lock(lie_ctor *c)
+{
+    /* between a reader's bands: what the builders could not land, now */
+    pthread_mutex_lock(&c->m);
+    land_ready(c, 0);
+    pthread_mutex_unlock(&c->m);
+    pthread_rwlock_rdlock(&c->env_lock);
+}
 void lie_ctor_read_unlock(lie_ctor *c) { pthread_rwlock_unlock(&c->env_lock); }
 const lie_env *lie_ctor_env(const lie_ctor *c) { return &c->env; }
 uint32_t lie_ctor_longest(const lie_ctor *c) { return c->longest; }
@@ -743,6 +826,7 @@ void lie_ctor_hold(lie_ctor *c)
     c->stop = 1; /* in-flight units are dropped, and built again later */
     while (c->busy > 0)
         pthread_cond_wait(&c->idle_cv, &c->m);
+    land_ready(c, 1); /* the units built so far are in the env the holder sees */
     c->stop = 0; /* nothing starts while held */
     pthread_mutex_unlock(&c->m);
 }
@@ -778,12 +862,7 @@ int lie_ctor_wait(lie_ctor *c, double seconds, lie_error *err)
             double left = end - lie_time_now();
             if (left <= 0.0)
                 break;
-            struct timespec ts;
-            clock_gettime(CLOCK_REALTIME, &ts);
-            double ns = (double)ts.tv_nsec + (left < 0.05 ? left : 0.05) * 1e9;
-            ts.tv_sec += (time_t)(ns / 1e9);
-            ts.tv_nsec = (long)fmod(ns, 1e9);
-            pthread_cond_timedwait(&c->idle_cv, &c->m, &ts);
+            timed_wait(&c->idle_cv, &c->m, left < 0.05 ? left : 0.05);
         } else {
             pthread_cond_wait(&c->idle_cv, &c->m);
         }
@@ -987,26 +1066,55 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
     pthread_rwlock_wrlock(&c->env_lock);
     if (restart)
         env_reset(c);
-    for (uint32_t t = 0; t < s->n_tris; t++) {
-        int again = restart || moved[t];
-        if (!again && c->state[t] == TRI_BUILT) {
-            lie_box3 tb = tri_box(&s->tri_p[3 * (size_t)t]);
-            for (size_t k = 0; k < c->ne && !again; k++) {
+    /* Which landed units the moved geometry may reach, as rst-update finds
+     * them (§5.3): a box holding each unit's shafts (its triangle's and its
+     * cluster's) against the moved triangles' boxes picks the candidates,
+     * then each candidate root's exact hull against the boxes
+     * (lie_rst_refine, as lib/update tightens the ray segment trees'
+     * answer) keeps those whose segments can meet moved geometry.  The box
+     * of a large emitter holds most of a room: the box test alone sent
+     * every unit of the view back. */
+    uint8_t *flags = restart ? NULL : calloc((size_t)c->env.n_nodes + 1, 1);
+    uint64_t candidates = 0;
+    for (uint32_t t = 0; flags && t < s->n_tris; t++) {
+        if (moved[t] || c->state[t] != TRI_BUILT)
+            continue;
+        lie_box3 tb = tri_box(&s->tri_p[3 * (size_t)t]);
+        for (size_t k = 0; k < c->ne; k++) {
+            uint32_t r = c->env.root[(size_t)t * c->ne + k];
+            if (r == 0 || lie_box3_is_empty(&cb[k]))
+                continue; /* unbuilt, or a cluster with no shafts */
+            int meets = !isfinite(cb[k].lo.x);
+            if (!meets) {
                 lie_box3 u = tb;
-                if (lie_box3_is_empty(&cb[k]) || !isfinite(cb[k].lo.x)) {
-                    again = !lie_box3_is_empty(&cb[k]);
-                    continue;
-                }
                 lie_box3_grow(&u, cb[k].lo);
                 lie_box3_grow(&u, cb[k].hi);
-                again = boxes_meet(&u, &before) || boxes_meet(&u, &after);
+                meets = boxes_meet(&u, &before) || boxes_meet(&u, &after);
             }
+            flags[r] = (uint8_t)meets;
+            candidates += (uint64_t)meets;
         }
+    }
+    const lie_box3 moved_boxes[2] = {before, after};
+    int n_moved_boxes = 0;
+    lie_box3 mb[2];
+    for (int i = 0; i < 2; i++)
+        if (!lie_box3_is_empty(&moved_boxes[i]))
+            mb[n_moved_boxes++] = moved_boxes[i];
+    if (flags && candidates)
+        lie_rst_refine(s, &c->env, mb, n_moved_boxes, flags, 0);
+    for (uint32_t t = 0; t < s->n_tris; t++) {
+        int again = restart || moved[t] || !flags;
+        for (size_t k = 0; !again && k < c->ne; k++)
+            again = flags[c->env.root[(size_t)t * c->ne + k]];
+        if (!again && c->state[t] != TRI_BUILT)
+            continue;
         if (again)
             unland(c, t);
         if (again && c->state[t] == TRI_BUILT)
             set_state(c, t, TRI_PENDING);
     }
+    free(flags);
     c->env.scene_hash = s->hash;
     pthread_rwlock_unlock(&c->env_lock);
     /* the views' pixels on the edited scene: sampled by a constructor

@@ -180,7 +180,7 @@ lie_status lie_update_apply(lie_cache *cache, lie_scene *scene, const lie_edit *
 typedef struct lie_ctor lie_ctor;
 
 typedef struct lie_ctor_options {
-    int threads;             /* constructor threads (0: one) */
+    int threads;             /* constructor threads (0: one a core, as rst-update's update has) */
     lie_build_params params; /* as lie-build's (params.threads is ignored: one per constructor thread) */
     int whole;               /* build every unit, as lie-build without --view; the views only order it */
     int view_width, view_height, max_depth; /* how views are sampled (lie_cache_views) */

@@ -49,13 +49,18 @@ fi
 # 2. paused before catching up: a partial cache, the frame of what landed
 cat >"$TMP/pause.txt" <<EOF
 frames 1
-redraw 12
+wait-units 20
 pause
 screenshot $TMP/pshot.png
 quit
 EOF
 run xvfb_run "$B/lie-view" "$M1" $VIEW --script "$TMP/pause.txt" --save "$TMP/partial.lie" --stats=json
 expect_rc 0 "paused during construction"
+if grep -q '"units_pending":[1-9]' "$TMP/err" && "$B/lie-inspect" summary "$TMP/partial.lie" | grep -q "^partial  *yes"; then
+    ok "paused after 20 units: a partial cache"
+else
+    not_ok "paused after 20 units, the cache is not partial: $(grep -o '"units_pending":[0-9]*' "$TMP/err")"
+fi
 "$B/lie-render" "$TMP/partial.lie" --camera "$cam" --size 96x96 --light-samples 8 -q -o "$TMP/pref.png"
 expect_same "$TMP/pshot.png" "$TMP/pref.png" "the screenshot equals lie-render of the saved (partial) cache"
 run "$B/lie-inspect" verify "$TMP/partial.lie"

@@ -120,10 +120,7 @@ lie_status write_frame_chunks(void *ctx, int fi, const lie_camera *fc, const lie
         lie_auto_exposure ae = lie_frame_auto_exposure(frame, LIE_EXPOSURE_KEY);
         *o->last_auto = ae;
         opt.png.exposure = ae.ev;
-        snprintf(text, sizeof text,
-                 "auto: %.4f stops, from a log-average luminance of %.6g over %llu pixels and the key %.2f "
-                 "(Reinhard et al. 2002)",
-                 (double)ae.ev, ae.log_average, (unsigned long long)ae.pixels, (double)ae.key);
+        lie_auto_exposure_text(&ae, text, sizeof text);
         opt.png.text = &png_text;
         opt.png.n_text = 1;
         memcpy(with_auto, attrs, sizeof attrs);

@@ -30,8 +30,11 @@ static void usage(FILE *fp)
             "change are answered by Embree until the constructor has rebuilt them.\n"
             "\n"
             "  -s, --size WxH          window and image size (default %dx%d)\n"
-            "      --exposure EV       exposure in stops, as lie-render --exposure (default 0;\n"
-            "                          E and Shift+E step it by a stop)\n"
+            "      --exposure EV|auto  exposure in stops, as lie-render --exposure (default 0;\n"
+            "                          E and Shift+E step it by a stop); auto: each image's\n"
+            "                          own, the stops that take its log-average luminance to\n"
+            "                          0.18 (Reinhard et al. 2002), for scenes in physical\n"
+            "                          units; screenshots then say it as lie-render's PNGs do\n"
             "      --view-size WxH     the image the constructor samples views at, as\n"
             "                          lie-build --view-size (default 512x512)\n"
             "      --light-samples N   light samples per shading point of the refined frame,\n"
@@ -39,7 +42,7 @@ static void usage(FILE *fp)
             "      --max-depth D       mirror reflection depth (default %d)\n"
             "      --camera SPEC       start from a scene camera or eye=..,target=..[,up=..][,fov=..]\n"
             "      --threads N         render threads (default: all cores)\n"
-            "      --constructor-threads N  threads rebuilding flagged units (default 1)\n"
+            "      --constructor-threads N  threads building units (default: all cores)\n"
             "      --script FILE       run commands from FILE (below), then keep the window\n"
             "                          open unless it says quit\n"
             "      --record EDITS.yaml write the session's edits there (formats/edit.md);\n"
@@ -71,7 +74,8 @@ static void usage(FILE *fp)
             "drag DX DY DZ, rotate AX AY AZ DEG, set-material FIELDS, set-emission FIELDS\n"
             "(FIELDS as in edit files: base-color: [r, g, b], roughness: r, strength: s),\n"
             "remove (the selection), undo, redo, wait (until no unit is pending),\n"
-            "wait-at-most S (as wait, S seconds at most), pause and resume (units stop\n"
+            "wait-at-most S (as wait, S seconds at most), wait-units N (until N units have\n"
+            "landed, or none is pending), pause and resume (units stop\n"
             "landing in between), redraw N (the full frame N times more, each timed),\n"
             "screenshot FILE.png (of what has landed), quit.\n",
             prog, 512, 512, LIE_LIGHT_SAMPLES_DEFAULT, LIE_MAX_DEPTH_DEFAULT);
@@ -100,8 +104,8 @@ static const struct option long_opts[] = {
 
 /* ---- statistics and overlay ---------------------------------------------------- */
 
-/* What the renderer's images say: frames per second over the time spent
- * rendering images (every level: what the window showed), the full frames
+/* What the renderer's images say: images per second over the time spent
+ * rendering them (every level: the renderer's rate), the full frames
  * before and after the constructor caught up with the view (none pending
  * at the frame's end, no unit landing during it). */
 typedef struct frame_summary {
@@ -154,14 +158,20 @@ static lie_status print_stats(session *S, const view_frame_time *times, size_t n
     const double *ms = view_world_update_ms(S->w, &n);
     frame_summary fs;
     summarise(times, n_times, &fs);
-    double fps = fs.fps;
+    /* fps_mean: real frames, as the window showed them while the view moved:
+     * each loop that put a new image on screen, over the wall time from
+     * the change that started the motion (the renderer's own rate over its
+     * busy time is render_fps: coarse levels of a still view counted there
+     * made thousands of "frames" a second) */
+    double fps = S->moving_seconds > 0.0 ? (double)S->moving_frames / S->moving_seconds : 0.0;
     if (cli->stats == 2) {
         lie_stats_json js;
         FILE *fp = lie_stats_json_begin(&js, prog, NULL);
         if (!fp)
             return lie_stats_json_end(cli, &js, err);
-        fprintf(fp, ",\"frames\":%llu,\"moving_frames\":%llu,\"fps_mean\":%.3f,",
-                (unsigned long long)S->frames, (unsigned long long)S->moving_frames, fps);
+        fprintf(fp, ",\"frames\":%llu,\"moving_frames\":%llu,\"moving_seconds\":%.6f,\"fps_mean\":%.3f,"
+                    "\"render_fps\":%.3f,",
+                (unsigned long long)S->frames, (unsigned long long)S->moving_frames, S->moving_seconds, fps, fs.fps);
         fprintf(fp, "\"first_frame_ms\":%.3f,\"full_frame_first_ms\":%.3f,\"full_frames_before\":%d,"
                         "\"full_frame_before_ms\":%.3f,\"full_frames_after\":%d,\"full_frame_after_ms\":%.3f,"
                         "\"full_frames\":[",
@@ -185,7 +195,8 @@ static lie_status print_stats(session *S, const view_frame_time *times, size_t n
         fprintf(fp, "],\"refine_ms\":[");
         for (int i = 0; i < S->n_refine; i++)
             fprintf(fp, "%s%.3f", i ? "," : "", S->refine_ms[i]);
-        fprintf(fp, "],\"pending_max\":%lld,\"camera\":", (long long)view_world_pending_max(S->w));
+        fprintf(fp, "],\"pending_max\":%lld,\"exposure\":%.6f,\"exposure_mode\":\"%s\",\"camera\":",
+                (long long)view_world_pending_max(S->w), (double)S->exposure_shown, S->ro.exposure_auto ? "auto" : "fixed");
         lie_json_string(fp, S->spec);
         fprintf(fp, "}\n");
         return lie_stats_json_end(cli, &js, err);
@@ -199,10 +210,10 @@ static lie_status print_stats(session *S, const view_frame_time *times, size_t n
                         "up (%d), %.1f ms after (%d)\n",
                 prog, S->first_image_ms, fs.first_full_ms, fs.before_ms, fs.n_before, fs.after_ms, fs.n_after);
         fprintf(stderr,
-                "%s: %llu frames, %.1f fps rendering (%llu while the view moved)\n"
+                "%s: %llu frames, %.1f fps while the view moved (%llu frames), %.1f images a second rendering\n"
                 "  %d edits, update %.1f ms mean, %.1f ms max; at most %lld units pending\n"
                 "  camera %s\n",
-                prog, (unsigned long long)S->frames, fps, (unsigned long long)S->moving_frames, n,
+                prog, (unsigned long long)S->frames, fps, (unsigned long long)S->moving_frames, fs.fps, n,
                 n ? sum / n : 0.0, mx, (long long)view_world_pending_max(S->w), S->spec);
     }
     return LIE_OK;
@@ -258,8 +269,9 @@ static int parse_options(session *S, view_world_options *wo, lie_cli *cli, const
         case OPT_RECORD: wo->record = optarg; break;
         case OPT_SAVE: S->save = optarg; break;
         case OPT_EXPOSURE:
-            if (!lie_parse_float(optarg, -64.0f, 64.0f, &S->ro.exposure))
-                return usage_error("--exposure: expected a number of stops, got '%s'", optarg);
+            S->ro.exposure_auto = strcmp(optarg, "auto") == 0;
+            if (!S->ro.exposure_auto && !lie_parse_float(optarg, -64.0f, 64.0f, &S->ro.exposure))
+                return usage_error("--exposure: expected a number of stops or auto, got '%s'", optarg);
             break;
         case OPT_VIEW_SIZE:
             if (!lie_parse_size(optarg, 16384, &wo->view_width, &wo->view_height))
@@ -408,8 +420,10 @@ static void handle_events(session *S, drag_state *D, int *quit)
         if (ev.type == SDL_QUIT) {
             *quit = 1;
         } else if (ev.type == SDL_KEYDOWN && ev.key.keysym.sym == SDLK_e) {
-            /* exposure, a stop a press (Shift: darker) */
-            S->ro.exposure += (ev.key.keysym.mod & KMOD_SHIFT) ? -1.0f : 1.0f;
+            /* exposure, a stop a press (Shift: darker), from the one shown
+             * (auto exposure's, which it ends) */
+            S->ro.exposure = view_render_exposure(S->r) + ((ev.key.keysym.mod & KMOD_SHIFT) ? -1.0f : 1.0f);
+            S->ro.exposure_auto = 0;
             view_render_set_exposure(S->r, S->ro.exposure);
         } else if (ev.type == SDL_KEYDOWN) {
             session_key(S, &ev.key, quit);
@@ -576,6 +590,7 @@ static int finish(session *S, const script_run *R, const lie_cli *cli, int rc)
         rc = fail_line(&R->err);
     size_t n_times = 0;
     view_frame_time *times = S->r ? view_render_times(S->r, &n_times) : NULL;
+    S->exposure_shown = S->r ? view_render_exposure(S->r) : S->ro.exposure;
     view_render_stop(S->r);
     S->r = NULL;
     if (rc == 0 && view_world_write_record(S->w, &err) != LIE_OK)
@@ -629,7 +644,7 @@ int main(int argc, char **argv)
     memset(&wo, 0, sizeof wo);
     wo.so = lie_scene_options_default();
     wo.so.files = S.files = lie_file_set_create(LIE_FILES_NAMES);
-    wo.threads = 1;
+    wo.threads = 0; /* the constructor's: a thread a core, as rst-update */
     wo.view_width = wo.view_height = 512;
     wo.max_depth = S.ro.max_depth;
     const char *camera = NULL, *script_path = NULL;

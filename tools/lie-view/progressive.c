@@ -10,12 +10,17 @@
  *
  * Units the constructor lands (§4.3.1) do not make a frame stale: a
  * unit not yet landed is answered by Embree, so the image is the same,
- * only slower.  When the request is done and units have landed since its
- * full frame began, the full frame is rendered again over the one shown
- * (no coarse levels): the view refines to full quality at once and its
- * frames get faster as units land.  A full frame during which no unit
- * landed is *clean*: the frame lie-render makes from a cache of what had
- * landed; screenshots hold the constructor and take one. */
+ * only slower.  A view that moves uses every unit landed by its next
+ * band.  A still view is already at full quality; its full frame is
+ * rendered again over the one shown (no coarse levels) only when that
+ * pays for the cores it takes from the constructor (landed_due): once the
+ * constructor has caught up with the view, or when half of what was
+ * pending has landed and the renderer has rested as long as its last full
+ * frame took.  Redrawing on every landing kept both cores rendering the
+ * same picture while the constructor's threads waited for them.  A full
+ * frame during which no unit landed is *clean*: the frame lie-render
+ * makes from a cache of what had landed; screenshots hold the constructor
+ * and take one. */
 #include "view.h"
 
 #include <stdlib.h>
@@ -48,6 +53,7 @@ struct view_render {
     view_frame_time *times;          /* every full frame's time */
     size_t n_times, cap_times;
     lie_frame *full;
+    float auto_ev;                   /* --exposure auto: the last finished image's (m) */
     /* the render thread's own: a frame per level and view mode (the modes'
      * AOV layers are what lie_render_tiles fills) */
     lie_frame *level[LEVELS][3];
@@ -83,7 +89,7 @@ static void blit(view_render *r, const lie_frame *f, int div, int mode, int y0, 
     }
     int W = r->o.width, H = r->o.height, lw = f->width;
     const uint8_t *m = r->sel_mask;
-    float scale = exp2f(r->o.exposure);
+    float scale = exp2f(r->o.exposure_auto ? r->auto_ev : r->o.exposure);
     for (int y = y0; y < y1; y++)
         for (int x = 0; x < lw; x++) {
             size_t i = (size_t)y * (size_t)lw + (size_t)x;
@@ -123,6 +129,24 @@ static void mask_rows(view_render *r, const lie_scene *s, const lie_rt *rt, cons
         }
 }
 
+/* The last full frame: the units pending when it began, when it ended
+ * and how long it took. */
+typedef struct last_full {
+    int64_t pending0;
+    double end, seconds;
+} last_full;
+
+/* Whether units landed since the shown full frame (units_seen) make it
+ * worth rendering again (see the top of this file). */
+static int landed_due(view_render *r, uint64_t units_seen, const last_full *last)
+{
+    if (view_world_units_version(r->w) == units_seen)
+        return 0;
+    int64_t pending = view_world_pending(r->w);
+    return pending == 0 ||
+           (2 * pending <= last->pending0 && lie_time_now() - last->end >= last->seconds);
+}
+
 /* A full frame's time, kept for --stats (m held). */
 static void note_time(view_render *r, int level, double t0, double t1, int clean)
 {
@@ -150,10 +174,11 @@ static void *render_main(void *arg)
 {
     view_render *r = arg;
     uint64_t done_gen = 0, done_version = 0, done_units = 0, done_force = 0;
+    last_full last = {0, 0.0, 0.0};
     for (;;) {
         pthread_mutex_lock(&r->m);
         while (!r->quit && r->gen == done_gen && view_world_version(r->w) == done_version &&
-               view_world_units_version(r->w) == done_units && r->force == done_force) {
+               !landed_due(r, done_units, &last) && r->force == done_force) {
             struct timespec ts;
             clock_gettime(CLOCK_REALTIME, &ts);
             ts.tv_nsec += 10 * 1000 * 1000; /* the world's version is polled */
@@ -177,6 +202,7 @@ static void *render_main(void *arg)
         int abandoned = 0;
         for (int lv = again ? LEVELS - 1 : 0; lv < LEVELS && !abandoned; lv++) {
             double t_level = lie_time_now();
+            int64_t pending0 = lv == LEVELS - 1 ? view_world_pending(r->w) : 0;
             int div = level_div[lv];
             int lw = (r->o.width + div - 1) / div, lh = (r->o.height + div - 1) / div;
             lie_render_options ro = lie_render_options_default();
@@ -250,7 +276,22 @@ static void *render_main(void *arg)
             }
             if (abandoned)
                 break;
+            /* --exposure auto: the image's own exposure, as lie-render
+             * gives its frame; the bands drawn with the last image's are
+             * drawn again if it differs */
+            lie_auto_exposure ae = {0.0f, LIE_EXPOSURE_KEY, 0.0, 0};
+            if (r->o.exposure_auto && mode == VIEW_MODE_SHADE)
+                ae = lie_frame_auto_exposure(f, LIE_EXPOSURE_KEY);
             pthread_mutex_lock(&r->m);
+            if (r->o.exposure_auto && mode == VIEW_MODE_SHADE && ae.ev != r->auto_ev && r->gen == gen) {
+                r->auto_ev = ae.ev;
+                uint8_t *keep = r->sel_mask;
+                if (sel < 0)
+                    r->sel_mask = NULL;
+                blit(r, f, div, mode, 0, lh);
+                r->sel_mask = keep;
+                r->dirty = 1;
+            }
             r->images++;
             r->level_pixels = (uint64_t)lw * (uint64_t)lh;
             r->image_version = version;
@@ -263,7 +304,10 @@ static void *render_main(void *arg)
                 r->full_force = force;
                 r->full_clean = view_world_units_version(r->w) == units;
             }
-            note_time(r, lv, t_level, lie_time_now(), view_world_units_version(r->w) == units);
+            double t_end = lie_time_now();
+            note_time(r, lv, t_level, t_end, view_world_units_version(r->w) == units);
+            if (lv == LEVELS - 1)
+                last = (last_full){pending0, t_end, t_end - t_level};
             pthread_cond_broadcast(&r->cv);
             pthread_mutex_unlock(&r->m);
         }
@@ -295,8 +339,9 @@ lie_status view_render_start(view_world *w, const view_render_options *opt, view
     size_t n = (size_t)opt->width * (size_t)opt->height;
     r->display = calloc(n, sizeof *r->display);
     r->sel_mask = calloc(n, 1);
-    r->full = lie_frame_create(opt->width, opt->height);
-    if (!r->display || !r->sel_mask || !r->full) {
+    /* r->full: the first full frame rendered (a frame lie_render_frame_create
+     * made, with the coverage --exposure auto leaves the background out by) */
+    if (!r->display || !r->sel_mask) {
         view_render_stop(r);
         return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory for %dx%d frames", opt->width, opt->height);
     }
@@ -378,9 +423,18 @@ void view_render_set_exposure(view_render *r, float ev)
 {
     pthread_mutex_lock(&r->m);
     r->o.exposure = ev;
+    r->o.exposure_auto = 0;
     r->force++; /* the full frame again, exposed anew */
     pthread_cond_broadcast(&r->cv);
     pthread_mutex_unlock(&r->m);
+}
+
+float view_render_exposure(view_render *r)
+{
+    pthread_mutex_lock(&r->m);
+    float ev = r->o.exposure_auto ? r->auto_ev : r->o.exposure;
+    pthread_mutex_unlock(&r->m);
+    return ev;
 }
 
 void view_render_again(view_render *r)
@@ -431,6 +485,16 @@ lie_status view_render_screenshot(view_render *r, const char *path, lie_error *e
     lie_frame_options fo;
     memset(&fo, 0, sizeof fo);
     fo.png.exposure = r->o.exposure;
+    /* --exposure auto: the frame's own, said in the file as lie-render says it */
+    char text[160];
+    lie_png_text png_text = {"lie.exposure", text};
+    if (r->o.exposure_auto) {
+        lie_auto_exposure ae = lie_frame_auto_exposure(r->full, LIE_EXPOSURE_KEY);
+        fo.png.exposure = ae.ev;
+        lie_auto_exposure_text(&ae, text, sizeof text);
+        fo.png.text = &png_text;
+        fo.png.n_text = 1;
+    }
     lie_status st = lie_frame_write(path, r->full, &fo, err);
     pthread_mutex_unlock(&r->m);
     view_world_release(r->w);

@@ -24,7 +24,7 @@ static const struct {
     {"screenshot", VIEW_CMD_SCREENSHOT, -1}, {"quit", VIEW_CMD_QUIT, 0},
     {"remove", VIEW_CMD_REMOVE, 0},      {"pause", VIEW_CMD_PAUSE, 0},
     {"resume", VIEW_CMD_RESUME, 0},      {"redraw", VIEW_CMD_REDRAW, 1},
-    {"wait-at-most", VIEW_CMD_WAIT_AT_MOST, 1},
+    {"wait-at-most", VIEW_CMD_WAIT_AT_MOST, 1}, {"wait-units", VIEW_CMD_WAIT_UNITS, 1},
 };
 
 void view_script_destroy(view_script *s)
@@ -143,6 +143,7 @@ lie_status view_script_read(const char *path, view_script **out, lie_error *err)
             if (((c.kind == VIEW_CMD_FRAMES || c.kind == VIEW_CMD_REDRAW) &&
                  (c.v[0] < 0 || c.v[0] > 1e6 || c.v[0] != (double)(long)c.v[0])) ||
                 (c.kind == VIEW_CMD_REDRAW && c.v[0] < 1) || (c.kind == VIEW_CMD_WAIT_AT_MOST && !(c.v[0] >= 0)) ||
+                (c.kind == VIEW_CMD_WAIT_UNITS && !(c.v[0] >= 0 && c.v[0] <= 1e18)) ||
                 (c.kind == VIEW_CMD_DOLLY && !(c.v[0] < 1.0))) {
                 st = lie_error_set_at(err, LIE_ERR_ARG, path, line, 1, "%s: value out of range", p);
                 break;

@@ -359,6 +359,8 @@ int session_script_step(session *S, script_run *R, uint64_t images, int idle)
         return 0;
     if (R->waiting == 2 && view_world_busy(S->w) && (R->deadline == 0.0 || lie_time_now() < R->deadline))
         return 0;
+    if (R->waiting == 4 && view_world_units_built(S->w) < R->until_units && view_world_busy(S->w))
+        return 0;
     R->deadline = 0.0;
     if (R->waiting == 3) {
         uint64_t n = view_render_full_count(S->r);
@@ -440,6 +442,10 @@ int session_script_step(session *S, script_run *R, uint64_t images, int idle)
         case VIEW_CMD_WAIT_AT_MOST: /* until no unit is pending (or S seconds) */
             R->waiting = 2;
             R->deadline = c->kind == VIEW_CMD_WAIT_AT_MOST ? lie_time_now() + c->v[0] : 0.0;
+            return 0;
+        case VIEW_CMD_WAIT_UNITS: /* until N units have landed (or none is pending) */
+            R->waiting = 4;
+            R->until_units = (uint64_t)c->v[0];
             return 0;
         case VIEW_CMD_SCREENSHOT:
             session_camera_update(S);

@@ -41,6 +41,7 @@ typedef struct session {
     int refining;           /* the camera changed: time until every level is done */
     double start_t;         /* the program started */
     double first_image_ms;  /* to the first image on screen (-1: none yet) */
+    float exposure_shown;   /* at exit: the stops the view was shown with (--exposure auto: the last image's) */
     lie_camera looked;      /* the camera the constructor last built for */
     double cam_change_t;
     int looked_set;
@@ -60,8 +61,9 @@ typedef struct script_run {
     view_script *sc;
     const char *path;
     int next;
-    int waiting;            /* 0 none, 1 frames, 2 pending, 3 full frames redrawn */
+    int waiting;            /* 0 none, 1 frames, 2 pending, 3 full frames redrawn, 4 units landed */
     uint64_t until_images;
+    uint64_t until_units;   /* wait-units */
     int paused;             /* the script holds the constructor */
     int redraws;            /* redraw: frames still to ask for */
     double deadline;        /* wait-at-most: when waiting ends anyway (0: never) */

@@ -281,9 +281,10 @@ void *world_constructor_main(void *arg)
     double last_publish = 0.0;
     for (;;) {
         pthread_mutex_lock(&w->cm);
-        while (!w->quit && ((atomic_load(&w->n_pending) == 0 && !atomic_load(&w->dirty)) || w->failed))
+        while (!w->quit && ((atomic_load(&w->n_pending) == 0 && !atomic_load(&w->dirty)) || w->failed || w->held))
             pthread_cond_wait(&w->ccv, &w->cm);
         int quit = w->quit;
+        w->stepping = !quit;
         pthread_mutex_unlock(&w->cm);
         if (quit)
             break;
@@ -339,8 +340,8 @@ void *world_constructor_main(void *arg)
         else if (dt > 0.2 && step > 4)
             step /= 2;
         pthread_mutex_lock(&w->cm);
-        if ((atomic_load(&w->n_pending) == 0 && !atomic_load(&w->dirty)) || w->failed)
-            pthread_cond_broadcast(&w->ccv);
+        w->stepping = 0;
+        pthread_cond_broadcast(&w->ccv); /* a hold waiting for the step, or a wait for the commit */
         pthread_mutex_unlock(&w->cm);
     }
     return NULL;
@@ -353,7 +354,7 @@ void view_world_wait(view_world *w)
         return;
     }
     pthread_mutex_lock(&w->cm);
-    while ((atomic_load(&w->n_pending) > 0 || atomic_load(&w->dirty)) && w->ctor_started && !w->failed)
+    while ((atomic_load(&w->n_pending) > 0 || atomic_load(&w->dirty)) && w->ctor_started && !w->failed && !w->held)
         pthread_cond_wait(&w->ccv, &w->cm);
     pthread_mutex_unlock(&w->cm);
 }

@@ -48,7 +48,7 @@ void view_thread_quit(pthread_mutex_t *m, pthread_cond_t *cv, int *quit, pthread
 typedef struct view_world view_world;
 
 typedef struct view_world_options {
-    int threads;           /* constructor threads (0: one) */
+    int threads;           /* constructor threads (0: one a core) */
     int view_width, view_height, max_depth; /* how the constructor samples views (lie-build --view-size) */
     const char *record;    /* --record EDITS.yaml, or NULL */
     lie_scene_options so;
@@ -69,7 +69,8 @@ void view_world_sync_oracle(view_world *w);
  * stay right, and get faster when rendered again. */
 uint64_t view_world_units_version(const view_world *w);
 /* Stop units landing until the release (screenshots, pause); returns at once
- * (a unit in progress is dropped). */
+ * (a unit in progress is dropped; a whole cache's update step in progress
+ * ends first). */
 void view_world_hold(view_world *w);
 void view_world_release(view_world *w);
 /* The camera now: the constructor builds what it sees first. */
@@ -79,6 +80,7 @@ lie_ctor *view_world_ctor(const view_world *w);
 /* Changes on every edit and every constructor step: frames older than it are stale. */
 uint64_t view_world_version(const view_world *w);
 int64_t view_world_pending(const view_world *w);   /* units not yet rebuilt */
+uint64_t view_world_units_built(const view_world *w); /* units the constructor has landed (0 without one) */
 int view_world_busy(const view_world *w);          /* units pending, or the update not yet committed */
 int64_t view_world_pending_max(const view_world *w);
 double view_world_last_update_ms(const view_world *w);
@@ -119,6 +121,7 @@ typedef struct view_render view_render;
 typedef struct view_render_options {
     int width, height, light_samples, max_depth, threads;
     float exposure;        /* stops, as lie-render --exposure */
+    int exposure_auto;     /* --exposure auto: each image's own (lie_frame_auto_exposure), as lie-render's */
 } view_render_options;
 
 /* A full frame: when it ended (lie_time_now), how long it took, whether
@@ -150,8 +153,10 @@ lie_status view_render_screenshot(view_render *r, const char *path, lie_error *e
 void view_render_again(view_render *r);
 /* Full frames finished so far. */
 uint64_t view_render_full_count(view_render *r);
-/* The shaded view's exposure, in stops. */
+/* The shaded view's exposure, in stops (auto exposure off). */
 void view_render_set_exposure(view_render *r, float ev);
+/* The exposure the shaded view is shown with now, in stops (auto's last). */
+float view_render_exposure(view_render *r);
 /* Every image finished so far, each level (a copy: free it). */
 view_frame_time *view_render_times(view_render *r, size_t *n);
 
@@ -166,7 +171,7 @@ typedef enum view_cmd_kind {
     VIEW_CMD_FRAMES, VIEW_CMD_ORBIT, VIEW_CMD_DOLLY, VIEW_CMD_SELECT, VIEW_CMD_PICK, VIEW_CMD_DRAG,
     VIEW_CMD_ROTATE, VIEW_CMD_SET_MATERIAL, VIEW_CMD_SET_EMISSION, VIEW_CMD_UNDO, VIEW_CMD_REDO, VIEW_CMD_WAIT,
     VIEW_CMD_SCREENSHOT, VIEW_CMD_QUIT, VIEW_CMD_REMOVE, VIEW_CMD_PAUSE, VIEW_CMD_RESUME, VIEW_CMD_REDRAW,
-    VIEW_CMD_WAIT_AT_MOST
+    VIEW_CMD_WAIT_AT_MOST, VIEW_CMD_WAIT_UNITS
 } view_cmd_kind;
 
 typedef struct view_cmd {

@@ -53,13 +53,28 @@ void view_world_sync_oracle(view_world *w)
 uint64_t view_world_units_version(const view_world *w) { return w->ctor ? lie_ctor_version(w->ctor) : 0; }
 void view_world_hold(view_world *w)
 {
-    if (w->ctor)
+    if (w->ctor) {
         lie_ctor_hold(w->ctor);
+        return;
+    }
+    /* lib/update's steps: the one running ends (it publishes), no other starts */
+    pthread_mutex_lock(&w->cm);
+    w->held++;
+    while (w->stepping)
+        pthread_cond_wait(&w->ccv, &w->cm);
+    pthread_mutex_unlock(&w->cm);
 }
 void view_world_release(view_world *w)
 {
-    if (w->ctor)
+    if (w->ctor) {
         lie_ctor_release(w->ctor);
+        return;
+    }
+    pthread_mutex_lock(&w->cm);
+    if (w->held > 0)
+        w->held--;
+    pthread_cond_broadcast(&w->ccv);
+    pthread_mutex_unlock(&w->cm);
 }
 void view_world_look(view_world *w, const lie_camera *cam)
 {
@@ -79,6 +94,14 @@ int64_t view_world_pending(const view_world *w)
         return (int64_t)cs.units_pending + cs.sampling;
     }
     return atomic_load(&((view_world *)w)->n_pending);
+}
+uint64_t view_world_units_built(const view_world *w)
+{
+    if (!w->ctor)
+        return 0;
+    lie_ctor_stats cs;
+    lie_ctor_get_stats(w->ctor, &cs);
+    return cs.units_built;
 }
 int view_world_busy(const view_world *w)
 {

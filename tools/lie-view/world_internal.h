@@ -45,6 +45,7 @@ struct view_world {
     /* the constructor */
     pthread_t ctor_thread;
     int ctor_started, quit, failed;
+    int held, stepping;        /* (cm) view_world_hold's count; a step is running */
     lie_error ctor_err;
     pthread_mutex_t cm;
     pthread_cond_t ccv;        /* work arrived, or pending reached 0 */
