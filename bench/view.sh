@@ -75,18 +75,19 @@ fi
 # time first (every shadow ray Embree's: the constructor paused until
 # then) and once the constructor has
 # caught up with the view (CATCHUP seconds at most; "pending" says what it
-# had not built by then); on bedroom_corner, a drag's catch-up against
+# had not built by then); on each, a drag's catch-up against
 # rst-update of the same edit on the cache of the same view.
-# NAME|SCENE|CAMERA|PICK (a pixel of an object to drag, or empty)
+# NAME|SCENE|CAMERA|PICK|MOVE (a pixel of an object to drag, or empty, and
+# how far, in the scene's units)
 CSIZE=${CSIZE:-256x256}
 CLS=${CLS:-32}
 CATCHUP=${CATCHUP:-300}
-CSCENES=${CSCENES:-"bedroom_corner|../shared/scenes/bedroom_corner/scene.gltf|eye=30,25,35,target=-40,20,-20|128 200
-scifi_hallway|../shared/scenes/scifi_hallway/space_ship_hallway.glb|eye=20.1,0.4,-2,target=20.1,0.2,-15|
-ccity_buildings|../shared/scenes/ccity_buildings/scene.gltf|eye=-10000,300,-5000,target=-15000,200,-13000|"}
+CSCENES=${CSCENES:-"bedroom_corner|../shared/scenes/bedroom_corner/scene.gltf|eye=30,25,35,target=-40,20,-20|128 200|3 0 -2
+scifi_hallway|../shared/scenes/scifi_hallway/space_ship_hallway.glb|eye=20.1,0.4,-2,target=20.1,0.2,-15|40 128|0.3 0 0.2
+ccity_buildings|../shared/scenes/ccity_buildings/scene.gltf|eye=-10000,300,-5000,target=-15000,200,-13000|118 140|300 0 200"}
 printf '\n%-16s %8s %9s %9s %7s %9s %10s %10s\n' "lie-view $CSIZE" "first" "full 1st" "full end" "ratio" "pending" "drag up" "rst-update"
 printf '%-16s %8s %9s %9s %7s %9s %10s %10s\n' "target" "<= 1 s" "" "" ">= 5" "" "" ">= drag"
-echo "$CSCENES" | while IFS='|' read -r name scene cam pick; do
+echo "$CSCENES" | while IFS='|' read -r name scene cam pick move; do
     [ -f "$scene" ] || { echo "$name: $scene missing"; continue; }
     {
         echo "pause"      # the first full frames with every shadow ray Embree's
@@ -97,7 +98,7 @@ echo "$CSCENES" | while IFS='|' read -r name scene cam pick; do
         echo "redraw 3"
         if [ -n "$pick" ]; then
             echo "pick $pick"
-            echo "drag 3 0 -2"
+            echo "drag ${move:-3 0 -2}"
             echo "wait-at-most $CATCHUP"
             echo "redraw 1"
         fi
@@ -112,7 +113,8 @@ echo "$CSCENES" | while IFS='|' read -r name scene cam pick; do
     drag=$(sed -n 's/.*"catchup_ms":\[\([0-9.]*\).*/\1/p' "$J")
     rst=""
     if [ -n "$pick" ] && [ -s "$TMP/c.yaml" ]; then
-        bin/lie-build "$scene" --view "$cam" -q -o "$TMP/c.lie"
+        vcam=$(sed -n 's/.*"camera":"\([^"]*\)".*/\1/p' "$J") # the viewer's, as it printed it
+        bin/lie-build "$scene" --view "${vcam:-$cam}" -q -o "$TMP/c.lie"
         t0=$(date +%s.%N)
         bin/rst-update "$TMP/c.lie" "$TMP/c.yaml" -q -o "$TMP/c2.lie"
         rst=$(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN { printf "%.0f", 1e3 * (b - a) }')

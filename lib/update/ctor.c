@@ -1082,8 +1082,13 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
         lie_box3 tb = tri_box(&s->tri_p[3 * (size_t)t]);
         for (size_t k = 0; k < c->ne; k++) {
             uint32_t r = c->env.root[(size_t)t * c->ne + k];
-            if (r == 0 || lie_box3_is_empty(&cb[k]))
-                continue; /* unbuilt, or a cluster with no shafts */
+            uint32_t cls = c->env.nodes[r].cls;
+            /* as the trees leave them out (lib/rst): unlit stays unlit unless
+             * its patch or emitter moves, an unbuilt unit stays unbuilt (the
+             * cost model's decision reads light, not blockers); and a
+             * cluster with no shafts */
+            if (r == 0 || cls == LIE_CLASS_UNLIT || cls == LIE_CLASS_NONE || lie_box3_is_empty(&cb[k]))
+                continue;
             int meets = !isfinite(cb[k].lo.x);
             if (!meets) {
                 lie_box3 u = tb;

@@ -174,7 +174,9 @@ lie_status lie_update_apply(lie_cache *cache, lie_scene *scene, const lie_edit *
  * renderer reads lie_ctor_env between lie_ctor_read_lock and
  * lie_ctor_read_unlock: the env is changed in place (each landing appends
  * what landed, never copies the whole env) under the write side of that
- * lock.  To edit the scene: lie_ctor_hold (builds stop, the unit in
+ * lock.  A builder never waits for the lock: what it cannot land at once
+ * lands at the next chance, at the latest when a reader next takes the
+ * lock (so hold it for a band of a frame, not for the frame).  To edit the scene: lie_ctor_hold (builds stop, the unit in
  * progress is dropped), edit, make the new Embree scene, lie_ctor_edited,
  * lie_ctor_release. */
 typedef struct lie_ctor lie_ctor;
