@@ -47,9 +47,12 @@ typedef struct pxref {
     int refs;
 } pxref;
 
-/* A triangle's units, built, waiting for the write side of env_lock. */
+/* Units of a triangle, built, waiting for the write side of env_lock: all
+ * of them, or (after an edit) a run of the units it sent back, the
+ * triangle's last run marked. */
 typedef struct ready_part {
     uint32_t t;
+    int last;
     lie_env_part part;
     pxref *px; /* the pixels it was built for */
 } ready_part;
@@ -90,6 +93,11 @@ struct lie_ctor {
     uint64_t pending;       /* triangles pending, being built or ready */
     ready_part *ready;      /* built, not landed yet (see land_ready) */
     size_t n_ready, cap_ready;
+    /* After an edit a pending triangle may keep most of its units: only
+     * those an edit reached (redo, per unit) are built again, the others
+     * stay landed (some_tri: triangle t is pending so).  Invariant: a
+     * triangle without some_tri has no redo unit. */
+    uint8_t *redo, *some_tri;
     uint64_t units_built;
     double t0;
     lie_ctor_sample *samples;
@@ -164,11 +172,21 @@ static int reserve(void **a, size_t *cap, size_t need, size_t elem)
     return 1;
 }
 
-/* Every unit of triangle t back to the shared unbuilt leaf. */
+/* Every unit of triangle t back to the shared unbuilt leaf: all of them
+ * to build again. */
 static void unland(lie_ctor *c, uint32_t t)
 {
-    for (size_t e = 0; e < c->ne; e++)
+    for (size_t e = 0; e < c->ne; e++) {
         c->env.root[(size_t)t * c->ne + e] = 0;
+        c->redo[(size_t)t * c->ne + e] = 0;
+    }
+    c->some_tri[t] = 0;
+}
+
+/* Triangle t holds units built: landed, or pending only in some. */
+static int has_landed(const lie_ctor *c, uint32_t t)
+{
+    return c->state[t] == TRI_BUILT || (c->state[t] == TRI_PENDING && c->some_tri[t]);
 }
 
 /* Land a part (one triangle's units): its nodes and lists at the arrays' ends. */
@@ -365,7 +383,7 @@ static void take_view(lie_ctor *c)
         /* landed triangles whose decisions the new pixels change go again */
         pthread_rwlock_wrlock(&c->env_lock);
         for (uint32_t t = 0; old && t < c->s->n_tris; t++)
-            if (c->state[t] == TRI_BUILT && lie_env_tri_stale(&c->env, c->s, old->px, nw->px, t)) {
+            if (has_landed(c, t) && lie_env_tri_stale(&c->env, c->s, old->px, nw->px, t)) {
                 unland(c, t);
                 set_state(c, t, TRI_PENDING);
             }
@@ -435,13 +453,13 @@ static void take_resample(lie_ctor *c)
         pthread_rwlock_wrlock(&c->env_lock);
         for (uint32_t t = 0; t < c->s->n_tris; t++) {
             int seen = tri_hits(npx, t) > 0;
-            if (c->state[t] == TRI_BUILT && lie_pixels_tri_hash(c->px->px, t) != lie_pixels_tri_hash(npx->px, t))
+            int changed = has_landed(c, t) && lie_pixels_tri_hash(c->px->px, t) != lie_pixels_tri_hash(npx->px, t);
+            if (changed)
                 unland(c, t);
             if (!seen) {
                 unland(c, t);
                 set_state(c, t, TRI_UNSEEN);
-            } else if (seen && c->state[t] == TRI_BUILT &&
-                       lie_pixels_tri_hash(c->px->px, t) != lie_pixels_tri_hash(npx->px, t)) {
+            } else if (changed) {
                 set_state(c, t, TRI_PENDING);
             } else if (seen && c->state[t] == TRI_UNSEEN) {
                 set_state(c, t, TRI_PENDING);
@@ -488,12 +506,17 @@ static void land_ready(lie_ctor *c, int wait)
                 fail(c, &err);
             }
             set_state(c, r->t, TRI_PENDING);
+        } else if (!r->last) {
+            c->units_built += r->part.n_units; /* more of the triangle follows */
         } else if (r->px && r->px != c->px && lie_env_tri_stale(&c->env, c->s, r->px->px, c->px->px, r->t)) {
             unland(c, r->t);
             set_state(c, r->t, TRI_PENDING);
         } else {
+            for (size_t e = 0; e < c->ne; e++)
+                c->redo[(size_t)r->t * c->ne + e] = 0;
+            c->some_tri[r->t] = 0;
             set_state(c, r->t, TRI_BUILT);
-            c->units_built += c->ne;
+            c->units_built += r->part.n_units;
         }
         lie_env_part_free(&r->part);
         px_drop(r->px);
@@ -505,8 +528,9 @@ static void land_ready(lie_ctor *c, int wait)
     pthread_cond_broadcast(&c->idle_cv);
 }
 
-/* Build triangle t (m held on entry and exit); it lands when the env is
- * free (land_ready). */
+/* Build triangle t (m held on entry and exit): all its units, or those
+ * an edit sent back (redo), each run of them one part; it lands when the
+ * env is free (land_ready). */
 static void build_tri(lie_ctor *c, uint32_t t)
 {
     set_state(c, t, TRI_BUSY);
@@ -514,32 +538,58 @@ static void build_tri(lie_ctor *c, uint32_t t)
     if (px)
         px->refs++;
     c->busy++;
+    uint8_t *want = malloc(c->ne + 1); /* the units to build, read under m */
+    int some = c->some_tri[t];
+    for (size_t e = 0; want && e < c->ne; e++)
+        want[e] = !some || c->redo[(size_t)t * c->ne + e];
     pthread_mutex_unlock(&c->m);
-    lie_env_part part;
-    lie_build_stats bs;
+    lie_env_part *parts = calloc(c->ne + 1, sizeof *parts);
+    size_t n_parts = 0;
     lie_error err;
-    lie_status st = lie_env_build_units(c->s, c->rt, &c->p, px ? px->px : NULL, (uint64_t)t * c->ne, c->ne, &c->stop,
-                                        &part, &bs, &err);
-    int interrupted = st == LIE_OK && bs.units_interrupted > 0;
+    lie_status st = want && parts ? LIE_OK : lie_error_set(&err, LIE_ERR_NOMEM, c->s->path, "out of memory");
+    int interrupted = 0;
+    for (size_t e = 0; st == LIE_OK && !interrupted && e < c->ne;) {
+        if (!want[e]) {
+            e++;
+            continue;
+        }
+        size_t e1 = e;
+        while (e1 < c->ne && want[e1])
+            e1++;
+        lie_build_stats bs;
+        st = lie_env_build_units(c->s, c->rt, &c->p, px ? px->px : NULL, (uint64_t)t * c->ne + e, e1 - e, &c->stop,
+                                 &parts[n_parts], &bs, &err);
+        if (st == LIE_OK)
+            n_parts++;
+        interrupted = st == LIE_OK && bs.units_interrupted > 0;
+        e = e1;
+    }
+    free(want);
     pthread_mutex_lock(&c->m);
     c->busy--;
     if (st == LIE_OK && !interrupted &&
-        !reserve((void **)&c->ready, &c->cap_ready, c->n_ready + 1, sizeof *c->ready))
+        !reserve((void **)&c->ready, &c->cap_ready, c->n_ready + n_parts + 1, sizeof *c->ready))
         st = lie_error_set(&err, LIE_ERR_NOMEM, c->s->path, "out of memory for the constructor's environments");
-    if (st != LIE_OK) {
-        lie_env_part_free(&part);
-        set_state(c, t, TRI_PENDING);
-        fail(c, &err);
-        px_drop(px);
-    } else if (interrupted) {
-        lie_env_part_free(&part);
-        set_state(c, t, TRI_PENDING); /* a hold stopped it: again later */
+    if (st != LIE_OK || interrupted || n_parts == 0) {
+        for (size_t i = 0; i < n_parts; i++)
+            lie_env_part_free(&parts[i]);
+        int nothing = n_parts == 0 && st == LIE_OK && !interrupted; /* no unit was sent back */
+        if (nothing)
+            c->some_tri[t] = 0;
+        set_state(c, t, nothing ? TRI_BUILT : TRI_PENDING);
+        if (st != LIE_OK)
+            fail(c, &err); /* (interrupted: a hold stopped it, again later) */
         px_drop(px);
     } else {
-        c->ready[c->n_ready++] = (ready_part){t, part, px};
+        for (size_t i = 0; i < n_parts; i++) {
+            if (i > 0 && px)
+                px->refs++;
+            c->ready[c->n_ready++] = (ready_part){t, i + 1 == n_parts, parts[i], px};
+        }
         set_state(c, t, TRI_READY);
         land_ready(c, 0);
     }
+    free(parts);
     pthread_cond_broadcast(&c->idle_cv);
 }
 
@@ -625,6 +675,8 @@ void lie_ctor_destroy(lie_ctor *c)
     px_drop(c->cur);
     free(c->views.cams);
     free(c->state);
+    free(c->redo);
+    free(c->some_tri);
     free(c->order);
     free(c->samples);
     for (size_t i = 0; i < c->n_ready; i++) {
@@ -745,8 +797,10 @@ lie_status lie_ctor_create(lie_scene *s, const lie_rt *rt, const lie_ctor_option
     size_t n_units = (size_t)s->n_tris * c->ne;
     c->env.root = malloc(sizeof *c->env.root * (n_units + 1));
     c->state = calloc((size_t)s->n_tris + 1, 1);
+    c->redo = calloc(n_units + 1, 1);
+    c->some_tri = calloc((size_t)s->n_tris + 1, 1);
     c->tri_p = malloc(sizeof *c->tri_p * (3 * (size_t)s->n_tris + 1));
-    lie_status st = c->env.root && c->state && c->tri_p &&
+    lie_status st = c->env.root && c->state && c->redo && c->some_tri && c->tri_p &&
                             reserve((void **)&c->env.nodes, &c->cap_nodes, 1, sizeof(lie_pnode)) &&
                             reserve((void **)&c->env.pool, &c->cap_pool, 1, sizeof(uint32_t))
                         ? LIE_OK
@@ -949,8 +1003,13 @@ lie_status lie_ctor_build(lie_ctor *c, const uint8_t *mask, const lie_camera *ca
     }
     pthread_mutex_lock(&c->m);
     c->busy--;
-    for (size_t i = 0; i < n; i++)
+    for (size_t i = 0; i < n; i++) {
+        if (st == LIE_OK) { /* every unit built: none left to redo */
+            memset(c->redo + (size_t)tris[i] * c->ne, 0, c->ne);
+            c->some_tri[tris[i]] = 0;
+        }
         set_state(c, tris[i], st == LIE_OK ? TRI_BUILT : TRI_PENDING);
+    }
     if (st == LIE_OK) {
         c->units_built += n * c->ne;
         sample_stats(c);
@@ -1077,7 +1136,7 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
     uint8_t *flags = restart ? NULL : calloc((size_t)c->env.n_nodes + 1, 1);
     uint64_t candidates = 0;
     for (uint32_t t = 0; flags && t < s->n_tris; t++) {
-        if (moved[t] || c->state[t] != TRI_BUILT)
+        if (moved[t] || !has_landed(c, t))
             continue;
         lie_box3 tb = tri_box(&s->tri_p[3 * (size_t)t]);
         for (size_t k = 0; k < c->ne; k++) {
@@ -1108,16 +1167,32 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
             mb[n_moved_boxes++] = moved_boxes[i];
     if (flags && candidates)
         lie_rst_refine(s, &c->env, mb, n_moved_boxes, flags, 0);
+    /* a triangle moved (or everything: restart) goes again whole; one
+     * with units the refinement kept goes again in those units only, the
+     * others staying landed (units are independent: lib/lie/lie.h) */
     for (uint32_t t = 0; t < s->n_tris; t++) {
-        int again = restart || moved[t] || !flags;
-        for (size_t k = 0; !again && k < c->ne; k++)
-            again = flags[c->env.root[(size_t)t * c->ne + k]];
-        if (!again && c->state[t] != TRI_BUILT)
-            continue;
-        if (again)
+        if (restart || moved[t] || !flags) {
+            int was_built = c->state[t] == TRI_BUILT;
             unland(c, t);
-        if (again && c->state[t] == TRI_BUILT)
+            if (was_built)
+                set_state(c, t, TRI_PENDING);
+            continue;
+        }
+        if (!has_landed(c, t))
+            continue;
+        int any = 0;
+        for (size_t k = 0; k < c->ne; k++) {
+            size_t u = (size_t)t * c->ne + k;
+            if (c->env.root[u] && flags[c->env.root[u]]) {
+                c->env.root[u] = 0;
+                c->redo[u] = 1;
+                any = 1;
+            }
+        }
+        if (any) {
+            c->some_tri[t] = 1;
             set_state(c, t, TRI_PENDING);
+        }
     }
     free(flags);
     c->env.scene_hash = s->hash;

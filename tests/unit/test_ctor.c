@@ -191,9 +191,70 @@ static void test_an_edit_during_construction_ends_in_the_edited_build(void **sta
     close_fixture(&f);
 }
 
+/* Apply one edit as lie-view does: held, the scene edited, its Embree scene
+ * made again, the constructor told. */
+static void ctor_edit(lie_ctor *c, fixture *f, const char *text)
+{
+    lie_error err;
+    lie_edit *e = NULL;
+    assert_int_equal(lie_edit_parse((const unsigned char *)text, strlen(text), "e.yaml", &e, &err), LIE_OK);
+    lie_ctor_hold(c);
+    assert_int_equal(lie_edit_apply(f->s, e, NULL, NULL, &err), LIE_OK);
+    lie_rt *rt = NULL;
+    assert_int_equal(lie_rt_create(f->s, &rt, &err), LIE_OK);
+    assert_int_equal(lie_ctor_edited(c, rt, 1, &err), LIE_OK);
+    lie_rt_destroy(f->rt);
+    f->rt = rt;
+    lie_ctor_release(c);
+    lie_edit_destroy(e);
+}
+
+/* Six emitters: an edit sends back only the units whose shafts the moved
+ * geometry may reach, not their triangles' other units, and a second edit
+ * while those are pending adds to them; the end is the edited scene's
+ * build, byte for byte. */
+static void test_edits_send_back_units_not_triangles(void **state)
+{
+    (void)state;
+    fixture f;
+    lie_error err;
+    memset(&f, 0, sizeof f);
+    assert_int_equal(lie_scene_load(TEST_SCENES "/museum3.gltf", NULL, &f.s, &err), LIE_OK);
+    assert_int_equal(lie_rt_create(f.s, &f.rt, &err), LIE_OK);
+    /* inside the room, over the first table group under its light */
+    assert_int_equal(lie_camera_parse(f.s, "eye=-3,2.5,0,target=-6,0.5,-3.5", &f.cams[0], &err), LIE_OK);
+    f.co = lie_ctor_options_default();
+    f.co.params.min_patch = 1e-2f;
+    f.co.view_width = f.co.view_height = 48;
+    f.co.max_depth = 2;
+    f.co.threads = 2;
+    assert_true(f.s->n_clusters > 1);
+    lie_ctor *c = NULL;
+    assert_int_equal(lie_ctor_create(f.s, f.rt, &f.co, NULL, &c, &err), LIE_OK);
+    lie_ctor_view(c, &f.cams[0]);
+    assert_int_equal(lie_ctor_wait(c, -1.0, &err), 1);
+    lie_ctor_stats st;
+    lie_ctor_get_stats(c, &st);
+    uint64_t before = st.units_built;
+    ctor_edit(c, &f, "- move: {node: G1Chair1, by: [0.3, 0, 0.2]}\n");
+    ctor_edit(c, &f, "- move: {node: G1Table, by: [-0.2, 0, 0.1]}\n");
+    assert_int_equal(lie_ctor_wait(c, -1.0, &err), 1);
+    lie_ctor_get_stats(c, &st);
+    /* some units went again, far from all of the view's */
+    assert_true(st.units_built > before);
+    assert_true(st.units_built - before < before / 2);
+    lie_env *got = saved(c, f.s), *want = batch(&f, 1);
+    assert_true(same_env(got, want));
+    lie_env_destroy(got);
+    lie_env_destroy(want);
+    lie_ctor_destroy(c);
+    close_fixture(&f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_edits_send_back_units_not_triangles),
         cmocka_unit_test(test_two_views_end_in_one_build_for_both),
         cmocka_unit_test(test_held_and_manual_constructors),
         cmocka_unit_test(test_an_edit_during_construction_ends_in_the_edited_build),
