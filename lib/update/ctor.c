@@ -104,6 +104,8 @@ struct lie_ctor {
     size_t n_samples, cap_samples;
     /* the geometry the landed units were built on (edits compare against it) */
     lie_vec3 *tri_p;
+    lie_emitter *em;        /* the emitters as they were (their geometry and light; pointers unused) */
+    int n_em;
     uint32_t n_tris;
     float max_tri_area, ray_far;
     pthread_t *tids;
@@ -651,6 +653,9 @@ static void *worker_main(void *arg)
 static void keep_geometry(lie_ctor *c)
 {
     memcpy(c->tri_p, c->s->tri_p, sizeof *c->tri_p * 3 * (size_t)c->s->n_tris);
+    if (c->s->n_emitters)
+        memcpy(c->em, c->s->emitters, sizeof *c->em * (size_t)c->s->n_emitters);
+    c->n_em = c->s->n_emitters;
     c->n_tris = c->s->n_tris;
     c->max_tri_area = c->s->max_tri_area;
     c->ray_far = lie_pair_ray_far(c->s);
@@ -685,6 +690,7 @@ void lie_ctor_destroy(lie_ctor *c)
     }
     free(c->ready);
     free(c->tri_p);
+    free(c->em);
     pthread_rwlock_destroy(&c->env_lock);
     pthread_mutex_destroy(&c->m);
     pthread_cond_destroy(&c->cv);
@@ -800,7 +806,8 @@ lie_status lie_ctor_create(lie_scene *s, const lie_rt *rt, const lie_ctor_option
     c->redo = calloc(n_units + 1, 1);
     c->some_tri = calloc((size_t)s->n_tris + 1, 1);
     c->tri_p = malloc(sizeof *c->tri_p * (3 * (size_t)s->n_tris + 1));
-    lie_status st = c->env.root && c->state && c->redo && c->some_tri && c->tri_p &&
+    c->em = malloc(sizeof *c->em * ((size_t)s->n_emitters + 1));
+    lie_status st = c->env.root && c->state && c->redo && c->some_tri && c->tri_p && c->em &&
                             reserve((void **)&c->env.nodes, &c->cap_nodes, 1, sizeof(lie_pnode)) &&
                             reserve((void **)&c->env.pool, &c->cap_pool, 1, sizeof(uint32_t))
                         ? LIE_OK
@@ -1073,13 +1080,27 @@ static void box_pad(lie_box3 *b, float d)
     b->hi = lie_v3(b->hi.x + d, b->hi.y + d, b->hi.z + d);
 }
 
+/* Whether an emitter kept its geometry and light (every field a unit or
+ * the cost model reads; not its pointers, which an edit may make anew). */
+static int same_emitter(const lie_emitter *a, const lie_emitter *b)
+{
+    return a->type == b->type && a->first_tri == b->first_tri && a->n_tris == b->n_tris && a->area == b->area &&
+           memcmp(a->radiance, b->radiance, sizeof a->radiance) == 0 && a->double_sided == b->double_sided &&
+           a->n_hull == b->n_hull && memcmp(a->hull, b->hull, sizeof a->hull) == 0 &&
+           memcmp(&a->position, &b->position, sizeof a->position) == 0 &&
+           memcmp(&a->direction, &b->direction, sizeof a->direction) == 0 &&
+           memcmp(a->intensity, b->intensity, sizeof a->intensity) == 0 && a->cos_inner == b->cos_inner &&
+           a->cos_outer == b->cos_outer && a->range == b->range && a->first_cluster == b->first_cluster &&
+           a->n_clusters == b->n_clusters;
+}
+
 lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie_error *err)
 {
     pthread_mutex_lock(&c->m);
     lie_scene *s = c->s;
     c->rt = rt;
     int restart = !geometry_only || s->n_tris != c->n_tris || (size_t)s->n_clusters != c->ne ||
-                  s->max_tri_area != c->max_tri_area || lie_pair_ray_far(s) != c->ray_far;
+                  s->n_emitters != c->n_em || s->max_tri_area != c->max_tri_area || lie_pair_ray_far(s) != c->ray_far;
     lie_status st = LIE_OK;
     if (restart && (s->n_tris != c->n_tris || (size_t)s->n_clusters != c->ne)) {
         pthread_mutex_unlock(&c->m);
@@ -1090,8 +1111,18 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
     /* the moved geometry, before and after, and its size for the padding */
     lie_box3 before = lie_box3_empty(), after = lie_box3_empty(), all = lie_box3_empty();
     uint8_t *moved = calloc((size_t)s->n_tris + 1, 1);
-    if (!moved)
+    /* clusters of an emitter the edit moved (or changed): every unit of
+     * them goes again, as rst-update builds them afresh (lib/update/mark.c) */
+    uint8_t *cl_moved = calloc(c->ne + 1, 1);
+    int light_moved = 0;
+    if (!moved || !cl_moved)
         st = lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
+    for (int e = 0; st == LIE_OK && !restart && e < s->n_emitters; e++)
+        if (!same_emitter(&c->em[e], &s->emitters[e])) {
+            for (int k = 0; k < s->emitters[e].n_clusters; k++)
+                cl_moved[s->emitters[e].first_cluster + k] = 1;
+            light_moved = 1;
+        }
     for (uint32_t t = 0; st == LIE_OK && t < s->n_tris; t++) {
         const lie_vec3 *a = &c->tri_p[3 * (size_t)t], *b = &s->tri_p[3 * (size_t)t];
         for (int q = 0; q < 3; q++)
@@ -1103,8 +1134,12 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
             lie_box3_grow(&before, a[q]);
             lie_box3_grow(&after, b[q]);
         }
-        if (s->tri_emitter && s->tri_emitter[t] >= 0)
-            restart = 1; /* an emitter moved: every unit of it */
+        if (s->tri_emitter && s->tri_emitter[t] >= 0) { /* an emitter moved: every unit of it */
+            const lie_emitter *em = &s->emitters[s->tri_emitter[t]];
+            for (int k = 0; k < em->n_clusters; k++)
+                cl_moved[em->first_cluster + k] = 1;
+            light_moved = 1;
+        }
     }
     /* shadow rays start a little off the surface (lib/rt/rt.h): pad */
     float pad = lie_box3_is_empty(&all) ? 0.0f : 1e-3f * lie_v3_len(lie_v3_sub(all.hi, all.lo));
@@ -1117,6 +1152,7 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
         cb[k] = cluster_box(s, (int)k);
     if (st != LIE_OK) {
         free(moved);
+        free(cl_moved);
         free(cb);
         fail(c, err);
         pthread_mutex_unlock(&c->m);
@@ -1134,6 +1170,11 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
      * of a large emitter holds most of a room: the box test alone sent
      * every unit of the view back. */
     uint8_t *flags = restart ? NULL : calloc((size_t)c->env.n_nodes + 1, 1);
+    double *share = light_moved ? malloc(sizeof *share * (c->ne + 1)) : NULL;
+    if (light_moved && !share) {
+        free(flags); /* out of memory: everything goes again */
+        flags = NULL;
+    }
     uint64_t candidates = 0;
     for (uint32_t t = 0; flags && t < s->n_tris; t++) {
         if (moved[t] || !has_landed(c, t))
@@ -1146,7 +1187,7 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
              * its patch or emitter moves, an unbuilt unit stays unbuilt (the
              * cost model's decision reads light, not blockers); and a
              * cluster with no shafts */
-            if (r == 0 || cls == LIE_CLASS_UNLIT || cls == LIE_CLASS_NONE || lie_box3_is_empty(&cb[k]))
+            if (r == 0 || cls == LIE_CLASS_UNLIT || cls == LIE_CLASS_NONE || lie_box3_is_empty(&cb[k]) || cl_moved[k])
                 continue;
             int meets = !isfinite(cb[k].lo.x);
             if (!meets) {
@@ -1180,10 +1221,21 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
         }
         if (!has_landed(c, t))
             continue;
+        /* the cost model's decision to build a unit for the views reads
+         * every emitter's light at its triangle (lie_unit_shares): when an
+         * emitter moved, a unit whose decision turns goes again, as
+         * rst-update decides it anew (lib/update/mark.c) */
+        int decide = light_moved && share && c->views_mode && c->px;
+        if (decide)
+            lie_unit_shares(s, t, lie_pair_ray_far(s), share);
         int any = 0;
         for (size_t k = 0; k < c->ne; k++) {
             size_t u = (size_t)t * c->ne + k;
-            if (c->env.root[u] && flags[c->env.root[u]]) {
+            uint32_t r = c->env.root[u];
+            int again = r && (flags[r] || cl_moved[k]);
+            if (r && !again && decide)
+                again = (c->env.nodes[r].cls != LIE_CLASS_NONE) != lie_unit_pays(&c->p, c->px->px, t, share[k]);
+            if (again) {
                 c->env.root[u] = 0;
                 c->redo[u] = 1;
                 any = 1;
@@ -1195,6 +1247,8 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
         }
     }
     free(flags);
+    free(share);
+    free(cl_moved);
     c->env.scene_hash = s->hash;
     pthread_rwlock_unlock(&c->env_lock);
     /* the views' pixels on the edited scene: sampled by a constructor

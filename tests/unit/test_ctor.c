@@ -211,8 +211,9 @@ static void ctor_edit(lie_ctor *c, fixture *f, const char *text)
 
 /* Six emitters: an edit sends back only the units whose shafts the moved
  * geometry may reach, not their triangles' other units, and a second edit
- * while those are pending adds to them; the end is the edited scene's
- * build, byte for byte. */
+ * while those are pending adds to them; a moved light sends back its own
+ * units, not every unit; each time the end is the edited scene's build,
+ * byte for byte. */
 static void test_edits_send_back_units_not_triangles(void **state)
 {
     (void)state;
@@ -244,6 +245,19 @@ static void test_edits_send_back_units_not_triangles(void **state)
     assert_true(st.units_built > before);
     assert_true(st.units_built - before < before / 2);
     lie_env *got = saved(c, f.s), *want = batch(&f, 1);
+    assert_true(same_env(got, want));
+    lie_env_destroy(got);
+    lie_env_destroy(want);
+    /* a light moved: its units go again, and those of the others whose
+     * cost-model decision its light turns; not all */
+    uint64_t built = st.units_built;
+    ctor_edit(c, &f, "- move: {node: Light1, by: [0.5, 0, 0.25]}\n");
+    assert_int_equal(lie_ctor_wait(c, -1.0, &err), 1);
+    lie_ctor_get_stats(c, &st);
+    assert_true(st.units_built > built);
+    assert_true(st.units_built - built < before);
+    got = saved(c, f.s);
+    want = batch(&f, 1);
     assert_true(same_env(got, want));
     lie_env_destroy(got);
     lie_env_destroy(want);
