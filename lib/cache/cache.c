@@ -109,6 +109,68 @@ static lie_status check_cache(const lie_cache *c, const char *name, lie_error *e
     return lie_cache_check_env(env, LIE_ERR_ARG, name, "refusing to write an invalid env: ", err);
 }
 
+/* The file's trees (formats/lie-cache.md, Canonical order): a unit that is
+ * one lone leaf is a tag in ROOTS; every other unit's nodes follow in unit
+ * order, each tree depth first, a split node's four children appended when
+ * it is visited, lists in the order their leaves are visited.  Whatever
+ * the env's own layout (a build's shares its lone leaves; an older file's
+ * or an edited env's may not), the same trees give the same bytes. */
+typedef struct tree_writer {
+    const lie_env *env;
+    unsigned char *nodes, *pool; /* where NODES and POOL start */
+    uint32_t next_node, next_pool;
+} tree_writer;
+
+static void put_node(unsigned char *p, const lie_pnode *x)
+{
+    lie_cache_put_u32(p + 0, x->child);
+    lie_cache_put_u32(p + 4, x->cls);
+    lie_cache_put_u32(p + 8, x->quality);
+    lie_cache_put_u32(p + 12, x->list);
+    lie_cache_put_u32(p + 16, x->count);
+}
+
+static void write_tree(tree_writer *w, uint32_t from, uint32_t idx)
+{
+    lie_pnode x = w->env->nodes[from];
+    if (x.child) {
+        uint32_t first = w->next_node, oc = x.child;
+        w->next_node += 4;
+        x.child = first;
+        put_node(w->nodes + (size_t)LIE_CACHE_NODE_SIZE * idx, &x);
+        for (uint32_t k = 0; k < 4; k++)
+            write_tree(w, oc + k, first + k);
+        return;
+    }
+    if (x.cls == LIE_CLASS_PARTIAL) {
+        for (uint32_t k = 0; k < x.count; k++)
+            lie_cache_put_u32(w->pool + 4 * ((size_t)w->next_pool + k), w->env->pool[x.list + k]);
+        x.list = w->next_pool;
+        w->next_pool += x.count;
+    }
+    put_node(w->nodes + (size_t)LIE_CACHE_NODE_SIZE * idx, &x);
+}
+
+static void tree_size(const lie_env *env, uint32_t from, uint64_t *nodes, uint64_t *pool)
+{
+    const lie_pnode *x = &env->nodes[from];
+    ++*nodes;
+    if (x->child)
+        for (uint32_t k = 0; k < 4; k++)
+            tree_size(env, x->child + k, nodes, pool);
+    else if (x->cls == LIE_CLASS_PARTIAL)
+        *pool += x->count;
+}
+
+/* The ROOTS entry of a lone unit, or 0 (no tag is 0). */
+static uint32_t lone_tag(const lie_env *env, uint32_t root)
+{
+    const lie_pnode *x = &env->nodes[root];
+    if (!lie_pnode_lone(x))
+        return 0;
+    return x->cls == LIE_CLASS_UNLIT ? LIE_CACHE_ROOT_LONE_UNLIT : LIE_CACHE_ROOT_LONE_NONE;
+}
+
 /* `name` (the output path, or NULL) is used in messages.  One piece: the
  * sections in the order formats/lie-cache.md specifies them, each a few
  * lines, share one running offset and the header that records them. */
@@ -130,9 +192,15 @@ static lie_status encode(const lie_cache *c, const char *name, unsigned char **d
     for (int i = 0; i < c->n_edits; i++)
         sz[S_EDITS] += 8 + (uint64_t)strlen(c->edits[i].name) + c->edits[i].size;
     sz[S_EMITTERS] = LIE_CACHE_EMITTER_SIZE * (uint64_t)c->n_emitters;
+    uint64_t file_nodes = 0, file_pool = 0;
+    for (uint64_t u = 0; u < n_units; u++)
+        if (!lone_tag(env, env->root[u]))
+            tree_size(env, env->root[u], &file_nodes, &file_pool);
+    if (file_nodes >= 0xFFFFFFF0u || file_pool >= 0xFFFFFFF0u)
+        return lie_error_set(err, LIE_ERR_LIMIT, name, "the patch trees hold too many nodes for one cache");
     sz[S_ROOTS] = 4 * n_units;
-    sz[S_NODES] = LIE_CACHE_NODE_SIZE * (uint64_t)env->n_nodes;
-    sz[S_POOL] = 4 * (uint64_t)env->n_pool;
+    sz[S_NODES] = LIE_CACHE_NODE_SIZE * file_nodes;
+    sz[S_POOL] = 4 * file_pool;
     sz[S_VIEWS] = LIE_CACHE_VIEWS_FIXED + LIE_CACHE_VIEW_SIZE * (uint64_t)c->views.n_cams;
     /* VIEWS only in a cache built for views: others keep their layout */
     const int n_sections = c->views.n_cams ? S_COUNT : S_VIEWS;
@@ -165,8 +233,8 @@ static lie_status encode(const lie_cache *c, const char *name, unsigned char **d
     lie_cache_put_u32(p + 16, env->n_tris);
     lie_cache_put_u32(p + 20, (uint32_t)c->n_emitters);
     lie_cache_put_u64(p + 24, n_units);
-    lie_cache_put_u32(p + 32, env->n_nodes);
-    lie_cache_put_u32(p + 36, env->n_pool);
+    lie_cache_put_u32(p + 32, (uint32_t)file_nodes);
+    lie_cache_put_u32(p + 36, (uint32_t)file_pool);
     lie_cache_put_u32(p + 40, (uint32_t)path_len);
     lie_cache_put_u32(p + 44, 0);
     memcpy(p + LIE_CACHE_META_FIXED, c->scene_path, (size_t)path_len);
@@ -185,6 +253,7 @@ static lie_status encode(const lie_cache *c, const char *name, unsigned char **d
     lie_cache_put_u32(p + 36, lie_cache_f32_bits(env->params.ns_segment));
     lie_cache_put_u32(p + 40, lie_cache_f32_bits(env->params.ns_blocker));
     lie_cache_put_u32(p + 44, lie_cache_f32_bits(env->params.ns_ray));
+    lie_cache_put_u32(p + 48, env->params.complex_predict);
 
     /* EDITS */
     p = buf + off[S_EDITS];
@@ -215,20 +284,17 @@ static lie_status encode(const lie_cache *c, const char *name, unsigned char **d
 
     /* ROOTS, NODES, POOL */
     p = buf + off[S_ROOTS];
-    for (uint64_t u = 0; u < n_units; u++, p += 4)
-        lie_cache_put_u32(p, env->root[u]);
-    p = buf + off[S_NODES];
-    for (uint32_t i = 0; i < env->n_nodes; i++, p += LIE_CACHE_NODE_SIZE) {
-        const lie_pnode *x = &env->nodes[i];
-        lie_cache_put_u32(p + 0, x->child);
-        lie_cache_put_u32(p + 4, x->cls);
-        lie_cache_put_u32(p + 8, x->quality);
-        lie_cache_put_u32(p + 12, x->list);
-        lie_cache_put_u32(p + 16, x->count);
+    tree_writer tw = {env, buf + off[S_NODES], buf + off[S_POOL], 0, 0};
+    for (uint64_t u = 0; u < n_units; u++, p += 4) {
+        uint32_t tag = lone_tag(env, env->root[u]);
+        if (tag) {
+            lie_cache_put_u32(p, tag);
+            continue;
+        }
+        uint32_t idx = tw.next_node++;
+        lie_cache_put_u32(p, idx);
+        write_tree(&tw, env->root[u], idx);
     }
-    p = buf + off[S_POOL];
-    for (uint32_t i = 0; i < env->n_pool; i++, p += 4)
-        lie_cache_put_u32(p, env->pool[i]);
 
     /* VIEWS */
     if (n_sections > S_VIEWS) {

@@ -20,7 +20,11 @@
 extern "C" {
 #endif
 
-#define LIE_CACHE_VERSION 5u
+#define LIE_CACHE_VERSION 6u
+/* ROOTS entries from version 6 that name no node: the unit is one lone
+ * leaf (lie_pnode_lone), unlit or none, which the reader shares. */
+#define LIE_CACHE_ROOT_LONE_UNLIT 0xFFFFFFFFu
+#define LIE_CACHE_ROOT_LONE_NONE 0xFFFFFFFEu
 /* Caches of earlier versions hold units built by earlier rules (their
  * sampling hashed emitter indices, their shaft tolerances read the scene's
  * extent; formats/lie-cache.md, Versions): they still render, but an update

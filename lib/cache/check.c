@@ -77,7 +77,7 @@ lie_status lie_cache_check_env(const lie_env *env, lie_status status, const char
         if (r >= n_nodes)
             st = lie_error_set(err, status, name, "%ssection ROOTS: unit %zu: root %u beyond the %u nodes", prefix,
                                u, r, n_nodes);
-        else if (state[r])
+        else if (state[r] && !lie_pnode_lone(&env->nodes[r])) /* lone leaves are shared (lib/lie/lie.h) */
             st = lie_error_set(err, status, name, "%ssection ROOTS: unit %zu: node %u is already a root", prefix,
                                u, r);
         else

@@ -144,6 +144,7 @@ static lie_status parse_params(const unsigned char *p, uint64_t size, uint32_t v
 {
     const uint32_t want = version == 1   ? LIE_CACHE_PARAMS_SIZE_V1
                           : version == 2 ? LIE_CACHE_PARAMS_SIZE_V2
+                          : version <= 5 ? LIE_CACHE_PARAMS_SIZE_V5
                                          : LIE_CACHE_PARAMS_SIZE;
     if (size != want)
         return FAIL("section PARAMS: %llu bytes, expected %u", (ull)size, want);
@@ -168,6 +169,8 @@ static lie_status parse_params(const unsigned char *p, uint64_t size, uint32_t v
     bp->ns_segment = version >= 3 ? lie_cache_bits_f32(lie_cache_get_u32(p + 36)) : d.ns_segment;
     bp->ns_blocker = version >= 3 ? lie_cache_bits_f32(lie_cache_get_u32(p + 40)) : d.ns_blocker;
     bp->ns_ray = version >= 3 ? lie_cache_bits_f32(lie_cache_get_u32(p + 44)) : d.ns_ray;
+    /* older caches predicted nothing: every unit was built */
+    bp->complex_predict = version >= 6 ? lie_cache_get_u32(p + 48) : 0u;
     lie_error perr;
     if (lie_build_params_check(bp, &perr) != LIE_OK)
         return FAIL("section PARAMS: %s", perr.msg);
@@ -281,7 +284,7 @@ static lie_status parse_emitters(const unsigned char *p, uint64_t size, uint32_t
 }
 
 /* ROOTS, NODES, POOL into a new env; the structure is checked after. */
-static lie_status parse_env(const unsigned char *data, const lie_cache_section *roots,
+static lie_status parse_env(const unsigned char *data, uint32_t version, const lie_cache_section *roots,
                             const lie_cache_section *nodes, const lie_cache_section *pool, const char *name,
                             const meta_counts *m, lie_env *env, lie_error *err)
 {
@@ -295,14 +298,41 @@ static lie_status parse_env(const unsigned char *data, const lie_cache_section *
         return FAIL("section POOL: %llu bytes for %u entries, expected 4 per entry", (ull)pool->size, m->n_pool);
     /* every count is now bounded by bytes present in memory */
     const size_t n_units = (size_t)m->n_units;
+    /* from version 6, a lone unit is a tag: it shares the leaf its class
+     * has after the file's nodes, as a build lays an env out (lib/lie/lie.h,
+     * lie_pnode_lone); before, every tag is a root beyond the nodes */
+    const unsigned char *p = data + roots->offset;
+    int used_unlit = 0, used_none = 0;
+    for (size_t u = 0; version >= 6 && u < n_units; u++, p += 4) {
+        uint32_t r = lie_cache_get_u32(p);
+        used_unlit |= r == LIE_CACHE_ROOT_LONE_UNLIT;
+        used_none |= r == LIE_CACHE_ROOT_LONE_NONE;
+    }
+    const uint32_t shared_unlit = m->n_nodes, shared_none = m->n_nodes + (uint32_t)used_unlit;
+    const uint32_t n_mem = m->n_nodes + (uint32_t)used_unlit + (uint32_t)used_none;
+    if (n_mem < m->n_nodes)
+        return FAIL("section META: %u nodes leave no room for the shared leaves", m->n_nodes);
     env->root = malloc(sizeof *env->root * (n_units + 1));
-    env->nodes = malloc(sizeof *env->nodes * ((size_t)m->n_nodes + 1));
+    env->nodes = malloc(sizeof *env->nodes * ((size_t)n_mem + 1));
     env->pool = malloc(sizeof *env->pool * ((size_t)m->n_pool + 1));
     if (!env->root || !env->nodes || !env->pool)
         return lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory");
-    const unsigned char *p = data + roots->offset;
-    for (size_t u = 0; u < n_units; u++, p += 4)
-        env->root[u] = lie_cache_get_u32(p);
+    p = data + roots->offset;
+    for (size_t u = 0; u < n_units; u++, p += 4) {
+        uint32_t r = lie_cache_get_u32(p);
+        if (version >= 6 && r == LIE_CACHE_ROOT_LONE_UNLIT)
+            r = shared_unlit;
+        else if (version >= 6 && r == LIE_CACHE_ROOT_LONE_NONE)
+            r = shared_none;
+        else if (r >= m->n_nodes)
+            return FAIL("section ROOTS: unit %zu: root %u beyond the %u nodes", u, r, m->n_nodes);
+        env->root[u] = r;
+    }
+    memset(env->nodes + m->n_nodes, 0, sizeof *env->nodes * (size_t)(n_mem - m->n_nodes));
+    if (used_unlit)
+        env->nodes[shared_unlit].cls = LIE_CLASS_UNLIT;
+    if (used_none)
+        env->nodes[shared_none].cls = LIE_CLASS_NONE;
     p = data + nodes->offset;
     for (uint32_t i = 0; i < m->n_nodes; i++, p += LIE_CACHE_NODE_SIZE) {
         lie_pnode *x = &env->nodes[i];
@@ -317,7 +347,7 @@ static lie_status parse_env(const unsigned char *data, const lie_cache_section *
         env->pool[i] = lie_cache_get_u32(p);
     env->n_tris = m->n_tris;
     env->n_clusters = (int)m->n_clusters;
-    env->n_nodes = m->n_nodes;
+    env->n_nodes = n_mem;
     env->n_pool = m->n_pool;
     return lie_cache_check_env(env, LIE_ERR_FORMAT, name, "", err);
 }
@@ -367,7 +397,7 @@ lie_status lie_cache_decode(const unsigned char *data, size_t size, const char *
     if (st == LIE_OK)
         st = parse_emitters(data + s[3]->offset, s[3]->size, lie_cache_get_u32(data + 8), name, &m, c, err);
     if (st == LIE_OK)
-        st = parse_env(data, s[4], s[5], s[6], name, &m, env, err);
+        st = parse_env(data, c->version, s[4], s[5], s[6], name, &m, env, err);
     const lie_cache_section *sv = find(sec, n, LIE_CACHE_ID_VIEWS);
     if (st == LIE_OK && sv && lie_cache_get_u32(data + 8) >= 3)
         st = parse_views(data + sv->offset, sv->size, name, c, err);

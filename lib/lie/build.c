@@ -106,8 +106,7 @@ static uint32_t *heaviest_first(const uint32_t *w, uint32_t n)
 static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, const int32_t *old_unit,
                            const uint8_t *node_flags, const uint8_t *tri_mask, const lie_pixels *px,
                            uint64_t unit_lo, uint64_t unit_hi, int threads, int memo, lie_progress *progress,
-                           const volatile sig_atomic_t *stop,
-                           lie_build_stats *stats)
+                           const volatile sig_atomic_t *stop, int audit, lie_build_stats *stats)
 {
     build_ctx c;
     memset(&c, 0, sizeof c);
@@ -122,6 +121,7 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     c.tri_mask = tri_mask;
     c.pix = px;
     c.stop = stop;
+    c.audit_complex = audit;
     /* the triangles holding units [unit_lo, unit_hi) */
     size_t ne = s->n_clusters > 0 ? (size_t)s->n_clusters : 1;
     c.unit_lo = unit_lo;
@@ -238,6 +238,94 @@ static int holds_unbuilt(const lie_env *env, uint32_t idx)
     return 0;
 }
 
+/* The shared leaves of an env whose units own `own` nodes: unlit first,
+ * then none, each only if used; *n_nodes the total. */
+typedef struct shared_leaves {
+    uint32_t unlit, none, n_nodes;
+} shared_leaves;
+
+static shared_leaves shared_place(uint32_t own, int used_unlit, int used_none)
+{
+    shared_leaves sh = {own, own + (uint32_t)(used_unlit != 0), own};
+    sh.n_nodes = own + (uint32_t)(used_unlit != 0) + (uint32_t)(used_none != 0);
+    return sh;
+}
+
+static void shared_write(lie_pnode *nd, const shared_leaves *sh, int used_unlit, int used_none)
+{
+    if (used_unlit) {
+        memset(&nd[sh->unlit], 0, sizeof *nd);
+        nd[sh->unlit].cls = LIE_CLASS_UNLIT;
+    }
+    if (used_none) {
+        memset(&nd[sh->none], 0, sizeof *nd);
+        nd[sh->none].cls = LIE_CLASS_NONE;
+    }
+}
+
+/* The lone class of a unit with root r in env (LIE_ROOT_LONE_*), or 0. */
+static uint32_t lone_of(const lie_env *env, uint32_t r)
+{
+    const lie_pnode *x = &env->nodes[r];
+    if (!lie_pnode_lone(x))
+        return 0;
+    return x->cls == LIE_CLASS_UNLIT ? LIE_ROOT_LONE_UNLIT : LIE_ROOT_LONE_NONE;
+}
+
+lie_status lie_env_lay_out(const lie_env *const *src, const uint64_t *n_units, size_t n_src, const uint8_t *drop,
+                           lie_env *dst, uint64_t *own)
+{
+    /* the sizes first: a unit's tree, reachable from its root */
+    uint64_t nodes = 0, pool = 0, all = 0;
+    int used[2] = {0, 0}; /* unlit, none */
+    for (size_t i = 0; i < n_src; i++)
+        for (uint64_t u = 0; u < n_units[i]; u++, all++) {
+            uint32_t r = src[i]->root[u], lone = drop && drop[all] ? LIE_ROOT_LONE_NONE : lone_of(src[i], r);
+            if (lone) {
+                used[lone == LIE_ROOT_LONE_NONE] = 1;
+                continue;
+            }
+            uint32_t nn = 0, np = 0;
+            lie_subtree_size(src[i], r, &nn, &np);
+            nodes += nn;
+            pool += np;
+        }
+    if (own)
+        *own = nodes;
+    if (nodes >= 0xFFFFFFF0u || pool >= 0xFFFFFFF0u)
+        return LIE_ERR_LIMIT;
+    shared_leaves sh = shared_place((uint32_t)nodes, used[0], used[1]);
+    uint32_t *root = malloc(sizeof *root * ((size_t)all + 1));
+    lie_pnode *nd = malloc(sizeof *nd * ((size_t)sh.n_nodes + 1));
+    uint32_t *pl = malloc(sizeof *pl * ((size_t)pool + 1));
+    if (!root || !nd || !pl) {
+        lie_forest_free(root, nd, pl);
+        return LIE_ERR_NOMEM;
+    }
+    /* unit by unit, each tree as copy_node lays it out: a build's layout */
+    uint32_t next_node = 0, next_pool = 0;
+    all = 0;
+    for (size_t i = 0; i < n_src; i++)
+        for (uint64_t u = 0; u < n_units[i]; u++, all++) {
+            uint32_t r = src[i]->root[u], lone = drop && drop[all] ? LIE_ROOT_LONE_NONE : lone_of(src[i], r);
+            if (lone) {
+                root[all] = lone == LIE_ROOT_LONE_UNLIT ? sh.unlit : sh.none;
+                dst->partial |= drop && drop[all];
+                continue;
+            }
+            uint32_t idx = next_node++;
+            root[all] = idx;
+            copy_direct(src[i], r, nd, pl, idx, &next_node, &next_pool);
+        }
+    shared_write(nd, &sh, used[0], used[1]);
+    dst->root = root;
+    dst->nodes = nd;
+    dst->pool = pl;
+    dst->n_nodes = sh.n_nodes;
+    dst->n_pool = next_pool;
+    return LIE_OK;
+}
+
 /* lie_env_compact; with `whole_units`, a unit holding an unbuilt leaf
  * below its root (an update's pending leaves) is left unbuilt whole. */
 static lie_status compact(const lie_env *src, int whole_units, lie_env **out, lie_error *err)
@@ -249,51 +337,23 @@ static lie_status compact(const lie_env *src, int whole_units, lie_env **out, li
         return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
     for (size_t u = 0; drop && u < n_units; u++)
         drop[u] = src->nodes[src->root[u]].child && holds_unbuilt(src, src->root[u]);
-    /* the sizes first: a unit's subtree, reachable from its root */
-    uint64_t nodes = 0, pool = 0;
-    for (size_t u = 0; u < n_units; u++) {
-        uint32_t nn = 0, np = 0;
-        if (drop && drop[u])
-            nn = 1;
-        else
-            lie_subtree_size(src, src->root[u], &nn, &np);
-        nodes += nn;
-        pool += np;
-    }
-    if (nodes >= 0xFFFFFFF0u || pool >= 0xFFFFFFF0u) {
-        free(drop);
-        return lie_error_set(err, LIE_ERR_LIMIT, NULL, "the patch trees hold too many nodes for one env");
-    }
     lie_env *env = calloc(1, sizeof *env);
+    lie_status st = env ? LIE_OK : LIE_ERR_NOMEM;
     if (env) {
         *env = *src;
-        env->root = malloc(sizeof *env->root * (n_units + 1));
-        env->nodes = malloc(sizeof *env->nodes * (size_t)(nodes + 1));
-        env->pool = malloc(sizeof *env->pool * (size_t)(pool + 1));
+        env->root = NULL;
+        env->nodes = NULL;
+        env->pool = NULL;
+        uint64_t nu = n_units;
+        st = lie_env_lay_out(&src, &nu, 1, drop, env, NULL);
     }
-    if (!env || !env->root || !env->nodes || !env->pool) {
-        if (env)
-            lie_forest_free(env->root, env->nodes, env->pool);
-        free(env);
-        free(drop);
-        return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
-    }
-    /* unit by unit, each subtree as copy_node lays it out: a build's layout */
-    uint32_t next_node = 0, next_pool = 0;
-    for (size_t u = 0; u < n_units; u++) {
-        uint32_t idx = next_node++;
-        env->root[u] = idx;
-        if (drop && drop[u]) {
-            memset(&env->nodes[idx], 0, sizeof env->nodes[idx]);
-            env->nodes[idx].cls = LIE_CLASS_NONE;
-            env->partial = 1;
-            continue;
-        }
-        copy_direct(src, src->root[u], env->nodes, env->pool, idx, &next_node, &next_pool);
-    }
-    env->n_nodes = next_node;
-    env->n_pool = next_pool;
     free(drop);
+    if (st != LIE_OK) {
+        free(env);
+        return st == LIE_ERR_LIMIT
+                   ? lie_error_set(err, LIE_ERR_LIMIT, NULL, "the patch trees hold too many nodes for one env")
+                   : lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory");
+    }
     *out = env;
     return LIE_OK;
 }
@@ -320,6 +380,7 @@ typedef struct assembly {
     const int32_t *old_unit;
     uint64_t unit_lo, unit_hi;
     const uint32_t *nb, *pb; /* per triangle: its first node and pool entry */
+    shared_leaves sh;
     uint32_t *root;
     lie_pnode *nd;
     uint32_t *pl;
@@ -335,16 +396,23 @@ static void assemble_tri(const assembly *a, uint32_t t)
         uint32_t next_node = nb, next_pool = pb;
         for (int e = 0; e < a->n_clusters; e++) {
             size_t unit = (size_t)(a->tri_lo + t) * (size_t)a->n_clusters + (size_t)e;
+            uint32_t r = a->old->root[a->old_unit[unit]], lone = lone_of(a->old, r);
+            if (lone) {
+                a->root[unit - a->unit_lo] = lone == LIE_ROOT_LONE_UNLIT ? a->sh.unlit : a->sh.none;
+                continue;
+            }
             uint32_t idx = next_node++;
             a->root[unit - a->unit_lo] = idx;
-            copy_direct(a->old, a->old->root[a->old_unit[unit]], a->nd, a->pl, idx, &next_node, &next_pool);
+            copy_direct(a->old, r, a->nd, a->pl, idx, &next_node, &next_pool);
         }
         return;
     }
     for (int e = 0; e < a->n_clusters; e++) {
         uint64_t unit = (uint64_t)(a->tri_lo + t) * (uint64_t)a->n_clusters + (uint64_t)e;
-        if (unit >= a->unit_lo && unit < a->unit_hi)
-            a->root[unit - a->unit_lo] = nb + u->roots[e];
+        if (unit < a->unit_lo || unit >= a->unit_hi)
+            continue;
+        uint32_t r = u->roots[e];
+        a->root[unit - a->unit_lo] = r == LIE_ROOT_LONE_UNLIT ? a->sh.unlit : r == LIE_ROOT_LONE_NONE ? a->sh.none : nb + r;
     }
     for (uint32_t i = 0; i < u->n_nodes; i++) {
         lie_pnode x = u->nodes[i];
@@ -372,14 +440,24 @@ static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32
                            const int32_t *old_unit, uint64_t unit_lo, uint64_t unit_hi, int threads)
 {
     uint64_t nodes = 0, pool = 0;
+    int used[2] = {0, 0}; /* the shared leaves: unlit, none */
     for (uint32_t t = 0; t < n_tris; t++) {
         nodes += bufs[t].n_nodes;
         pool += bufs[t].n_pool;
+        for (int e = 0; e < n_clusters; e++) {
+            uint64_t unit = (uint64_t)(tri_lo + t) * (uint64_t)n_clusters + (uint64_t)e;
+            if (unit < unit_lo || unit >= unit_hi)
+                continue;
+            uint32_t r = bufs[t].copied ? lone_of(env, env->root[old_unit[unit]]) : bufs[t].roots[e];
+            used[0] |= r == LIE_ROOT_LONE_UNLIT;
+            used[1] |= r == LIE_ROOT_LONE_NONE;
+        }
     }
     if (nodes >= 0xFFFFFFF0u || pool >= 0xFFFFFFF0u)
         return LIE_ERR_LIMIT;
+    shared_leaves sh = shared_place((uint32_t)nodes, used[0], used[1]);
     uint32_t *root = malloc(sizeof *root * ((size_t)(unit_hi - unit_lo) + 1));
-    lie_pnode *nd = malloc(sizeof *nd * (size_t)(nodes + 1));
+    lie_pnode *nd = malloc(sizeof *nd * (size_t)(sh.n_nodes + 1));
     uint32_t *pl = malloc(sizeof *pl * (size_t)(pool + 1));
     uint32_t *nb = malloc(sizeof *nb * ((size_t)n_tris + 1));
     uint32_t *pb = malloc(sizeof *pb * ((size_t)n_tris + 1));
@@ -390,9 +468,10 @@ static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32
             nb[t + 1] = nb[t] + bufs[t].n_nodes;
             pb[t + 1] = pb[t] + bufs[t].n_pool;
         }
-        assembly a = {env, bufs, tri_lo, n_tris, n_clusters, old_unit, unit_lo, unit_hi, nb, pb, root, nd, pl};
+        assembly a = {env, bufs, tri_lo, n_tris, n_clusters, old_unit, unit_lo, unit_hi, nb, pb, sh, root, nd, pl};
         st = lie_parallel_for((n_tris + ASSEMBLE_CHUNK - 1) / ASSEMBLE_CHUNK, threads, assemble_chunk, &a, NULL,
                               NULL);
+        shared_write(nd, &sh, used[0], used[1]);
     }
     if (st != LIE_OK) {
         free(root);
@@ -406,7 +485,7 @@ static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32
     env->root = root;
     env->nodes = nd;
     env->pool = pl;
-    env->n_nodes = nb[n_tris];
+    env->n_nodes = sh.n_nodes;
     env->n_pool = pb[n_tris];
     free(nb);
     free(pb);
@@ -462,7 +541,7 @@ static lie_status resume_check(const lie_env *r, const lie_scene *s, const lie_b
     const lie_build_params *q = &r->params;
     if (q->samples != p->samples || q->max_samples != p->max_samples || q->max_blockers != p->max_blockers ||
         q->complex_cap != p->complex_cap || q->min_patch != p->min_patch || q->split_gain != p->split_gain ||
-        q->mode != p->mode)
+        q->mode != p->mode || q->complex_predict != p->complex_predict)
         return lie_error_set(err, LIE_ERR_ARG, s->path,
                              "the partial build to resume was made with other build parameters");
     return LIE_OK;
@@ -512,7 +591,7 @@ lie_status lie_env_build_with(const lie_scene *s, const lie_rt *rt, const lie_bu
     if (stats)
         memset(stats, 0, sizeof *stats);
     lie_status st = run_build(env, s, rt, old_unit, NULL, ctl->tri_mask, ctl->pixels, 0, n_units, p->threads, 0,
-                              ctl->progress, ctl->stop, stats);
+                              ctl->progress, ctl->stop, ctl->audit_complex, stats);
     free(old_unit);
     if (st != LIE_OK) {
         lie_env_destroy(env);
@@ -604,7 +683,7 @@ static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_bu
     lie_status st = LIE_OK;
     if (n_units)
         st = run_build(&part, s, rt, NULL, NULL, tri_mask, px, first_unit, first_unit + n_units, p->threads, 0, NULL,
-                       stop, stats);
+                       stop, 0, stats);
     if (st != LIE_OK) {
         free(part.root);
         free(part.nodes);
@@ -668,7 +747,7 @@ lie_status lie_build_update(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     if (stats)
         memset(stats, 0, sizeof *stats);
     lie_status st = run_build(env, s, rt, old_unit, node_flags, NULL, px, 0,
-                              (uint64_t)s->n_tris * (uint64_t)s->n_clusters, threads, memo, NULL, NULL, stats);
+                              (uint64_t)s->n_tris * (uint64_t)s->n_clusters, threads, memo, NULL, NULL, 0, stats);
     if (stats)
         stats->seconds = lie_time_now() - t0;
     if (st == LIE_ERR_LIMIT)

@@ -10,8 +10,13 @@
 
 /* ---- per-unit output and per-worker scratch ----------------------------- */
 
+/* A unit_buf's root for a unit that is one lone leaf (lie_pnode_lone): it
+ * holds no node, and assembly points it at the env's shared leaf. */
+#define LIE_ROOT_LONE_UNLIT 0xFFFFFFFFu
+#define LIE_ROOT_LONE_NONE 0xFFFFFFFEu
+
 typedef struct unit_buf {
-    uint32_t *roots;      /* per emitter: the unit's root, local index */
+    uint32_t *roots;      /* per emitter: the unit's root, local index, or LIE_ROOT_LONE_* */
     lie_pnode *nodes;
     uint32_t n_nodes;
     size_t cap_nodes;
@@ -39,6 +44,7 @@ typedef struct worker {
     uint64_t max_nodes;
     double *share;            /* lie_unit_shares of the triangle at hand */
     size_t cap_share;
+    int root_predicted;       /* the unit at hand was predicted complex (lib/lie/subdiv.c) */
 } worker;
 
 typedef struct build_ctx {
@@ -65,6 +71,7 @@ typedef struct build_ctx {
     int32_t *memo_new;    /* open-addressing table of the memo entries of new nodes */
     size_t memo_new_mask;
     const volatile sig_atomic_t *stop; /* lie_build_control.stop, or NULL */
+    int audit_complex;         /* lie_build_control.audit_complex */
     /* the parallel loops' CPU seconds so far (lie_parallel_report): summed
      * over workers, the busiest worker's per loop summed, idle tails */
     double par_cpu_sum, par_cpu_max, par_tail;
@@ -89,6 +96,19 @@ lie_status lie_build_update(lie_env *env, const lie_scene *s, const lie_rt *rt, 
                             lie_build_stats *stats, lie_error *err);
 /* The nodes and pool entries of node `from` of env and its subtree (subdiv.c). */
 void lie_subtree_size(const lie_env *env, uint32_t from, uint32_t *n_nodes, uint32_t *n_pool);
+/* The same for a unit's tree from its root, which holds none when it is a
+ * lone leaf (shared). */
+void lie_unit_size(const lie_env *env, uint32_t root, uint32_t *n_nodes, uint32_t *n_pool);
+/* Lay units out as a build does (lib/lie/lie.h, lie_pnode_lone): the units
+ * of src[0] .. src[n_src - 1] in order (src[i] holds n_units[i] units, its
+ * root, nodes and pool its own), each unit's tree depth first as built,
+ * lists in node order, lone leaves shared; with `drop` (one flag per unit
+ * of all the sources), a flagged unit becomes a lone none leaf.  Fills
+ * dst's root, nodes, pool and their counts, and sets dst->partial if a
+ * unit was dropped; *own (may be NULL) is the nodes the units own (not the
+ * shared leaves).  LIE_ERR_LIMIT past 2^32 nodes. */
+lie_status lie_env_lay_out(const lie_env *const *src, const uint64_t *n_units, size_t n_src, const uint8_t *drop,
+                           lie_env *dst, uint64_t *own);
 /* The error of a build that needs more than max-nodes nodes (build.c). */
 /* What an env was built from: the scene's counts and hash, the parameters. */
 void lie_env_describe(lie_env *env, const lie_scene *s, const lie_build_params *p);

@@ -53,6 +53,13 @@ typedef struct lie_build_params {
     float min_patch;       /* smallest patch area / largest triangle area (--min-patch): a floor */
     float split_gain;      /* a split is kept only if it shortens the lists by this share (--split-gain) */
     lie_blocker_mode mode;
+    /* Leave a unit that will be complex unbuilt (--complex-predict): a root
+     * that would split, whose smallest patches at its corners and centre
+     * (lie_subdiv_may_split's floor) each see more than complex_cap
+     * triangles in their shafts, is one complex leaf with the segments of
+     * its first sampling alone (lib/lie/subdiv.c).  Its shadow rays go to
+     * Embree, as a complex unit's would: the image is unchanged. */
+    uint32_t complex_predict;
     int threads;           /* not stored in caches: results never depend on it */
     uint64_t max_nodes;    /* patch-tree nodes a build may make (--max-nodes); 0: the default.
                               Not stored in caches: a build within it gives the same cache */
@@ -75,6 +82,9 @@ typedef struct lie_build_params {
 #define LIE_MIN_PATCH_DEFAULT 1e-4f
 #define LIE_SPLIT_GAIN_DEFAULT 0.25f
 #define LIE_FRAMES_DEFAULT 10u
+/* Off: on scifi_hallway the probes cost more than the subtrees they save
+ * (docs/measurements.md, "Complex units predicted") */
+#define LIE_COMPLEX_PREDICT_DEFAULT 0u
 #define LIE_MODEL_LIGHT_SAMPLES_DEFAULT 100u
 /* Measured on museum3 at 512x512 (CPU time per event; bench/build.sh
  * prints the measured values beside these).  A blocker test is an
@@ -96,7 +106,7 @@ lie_build_params lie_build_params_default(void);
 lie_status lie_build_params_check(const lie_build_params *p, lie_error *err);
 
 /* A node of a patch tree.  Leaves have child == 0 (a child is never node 0
- * of the whole array: node 0 is the first unit's root). */
+ * of the whole array: node 0 is a root, the first unit's or a shared leaf). */
 typedef struct lie_pnode {
     uint32_t child;   /* first of four consecutive children, or 0 */
     uint32_t cls;     /* lie_class */
@@ -104,6 +114,20 @@ typedef struct lie_pnode {
     uint32_t list;    /* partial: offset of the blocker list in the pool */
     uint32_t count;   /* partial: blockers; complex: blockers found before giving up */
 } lie_pnode;
+
+/* A lone leaf: a unit's whole tree when it is one unlit or none leaf, with
+ * no segments and no list.  Such a unit holds no node of its own: its root
+ * is one of the env's shared leaves, which any number of roots reference
+ * and no split node does (the cache writes it as a tag in ROOTS,
+ * formats/lie-cache.md).  A build lays an env out so: every other unit's
+ * nodes in unit order, then the shared unlit leaf and the shared none
+ * leaf, each only if a unit takes it.  A scene's unlit and unbuilt units,
+ * most of its units where it has many emitters, then cost a root each. */
+static inline int lie_pnode_lone(const lie_pnode *x)
+{
+    return !x->child && (x->cls == LIE_CLASS_UNLIT || x->cls == LIE_CLASS_NONE) && !x->quality && !x->list &&
+           !x->count;
+}
 
 typedef struct lie_env {
     uint32_t n_tris;
@@ -139,6 +163,11 @@ typedef struct lie_build_stats {
      * triangles enter the shaft, without proof: each got its exact list
      * instead (lib/lie/subdiv.c), where sampling alone would leak light */
     uint64_t unproven_occluded, unproven_visible;
+    /* units that will be complex (lie_build_params.complex_predict): named
+     * so before their trees were built (left one complex leaf each, or, in
+     * an audit, built anyway); built units whose every leaf came out
+     * complex; and, in an audit, the named that came out complex */
+    uint64_t complex_predicted, complex_measured, complex_predicted_measured;
     /* the model against the build, over the splits made: the render time
      * they save per frame as the model predicts it before the lookahead
      * (half the parent's list), and as the children's lists give it */
@@ -180,6 +209,11 @@ typedef struct lie_build_control {
      * returns LIE_OK with what it finished, the rest LIE_CLASS_NONE and
      * env->partial set (unless every unit was done). */
     const volatile sig_atomic_t *stop;
+    /* Name the units complex_predict would leave unbuilt without leaving
+     * them (params->complex_predict 0; lie-build --complex-predict audit):
+     * what the prediction says beside what the build measures
+     * (lie_build_stats.complex_predicted_measured). */
+    int audit_complex;
 } lie_build_control;
 lie_status lie_env_build_with(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
                               const lie_build_control *ctl, lie_env **out, lie_build_stats *stats, lie_error *err);

@@ -22,6 +22,7 @@ lie_build_params lie_build_params_default(void)
         .min_patch = LIE_MIN_PATCH_DEFAULT,
         .split_gain = LIE_SPLIT_GAIN_DEFAULT,
         .mode = LIE_BLOCKERS_SAMPLED,
+        .complex_predict = LIE_COMPLEX_PREDICT_DEFAULT,
         .frames = LIE_FRAMES_DEFAULT,
         .light_samples = LIE_MODEL_LIGHT_SAMPLES_DEFAULT,
         .ns_segment = LIE_NS_SEGMENT_DEFAULT,
@@ -47,6 +48,8 @@ lie_status lie_build_params_check(const lie_build_params *p, lie_error *err)
     if (!(p->ns_segment > 0.0f && p->ns_segment <= 1e9f) || !(p->ns_blocker > 0.0f && p->ns_blocker <= 1e9f) ||
         !(p->ns_ray > 0.0f && p->ns_ray <= 1e9f))
         return lie_error_set(err, LIE_ERR_ARG, NULL, "the cost model's times must be in (0, 1e9] ns");
+    if (p->complex_predict > 1)
+        return lie_error_set(err, LIE_ERR_ARG, NULL, "complex-predict must be 0 or 1");
     if (p->mode != LIE_BLOCKERS_SAMPLED && p->mode != LIE_BLOCKERS_CONSERVATIVE)
         return lie_error_set(err, LIE_ERR_ARG, NULL, "unknown blocker mode");
     return LIE_OK;
@@ -81,6 +84,9 @@ void lie_stats_merge(lie_build_stats *dst, const lie_build_stats *src)
     dst->splits_kept += src->splits_kept;
     dst->unproven_occluded += src->unproven_occluded;
     dst->unproven_visible += src->unproven_visible;
+    dst->complex_predicted += src->complex_predicted;
+    dst->complex_measured += src->complex_measured;
+    dst->complex_predicted_measured += src->complex_predicted_measured;
     dst->split_saving_predicted_ns += src->split_saving_predicted_ns;
     dst->split_saving_measured_ns += src->split_saving_measured_ns;
 }

@@ -49,7 +49,7 @@ lie_status lie_env_join(const lie_scene *s, const lie_build_params *p, const lie
                         lie_env **out, lie_error *err)
 {
     *out = NULL;
-    uint64_t n_units = (uint64_t)s->n_tris * (uint64_t)s->n_clusters, next = 0, nodes = 0, pool = 0;
+    uint64_t n_units = (uint64_t)s->n_tris * (uint64_t)s->n_clusters, next = 0;
     for (size_t i = 0; i < n_parts; i++) {
         if (parts[i].first_unit != next)
             return lie_error_set(err, LIE_ERR_ARG, s->path, "part %zu starts at unit %llu, expected %llu", i,
@@ -58,48 +58,44 @@ lie_status lie_env_join(const lie_scene *s, const lie_build_params *p, const lie
             return lie_error_set(err, LIE_ERR_FORMAT, s->path, "part %zu (units %llu..%llu) is inconsistent", i,
                                  (unsigned long long)next, (unsigned long long)(next + parts[i].n_units));
         next += parts[i].n_units;
-        nodes += parts[i].n_nodes;
-        pool += parts[i].n_pool;
     }
     if (next != n_units)
         return lie_error_set(err, LIE_ERR_ARG, s->path, "parts cover %llu of %llu units", (unsigned long long)next,
                              (unsigned long long)n_units);
-    /* one build stops past max-nodes; parts were held to it one by one */
-    if (nodes > (p->max_nodes ? p->max_nodes : LIE_MAX_NODES_DEFAULT))
-        return lie_budget_error(err, s, p);
-    if (nodes >= 0xFFFFFFF0u || pool >= 0xFFFFFFF0u)
-        return lie_error_set(err, LIE_ERR_LIMIT, s->path, "too many nodes");
     lie_env *env = calloc(1, sizeof *env);
-    if (env) {
-        env->root = malloc(sizeof *env->root * ((size_t)n_units + 1));
-        env->nodes = malloc(sizeof *env->nodes * ((size_t)nodes + 1));
-        env->pool = malloc(sizeof *env->pool * ((size_t)pool + 1));
+    const lie_env **views = calloc(n_parts + 1, sizeof *views);
+    lie_env *view = calloc(n_parts + 1, sizeof *view);
+    uint64_t *counts = calloc(n_parts + 1, sizeof *counts);
+    lie_status st = env && views && view && counts ? LIE_OK : LIE_ERR_NOMEM;
+    uint64_t own = 0;
+    for (size_t i = 0; st == LIE_OK && i < n_parts; i++) {
+        view[i].root = parts[i].root;
+        view[i].nodes = parts[i].nodes;
+        view[i].pool = parts[i].pool;
+        view[i].n_nodes = parts[i].n_nodes;
+        view[i].n_pool = parts[i].n_pool;
+        views[i] = &view[i];
+        counts[i] = parts[i].n_units;
     }
-    if (!env || !env->root || !env->nodes || !env->pool) {
+    /* each part laid out as a build lays its units out: parts' shared
+     * leaves become the env's */
+    if (st == LIE_OK)
+        st = lie_env_lay_out(views, counts, n_parts, NULL, env, &own);
+    free(views);
+    free(view);
+    free(counts);
+    /* one build stops past max-nodes (its own nodes: the shared leaves are
+     * not made); parts were held to it one by one */
+    if (st == LIE_OK && own > (p->max_nodes ? p->max_nodes : LIE_MAX_NODES_DEFAULT)) {
         lie_env_destroy(env);
-        return lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
+        return lie_budget_error(err, s, p);
+    }
+    if (st != LIE_OK) {
+        lie_env_destroy(env);
+        return st == LIE_ERR_LIMIT ? lie_error_set(err, LIE_ERR_LIMIT, s->path, "too many nodes")
+                                   : lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
     }
     lie_env_describe(env, s, p);
-    uint32_t nb = 0, pb = 0;
-    for (size_t i = 0; i < n_parts; i++) {
-        const lie_env_part *q = &parts[i];
-        for (uint64_t u = 0; u < q->n_units; u++)
-            env->root[q->first_unit + u] = nb + q->root[u];
-        for (uint32_t k = 0; k < q->n_nodes; k++) {
-            lie_pnode x = q->nodes[k];
-            if (x.child)
-                x.child += nb;
-            if (!x.child && x.cls == LIE_CLASS_PARTIAL)
-                x.list += pb;
-            env->nodes[nb + k] = x;
-        }
-        if (q->n_pool)
-            memcpy(env->pool + pb, q->pool, sizeof *env->pool * q->n_pool);
-        nb += q->n_nodes;
-        pb += q->n_pool;
-    }
-    env->n_nodes = nb;
-    env->n_pool = pb;
     *out = env;
     return LIE_OK;
 }

@@ -291,6 +291,61 @@ static int split_pays(const build_ctx *c, worker *w, uint32_t tri, lie_patch_pat
     return mean <= (1.0 - (double)c->p->split_gain) * parent;
 }
 
+/* §4.1.1 ahead of the tree: whether unit (tri, e) will be complex.  Its
+ * smallest patches (the first at each corner and at the centre that
+ * lie_subdiv_may_split stops) are the smallest leaves the tree can have
+ * there, and a leaf's shaft holds theirs: if each of them sees more than
+ * complex_cap triangles (lie_cull_exact), the leaves at those four points
+ * are complex however the tree grows, and where an emitter is large
+ * beside the patch (a corridor's light strips) the rest are too.  A unit
+ * named so is one complex leaf: Embree answers it as it would answer its
+ * leaves, so the image is the same wherever the prediction errs; only the
+ * lists it would have had are lost (lie-build --stats shows both counts).
+ * The probes lie inside the root's shaft, so the ray segment trees flag
+ * the unit whenever an edit could change the prediction (update ≡
+ * rebuild).  w->hits is kept.  Only a triangle larger than
+ * LIE_COMPLEX_KEEP_SPLITTING of the largest is probed: a smaller complex
+ * root is settled at its first level (split_pays weighs its children's
+ * exact lists), so its probes would cost as much as they save (on
+ * scifi_hallway, probing every splitting root made the view build 2.6
+ * times slower). */
+static int predict_complex(const build_ctx *c, worker *w, uint32_t tri, int e, int two_sided, size_t n_list)
+{
+    static const int corner[4] = {3, 0, 1, 2}; /* the centre first: a corner is likelier to differ */
+    uint32_t *keep = malloc(sizeof *keep * (n_list + 1));
+    if (!keep) {
+        w->nomem = 1;
+        return 0;
+    }
+    memcpy(keep, w->hits, sizeof *keep * n_list);
+    size_t n_hits = w->n_hits;
+    int complex = 1;
+    for (int k = 0; k < 4 && complex; k++) {
+        lie_patch_path p = lie_patch_root();
+        while (lie_subdiv_may_split(c, tri, p))
+            p = lie_patch_child(p, corner[k]);
+        lie_vec3 V[3];
+        lie_patch_world(p, &c->s->tri_p[3 * (size_t)tri], V);
+        complex = lie_cull_exact(c, w, tri, V, two_sided, e, c->p->complex_cap) > c->p->complex_cap && !w->nomem;
+    }
+    memcpy(w->hits, keep, sizeof *keep * n_list);
+    w->n_hits = n_hits;
+    free(keep);
+    return complex;
+}
+
+/* Whether every leaf below node idx of u is complex. */
+static int all_complex(const unit_buf *u, uint32_t idx)
+{
+    const lie_pnode *x = &u->nodes[idx];
+    if (!x->child)
+        return x->cls == LIE_CLASS_COMPLEX;
+    for (uint32_t k = 0; k < 4; k++)
+        if (!all_complex(u, x->child + k))
+            return 0;
+    return 1;
+}
+
 /* Build node `idx` for patch `path` of unit (tri, e).  In an update, `old`
  * is the old env's node for the same patch (or -1): when both old and new
  * split, children whose regions no edit touched are copied.  `pre`, when
@@ -331,6 +386,16 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
     size_t n_list = nc.n_list;
     int exact_done = 0; /* w->hits holds the leaf's exact list */
     int splits = lie_subdiv_splits(c, tri, path, e, nc.cls, w->hits, n_list);
+    if (splits && path.depth == 0 && (c->p->complex_predict || c->audit_complex) &&
+        c->s->tri_area[tri] > LIE_COMPLEX_KEEP_SPLITTING * c->s->max_tri_area) {
+        w->root_predicted = predict_complex(c, w, tri, e, two_sided, n_list);
+        if (w->nomem)
+            return;
+        if (w->root_predicted && c->p->complex_predict) {
+            splits = 0; /* one complex leaf: its shadow rays go to Embree */
+            nc.cls = LIE_CLASS_COMPLEX;
+        }
+    }
     if (splits && c->pix && !lie_subdiv_pixels_pay(c, tri, path, nc.cls, n_list, nc.quality)) {
         /* too few pixels see the patch for a split to pay: a leaf, with the
          * exact list (a sampled one may miss small blockers of a large
@@ -528,6 +593,12 @@ void lie_subtree_size(const lie_env *old, uint32_t from, uint32_t *n_nodes, uint
         *n_pool += x->count;
 }
 
+void lie_unit_size(const lie_env *env, uint32_t root, uint32_t *n_nodes, uint32_t *n_pool)
+{
+    if (!lie_pnode_lone(&env->nodes[root]))
+        lie_subtree_size(env, root, n_nodes, n_pool);
+}
+
 /* The shares of triangle tri's units (lie_unit_shares) in the worker's
  * scratch, once per triangle; NULL on no memory. */
 static const double *unit_shares(const build_ctx *c, worker *w, uint32_t tri)
@@ -572,9 +643,36 @@ static int copied_whole(const build_ctx *c, uint32_t tri, unit_buf *u)
             return 0;
     }
     for (size_t e = 0; e < ne; e++)
-        lie_subtree_size(c->old, c->old->root[c->old_unit[(size_t)tri * ne + e]], &u->n_nodes, &u->n_pool);
+        lie_unit_size(c->old, c->old->root[c->old_unit[(size_t)tri * ne + e]], &u->n_nodes, &u->n_pool);
     u->copied = 1;
     return 1;
+}
+
+/* The prediction of a unit just built against what it came out as
+ * (lie_build_stats.complex_predicted ...): with complex_predict, a unit
+ * not named that is complex throughout is one the prediction missed. */
+static void count_complex(const build_ctx *c, worker *w, const unit_buf *u, uint32_t root)
+{
+    if (!c->p->complex_predict && !c->audit_complex)
+        return;
+    int all = all_complex(u, root);
+    w->st.complex_predicted += (uint64_t)w->root_predicted;
+    if (c->p->complex_predict)
+        w->st.complex_measured += (uint64_t)(all && !w->root_predicted);
+    else
+        w->st.complex_measured += (uint64_t)all;
+    w->st.complex_predicted_measured += (uint64_t)(all && w->root_predicted && !c->p->complex_predict);
+}
+
+/* A unit built into node `root` that came out one lone leaf gives its
+ * node back: it takes the env's shared leaf (lie_pnode_lone). */
+static void share_lone(unit_buf *u, worker *w, uint32_t root, size_t e)
+{
+    if (u->n_nodes != root + 1 || !lie_pnode_lone(&u->nodes[root]))
+        return;
+    u->roots[e] = u->nodes[root].cls == LIE_CLASS_UNLIT ? LIE_ROOT_LONE_UNLIT : LIE_ROOT_LONE_NONE;
+    u->n_nodes = root;
+    atomic_fetch_sub_explicit(w->nodes_made, 1, memory_order_relaxed);
 }
 
 void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
@@ -603,20 +701,24 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
         size_t unit = (size_t)tri * ne + e;
         if (unit < c->unit_lo || unit >= c->unit_hi)
             continue; /* lie_env_build_range: another part's */
+        int64_t old = c->old_unit && c->old_unit[unit] >= 0 ? (int64_t)c->old->root[c->old_unit[unit]] : -1;
+        if (left_to_embree(c, w, tri, share, (int)e)) {
+            u->roots[e] = LIE_ROOT_LONE_NONE; /* outside the views, or cannot pay: not built */
+            w->st.pairs[LIE_CLASS_NONE]++;
+            continue;
+        }
         int root = push_node(u, w);
         if (root < 0)
             return;
         u->roots[e] = (uint32_t)root;
-        int64_t old = c->old_unit && c->old_unit[unit] >= 0 ? (int64_t)c->old->root[c->old_unit[unit]] : -1;
-        if (left_to_embree(c, w, tri, share, (int)e)) {
-            u->nodes[root].cls = LIE_CLASS_NONE; /* outside the views, or cannot pay: not built */
-            w->st.pairs[LIE_CLASS_NONE]++;
-            continue;
-        }
         int copy = old >= 0 && !(c->node_flags && c->node_flags[old]);
         w->st.units_copied += (uint64_t)copy;
+        w->root_predicted = 0;
         if (!c->stop || copy) {
             build_node(c, w, u, (uint32_t)root, tri, lie_patch_root(), (int)e, two_sided, NULL, 0, old, NULL);
+            if (!copy && !w->nomem)
+                count_complex(c, w, u, (uint32_t)root);
+            share_lone(u, w, (uint32_t)root, e);
             continue;
         }
         /* A build that may be interrupted: a unit the stop reaches is
@@ -627,15 +729,18 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
         uint32_t n_pool0 = u->n_pool;
         w->stopped = 0;
         build_node(c, w, u, (uint32_t)root, tri, lie_patch_root(), (int)e, two_sided, NULL, 0, old, NULL);
-        if (!w->stopped || w->nomem)
+        if (!w->stopped || w->nomem) {
+            if (!w->nomem)
+                count_complex(c, w, u, (uint32_t)root);
+            share_lone(u, w, (uint32_t)root, e);
             continue;
+        }
         w->stopped = 0;
-        atomic_fetch_sub_explicit(w->nodes_made, u->n_nodes - (uint32_t)root - 1, memory_order_relaxed);
+        atomic_fetch_sub_explicit(w->nodes_made, u->n_nodes - (uint32_t)root, memory_order_relaxed);
         w->st = saved;
-        u->n_nodes = (uint32_t)root + 1;
+        u->n_nodes = (uint32_t)root;
         u->n_pool = n_pool0;
-        memset(&u->nodes[root], 0, sizeof *u->nodes);
-        u->nodes[root].cls = LIE_CLASS_NONE;
+        u->roots[e] = LIE_ROOT_LONE_NONE;
         w->st.pairs[LIE_CLASS_NONE]++;
         w->st.units_interrupted++;
     }

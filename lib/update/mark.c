@@ -228,23 +228,31 @@ static void copy_subtree(const lie_env *env, const uint8_t *flags, uint32_t from
 }
 
 /* The work env: per unit of the edited scene, in unit order and each
- * contiguous, the committed unit it continues or one LIE_CLASS_NONE node
- * for a unit to build afresh. */
+ * contiguous, the committed unit it continues or, for a unit to build
+ * afresh, a none leaf; laid out as lib/lie lays out a build (lone leaves
+ * shared after the other units' nodes: lib/lie/lie.h, lie_pnode_lone), so
+ * that an update that recomputes nothing still gives a build's env. */
 static lie_status make_work(lie_update *u)
 {
     const lie_env *env = u->cache->env;
     const lie_scene *s = u->scene;
     size_t n_units = (size_t)s->n_tris * (size_t)s->n_clusters;
     uint64_t nodes = 0, pool = 0;
+    int used_unlit = 0, used_none = 0;
     for (size_t k = 0; k < n_units; k++) {
-        uint32_t a = 1, b = 0;
-        if (u->old_unit[k] >= 0) {
-            a = 0;
-            subtree_size(env, env->root[u->old_unit[k]], &a, &b);
+        uint32_t a = 0, b = 0;
+        const lie_pnode *r = u->old_unit[k] >= 0 ? &env->nodes[env->root[u->old_unit[k]]] : NULL;
+        if (!r || lie_pnode_lone(r)) {
+            used_unlit |= r && r->cls == LIE_CLASS_UNLIT;
+            used_none |= !r || r->cls == LIE_CLASS_NONE;
+            continue;
         }
+        subtree_size(env, env->root[u->old_unit[k]], &a, &b);
         nodes += a;
         pool += b;
     }
+    const uint64_t own = nodes;
+    nodes += (uint64_t)used_unlit + (uint64_t)used_none;
     if (nodes >= 0xFFFFFFF0u || pool >= 0xFFFFFFF0u)
         return LIE_ERR_LIMIT;
     lie_env *w = calloc(1, sizeof *w);
@@ -262,21 +270,36 @@ static lie_status make_work(lie_update *u)
     w->n_nodes = w->n_pool = 0;
     if (!w->root || !w->nodes || !w->pool)
         return LIE_ERR_NOMEM;
+    const uint32_t shared_unlit = (uint32_t)own, shared_none = (uint32_t)own + (uint32_t)used_unlit;
     u->n_pending = 0;
     for (size_t k = 0; k < n_units; k++) {
-        uint32_t idx = w->n_nodes++;
-        w->root[k] = idx;
-        if (u->old_unit[k] < 0) {
-            memset(&w->nodes[idx], 0, sizeof w->nodes[idx]);
-            w->nodes[idx].cls = LIE_CLASS_NONE;
+        const lie_pnode *r = u->old_unit[k] >= 0 ? &env->nodes[env->root[u->old_unit[k]]] : NULL;
+        if (!r) {
+            w->root[k] = shared_none;
             u->pending[k] = 2;
+        } else if (lie_pnode_lone(r)) {
+            /* unlit or unbuilt: shared, and if flagged built afresh (a lone
+             * leaf recomputed is the unit built) */
+            w->root[k] = r->cls == LIE_CLASS_UNLIT ? shared_unlit : shared_none;
+            u->pending[k] = u->flags[env->root[u->old_unit[k]]] ? 2 : 0;
         } else {
-            uint32_t r = env->root[u->old_unit[k]];
-            copy_subtree(env, u->flags, r, w, u->work_flags, idx);
-            u->pending[k] = u->flags[r];
+            uint32_t idx = w->n_nodes++;
+            w->root[k] = idx;
+            uint32_t from = env->root[u->old_unit[k]];
+            copy_subtree(env, u->flags, from, w, u->work_flags, idx);
+            u->pending[k] = u->flags[from];
         }
         u->n_pending += u->pending[k] != 0;
     }
+    if (used_unlit) {
+        memset(&w->nodes[shared_unlit], 0, sizeof w->nodes[shared_unlit]);
+        w->nodes[shared_unlit].cls = LIE_CLASS_UNLIT;
+    }
+    if (used_none) {
+        memset(&w->nodes[shared_none], 0, sizeof w->nodes[shared_none]);
+        w->nodes[shared_none].cls = LIE_CLASS_NONE;
+    }
+    w->n_nodes = (uint32_t)nodes;
     return LIE_OK;
 }
 

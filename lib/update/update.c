@@ -265,6 +265,16 @@ static lie_status commit(lie_update *u, lie_error *err)
     return LIE_OK;
 }
 
+/* The nodes of a unit's tree from root r: contiguous from r in an env
+ * lib/lie lays out (a lone leaf, shared, is never pending). */
+static uint32_t tree_nodes(const lie_env *env, uint32_t r)
+{
+    uint32_t n = 1;
+    for (uint32_t k = 0; env->nodes[r].child && k < 4; k++)
+        n += tree_nodes(env, env->nodes[r].child + k);
+    return n;
+}
+
 /* Recompute the chosen pending units of the work env in place (the others
  * are copied as they are), then carry the flags of the units still
  * pending over to the new layout. */
@@ -276,7 +286,6 @@ static lie_status recompute(lie_update *u, const uint8_t *chosen, lie_error *err
     int32_t *old_unit = malloc(sizeof *old_unit * (n_units + 1));
     uint8_t *flags = malloc((size_t)w->n_nodes + 1);
     uint32_t *root = malloc(sizeof *root * (n_units + 1));
-    uint32_t old_nodes = w->n_nodes;
     if (!old_unit || !flags || !root) {
         free(old_unit);
         free(flags);
@@ -287,10 +296,8 @@ static lie_status recompute(lie_update *u, const uint8_t *chosen, lie_error *err
     memcpy(flags, u->work_flags, w->n_nodes);
     for (size_t k = 0; k < n_units; k++) {
         old_unit[k] = chosen[k] && u->pending[k] == 2 ? -1 : (int32_t)k;
-        if (!chosen[k] && u->pending[k] == 1) {
-            uint32_t end = k + 1 < n_units ? root[k + 1] : old_nodes;
-            memset(flags + root[k], 0, end - root[k]);
-        }
+        if (!chosen[k] && u->pending[k] == 1)
+            memset(flags + root[k], 0, tree_nodes(w, root[k]));
     }
     lie_build_stats bst;
     lie_status st = lie_env_update_views(w, s, u->rt, u->px, old_unit, flags, u->opt.threads, &bst, err);
@@ -318,10 +325,8 @@ static lie_status recompute(lie_update *u, const uint8_t *chosen, lie_error *err
             u->pending[k] = 0;
             continue;
         }
-        if (u->pending[k] == 1) {
-            uint32_t end = k + 1 < n_units ? root[k + 1] : old_nodes;
-            memcpy(nf + w->root[k], u->work_flags + root[k], end - root[k]);
-        }
+        if (u->pending[k] == 1) /* copied as it was: the same tree */
+            memcpy(nf + w->root[k], u->work_flags + root[k], tree_nodes(w, w->root[k]));
     }
     free(root);
     free(u->work_flags);

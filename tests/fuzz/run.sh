@@ -54,6 +54,7 @@ seed gltf tests/scenes/*.gltf tests/data/gltf/*.gltf tests/data/gltf/*.glb tests
 seed edit tests/fuzz/seeds/edit/* examples/edits/*.yaml
 seed campath tests/fuzz/seeds/campath/*
 seed fileset tests/fuzz/seeds/fileset/*
+seed cache tests/fuzz/seeds/cache/* # older format versions, which the reader still takes
 mkdir -p "$OUT/seeds/cache"
 if make -s all >/dev/null 2>&1; then
     c="$OUT/seeds/cache"
@@ -61,6 +62,9 @@ if make -s all >/dev/null 2>&1; then
     bin/lie-build tests/scenes/cornell.gltf -q --samples 4 --max-samples 4 --min-patch 0.3 --blockers conservative -o "$c/cornell-c.lie"
     bin/lie-build tests/scenes/museum3.gltf -q --samples 2 --max-samples 2 --min-patch 1 -o "$c/museum3.lie"
     bin/lie-build tests/data/gltf/lights_cameras.gltf -q --samples 4 --min-patch 0.1 -o "$c/lights.lie"
+    # a view build: its unseen units are ROOTS tags (formats/lie-cache.md, version 6)
+    bin/lie-build tests/scenes/cornell.gltf -q --samples 4 --max-samples 4 --min-patch 0.1 --view 0 \
+        --view-size 32x32 -o "$c/cornell-view.lie"
     printf '%s\n' '- rotate: {node: TallBlock, axis: [0, 1, 0], degrees: -20}' >"$OUT/tall.yaml"
     bin/rst-update "$c/cornell.lie" "$OUT/tall.yaml" -q -o "$c/cornell-edited.lie"
 else

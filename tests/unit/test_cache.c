@@ -149,7 +149,7 @@ static void assemble(const sect *s, int n, unsigned char **out, size_t *size)
     unsigned char *b = calloc(1, total);
     assert_non_null(b);
     memcpy(b, "LIECACHE", 8);
-    put32(b + 8, 5);
+    put32(b + 8, 6);
     put32(b + 20, (uint32_t)n);
     put64(b + 24, total);
     for (int i = 0; i < n; i++) {
@@ -169,10 +169,92 @@ static void assemble(const sect *s, int n, unsigned char **out, size_t *size)
 
 enum { META, PARM, EDIT, EMIT, ROOT, NODE, POOL, N_SECT };
 
-/* The seven sections of a cache, field by field as the spec lists them. */
-static void spec_sections(const lie_cache *c, sect s[N_SECT])
+/* The trees in the file's canonical order (formats/lie-cache.md): per unit
+ * its root, then depth first, a split node's children appended when it is
+ * visited, lists as their leaves are visited; a lone unit is a tag in
+ * ROOTS (version 6), or with `own_lone` its own node (versions 1 to 5). */
+typedef struct spec_trees {
+    const lie_env *env;
+    uint32_t *root, n_nodes, n_pool;
+    lie_pnode *nodes;
+    uint32_t *pool;
+} spec_trees;
+
+static void spec_copy(spec_trees *t, uint32_t from, uint32_t idx)
 {
-    const lie_env *env = c->env;
+    lie_pnode x = t->env->nodes[from];
+    if (x.child) {
+        uint32_t first = t->n_nodes, oc = x.child;
+        t->n_nodes += 4;
+        x.child = first;
+        t->nodes[idx] = x;
+        for (uint32_t k = 0; k < 4; k++)
+            spec_copy(t, oc + k, first + k);
+        return;
+    }
+    if (x.cls == LIE_CLASS_PARTIAL) {
+        memcpy(t->pool + t->n_pool, t->env->pool + x.list, sizeof *t->pool * x.count);
+        x.list = t->n_pool;
+        t->n_pool += x.count;
+    }
+    t->nodes[idx] = x;
+}
+
+static void spec_lay_out(const lie_env *env, int own_lone, spec_trees *t)
+{
+    size_t units = (size_t)env->n_tris * (size_t)env->n_clusters;
+    memset(t, 0, sizeof *t);
+    t->env = env;
+    t->root = calloc(units + 1, sizeof *t->root);
+    t->nodes = calloc((size_t)env->n_nodes + units + 1, sizeof *t->nodes);
+    t->pool = calloc((size_t)env->n_pool + 1, sizeof *t->pool);
+    for (size_t u = 0; u < units; u++) {
+        const lie_pnode *x = &env->nodes[env->root[u]];
+        int lone = !x->child && (x->cls == LIE_CLASS_UNLIT || x->cls == LIE_CLASS_NONE) && !x->quality &&
+                   !x->list && !x->count;
+        if (lone && !own_lone) {
+            t->root[u] = x->cls == LIE_CLASS_UNLIT ? 0xFFFFFFFFu : 0xFFFFFFFEu;
+            continue;
+        }
+        t->root[u] = t->n_nodes++;
+        spec_copy(t, env->root[u], t->root[u]);
+    }
+}
+
+static void spec_free(spec_trees *t)
+{
+    free(t->root);
+    free(t->nodes);
+    free(t->pool);
+}
+
+/* The nodes a version 6 file holds for env. */
+static uint32_t file_nodes(const lie_env *env)
+{
+    spec_trees t;
+    spec_lay_out(env, 0, &t);
+    uint32_t n = t.n_nodes;
+    spec_free(&t);
+    return n;
+}
+
+/* The seven sections of a cache, field by field as the spec lists them
+ * (the trees as version 6 writes them, or with `own_lone` as version 5). */
+enum { SPEC_V6, SPEC_V5, SPEC_RAW /* the env's arrays as they are: synthetic layouts */ };
+static void spec_sections_as(const lie_cache *c, int how, sect s[N_SECT])
+{
+    spec_trees tr;
+    memset(&tr, 0, sizeof tr);
+    lie_env laid = *c->env;
+    if (how != SPEC_RAW) {
+        spec_lay_out(c->env, how == SPEC_V5, &tr);
+        laid.root = tr.root;
+        laid.nodes = tr.nodes;
+        laid.pool = tr.pool;
+        laid.n_nodes = tr.n_nodes;
+        laid.n_pool = tr.n_pool;
+    }
+    const lie_env *env = &laid;
     size_t pl = strlen(c->scene_path), units = (size_t)c->n_tris * (size_t)env->n_clusters;
     s[META] = (sect){id4("META"), calloc(1, 48 + pl), 48 + pl};
     put64(s[META].data, c->scene_hash);
@@ -184,7 +266,7 @@ static void spec_sections(const lie_cache *c, sect s[N_SECT])
     put32(s[META].data + 36, env->n_pool);
     put32(s[META].data + 40, (uint32_t)pl);
     memcpy(s[META].data + 48, c->scene_path, pl);
-    s[PARM] = (sect){id4("PARM"), calloc(1, 48), 48};
+    s[PARM] = (sect){id4("PARM"), calloc(1, 52), 52};
     put32(s[PARM].data, env->params.samples);
     put32(s[PARM].data + 4, env->params.max_samples);
     put32(s[PARM].data + 8, env->params.max_blockers);
@@ -203,6 +285,7 @@ static void spec_sections(const lie_cache *c, sect s[N_SECT])
         memcpy(&sg, ns[k], 4);
         put32(s[PARM].data + 36 + 4 * k, sg);
     }
+    put32(s[PARM].data + 48, env->params.complex_predict);
     size_t es = 4;
     for (int i = 0; i < c->n_edits; i++)
         es += 8 + strlen(c->edits[i].name) + c->edits[i].size;
@@ -239,7 +322,10 @@ static void spec_sections(const lie_cache *c, sect s[N_SECT])
     s[POOL] = (sect){id4("POOL"), calloc(1, 4 * (size_t)env->n_pool + 1), 4 * (size_t)env->n_pool};
     for (uint32_t i = 0; i < env->n_pool; i++)
         put32(s[POOL].data + 4 * i, env->pool[i]);
+    spec_free(&tr);
 }
+
+static void spec_sections(const lie_cache *c, sect s[N_SECT]) { spec_sections_as(c, SPEC_V6, s); }
 
 static void free_sections(sect *s, int n)
 {
@@ -424,7 +510,7 @@ static void test_sections_lists_the_table_in_file_order(void **state)
         end = (sec[i].offset + sec[i].size + 7) & ~(uint64_t)7;
     }
     assert_int_equal(end + 8, na);
-    assert_int_equal(sec[5].size, 20 * (uint64_t)c->env->n_nodes);
+    assert_int_equal(sec[5].size, 20 * (uint64_t)file_nodes(c->env));
     free(a);
     lie_cache_destroy(c);
 }
@@ -565,7 +651,7 @@ static void emitters_v2(const lie_cache *c, sect s[N_SECT])
 static void old_file(const lie_cache *c, sect s[N_SECT], uint32_t version, size_t params_size, unsigned char **a,
                      size_t *na)
 {
-    spec_sections(c, s);
+    spec_sections_as(c, SPEC_V5, s);
     emitters_v2(c, s);
     s[PARM].size = params_size;
     assemble(s, N_SECT, a, na);
@@ -630,7 +716,7 @@ static void test_version_1_reads_with_split_gain_0(void **state)
     old_version_read(&o, cornell_cache(LIE_BLOCKERS_SAMPLED), 1, 24);
     assert_true(o.d->env->params.split_gain == 0.0f);
     assert_int_equal(o.d->env->params.complex_cap, o.c->env->params.complex_cap);
-    assert_int_equal(o.d->env->n_nodes, o.c->env->n_nodes);
+    assert_int_equal(file_nodes(o.d->env), file_nodes(o.c->env));
     old_version_done(&o, "section PARAMS: 24 bytes, expected 28");
 }
 
@@ -707,7 +793,7 @@ static void test_newer_version_is_unsupported(void **state)
      * invariant trailing checksum must hold */
     memset(a + 12, 0xAB, na - 20);
     reseal(a, na);
-    expect_reject(a, na, LIE_ERR_UNSUPPORTED, "version 6");
+    expect_reject(a, na, LIE_ERR_UNSUPPORTED, "version 7");
     free(a);
     encode(c, &a, &na);
     put32(a + 8, 0);
@@ -717,30 +803,60 @@ static void test_newer_version_is_unsupported(void **state)
     lie_cache_destroy(c);
 }
 
-/* Version 4 has version 5's layout: it reads, and says its units follow
- * older rules (an update recomputes them all, lib/update); a cache this
- * library wrote does not. */
-static void test_version_4_reads_with_older_rules(void **state)
+/* Versions 4 and 5 have version 6's sections, with a node for every unit
+ * (no tags in ROOTS): they read; version 4 says its units follow older
+ * rules (an update recomputes them all, lib/update), version 5 and a cache
+ * this library wrote do not; and either encodes again as this library
+ * writes the same trees.  A tag in an older file is a root past the nodes. */
+static void test_versions_4_and_5_read_and_encode_as_version_6(void **state)
 {
     (void)state;
     lie_cache *c = small_cache(), *d = NULL;
-    unsigned char *a;
-    size_t na;
+    unsigned char *a, *b, *v6;
+    size_t na, nb, n6;
     lie_error err;
-    encode(c, &a, &na);
-    assert_int_equal(lie_cache_decode(a, na, "t.lie", &d, &err), LIE_OK);
+    c->env->params.complex_predict = 0; /* what an older file reads as */
+    encode(c, &v6, &n6);
+    assert_int_equal(lie_cache_decode(v6, n6, "t.lie", &d, &err), LIE_OK);
     assert_int_equal(d->version, LIE_CACHE_VERSION);
     assert_false(lie_cache_rules_old(d));
     assert_false(lie_cache_rules_old(c));
     lie_cache_destroy(d);
-    put32(a + 8, 4);
-    reseal(a, na);
-    assert_int_equal(lie_cache_decode(a, na, "t.lie", &d, &err), LIE_OK);
-    assert_int_equal(d->version, 4);
-    assert_true(lie_cache_rules_old(d));
-    assert_int_equal(d->env->n_nodes, c->env->n_nodes);
-    lie_cache_destroy(d);
+    sect s[N_SECT];
+    spec_sections_as(c, SPEC_V5, s);
+    s[PARM].size = 48;
+    assemble(s, N_SECT, &a, &na);
+    assert_true(na > n6); /* a node for each lone unit */
+    for (uint32_t version = 4; version <= 5; version++) {
+        put32(a + 8, version);
+        reseal(a, na);
+        assert_int_equal(lie_cache_decode(a, na, "t.lie", &d, &err), LIE_OK);
+        assert_int_equal(d->version, version);
+        assert_int_equal(lie_cache_rules_old(d), version < 5);
+        assert_int_equal(file_nodes(d->env), file_nodes(c->env));
+        encode(d, &b, &nb);
+        assert_int_equal(nb, n6);
+        assert_memory_equal(b, v6, n6);
+        free(b);
+        lie_cache_destroy(d);
+    }
     free(a);
+    free_sections(s, N_SECT);
+    /* a version 6 tag read as version 5 */
+    size_t units = (size_t)c->n_tris * (size_t)c->env->n_clusters, tagged = units;
+    for (size_t u = 0; u < units && tagged == units; u++)
+        if (lie_pnode_lone(&c->env->nodes[c->env->root[u]]))
+            tagged = u;
+    assert_true(tagged < units);
+    spec_sections(c, s);
+    s[PARM].size = 48;
+    assemble(s, N_SECT, &a, &na);
+    put32(a + 8, 5);
+    reseal(a, na);
+    expect_reject(a, na, LIE_ERR_FORMAT, "beyond the");
+    free(a);
+    free_sections(s, N_SECT);
+    free(v6);
     lie_cache_destroy(c);
 }
 
@@ -862,8 +978,8 @@ static void test_misplaced_sections_are_rejected_even_with_valid_checksums(void 
         {8, node_off - 8, "offset"},                  /* overlaps the previous section */
         {16, (uint64_t)na, "pass the end"},           /* longer than the file */
         {16, UINT64_MAX, "pass the end"},             /* wraps around */
-        {16, 20 * (uint64_t)c->env->n_nodes + 8, ""}, /* overlaps the next section */
-        {16, 20 * (uint64_t)c->env->n_nodes - 20, ""}, /* leaves a gap */
+        {16, 20 * (uint64_t)file_nodes(c->env) + 8, ""}, /* overlaps the next section */
+        {16, 20 * (uint64_t)file_nodes(c->env) - 20, ""}, /* leaves a gap */
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         memcpy(a, orig, na);
@@ -956,10 +1072,12 @@ static void test_bad_meta_params_edits_emitters_are_rejected(void **state)
     lie_cache_destroy(c);
 }
 
-/* Index of the first node after node 0 of class cls with (child != 0) == interior. */
+/* Index of the first node after node 0 of class cls with (child != 0) ==
+ * interior, among those the file holds (the env's first, as a build lays
+ * it out: its shared lone leaves come last, as tags). */
 static uint32_t find_node(const lie_env *env, uint32_t cls, int interior)
 {
-    for (uint32_t i = 1; i < env->n_nodes; i++)
+    for (uint32_t i = 1; i < file_nodes(env); i++)
         if (env->nodes[i].cls == cls && (env->nodes[i].child != 0) == interior)
             return i;
     fail_msg("no %s node of class %u", interior ? "interior" : "leaf", cls);
@@ -977,7 +1095,7 @@ static void test_structurally_invalid_env_is_rejected_despite_valid_checksums(vo
         if (env->nodes[i].cls == LIE_CLASS_PARTIAL && env->nodes[i].list > 0 && env->nodes[i].count >= 2)
             partial = i;
     assert_true(partial > 0);
-    uint32_t unlit = find_node(env, LIE_CLASS_UNLIT, 0);
+    uint32_t unlit = find_node(env, LIE_CLASS_VISIBLE, 0); /* unlit roots are tags */
     const lie_pnode *pn = &env->nodes[partial];
     assert_true(pn->count >= 2);
     size_t sn = 20 * (size_t)split, pp = 20 * (size_t)partial, un = 20 * (size_t)unlit;
@@ -987,12 +1105,12 @@ static void test_structurally_invalid_env_is_rejected_despite_valid_checksums(vo
     expect_patched_reject(c, NODE, sn, env->n_nodes - 2, LIE_ERR_FORMAT, "beyond");
     expect_patched_reject(c, NODE, sn, 0xFFFFFFFEu, LIE_ERR_FORMAT, "beyond");
     expect_patched_reject(c, NODE, sn, env->nodes[split].child + 1, LIE_ERR_FORMAT, NULL);
-    expect_patched_reject(c, NODE, un, split + 1, LIE_ERR_FORMAT, "has children but class unlit");
+    expect_patched_reject(c, NODE, un, split + 1, LIE_ERR_FORMAT, "has children but class visible");
     expect_patched_reject(c, NODE, sn + 12, 1, LIE_ERR_FORMAT, "split node with a list");
     /* classes */
     expect_patched_reject(c, NODE, un + 4, 7, LIE_ERR_FORMAT, "class 7 is unknown");
     expect_patched_reject(c, NODE, un + 4, LIE_CLASS_SPLIT, LIE_ERR_FORMAT, "without children");
-    expect_patched_reject(c, NODE, un + 16, 1, LIE_ERR_FORMAT, "unlit leaf with a blocker list");
+    expect_patched_reject(c, NODE, un + 16, 1, LIE_ERR_FORMAT, "visible leaf with a blocker list");
     expect_patched_reject(c, NODE, un + 4, LIE_CLASS_PARTIAL, LIE_ERR_FORMAT, "empty list");
     /* lists */
     expect_patched_reject(c, NODE, pp + 12, env->n_pool, LIE_ERR_FORMAT, "beyond the");
@@ -1005,8 +1123,11 @@ static void test_structurally_invalid_env_is_rejected_despite_valid_checksums(vo
     expect_patched_reject(c, POOL, 4 * ((size_t)pn->list + pn->count - 1), env->n_tris, LIE_ERR_FORMAT,
                           "beyond the 6 triangles");
     /* roots */
-    expect_patched_reject(c, ROOT, 0, env->n_nodes, LIE_ERR_FORMAT, "section ROOTS: unit 0");
-    expect_patched_reject(c, ROOT, 4, env->root[0], LIE_ERR_FORMAT, "already a root");
+    expect_patched_reject(c, ROOT, 0, file_nodes(env), LIE_ERR_FORMAT, "section ROOTS: unit 0");
+    size_t owner = 0;
+    while (lie_pnode_lone(&env->nodes[env->root[owner]]))
+        owner++;
+    expect_patched_reject(c, ROOT, 4 * (owner + 1), env->root[owner], LIE_ERR_FORMAT, "already a root");
     expect_patched_reject(c, ROOT, 0, env->nodes[split].child, LIE_ERR_FORMAT, NULL);
     lie_cache_destroy(c);
 }
@@ -1045,7 +1166,7 @@ static void test_trees_deeper_than_max_depth_or_with_orphans_are_rejected(void *
         lie_cache cc = *c;
         cc.env = &fake;
         sect s[N_SECT];
-        spec_sections(&cc, s);
+        spec_sections_as(&cc, SPEC_RAW, s);
         unsigned char *a;
         size_t na;
         assemble(s, N_SECT, &a, &na);
@@ -1063,7 +1184,7 @@ static void test_trees_deeper_than_max_depth_or_with_orphans_are_rejected(void *
         /* the same with the chain cut off from its unit */
         nodes[0].child = 0;
         nodes[0].cls = LIE_CLASS_VISIBLE;
-        spec_sections(&cc, s);
+        spec_sections_as(&cc, SPEC_RAW, s);
         assemble(s, N_SECT, &a, &na);
         expect_reject(a, na, LIE_ERR_FORMAT, "belongs to no unit");
         free(a);
@@ -1094,7 +1215,7 @@ static void test_empty_scene_round_trips(void **state)
     /* nodes nobody reaches are refused even then */
     sect s[N_SECT];
     env->n_nodes = 1;
-    spec_sections(c, s);
+    spec_sections_as(c, SPEC_RAW, s);
     free(a);
     assemble(s, N_SECT, &a, &na);
     expect_reject(a, na, LIE_ERR_FORMAT, "belongs to no unit");
@@ -1276,7 +1397,7 @@ int main(void)
         cmocka_unit_test(test_version_2_reads_with_the_default_cost_model),
         cmocka_unit_test(test_views_round_trip_and_bad_views_are_rejected),
         cmocka_unit_test(test_newer_version_is_unsupported),
-        cmocka_unit_test(test_version_4_reads_with_older_rules),
+        cmocka_unit_test(test_versions_4_and_5_read_and_encode_as_version_6),
         cmocka_unit_test(test_version_3_reads_with_one_cluster_each),
         cmocka_unit_test(test_unknown_required_flag_is_unsupported_optional_ignored),
         cmocka_unit_test(test_unknown_sections_are_skipped_and_order_is_free),

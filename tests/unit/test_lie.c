@@ -249,7 +249,7 @@ static void test_lie_quad_between_floor_and_light_is_the_only_blocker(void **sta
     lie_rt *rt = NULL;
     lie_build_params p = lie_build_params_default();
     p.min_patch = 2e-4f; /* patches small enough to lie whole in the umbra (|x|, |z| < 0.1) */
-    p.max_blockers = 1; /* split any list of two, to get small patches */
+    p.max_blockers = 0; /* split any list of two, to get small patches */
     p.split_gain = 0.0f; /* the paper's rule: split wherever a list is too long */
     lie_env *env = build(s, &rt, p);
     occ_check c = {s, 0, 0, 0, 0};
@@ -628,6 +628,59 @@ static void test_lie_build_is_identical_for_any_thread_count(void **state)
     lie_scene_destroy(s);
 }
 
+/* --complex-predict: on cornell with a low complex cap some units are
+ * predicted complex, each one complex leaf; the build is the same for any
+ * thread count, rebuilding units gives it again, and an audit (built as
+ * without the prediction) names the same units, which it measures. */
+static void test_lie_units_predicted_complex_are_one_complex_leaf(void **state)
+{
+    (void)state;
+    lie_scene *s = test_scene("cornell.gltf");
+    lie_rt *rt = NULL;
+    lie_error err;
+    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
+    lie_build_params p = test_params(1e-3f);
+    p.complex_cap = 0;
+    p.max_blockers = 0;
+    p.complex_predict = 1;
+    lie_build_control ctl;
+    memset(&ctl, 0, sizeof ctl);
+    lie_build_stats on, on3, audit, tally;
+    lie_env *a = NULL, *b = NULL, *c = NULL;
+    p.threads = 1;
+    assert_int_equal(lie_env_build_with(s, rt, &p, &ctl, &a, &on, &err), LIE_OK);
+    p.threads = 3;
+    assert_int_equal(lie_env_build_with(s, rt, &p, &ctl, &b, &on3, &err), LIE_OK);
+    assert_env_equal(a, b);
+    assert_true(on.complex_predicted > 0);
+    assert_int_equal(on.complex_predicted, on3.complex_predicted);
+    /* each predicted unit is a root that is a complex leaf */
+    size_t n_units = (size_t)s->n_tris * (size_t)s->n_clusters, complex_roots = 0;
+    for (size_t u = 0; u < n_units; u++)
+        complex_roots += a->nodes[a->root[u]].cls == LIE_CLASS_COMPLEX;
+    assert_true(complex_roots >= on.complex_predicted);
+    lie_env_stats(a, &tally);
+    assert_int_equal(tally.pairs[LIE_CLASS_COMPLEX], on.pairs[LIE_CLASS_COMPLEX]);
+    uint32_t units[64];
+    size_t n = 0;
+    for (uint32_t u = 0; u < n_units && n < 64; u += 2)
+        units[n++] = u;
+    assert_int_equal(lie_env_rebuild_units(b, s, rt, units, n, 2, NULL, &err), LIE_OK);
+    assert_env_equal(a, b);
+    p.complex_predict = 0;
+    ctl.audit_complex = 1;
+    assert_int_equal(lie_env_build_with(s, rt, &p, &ctl, &c, &audit, &err), LIE_OK);
+    assert_int_equal(audit.complex_predicted, on.complex_predicted);
+    assert_true(audit.complex_predicted_measured <= audit.complex_predicted);
+    assert_true(audit.complex_measured >= audit.complex_predicted_measured);
+    assert_true(audit.segments > on.segments); /* the predicted units' trees were built */
+    lie_env_destroy(a);
+    lie_env_destroy(b);
+    lie_env_destroy(c);
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+}
+
 static void test_lie_rebuilding_units_equals_building(void **state)
 {
     (void)state;
@@ -861,6 +914,7 @@ int main(void)
         cmocka_unit_test(test_lie_conservative_lists_contain_sampled_lists),
         cmocka_unit_test(test_lie_build_is_identical_for_any_thread_count),
         cmocka_unit_test(test_lie_rebuilding_units_equals_building),
+        cmocka_unit_test(test_lie_units_predicted_complex_are_one_complex_leaf),
         cmocka_unit_test(test_lie_parts_joined_equal_one_build),
         cmocka_unit_test(test_lie_unit_weights),
         cmocka_unit_test(test_patch_children_tile_the_parent),

@@ -24,8 +24,9 @@ typedef struct base {
     const char *const *pre;
     int n_pre;
     lie_blocker_mode mode;
+    int predict; /* complex units predicted, with a complex cap low enough for cornell to have some */
 } base;
-static const base CORNELL = {NULL, 0, LIE_BLOCKERS_SAMPLED};
+static const base CORNELL = {NULL, 0, LIE_BLOCKERS_SAMPLED, 0};
 
 static lie_build_params params(const base *b)
 {
@@ -33,6 +34,11 @@ static lie_build_params params(const base *b)
     p.min_patch = 1e-3f;
     p.threads = 2;
     p.mode = b->mode;
+    if (b->predict) {
+        p.complex_predict = 1;
+        p.complex_cap = 0;
+        p.max_blockers = 0;
+    }
     return p;
 }
 
@@ -208,6 +214,19 @@ static void test_update_equals_rebuild_for_each_operation(void **state)
     }
 }
 
+/* Units predicted complex (lie_build_params.complex_predict) are one
+ * complex leaf each; an edit in such a unit's shaft may change the
+ * prediction, and the update must find it as a rebuild does. */
+static void test_update_equals_rebuild_with_complex_units_predicted(void **state)
+{
+    (void)state;
+    for (int m = 0; m < 2; m++) {
+        const base b = {NULL, 0, m ? LIE_BLOCKERS_CONSERVATIVE : LIE_BLOCKERS_SAMPLED, 1};
+        for (int i = 0; i < 6; i++)
+            check_update_on(&b, &OPS[i], 1, 0, NULL);
+    }
+}
+
 /* restore (an undo of remove): the removed block comes back, update equal
  * to rebuild, and the environments equal those of a cache never edited */
 static void test_update_restore_after_remove_equals_rebuild(void **state)
@@ -294,12 +313,12 @@ static void test_update_equals_rebuild_when_emitters_are_renumbered(void **state
         "- set-emission: {node: BackWall, strength: 0}\n",
     };
     for (int m = 0; m < 2; m++) {
-        const base b = {NULL, 0, m ? LIE_BLOCKERS_CONSERVATIVE : LIE_BLOCKERS_SAMPLED};
+        const base b = {NULL, 0, m ? LIE_BLOCKERS_CONSERVATIVE : LIE_BLOCKERS_SAMPLED, 0};
         for (int i = 0; i < 3; i++)
             check_update_on(&b, &ON[i], 1, 0, NULL);
         check_update_on(&b, ON, 4, 7, NULL); /* on, more before it, the first off again */
         /* a base with the back wall lit: turning it off renumbers the light */
-        const base lit = {ON, 1, b.mode};
+        const base lit = {ON, 1, b.mode, 0};
         check_update_on(&lit, &ON[3], 1, 0, NULL);
     }
 }
@@ -325,7 +344,7 @@ static void test_update_equals_rebuild_when_scene_wide_sizes_change(void **state
     };
     for (int m = 0; m < 2; m++) {
         const lie_blocker_mode mode = m ? LIE_BLOCKERS_CONSERVATIVE : LIE_BLOCKERS_SAMPLED;
-        const base open = {SUN, 2, mode}, closed = {NULL, 0, mode};
+        const base open = {SUN, 2, mode, 0}, closed = {NULL, 0, mode, 0};
         for (int i = 0; i < 5; i++) {
             check_update_on(&open, &GROW[i], 1, 0, NULL);
             if (i < 3)
@@ -497,6 +516,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_update_equals_rebuild_for_each_operation),
         cmocka_unit_test(test_update_restore_after_remove_equals_rebuild),
+        cmocka_unit_test(test_update_equals_rebuild_with_complex_units_predicted),
         cmocka_unit_test(test_set_material_of_one_primitive),
         cmocka_unit_test(test_update_in_chunks_equals_update_at_once),
         cmocka_unit_test(test_update_of_several_files_equals_rebuild),

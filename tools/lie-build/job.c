@@ -251,6 +251,7 @@ static lie_status build_here(build_job *j, lie_progress *progress)
     ctl.progress = progress;
     ctl.resume = j->resume ? j->resume->env : NULL;
     ctl.stop = j->partial ? &job_stop_signal : NULL;
+    ctl.audit_complex = j->audit_complex && !j->bp.complex_predict;
     int handlers[3] = {0, 0, 0};
     if (j->partial)
         stop_handlers(1, handlers);

@@ -23,6 +23,7 @@ typedef struct build_job {
     lie_cache_edit edit_log[JOB_MAX_EDITS]; /* --edit: names, then the texts read */
     int n_edits;
     int view_w, view_h, size_given, params_given, partial;
+    int audit_complex; /* --complex-predict audit: count what the prediction would name */
     /* what the run loads and makes */
     lie_cache *old, *resume; /* --into's cache, --resume's partial cache */
     lie_scene *scene;

@@ -40,6 +40,11 @@ static void usage(FILE *fp)
             "                        its shadow rays go to the whole scene (default %u)\n"
             "      --blockers MODE   sampled (default, the paper's shaft sampling) |\n"
             "                        conservative (every triangle that meets the shaft: exact)\n"
+            "      --complex-predict on|off|audit  on: leave a unit whose lists will all\n"
+            "                        pass the complex cap unbuilt, one complex leaf answered by\n"
+            "                        Embree; audit: build it anyway and count, for --stats,\n"
+            "                        what the prediction names beside what the build measures\n"
+            "                        (default off)\n"
             "      --view CAMERA     build only the patches seen from this camera (a name, an\n"
             "                        index or eye=..,target=..; repeatable), directly or in\n"
             "                        mirrors; the rest is marked 'none' and rendered with full\n"
@@ -104,7 +109,8 @@ static int fail(const lie_error *err) { return lie_dist_fail(prog, err, 1); }
 enum {
     OPT_SAMPLES = 256, OPT_MAX_SAMPLES, OPT_MAX_BLOCKERS, OPT_MIN_PATCH, OPT_SPLIT_GAIN, OPT_COMPLEX_CAP, OPT_BLOCKERS,
     OPT_VIEW, OPT_VIEW_SIZE, OPT_PATH, OPT_MAX_NODES,
-    OPT_INTO, OPT_FRAMES, OPT_LIGHT_SAMPLES, OPT_COST, OPT_PARTIAL, OPT_RESUME, OPT_EDIT, OPT_CLUSTERS
+    OPT_INTO, OPT_FRAMES, OPT_LIGHT_SAMPLES, OPT_COST, OPT_PARTIAL, OPT_RESUME, OPT_EDIT, OPT_CLUSTERS,
+    OPT_COMPLEX_PREDICT
 };
 
 static const struct option long_opts[] = {
@@ -127,6 +133,7 @@ static const struct option long_opts[] = {
     {"light-samples", required_argument, NULL, OPT_LIGHT_SAMPLES},
     {"cost", required_argument, NULL, OPT_COST},
     {"emitter-clusters", required_argument, NULL, OPT_CLUSTERS},
+    {"complex-predict", required_argument, NULL, OPT_COMPLEX_PREDICT},
     {NULL, 0, NULL, 0},
 };
 
@@ -150,6 +157,7 @@ static int build_param(lie_cli *cli, int c, lie_build_params *bp)
 {
     static const lie_cli_choice modes[] = {
         {"sampled", LIE_BLOCKERS_SAMPLED}, {"conservative", LIE_BLOCKERS_CONSERVATIVE}, {NULL, 0}};
+    static const lie_cli_choice predict[] = {{"on", 1}, {"off", 0}, {"audit", 2}, {NULL, 0}};
     static const lie_cli_int ints[] = {
         {OPT_SAMPLES, 1, 1 << 20, offsetof(lie_build_params, samples)},
         {OPT_MAX_SAMPLES, 1, 1 << 24, offsetof(lie_build_params, max_samples)},
@@ -183,6 +191,11 @@ static int build_param(lie_cli *cli, int c, lie_build_params *bp)
             return -1;
         bp->mode = (lie_blocker_mode)mode;
         return 1;
+    case OPT_COMPLEX_PREDICT:
+        if (!lie_cli_pick(cli, predict, &mode))
+            return -1;
+        bp->complex_predict = mode == 1; /* audit: built as off (build_job.audit_complex) */
+        return 1;
     default: return 0;
     }
 }
@@ -197,6 +210,8 @@ static int parse_options(build_job *j, lie_cli *cli, int argc, char **argv)
             if (taken < 0)
                 return cli->status;
             j->params_given = 1;
+            if (c == OPT_COMPLEX_PREDICT)
+                j->audit_complex = strcmp(optarg, "audit") == 0;
             continue;
         }
         switch (c) {

@@ -28,6 +28,7 @@ typedef struct summary {
      * time less the cache's) and the frames the build takes to pay back */
     double saving, break_even;
     size_t bytes;
+    int audit;                    /* --complex-predict audit */
 } summary;
 
 static void print_json(FILE *fp, const summary *m)
@@ -52,13 +53,21 @@ static void print_json(FILE *fp, const summary *m)
         fprintf(fp, "%s%llu", b ? "," : "", (unsigned long long)m->st->list_hist[b]);
     fprintf(fp,
             "],\"mean_list_length\":%.3f,\"segments\":%llu,\"splits_undone\":%llu,\"splits_kept\":%llu,"
-            "\"splits_pixels\":%llu,\"unproven_occluded\":%llu,\"unproven_visible\":%llu,\"nodes\":%u,\"pool\":%u,"
+            "\"splits_pixels\":%llu,\"unproven_occluded\":%llu,\"unproven_visible\":%llu,\"nodes\":%llu,"
+            "\"nodes_stored\":%u,\"pool\":%u,"
             "\"seconds_load\":%.6f,\"seconds_bvh\":%.6f,\"seconds_build\":%.6f,\"seconds_write\":%.6f,"
             "\"bytes\":%zu",
             m->mean, (unsigned long long)m->st->segments, (unsigned long long)m->st->splits_undone,
             (unsigned long long)m->st->splits_kept, (unsigned long long)m->st->splits_pixels,
             (unsigned long long)m->st->unproven_occluded, (unsigned long long)m->st->unproven_visible,
-            m->env->n_nodes, m->env->n_pool, m->t[0], m->t[1], m->t[2], m->t[3], m->bytes);
+            (unsigned long long)m->patches, m->env->n_nodes, m->env->n_pool, m->t[0], m->t[1], m->t[2], m->t[3],
+            m->bytes);
+    fprintf(fp, ",\"complex_units\":{\"predict\":\"%s\",\"predicted\":%llu,\"measured\":%llu",
+            m->env->params.complex_predict ? "on" : m->audit ? "audit" : "off",
+            (unsigned long long)m->st->complex_predicted, (unsigned long long)m->st->complex_measured);
+    if (m->audit)
+        fprintf(fp, ",\"predicted_and_measured\":%llu", (unsigned long long)m->st->complex_predicted_measured);
+    fprintf(fp, "}");
     fprintf(fp, ",\"model\":{\"build_cpu_s_predicted\":%.6f,\"build_cpu_s_measured\":%.6f", m->model_build,
             m->cpu_build);
     if (m->pred)
@@ -112,10 +121,20 @@ static void print_text(const char *prog, const summary *m)
                 fprintf(stderr, " %u-%u:%llu", lo, hi, (unsigned long long)m->st->list_hist[b]);
         }
     fprintf(stderr, "\n  segments cast %llu; splits kept %llu, undone (did not shorten lists) %llu, not tried "
-                    "(too few pixels) %llu; %u nodes, %u pooled blockers, %zu bytes written\n",
+                    "(too few pixels) %llu; %llu nodes (%u stored: lone units share theirs), %u pooled blockers, %zu bytes "
+            "written\n",
             (unsigned long long)m->st->segments, (unsigned long long)m->st->splits_kept,
-            (unsigned long long)m->st->splits_undone, (unsigned long long)m->st->splits_pixels, m->env->n_nodes, m->env->n_pool,
-            m->bytes);
+            (unsigned long long)m->st->splits_undone, (unsigned long long)m->st->splits_pixels,
+            (unsigned long long)m->patches, m->env->n_nodes, m->env->n_pool, m->bytes);
+    if (m->env->params.complex_predict)
+        fprintf(stderr, "  complex units: %llu predicted and left one complex leaf each (Embree answers them); "
+                        "%llu built that came out complex throughout (missed)\n",
+                (unsigned long long)m->st->complex_predicted, (unsigned long long)m->st->complex_measured);
+    else if (m->audit)
+        fprintf(stderr, "  complex units (audit: built anyway): %llu predicted, %llu came out complex "
+                        "throughout, %llu of them predicted\n",
+                (unsigned long long)m->st->complex_predicted, (unsigned long long)m->st->complex_measured,
+                (unsigned long long)m->st->complex_predicted_measured);
     if (m->st->unproven_occluded || m->st->unproven_visible)
         fprintf(stderr, "  sampled leaves not proven, given exact lists: %llu called occluded, %llu visible\n",
                 (unsigned long long)m->st->unproven_occluded, (unsigned long long)m->st->unproven_visible);
@@ -152,7 +171,8 @@ lie_status job_print_stats(const lie_cli *cli, build_job *j, double cpu_build, c
     const lie_build_stats *st = &j->st;
     lie_prediction prediction;
     summary m = {.input = j->input, .s = j->scene, .env = j->env, .st = st, .as = j->into ? &j->as : NULL,
-                 .t = {t[0], t[1], t[2], t[3]}, .cpu_build = cpu_build, .bytes = j->bytes};
+                 .t = {t[0], t[1], t[2], t[3]}, .cpu_build = cpu_build, .bytes = j->bytes,
+                 .audit = j->audit_complex && !j->bp.complex_predict};
     if (j->px) {
         lie_env_predict(j->env, j->scene, j->px, &prediction);
         m.pred = &prediction;

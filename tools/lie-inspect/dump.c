@@ -60,6 +60,7 @@ static void header_text(const lie_cache *c, uint64_t n_nodes, uint64_t n_leaves)
     printf("param frames %u\n", p->frames);
     printf("param light-samples %u\n", p->light_samples);
     printf("param cost-ns %.9g %.9g %.9g\n", (double)p->ns_segment, (double)p->ns_blocker, (double)p->ns_ray);
+    printf("param complex-predict %u\n", p->complex_predict);
     const lie_cache_views *v = &c->views;
     printf("views %d %dx%d depth %d\n", v->n_cams, v->width, v->height, v->max_depth);
     for (int i = 0; i < v->n_cams; i++) {
@@ -95,10 +96,10 @@ static void header_json(const lie_cache *c, uint64_t n_nodes, uint64_t n_leaves)
            (unsigned long long)c->scene_hash, (unsigned long long)c->state_hash, c->n_tris, c->n_emitters);
     printf(",\"params\":{\"samples\":%u,\"max_samples\":%u,\"max_blockers\":%u,\"complex_cap\":%u,"
            "\"min_patch\":%.9g,\"split_gain\":%.9g,\"blockers\":\"%s\",\"frames\":%u,\"light_samples\":%u,"
-           "\"cost_ns\":[%.9g,%.9g,%.9g]},\"views\":%d",
+           "\"cost_ns\":[%.9g,%.9g,%.9g],\"complex_predict\":%u},\"views\":%d",
            p->samples, p->max_samples, p->max_blockers, p->complex_cap, (double)p->min_patch, (double)p->split_gain,
            inspect_mode_name(p->mode), p->frames, p->light_samples, (double)p->ns_segment, (double)p->ns_blocker,
-           (double)p->ns_ray, c->views.n_cams);
+           (double)p->ns_ray, p->complex_predict, c->views.n_cams);
     printf(",\"edits\":[");
     for (int i = 0; i < c->n_edits; i++) {
         printf("%s{\"name\":", i ? "," : "");
@@ -127,13 +128,19 @@ int inspect_dump(const char *path, const inspect_options *o)
     }
     const lie_cache *c = l.cache;
     const lie_env *env = c->env;
-    uint64_t leaves = 0;
-    for (uint32_t i = 0; i < env->n_nodes; i++)
-        leaves += env->nodes[i].child == 0;
+    /* the trees' nodes and leaves, not the arrays' (units share lone
+     * leaves: lie_pnode_lone) */
+    lie_build_stats tally;
+    lie_env_stats(env, &tally);
+    uint64_t nodes = 0, leaves = 0;
+    for (int d = 0; d <= LIE_PATCH_MAX_DEPTH; d++)
+        nodes += tally.patches_per_depth[d];
+    for (int k = 0; k < LIE_CLASS_COUNT; k++)
+        leaves += tally.pairs[k];
     if (o->json)
-        header_json(c, env->n_nodes, leaves);
+        header_json(c, nodes, leaves);
     else
-        header_text(c, env->n_nodes, leaves);
+        header_text(c, nodes, leaves);
 
     /* One triangle at a time: its units' nodes sorted by patch, then emitter. */
     collect col = {NULL, 0, 0, 0};

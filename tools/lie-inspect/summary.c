@@ -91,9 +91,11 @@ static void summary_text(const char *path, const inspect_cache *l, const lie_bui
     const lie_cache *c = l->cache;
     const lie_env *env = c->env;
     const lie_build_params *p = &env->params;
-    uint64_t leaves = 0;
+    uint64_t leaves = 0, nodes = 0; /* the trees' (lone units share a leaf: lie_pnode_lone) */
     for (int k = 0; k < LIE_CLASS_COUNT; k++)
         leaves += st->pairs[k];
+    for (int d = 0; d <= LIE_PATCH_MAX_DEPTH; d++)
+        nodes += st->patches_per_depth[d];
     int by_type[3] = {0, 0, 0};
     for (int e = 0; e < c->n_emitters; e++)
         if (c->emitters[e].type < 3)
@@ -115,9 +117,9 @@ static void summary_text(const char *path, const inspect_cache *l, const lie_bui
     char mp[32];
     inspect_fmt_float(p->min_patch, mp, sizeof mp);
     printf("parameters      samples %u, max-samples %u, max-blockers %u, complex-cap %u, min-patch %s, "
-           "split-gain %.9g, blockers %s\n",
+           "split-gain %.9g, blockers %s, complex-predict %s\n",
            p->samples, p->max_samples, p->max_blockers, p->complex_cap, mp, (double)p->split_gain,
-           inspect_mode_name(p->mode));
+           inspect_mode_name(p->mode), p->complex_predict ? "on" : "off");
     printf("triangles       %u\n", c->n_tris);
     printf("emitters        %d (%d area, %d point, %d directional)\n", c->n_emitters, by_type[0], by_type[1],
            by_type[2]);
@@ -126,7 +128,8 @@ static void summary_text(const char *path, const inspect_cache *l, const lie_bui
         printf("partial         yes: an interrupted lie-build, %llu units not built yet (lie-build --resume "
                "completes it; until then lie-render answers them from the whole scene)\n",
                (unsigned long long)units_none(env));
-    printf("nodes           %u (%llu leaves)\n", env->n_nodes, (unsigned long long)leaves);
+    printf("nodes           %llu (%llu leaves; %u stored, lone units sharing theirs)\n", (unsigned long long)nodes,
+           (unsigned long long)leaves, env->n_nodes);
     printf("pool entries    %u\n", env->n_pool);
     printf("pairs by class (leaves):\n");
     for (int k = 0; k < LIE_CLASS_COUNT; k++) {
@@ -162,9 +165,11 @@ static void summary_json(const char *path, const inspect_cache *l, const lie_bui
     const lie_cache *c = l->cache;
     const lie_env *env = c->env;
     const lie_build_params *p = &env->params;
-    uint64_t leaves = 0;
+    uint64_t leaves = 0, nodes = 0; /* the trees' (lone units share a leaf: lie_pnode_lone) */
     for (int k = 0; k < LIE_CLASS_COUNT; k++)
         leaves += st->pairs[k];
+    for (int d = 0; d <= LIE_PATCH_MAX_DEPTH; d++)
+        nodes += st->patches_per_depth[d];
     printf("{\"cache\":");
     inspect_json_string(stdout, path);
     printf(",\"file_bytes\":%zu,\"format_version\":%u,\"scene_path\":", l->size, LIE_CACHE_VERSION);
@@ -183,9 +188,10 @@ static void summary_json(const char *path, const inspect_cache *l, const lie_bui
            "\"min_patch\":%s,\"split_gain\":%.9g,\"blockers\":\"%s\"}",
            p->samples, p->max_samples, p->max_blockers, p->complex_cap, mp, (double)p->split_gain,
            inspect_mode_name(p->mode));
-    printf(",\"triangles\":%u,\"emitters\":%d,\"units\":%llu,\"nodes\":%u,\"leaves\":%llu,\"pool_entries\":%u",
+    printf(",\"triangles\":%u,\"emitters\":%d,\"units\":%llu,\"nodes\":%llu,\"nodes_stored\":%u,\"leaves\":%llu,"
+           "\"pool_entries\":%u",
            c->n_tris, c->n_emitters, (unsigned long long)((uint64_t)c->n_tris * (uint64_t)env->n_clusters),
-           env->n_nodes, (unsigned long long)leaves, env->n_pool);
+           (unsigned long long)nodes, env->n_nodes, (unsigned long long)leaves, env->n_pool);
     printf(",\"partial\":%s,\"units_none\":%llu", env->partial ? "true" : "false",
            (unsigned long long)units_none(env));
     printf(",\"emitter_types\":{");
