@@ -257,8 +257,12 @@ static void set_state(lie_ctor *c, uint32_t t, int st)
     c->pending -= (uint64_t)(was == TRI_PENDING || was == TRI_BUSY || was == TRI_READY);
     c->pending += (uint64_t)(st == TRI_PENDING || st == TRI_BUSY || st == TRI_READY);
     c->state[t] = (uint8_t)st;
-    if (st == TRI_PENDING)
+    if (st == TRI_PENDING && was != TRI_PENDING) {
         c->order_dirty = 1;
+        /* work for every idle builder: a view sampled by one of them made
+         * the view's triangles pending, and the others slept on */
+        pthread_cond_broadcast(&c->cv);
+    }
 }
 
 /* The pending triangles by decreasing hits in the current view, then in
