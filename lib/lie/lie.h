@@ -54,11 +54,12 @@ typedef struct lie_build_params {
     float split_gain;      /* a split is kept only if it shortens the lists by this share (--split-gain) */
     lie_blocker_mode mode;
     /* Leave a unit that will be complex unbuilt (--complex-predict): a root
-     * that would split, whose smallest patches at its corners and centre
-     * (lie_subdiv_may_split's floor) each see more than complex_cap
-     * triangles in their shafts, is one complex leaf with the segments of
-     * its first sampling alone (lib/lie/subdiv.c).  Its shadow rays go to
-     * Embree, as a complex unit's would: the image is unchanged. */
+     * that would split, on a triangle larger than 1% of the largest, whose
+     * smallest patches at its corners and centre (lie_subdiv_may_split's
+     * floor) each see more than complex_cap triangles in their shafts, is
+     * one complex leaf with the segments of its first sampling alone
+     * (lib/lie/subdiv.c).  Its shadow rays go to Embree, as a complex
+     * unit's would: the image is unchanged. */
     uint32_t complex_predict;
     int threads;           /* not stored in caches: results never depend on it */
     uint64_t max_nodes;    /* patch-tree nodes a build may make (--max-nodes); 0: the default.
