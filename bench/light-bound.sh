@@ -46,7 +46,7 @@ echo "$SCENES" | while IFS='|' read -r name scene eye target n; do
         continue
     fi
     glb=out/bench-scenes/$name.glb
-    [ -f "$glb" ] && [ "$glb" -nt "$scene" ] || "$LAMBERT" "$scene" "$glb"
+    [ -f "$glb" ] && [ "$glb" -nt "$scene" ] && [ "$glb" -nt "$LAMBERT" ] || "$LAMBERT" "$scene" "$glb"
     cam="eye=$eye,target=$target,fov=45"
     for vis in full none; do
         bin/lie-render "$glb" --camera "$cam" --size "$SIZE" --threads "$THREADS" --light-samples "${n:-$N}" \

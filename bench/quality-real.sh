@@ -120,7 +120,10 @@ echo "$SCENES" | while IFS='|' read -r name scene eye target build; do
     [ -n "$name" ] || continue
     if [ ! -f "$scene" ]; then echo "  $name: $scene missing, skipped"; continue; fi
     lam=out/bench-scenes/$name.glb
-    if [ ! -f "$lam" ] || [ "$scene" -nt "$lam" ]; then
+    # the copy is made again when the scene or bench-lambert (the exporter it
+    # links) is newer, and then the converged image below too: a copy made
+    # by an older exporter (one that dropped normal maps) is another scene
+    if [ ! -f "$lam" ] || [ "$scene" -nt "$lam" ] || [ "$LAMBERT" -nt "$lam" ]; then
         "$LAMBERT" "$scene" "$lam"
     fi
     validate "$scene" "$lam"
