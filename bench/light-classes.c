@@ -294,6 +294,12 @@ int main(int argc, char **argv)
     }
     if (m > 0)
         printf("\n");
+    free(j.rel_full);
+    free(j.light);
+    for (int u = 0; u < N_UNITS; u++) {
+        free(j.rel[u]);
+        free(j.partial[u]);
+    }
     lie_rt_destroy(rt);
     lie_scene_destroy(s);
     return 0;
