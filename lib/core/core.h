@@ -78,6 +78,9 @@ static inline float lie_minf(float a, float b) { return a < b ? a : b; }
  * between 0 and -0), where the same results must come out as before. */
 static inline float lie_fminf(float a, float b) { return a < b || b != b ? a : b; }
 static inline float lie_fmaxf(float a, float b) { return a > b || b != b ? a : b; }
+/* The largest float below 1 (1 - 2^-24): where a sample coordinate is
+ * clamped into [0, 1). */
+#define LIE_BELOW_ONE 0x1.fffffep-1f
 /* The largest coordinate magnitude of v (NaN coordinates count as 0). */
 static inline float lie_v3_maxabs(lie_vec3 v)
 {

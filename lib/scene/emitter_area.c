@@ -185,7 +185,7 @@ uint32_t lie_scene_point_on(const lie_scene *s, const uint32_t *tris, uint32_t f
     float lo = t > 0 ? cdf[t - 1] : 0.0f;
     float ta = cdf[t] - lo;
     float ru = ta > 0.0f ? (a - lo) / ta : 0.5f;
-    ru = lie_fminf(lie_fmaxf(ru, 0.0f), 0.99999994f);
+    ru = lie_fminf(lie_fmaxf(ru, 0.0f), LIE_BELOW_ONE);
     lie_sample_triangle(ru, u2, b1, b2);
     uint32_t g = tris ? tris[t] : first + t;
     const lie_vec3 *P = &s->tri_p[3 * (size_t)g];

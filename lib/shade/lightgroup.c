@@ -248,7 +248,7 @@ void lie_light_group_sample(const lie_scene *s, const lie_light_groups *G, int j
     }
     double below = lo > g->first ? G->cdf[lo - 1] : 0.0, w = G->cdf[lo] - below;
     float r = w > 0.0 ? (float)((x - below) / w) : 0.5f;
-    r = fminf(fmaxf(r, 0.0f), 0.99999994f);
+    r = fminf(fmaxf(r, 0.0f), LIE_BELOW_ONE);
     uint32_t t = G->tris[lo];
     if (tl) {
         lie_texlight_sample_tri(s, g->emitter, tl, t - em->first_tri, r, u2, out);
@@ -259,7 +259,7 @@ void lie_light_group_sample(const lie_scene *s, const lie_light_groups *G, int j
          * emitter is what makes a pixel's few samples fireflies */
         lie_sph_tri st;
         lie_sph_sample q;
-        if (o && lie_sph_tri_setup(*o, P, &st) && lie_sph_tri_sample(&st, r, fminf(u2, 0.99999994f), &q) &&
+        if (o && lie_sph_tri_setup(*o, P, &st) && lie_sph_tri_sample(&st, r, fminf(u2, LIE_BELOW_ONE), &q) &&
             q.inv_pdf_area > 0.0 && isfinite(q.inv_pdf_area)) {
             out->p = lie_v3((float)q.p[0], (float)q.p[1], (float)q.p[2]);
             out->n = s->tri_ng[t];
@@ -271,7 +271,7 @@ void lie_light_group_sample(const lie_scene *s, const lie_light_groups *G, int j
             return;
         }
         float b1, b2;
-        lie_sample_triangle(r, fminf(u2, 0.99999994f), &b1, &b2);
+        lie_sample_triangle(r, fminf(u2, LIE_BELOW_ONE), &b1, &b2);
         float b0 = 1.0f - b1 - b2;
         out->p = lie_v3_add(lie_v3_add(lie_v3_scale(P[0], b0), lie_v3_scale(P[1], b1)), lie_v3_scale(P[2], b2));
         out->n = s->tri_ng[t];

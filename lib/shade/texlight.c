@@ -381,10 +381,10 @@ void lie_texlight_sample_tri(const lie_scene *s, int e, const lie_texlight *t, u
     uint32_t c = cdf_find(cdf, nc, y);
     double clo = c > 0 ? cdf[c - 1] : 0.0, cw = cdf[c] - clo;
     float r2 = cw > 0.0 ? (float)((y - clo) / cw) : 0.5f;
-    r2 = fminf(fmaxf(r2, 0.0f), 0.99999994f);
+    r2 = fminf(fmaxf(r2, 0.0f), LIE_BELOW_ONE);
     float cv[3][2], sb1, sb2;
     subtriangle(R, c, cv);
-    lie_sample_triangle(r2, fminf(u2, 0.99999994f), &sb1, &sb2);
+    lie_sample_triangle(r2, fminf(u2, LIE_BELOW_ONE), &sb1, &sb2);
     float b1 = cv[0][0] + sb1 * (cv[1][0] - cv[0][0]) + sb2 * (cv[2][0] - cv[0][0]);
     float b2 = cv[0][1] + sb1 * (cv[1][1] - cv[0][1]) + sb2 * (cv[2][1] - cv[0][1]);
     const lie_vec3 *P = &s->tri_p[3 * (size_t)g];

@@ -11,12 +11,7 @@
 # lie-render's.
 . "$ROOT/tests/tools/lib.sh"
 
-export ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0"
-
-if ! command -v Xvfb >/dev/null 2>&1; then
-    not_ok "Xvfb is missing (make deps installs xvfb)"
-    finish
-fi
+need_viewer
 
 M1="$S/museum1.gltf"
 VIEW="-q --size 96x96 --light-samples 8 --view-size 128x128"

@@ -8,12 +8,7 @@
 # white at --exposure 0, is the same picture with 9.97 stops less.
 . "$ROOT/tests/tools/lib.sh"
 
-export ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0"
-
-if ! command -v Xvfb >/dev/null 2>&1; then
-    not_ok "Xvfb is missing (make deps installs xvfb)"
-    finish
-fi
+need_viewer
 cd "$TMP" || exit 1
 VIEW="-q --size 48x48 --light-samples 4 --view-size 64x64"
 camera_of() { sed -n 's/.*"camera":"\([^"]*\)".*/\1/p' "$1"; }

@@ -9,12 +9,7 @@
 # session ends with exit 0, and --save writes a partial cache that is valid.
 . "$ROOT/tests/tools/lib.sh"
 
-export ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0"
-
-if ! command -v Xvfb >/dev/null 2>&1; then
-    not_ok "Xvfb is missing (make deps installs xvfb)"
-    finish
-fi
+need_viewer
 M1="$S/museum1.gltf"
 VIEW="-q --size 64x64 --light-samples 4 --view-size 96x96"
 "$B/lie-build" "$M1" -q --min-patch 1e-2 -o "$TMP/m1.lie" || not_ok "build museum1"

@@ -8,11 +8,7 @@
 # and line; a node is selected by index as '#N'; a removed node cannot be
 # selected; --record and --save cannot be an input.
 . "$ROOT/tests/tools/lib.sh"
-export ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0"
-if ! command -v Xvfb >/dev/null 2>&1; then
-    not_ok "Xvfb is missing (make deps installs xvfb)"
-    finish
-fi
+need_viewer
 T=$TMP
 cd "$T" || exit 1
 
