@@ -207,7 +207,7 @@ NPROC    := $(shell nproc 2>/dev/null || echo 2)
 # Everything the tests need, built in parallel; the tests then run in order.
 build-tests: $(TOOL_BIN) $(UNIT_BIN) $(HELPERS)
 
-test:
+test: deps
 	$(MAKE) -j$(NPROC) build-tests
 	$(MAKE) test-unit test-tools
 	$(MAKE) -j$(NPROC) VARIANT=asan build-tests

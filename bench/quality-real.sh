@@ -99,13 +99,13 @@ time_to() {
          }'
 }
 
-# the scenes and their Lambertian copies through the Khronos validator, when
-# it is installed (npm install --prefix out gltf-validator)
+# the scenes and their Lambertian copies through the Khronos validator
+# (make deps installs it: scripts/npm)
 validate() {
-    if command -v node >/dev/null 2>&1 && NODE_PATH=out/node_modules node -e "require('gltf-validator')" 2>/dev/null; then
-        NODE_PATH=out/node_modules node bench/validate.js "$@" | sed 's/^/  gltf-validator: /'
+    if command -v node >/dev/null 2>&1 && NODE_PATH=scripts/npm/node_modules node -e "require('gltf-validator')" 2>/dev/null; then
+        NODE_PATH=scripts/npm/node_modules node bench/validate.js "$@" | sed 's/^/  gltf-validator: /'
     else
-        echo "  gltf-validator: not installed (npm install --prefix out gltf-validator), skipped"
+        echo "  gltf-validator: not installed (make deps installs it), skipped"
     fi
 }
 
