@@ -290,7 +290,7 @@ static lie_scene *blockers_scene(void)
     for (int i = 0; i < 9; i++) {
         float x = -1.2f + 1.2f * (float)(i % 3), z = -1.2f + 1.2f * (float)(i / 3), r = 0.2f;
         float q[12] = {x - r, 1, z - r, x - r, 1, z + r, x + r, 1, z + r, x + r, 1, z - r};
-        char name[8];
+        char name[16];
         snprintf(name, sizeof name, "B%d", i);
         lie_scene_add_node(s, name, -1, NULL, lie_scene_add_mesh(s, name, q, NULL, NULL, 4, idx, 2, mb), -1, -1);
     }
