@@ -15,6 +15,8 @@
  *   gltf_mesh.cpp     accessors, checked whole before any read, and meshes;
  *   gltf_import.cpp   materials and textures, nodes, cameras, lights, the
  *                     document, and lie_gltf_import;
+ *   gltf_texture.cpp  the textures' pixels: the images materials use
+ *                     decoded, and converted to float, on every core;
  *   gltf_anim.cpp     skins and animations.
  * The exporter is lib/export, above lib/image, whose PNG encoder it uses.
  *
@@ -32,7 +34,9 @@
 #include <climits>
 #include <cstdint>
 #include <cstdlib>
+#include <exception>
 #include <map>
+#include <memory>
 #include <new>
 #include <string>
 #include <vector>
@@ -114,13 +118,50 @@ struct ImageState {
  * image's range and keeps the bytes; it decodes nothing. */
 bool image_load(tinygltf::Image *image, const int index, std::string *err, std::string *warn, int req_w,
                 int req_h, const unsigned char *bytes, int size, void *user);
-/* Decode image `index` (its glTF entry `meta`, its bytes) into *out, once a
- * material uses it: its size from the header first (any format stb reads),
- * refused (LIE_ERR_LIMIT, thrown) past MAX_IMAGE_PIXELS before anything is
- * allocated.  An image the decoder cannot read sets *why (a warning: its
- * slots fall back to their factors) and leaves *out without pixels. */
-void decode_image(const tinygltf::Image &meta, int index, const std::vector<unsigned char> &bytes,
-                  tinygltf::Image *out, std::string *why);
+/* An image as stb decodes it: 8 or 16 bits a channel, expanded to RGBA
+ * (what tinygltf's LoadImageData gives by default), in stb's own buffer. */
+struct StbFree {
+    void operator()(unsigned char *p) const;
+};
+struct Decoded {
+    int width = 0, height = 0, component = 0, bits = 0;
+    std::unique_ptr<unsigned char, StbFree> pixels;
+    std::string why;          /* the decoder cannot read it: a warning, its slots keep their factors */
+    std::exception_ptr error; /* decode_image threw: thrown again where a material first uses the image */
+};
+
+/* Decode image `index` (its glTF entry `meta`, its bytes) into *out: its
+ * size from the header first (any format stb reads), refused
+ * (LIE_ERR_LIMIT, thrown) past MAX_IMAGE_PIXELS before anything is
+ * allocated.  An image the decoder cannot read sets out->why and leaves
+ * it without pixels.  Safe to call from several threads at once (stb
+ * keeps its failure reason per thread). */
+void decode_image(const tinygltf::Image &meta, int index, const std::vector<unsigned char> &bytes, Decoded *out);
+
+/* ---- gltf_texture.cpp: textures' pixels on every core -------------------- */
+
+/* The glTF images the materials' texture slots name, those the importer
+ * reads (base colour, metallic-roughness, emissive, normal, transmission),
+ * in increasing order; indices out of range are left to the import to
+ * refuse. */
+std::vector<int> material_images(const tinygltf::Model &m);
+/* Decode `images` (their bytes in `encoded`) into `decoded` on `threads`
+ * workers (0: one a core), the largest first: each image by one worker,
+ * so the pixels are those one decoder makes.  What decode_image throws is
+ * kept in the image's Decoded, for the import to throw where a material
+ * first uses it, as if decoded there. */
+void decode_images(const tinygltf::Model &m, const std::map<int, std::vector<unsigned char>> &encoded,
+                   const std::vector<int> &images, std::map<int, Decoded> &decoded, int threads);
+/* A texture whose linear float RGBA pixels are still to be filled from an
+ * image's codes: colour through the sRGB transfer function when srgb
+ * (IEC 61966-2-1, lie_texture_code_value), alpha always linear. */
+struct Conversion {
+    float *rgba;
+    const Decoded *img;
+    bool srgb;
+};
+/* Fill every texture of `jobs`, in bands of rows on `threads` workers. */
+void convert_textures(const std::vector<Conversion> &jobs, int threads);
 
 /* ---- gltf_check.cpp: the file ------------------------------------------- */
 

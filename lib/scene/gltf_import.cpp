@@ -22,7 +22,9 @@ struct Import {
     lie_scene *s;
     const std::map<int, std::string> &image_errors; /* from load_model */
     const std::map<int, std::vector<unsigned char>> &encoded; /* from load_model: images' bytes */
-    std::map<int, tinygltf::Image> decoded;                    /* those decoded so far (decode_image) */
+    std::map<int, Decoded> decoded;  /* those decoded so far (decode_images, decode_image) */
+    std::set<int> used;              /* images a texture was made from so far */
+    std::vector<Conversion> pending; /* textures whose pixels are still to fill (convert_textures) */
     std::map<int, int> texture_of; /* glTF texture * 2 + srgb -> s->textures index */
     std::map<int, int> image_of;   /* glTF image -> s->images index */
     std::set<int> warned;          /* images warned about */
@@ -113,27 +115,30 @@ int texture_for(Import &im, int ti, bool srgb, const std::string &what)
         fail(LIE_ERR_FORMAT, "%s: image %d out of range", tw.c_str(), tex.source);
     std::string iw = "image " + std::to_string(tex.source);
     auto dec = im.decoded.find(tex.source);
-    if (dec == im.decoded.end()) { /* decoded on first use only: an unused image costs nothing */
-        dec = im.decoded.emplace(tex.source, m.images[size_t(tex.source)]).first;
+    if (dec == im.decoded.end()) { /* decode_images decodes the images materials name; any other here */
+        dec = im.decoded.emplace(tex.source, Decoded()).first;
         auto enc = im.encoded.find(tex.source);
-        std::string why;
         if (enc != im.encoded.end())
-            decode_image(m.images[size_t(tex.source)], tex.source, enc->second, &dec->second, &why);
-        if (!why.empty()) {
+            decode_image(m.images[size_t(tex.source)], tex.source, enc->second, &dec->second);
+    }
+    const Decoded &img = dec->second;
+    if (im.used.insert(tex.source).second) { /* its first use: what its decoding found is said here */
+        if (img.error)
+            std::rethrow_exception(img.error);
+        if (!img.why.empty()) {
             /* An image the decoder cannot read (a corrupt PNG, a KTX2 or
              * WebP named as a plain source) is not the whole scene's
              * failure: the slots using it fall back to their factors, as
              * Blender and three.js do, with a warning.  Required extensions
              * are refused earlier. */
             im.warned.insert(tex.source);
-            scene_warn(im.s, why + "; its textures fall back to their factors");
+            scene_warn(im.s, img.why + "; its textures fall back to their factors");
             not_read(im.s, iw, "the decoder cannot read it", false); /* warned of just above */
         }
     }
-    const tinygltf::Image &img = dec->second;
     if (im.warned.count(tex.source))
         return -1; /* no texture: the slot keeps its factor */
-    if (img.image.empty() || img.width <= 0 || img.height <= 0) {
+    if (!img.pixels || img.width <= 0 || img.height <= 0) {
         auto e = im.image_errors.find(tex.source);
         if (e != im.image_errors.end())
             fail(LIE_ERR_IO, "%s %s", iw.c_str(), e->second.c_str());
@@ -143,12 +148,10 @@ int texture_for(Import &im, int ti, bool srgb, const std::string &what)
     if (!bytes || img.component < 1 || img.component > 4)
         fail(LIE_ERR_UNSUPPORTED, "%s: %d-bit, %d-channel images are not supported", iw.c_str(), img.bits,
              img.component);
-    size_t w = size_t(img.width), h = size_t(img.height), nc = size_t(img.component);
+    size_t w = size_t(img.width), h = size_t(img.height);
     if (uint64_t(w) * h > MAX_IMAGE_PIXELS)
         fail(LIE_ERR_LIMIT, "%s is %zux%zu, beyond the limit of %llu pixels", iw.c_str(), w, h,
              (unsigned long long)MAX_IMAGE_PIXELS);
-    if (img.image.size() != w * h * nc * bytes)
-        fail(LIE_ERR_FORMAT, "%s: decoded size does not match %zux%zu", iw.c_str(), w, h);
 
     lie_wrap ws = LIE_WRAP_REPEAT, wt = LIE_WRAP_REPEAT;
     if (tex.sampler >= 0) {
@@ -160,14 +163,6 @@ int texture_for(Import &im, int ti, bool srgb, const std::string &what)
         wt = wrap_mode(sm.wrapT, sw);
     }
 
-    /* colour channels through the sRGB transfer function when asked, alpha
-     * always linear; a table over every code value */
-    size_t levels = bytes == 1 ? 256 : 65536;
-    std::vector<float> lin(levels), enc(levels);
-    for (size_t i = 0; i < levels; i++) {
-        lin[i] = lie_texture_code_value(i, levels, 0);
-        enc[i] = lie_texture_code_value(i, levels, srgb);
-    }
     float *rgba = alloc_array<float>(w * h * 4); /* w * h <= MAX_IMAGE_PIXELS */
     lie_texture &t = im.s->textures[im.s->n_textures];
     t.width = int(w);
@@ -179,20 +174,9 @@ int texture_for(Import &im, int ti, bool srgb, const std::string &what)
     int index = im.s->n_textures++;
     t.image = keep_image(im, tex.source);
     im.texture_of[ti * 2 + srgb] = index;
-
-    const unsigned char *src = img.image.data();
-    for (size_t i = 0; i < w * h; i++, src += nc * bytes) {
-        size_t code[4];
-        for (size_t c = 0; c < nc; c++)
-            code[c] = bytes == 1 ? src[c] : (size_t(src[2 * c]) | size_t(src[2 * c + 1]) << 8);
-        float *d = rgba + 4 * i;
-        switch (nc) { /* grey, grey + alpha, RGB, RGBA */
-        case 1: d[0] = d[1] = d[2] = enc[code[0]]; d[3] = 1.0f; break;
-        case 2: d[0] = d[1] = d[2] = enc[code[0]]; d[3] = lin[code[1]]; break;
-        case 3: d[0] = enc[code[0]]; d[1] = enc[code[1]]; d[2] = enc[code[2]]; d[3] = 1.0f; break;
-        default: d[0] = enc[code[0]]; d[1] = enc[code[1]]; d[2] = enc[code[2]]; d[3] = lin[code[3]]; break;
-        }
-    }
+    /* its pixels once every material is read: all textures at once, on
+     * every core (convert_textures) */
+    im.pending.push_back(Conversion{rgba, &img, srgb});
     return index;
 }
 
@@ -802,8 +786,14 @@ extern "C" lie_status lie_gltf_import(lie_scene *s, const char *path, const lie_
         s->stats.points_skipped = s->stats.lines_skipped = s->stats.prims_without_material = 0;
         import_document(model, s, o);
         s->n_warnings = 0;
-        Import im{model, s, image_errors, encoded, {}, {}, {}, {}};
+        Import im{model, s, image_errors, encoded, {}, {}, {}, {}, {}, {}};
+        /* the images the materials use, decoded at once on every core
+         * (stb's decoders are the larger part of loading a textured scene),
+         * then the materials, then the textures' float pixels */
+        decode_images(model, encoded, material_images(model), im.decoded, o.threads);
         import_materials(im);
+        convert_textures(im.pending, o.threads);
+        im.decoded.clear();
         import_cameras(model, s);
         import_lights(model, s);
         import_skins(model, s);

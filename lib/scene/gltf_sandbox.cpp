@@ -292,10 +292,10 @@ bool image_load(tinygltf::Image *image, const int index, std::string *err, std::
     return true;
 }
 
-void decode_image(const tinygltf::Image &meta, int index, const std::vector<unsigned char> &b, tinygltf::Image *out,
-                  std::string *why)
+void StbFree::operator()(unsigned char *p) const { stbi_image_free(p); }
+
+void decode_image(const tinygltf::Image &meta, int index, const std::vector<unsigned char> &b, Decoded *out)
 {
-    *out = meta;
     std::string name = !meta.uri.empty() && meta.uri.compare(0, 5, "data:") != 0 ? " '" + clean(meta.uri) + "'"
                        : !meta.name.empty()                                    ? " '" + clean(meta.name) + "'"
                                                                                : std::string();
@@ -309,19 +309,36 @@ void decode_image(const tinygltf::Image &meta, int index, const std::vector<unsi
         h = int(hh > INT_MAX ? INT_MAX : hh);
     }
     if (!sized) {
-        *why = iw + ": cannot decode (not an image the decoder reads)";
+        out->why = iw + ": cannot decode (not an image the decoder reads)";
         return;
     }
     if (w <= 0 || h <= 0 || uint64_t(w) * uint64_t(h) > MAX_IMAGE_PIXELS)
         fail(LIE_ERR_LIMIT, "image %d is %dx%d, beyond the limit of %llu pixels", index, w, h,
              (unsigned long long)MAX_IMAGE_PIXELS);
-    /* stb decoding, expanded to 8- or 16-bit RGBA (tinygltf's default options) */
-    std::string derr, warn;
-    if (!tinygltf::LoadImageData(out, index, &derr, &warn, 0, 0, b.data(), int(b.size()), nullptr)) {
-        out->image.clear();
-        out->width = out->height = 0;
-        *why = iw + ": cannot decode (the decoder refused it)";
+    /* stb decoding expanded to RGBA, 16 bits a channel where the file has
+     * them, else 8, as tinygltf's LoadImageData decodes with its default
+     * options; kept in stb's buffer (LoadImageData copies it once more) */
+    int bits = 8;
+    unsigned char *px = nullptr;
+    w = h = comp = 0;
+    if (stbi_is_16_bit_from_memory(b.data(), int(b.size()))) {
+        px = reinterpret_cast<unsigned char *>(stbi_load_16_from_memory(b.data(), int(b.size()), &w, &h, &comp, 4));
+        bits = 16;
     }
+    if (!px) {
+        px = stbi_load_from_memory(b.data(), int(b.size()), &w, &h, &comp, 4);
+        bits = 8;
+    }
+    out->pixels.reset(px);
+    if (!px || w < 1 || h < 1) {
+        out->pixels.reset();
+        out->why = iw + ": cannot decode (the decoder refused it)";
+        return;
+    }
+    out->width = w;
+    out->height = h;
+    out->component = 4;
+    out->bits = bits;
 }
 
 } // namespace lie_gltf

@@ -384,6 +384,9 @@ typedef struct lie_scene_options {
      * with the largest of them when this is 0, which reproduces the
      * partition (its digest is checked). */
     int emitter_clusters;
+    /* Threads decoding the textures' images and converting their pixels
+     * (0: one a core); the scene is the same for any count. */
+    int threads;
 } lie_scene_options;
 #define LIE_SCENE_MAX_TRIANGLES_DEFAULT 50000000u
 lie_scene_options lie_scene_options_default(void);

@@ -252,6 +252,7 @@ static int parse_options(build_job *j, lie_cli *cli, int argc, char **argv)
     j->bp.threads = cli->threads;
     j->output = cli->output;
     j->so.allow_external_uris = cli->external;
+    j->so.threads = cli->threads;
     return -1;
 }
 

@@ -425,6 +425,7 @@ static int parse_options(args *a, lie_cli *cli, int argc, char **argv)
     if (c == LIE_CLI_EXIT)
         return cli->status;
     a->so.allow_external_uris = cli->external;
+    a->so.threads = cli->threads;
     a->ro.threads = cli->threads;
     a->fopt.exr.threads = a->ro.threads;
     a->output = cli->output;

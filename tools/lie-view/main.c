@@ -284,6 +284,7 @@ static int parse_options(session *S, view_world_options *wo, lie_cli *cli, const
     if (c == LIE_CLI_EXIT)
         return cli->status;
     wo->so.allow_external_uris = cli->external;
+    wo->so.threads = cli->threads; /* --threads: the textures are decoded on them too */
     S->ro.threads = cli->threads;
     S->quiet = cli->quiet;
     return -1;
