@@ -131,6 +131,10 @@ static void sink_triangle(void *ctx, size_t item, int worker_id)
     build_ctx *c = ctx;
     lie_subdiv_triangle(ctx, item, worker_id);
     pthread_mutex_lock(&c->sink_m);
+    /* a worker out of memory or past the node budget left this triangle
+     * unfinished: the build fails, and nothing more is handed over */
+    if (c->workers[worker_id].nomem && c->sink_st == LIE_OK)
+        c->sink_st = LIE_ERR_NOMEM;
     c->sink_done[item] = 1;
     while (c->sink_next < c->sink_n && c->sink_done[c->sink_next]) {
         unit_buf *u = &c->out[c->sink_next];
