@@ -22,12 +22,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32_t n_tris, int n_clusters,
-                           const int32_t *old_unit, uint64_t unit_lo, uint64_t unit_hi, int threads);
+static lie_status assemble(lie_env *env, const lie_env *old, unit_buf *bufs, uint32_t tri_lo, uint32_t n_tris,
+                           int n_clusters, const int32_t *old_unit, uint64_t unit_lo, uint64_t unit_hi, int threads);
 static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
                               const uint8_t *tri_mask, const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
-                              const volatile sig_atomic_t *stop, lie_env_part *out, lie_build_stats *stats,
-                              lie_error *err);
+                              const lie_units_old *from, const volatile sig_atomic_t *stop, lie_env_part *out,
+                              lie_build_stats *stats, lie_error *err);
 
 static void workers_free(worker *ws, int n)
 {
@@ -74,7 +74,7 @@ static uint32_t *build_weights(const build_ctx *c, uint32_t n_items, size_t ne)
         size_t pairs = c->s->n_clusters == 0 ? 1 : u1 > u0 ? u1 - u0 : 0;
         if (c->old_unit && !c->node_flags)
             for (size_t u = u0; u < u1; u++)
-                pairs -= c->old_unit[u] >= 0; /* copied */
+                pairs -= lie_ctx_old_unit(c, u) >= 0; /* copied */
         double v = (double)(pairs ? pairs : 1) * (pairs ? pair_weight(c, tri) : 0.05) * 4.0;
         w[i] = v < 1.0 ? 1u : v > 1e9 ? 1000000000u : (uint32_t)v;
     }
@@ -102,9 +102,12 @@ static uint32_t *heaviest_first(const uint32_t *w, uint32_t n)
 
 /* Build (or, with a mask, rebuild some units of) every triangle, then
  * concatenate the per-triangle buffers in unit order.  `stop` (may be
- * NULL) interrupts it: env->partial says whether a unit was left out. */
-static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, const int32_t *old_unit,
-                           const uint8_t *node_flags, const uint8_t *tri_mask, const lie_pixels *px,
+ * NULL) interrupts it: env->partial says whether a unit was left out.
+ * An update continues the units of `old` (NULL: env itself, updated in
+ * place): old_unit[unit - unit_lo] is the unit of old that unit continues,
+ * or -1, and node_flags marks old's nodes to recompute. */
+static lie_status run_build(lie_env *env, const lie_env *old, const lie_scene *s, const lie_rt *rt,
+                           const int32_t *old_unit, const uint8_t *node_flags, const uint8_t *tri_mask, const lie_pixels *px,
                            uint64_t unit_lo, uint64_t unit_hi, int threads, int memo, lie_progress *progress,
                            const volatile sig_atomic_t *stop, int audit, lie_build_stats *stats)
 {
@@ -115,7 +118,7 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     c.p = &env->params;
     c.min_area = env->params.min_patch * s->max_tri_area;
     c.ray_far = lie_pair_ray_far(s);
-    c.old = env;
+    c.old = old ? old : env;
     c.old_unit = old_unit;
     c.node_flags = node_flags;
     c.tri_mask = tri_mask;
@@ -171,7 +174,7 @@ static lie_status run_build(lie_env *env, const lie_scene *s, const lie_rt *rt, 
         stats->seconds_tail += c.par_tail + rep.tail;
     }
     if (st == LIE_OK)
-        st = assemble(env, c.out, c.tri_lo, n_items, s->n_clusters, old_unit, unit_lo, unit_hi, threads);
+        st = assemble(env, c.old, c.out, c.tri_lo, n_items, s->n_clusters, old_unit, unit_lo, unit_hi, threads);
     if (st == LIE_OK && interrupted)
         env->partial = 1;
     for (uint32_t t = 0; c.out && t < n_items; t++) {
@@ -396,7 +399,7 @@ static void assemble_tri(const assembly *a, uint32_t t)
         uint32_t next_node = nb, next_pool = pb;
         for (int e = 0; e < a->n_clusters; e++) {
             size_t unit = (size_t)(a->tri_lo + t) * (size_t)a->n_clusters + (size_t)e;
-            uint32_t r = a->old->root[a->old_unit[unit]], lone = lone_of(a->old, r);
+            uint32_t r = a->old->root[a->old_unit[unit - a->unit_lo]], lone = lone_of(a->old, r);
             if (lone) {
                 a->root[unit - a->unit_lo] = lone == LIE_ROOT_LONE_UNLIT ? a->sh.unlit : a->sh.none;
                 continue;
@@ -436,8 +439,8 @@ static void assemble_chunk(void *ctx, size_t item, int worker_id)
         assemble_tri(a, t);
 }
 
-static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32_t n_tris, int n_clusters,
-                           const int32_t *old_unit, uint64_t unit_lo, uint64_t unit_hi, int threads)
+static lie_status assemble(lie_env *env, const lie_env *old, unit_buf *bufs, uint32_t tri_lo, uint32_t n_tris,
+                           int n_clusters, const int32_t *old_unit, uint64_t unit_lo, uint64_t unit_hi, int threads)
 {
     uint64_t nodes = 0, pool = 0;
     int used[2] = {0, 0}; /* the shared leaves: unlit, none */
@@ -448,7 +451,7 @@ static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32
             uint64_t unit = (uint64_t)(tri_lo + t) * (uint64_t)n_clusters + (uint64_t)e;
             if (unit < unit_lo || unit >= unit_hi)
                 continue;
-            uint32_t r = bufs[t].copied ? lone_of(env, env->root[old_unit[unit]]) : bufs[t].roots[e];
+            uint32_t r = bufs[t].copied ? lone_of(old, old->root[old_unit[unit - unit_lo]]) : bufs[t].roots[e];
             used[0] |= r == LIE_ROOT_LONE_UNLIT;
             used[1] |= r == LIE_ROOT_LONE_NONE;
         }
@@ -468,7 +471,7 @@ static lie_status assemble(lie_env *env, unit_buf *bufs, uint32_t tri_lo, uint32
             nb[t + 1] = nb[t] + bufs[t].n_nodes;
             pb[t + 1] = pb[t] + bufs[t].n_pool;
         }
-        assembly a = {env, bufs, tri_lo, n_tris, n_clusters, old_unit, unit_lo, unit_hi, nb, pb, sh, root, nd, pl};
+        assembly a = {old, bufs, tri_lo, n_tris, n_clusters, old_unit, unit_lo, unit_hi, nb, pb, sh, root, nd, pl};
         st = lie_parallel_for((n_tris + ASSEMBLE_CHUNK - 1) / ASSEMBLE_CHUNK, threads, assemble_chunk, &a, NULL,
                               NULL);
         shared_write(nd, &sh, used[0], used[1]);
@@ -590,7 +593,7 @@ lie_status lie_env_build_with(const lie_scene *s, const lie_rt *rt, const lie_bu
     lie_env_describe(env, s, p);
     if (stats)
         memset(stats, 0, sizeof *stats);
-    lie_status st = run_build(env, s, rt, old_unit, NULL, ctl->tri_mask, ctl->pixels, 0, n_units, p->threads, 0,
+    lie_status st = run_build(env, NULL, s, rt, old_unit, NULL, ctl->tri_mask, ctl->pixels, 0, n_units, p->threads, 0,
                               ctl->progress, ctl->stop, ctl->audit_complex, stats);
     free(old_unit);
     if (st != LIE_OK) {
@@ -610,7 +613,7 @@ lie_status lie_env_build_range(const lie_scene *s, const lie_rt *rt, const lie_b
                                const uint8_t *tri_mask, uint64_t first_unit, uint64_t n_units, lie_env_part *out,
                                lie_build_stats *stats, lie_error *err)
 {
-    return build_range(s, rt, p, tri_mask, NULL, first_unit, n_units, NULL, out, stats, err);
+    return build_range(s, rt, p, tri_mask, NULL, first_unit, n_units, NULL, NULL, out, stats, err);
 }
 
 lie_status lie_env_build_range_views(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
@@ -620,18 +623,18 @@ lie_status lie_env_build_range_views(const lie_scene *s, const lie_rt *rt, const
     memset(out, 0, sizeof *out);
     if (px && px->n_tris != s->n_tris)
         return lie_error_set(err, LIE_ERR_ARG, s->path, "pixels for %u triangles, not %u", px->n_tris, s->n_tris);
-    return build_range(s, rt, p, NULL, px, first_unit, n_units, NULL, out, stats, err);
+    return build_range(s, rt, p, NULL, px, first_unit, n_units, NULL, NULL, out, stats, err);
 }
 
 lie_status lie_env_build_units(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
                                const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
-                               const volatile sig_atomic_t *stop, lie_env_part *out, lie_build_stats *stats,
-                               lie_error *err)
+                               const lie_units_old *from, const volatile sig_atomic_t *stop, lie_env_part *out,
+                               lie_build_stats *stats, lie_error *err)
 {
     memset(out, 0, sizeof *out);
     if (px && px->n_tris != s->n_tris)
         return lie_error_set(err, LIE_ERR_ARG, s->path, "pixels for %u triangles, not %u", px->n_tris, s->n_tris);
-    return build_range(s, rt, p, NULL, px, first_unit, n_units, stop, out, stats, err);
+    return build_range(s, rt, p, NULL, px, first_unit, n_units, from, stop, out, stats, err);
 }
 
 /* Parameters and a unit range a build can take. */
@@ -668,8 +671,8 @@ lie_status lie_env_unit_weights(const lie_scene *s, const lie_build_params *p, c
 
 static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
                               const uint8_t *tri_mask, const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
-                              const volatile sig_atomic_t *stop, lie_env_part *out, lie_build_stats *stats,
-                              lie_error *err)
+                              const lie_units_old *from, const volatile sig_atomic_t *stop, lie_env_part *out,
+                              lie_build_stats *stats, lie_error *err)
 {
     memset(out, 0, sizeof *out);
     if (check_range(s, p, first_unit, n_units, err) != LIE_OK)
@@ -682,8 +685,9 @@ static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_bu
         memset(stats, 0, sizeof *stats);
     lie_status st = LIE_OK;
     if (n_units)
-        st = run_build(&part, s, rt, NULL, NULL, tri_mask, px, first_unit, first_unit + n_units, p->threads, 0, NULL,
-                       stop, 0, stats);
+        st = run_build(&part, from ? from->env : NULL, s, rt, from ? from->old_unit : NULL,
+                       from ? from->node_flags : NULL, tri_mask, px, first_unit, first_unit + n_units, p->threads, 0,
+                       NULL, stop, 0, stats);
     if (st != LIE_OK) {
         free(part.root);
         free(part.nodes);
@@ -746,7 +750,7 @@ lie_status lie_build_update(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     double t0 = lie_time_now();
     if (stats)
         memset(stats, 0, sizeof *stats);
-    lie_status st = run_build(env, s, rt, old_unit, node_flags, NULL, px, 0,
+    lie_status st = run_build(env, NULL, s, rt, old_unit, node_flags, NULL, px, 0,
                               (uint64_t)s->n_tris * (uint64_t)s->n_clusters, threads, memo, NULL, NULL, 0, stats);
     if (stats)
         stats->seconds = lie_time_now() - t0;

@@ -54,8 +54,8 @@ typedef struct build_ctx {
     float min_area;       /* absolute smallest patch area that may still split */
     float ray_far;        /* towards directional emitters */
     const lie_env *old;   /* rebuild: units not in the mask are copied from here */
-    const int32_t *old_unit;  /* update: per unit, the old unit to copy or update, or -1 to
-                                 build afresh (NULL: build everything) */
+    const int32_t *old_unit;  /* update: per unit from unit_lo, the old unit to copy or update,
+                                 or -1 to build afresh (NULL: build everything) */
     const uint8_t *node_flags; /* update: per old node, 1 = recompute (NULL: none) */
     const uint8_t *tri_mask;   /* build only these triangles (NULL: all) */
     const lie_pixels *pix;     /* views: build only triangles with hits, as fine as their pixels
@@ -78,6 +78,13 @@ typedef struct build_ctx {
     double *halton;       /* radical inverses in bases 2, 3, 5, 7 of 0..n_halton-1 */
     uint32_t n_halton;
 } build_ctx;
+
+/* The unit of c->old that unit continues in an update, or -1 (built
+ * afresh, or no update): old_unit is indexed from the range's first unit. */
+static inline int32_t lie_ctx_old_unit(const build_ctx *c, uint64_t unit)
+{
+    return c->old_unit ? c->old_unit[unit - c->unit_lo] : -1;
+}
 
 /* Sort v[0..n) and drop repeats; returns the new length. */
 size_t lie_sort_unique(uint32_t *v, size_t n);

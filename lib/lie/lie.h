@@ -346,15 +346,28 @@ lie_status lie_env_build_range_views(const lie_scene *s, const lie_rt *rt, const
  * sharing units out among processes so that they balance. */
 lie_status lie_env_unit_weights(const lie_scene *s, const lie_build_params *p, const lie_pixels *px,
                                 uint64_t first_unit, uint64_t n_units, double *out, lie_error *err);
+/* What a range of units continues after an edit, as lie_env_update
+ * continues an env: old_unit[i] is the unit of env that unit first_unit + i
+ * continues (its nodes flagged in node_flags recomputed, the others
+ * copied), or -1 to build it afresh.  Only env's root, nodes and pool are
+ * read. */
+typedef struct lie_units_old {
+    const lie_env *env;
+    const int32_t *old_unit;
+    const uint8_t *node_flags;
+} lie_units_old;
 /* lie_env_build_range_views, stopped by *stop (may be NULL) as
  * lie_build_control.stop stops a build: units the stop reaches are left
- * LIE_CLASS_NONE and counted in stats->units_interrupted.  An asynchronous
- * constructor builds a triangle's units at a time with it (lib/update,
- * lie_ctor). */
+ * LIE_CLASS_NONE and counted in stats->units_interrupted.  With `from`
+ * (may be NULL) the units are updated, not built: the part is what
+ * lie_env_update_views gives these units, provided the flags hold every
+ * node whose shaft an edit touched.  An asynchronous constructor builds a
+ * triangle's units at a time with it, and after an edit recomputes the
+ * nodes it reached (lib/update, lie_ctor). */
 lie_status lie_env_build_units(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
                                const lie_pixels *px, uint64_t first_unit, uint64_t n_units,
-                               const volatile sig_atomic_t *stop, lie_env_part *out, lie_build_stats *stats,
-                               lie_error *err);
+                               const lie_units_old *from, const volatile sig_atomic_t *stop, lie_env_part *out,
+                               lie_build_stats *stats, lie_error *err);
 /* An env laid out as a build lays it out (every unit's tree in unit order,
  * nodes depth first as built, lists in node order), from one whose units
  * were put together in any order and may hold unreachable nodes: the same

@@ -161,7 +161,7 @@ lie_status lie_memo_precompute(build_ctx *c, int threads, size_t *n_memo)
     size_t ne = (size_t)s->n_clusters;
     for (uint32_t t = 0; t < s->n_tris; t++)
         for (size_t e = 0; e < ne; e++) {
-            int32_t ou = c->old_unit[(size_t)t * ne + e];
+            int32_t ou = lie_ctx_old_unit(c, (uint64_t)t * ne + e);
             uint32_t r = ou < 0 ? MEMO_NO_OLD : old->root[ou];
             if (r == MEMO_NO_OLD && !lie_subdiv_seen(c, t))
                 continue; /* outside the views: one none node, nothing to sample */

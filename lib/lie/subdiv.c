@@ -635,15 +635,17 @@ static int left_to_embree(const build_ctx *c, worker *w, uint32_t tri, const dou
 static int copied_whole(const build_ctx *c, uint32_t tri, unit_buf *u)
 {
     size_t ne = (size_t)c->s->n_clusters;
-    if (!c->old_unit || c->tri_mask)
+    uint64_t first = (uint64_t)tri * ne;
+    /* (a range of some of its units is built unit by unit) */
+    if (!c->old_unit || c->tri_mask || first < c->unit_lo || first + ne > c->unit_hi)
         return 0;
     for (size_t e = 0; e < ne; e++) {
-        int32_t ou = c->old_unit[(size_t)tri * ne + e];
+        int32_t ou = lie_ctx_old_unit(c, first + e);
         if (ou < 0 || (c->node_flags && c->node_flags[c->old->root[ou]]))
             return 0;
     }
     for (size_t e = 0; e < ne; e++)
-        lie_unit_size(c->old, c->old->root[c->old_unit[(size_t)tri * ne + e]], &u->n_nodes, &u->n_pool);
+        lie_unit_size(c->old, c->old->root[lie_ctx_old_unit(c, first + e)], &u->n_nodes, &u->n_pool);
     u->copied = 1;
     return 1;
 }
@@ -701,7 +703,8 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
         size_t unit = (size_t)tri * ne + e;
         if (unit < c->unit_lo || unit >= c->unit_hi)
             continue; /* lie_env_build_range: another part's */
-        int64_t old = c->old_unit && c->old_unit[unit] >= 0 ? (int64_t)c->old->root[c->old_unit[unit]] : -1;
+        int32_t ou = lie_ctx_old_unit(c, unit);
+        int64_t old = ou >= 0 ? (int64_t)c->old->root[ou] : -1;
         if (left_to_embree(c, w, tri, share, (int)e)) {
             u->roots[e] = LIE_ROOT_LONE_NONE; /* outside the views, or cannot pay: not built */
             w->st.pairs[LIE_CLASS_NONE]++;

@@ -26,9 +26,11 @@
  * units one by one, in any order and on any thread, gives the same trees.
  * A view added later changes the pixels of triangles already built; those
  * whose decisions the new pixels can change (lie_env_tri_stale) are built
- * again.  An edit (lie_ctor_edited) builds again every landed triangle
- * whose units' shafts the edited geometry may reach. */
-#include "update/update.h"
+ * again.  An edit (lie_ctor_edited) sends back the landed units whose
+ * shafts the edited geometry may reach, and their nodes it may reach are
+ * recomputed, the others copied, as rst-update recomputes them (§5.3;
+ * lie_env_build_units with the units' old trees). */
+#include "update/internal.h"
 #include "shade/shade.h"
 
 #include <math.h>
@@ -96,9 +98,17 @@ struct lie_ctor {
     /* After an edit a pending triangle may keep most of its units: only
      * those an edit reached (redo, per unit) are built again, the others
      * stay landed (some_tri: triangle t is pending so).  Invariant: a
-     * triangle without some_tri has no redo unit. */
+     * triangle without some_tri has no redo unit.  A redo unit whose own
+     * patch and emitter stayed keeps its old tree in the env, unreachable
+     * from its root (redo_root: that tree's root, 0 for a unit built
+     * afresh), and nflags marks the old trees' nodes an edit may have
+     * changed (n_nflags: the env's nodes at the last edit; nodes landed
+     * since are in no old tree): only those are recomputed. */
     uint8_t *redo, *some_tri;
-    uint64_t units_built;
+    uint32_t *redo_root;
+    uint8_t *nflags;
+    size_t n_nflags;
+    uint64_t units_built, nodes_built;
     double t0;
     lie_ctor_sample *samples;
     size_t n_samples, cap_samples;
@@ -181,7 +191,16 @@ static void unland(lie_ctor *c, uint32_t t)
     for (size_t e = 0; e < c->ne; e++) {
         c->env.root[(size_t)t * c->ne + e] = 0;
         c->redo[(size_t)t * c->ne + e] = 0;
+        c->redo_root[(size_t)t * c->ne + e] = 0;
     }
+    c->some_tri[t] = 0;
+}
+
+/* Triangle t's redo units are done (all landed). */
+static void redone(lie_ctor *c, uint32_t t)
+{
+    memset(c->redo + (size_t)t * c->ne, 0, c->ne);
+    memset(c->redo_root + (size_t)t * c->ne, 0, sizeof *c->redo_root * c->ne);
     c->some_tri[t] = 0;
 }
 
@@ -223,9 +242,12 @@ static void env_reset(lie_ctor *c)
 {
     size_t n_units = (size_t)c->s->n_tris * c->ne;
     for (size_t u = 0; u < n_units; u++)
-        c->env.root[u] = 0;
+        c->env.root[u] = c->redo_root[u] = 0;
     c->env.n_nodes = 1;
     c->env.n_pool = 0;
+    free(c->nflags); /* the nodes are landed again from 1 */
+    c->nflags = NULL;
+    c->n_nflags = 0;
 }
 
 /* ---- the queue (m held) ------------------------------------------------------- */
@@ -386,10 +408,15 @@ static void take_view(lie_ctor *c)
         }
         if (nw == cr)
             cr->refs++;
-        /* landed triangles whose decisions the new pixels change go again */
+        /* landed triangles whose decisions the new pixels change go again;
+         * so does one whose units an edit sent back to be recomputed
+         * where it reached, if its pixels changed: the rest of their old
+         * trees was decided for the old pixels */
         pthread_rwlock_wrlock(&c->env_lock);
         for (uint32_t t = 0; old && t < c->s->n_tris; t++)
-            if (has_landed(c, t) && lie_env_tri_stale(&c->env, c->s, old->px, nw->px, t)) {
+            if (has_landed(c, t) &&
+                (lie_env_tri_stale(&c->env, c->s, old->px, nw->px, t) ||
+                 (c->some_tri[t] && lie_pixels_tri_hash(old->px, t) != lie_pixels_tri_hash(nw->px, t)))) {
                 unland(c, t);
                 set_state(c, t, TRI_PENDING);
             }
@@ -518,9 +545,7 @@ static void land_ready(lie_ctor *c, int wait)
             unland(c, r->t);
             set_state(c, r->t, TRI_PENDING);
         } else {
-            for (size_t e = 0; e < c->ne; e++)
-                c->redo[(size_t)r->t * c->ne + e] = 0;
-            c->some_tri[r->t] = 0;
+            redone(c, r->t);
             set_state(c, r->t, TRI_BUILT);
             c->units_built += r->part.n_units;
         }
@@ -532,6 +557,62 @@ static void land_ready(lie_ctor *c, int wait)
     sample_stats(c);
     atomic_fetch_add(&c->version, 1);
     pthread_cond_broadcast(&c->idle_cv);
+}
+
+/* The old trees of triangle t's units an edit sent back to be recomputed
+ * where it reached (redo_root), copied out of the live env with their
+ * flags (m held: the builder reads them while units land and the env's
+ * arrays move): old's root[e] is unit e's copy, old_unit[e] e, or -1 for a
+ * unit to build afresh.  0: out of memory. */
+typedef struct old_trees {
+    lie_env env;
+    int32_t *old_unit;
+    uint8_t *flags;
+} old_trees;
+
+static void old_trees_free(old_trees *o)
+{
+    free(o->env.root);
+    free(o->env.nodes);
+    free(o->env.pool);
+    free(o->old_unit);
+    free(o->flags);
+    memset(o, 0, sizeof *o);
+}
+
+static int old_trees_copy(lie_ctor *c, uint32_t t, const uint8_t *want, old_trees *o)
+{
+    memset(o, 0, sizeof *o);
+    const uint32_t *rr = c->redo_root + (size_t)t * c->ne;
+    uint32_t nodes = 0, pool = 0;
+    pthread_rwlock_rdlock(&c->env_lock);
+    for (size_t e = 0; e < c->ne; e++)
+        if (want[e] && rr[e])
+            lie_update_subtree_size(&c->env, rr[e], &nodes, &pool);
+    if (nodes == 0) {
+        pthread_rwlock_unlock(&c->env_lock);
+        return 1; /* every unit built afresh */
+    }
+    o->env.root = malloc(sizeof *o->env.root * (c->ne + 1));
+    o->env.nodes = malloc(sizeof *o->env.nodes * ((size_t)nodes + 1));
+    o->env.pool = malloc(sizeof *o->env.pool * ((size_t)pool + 1));
+    o->old_unit = malloc(sizeof *o->old_unit * (c->ne + 1));
+    o->flags = malloc((size_t)nodes + 1);
+    int ok = o->env.root && o->env.nodes && o->env.pool && o->old_unit && o->flags;
+    for (size_t e = 0; ok && e < c->ne; e++) {
+        o->old_unit[e] = -1;
+        o->env.root[e] = 0;
+        if (!want[e] || !rr[e])
+            continue;
+        uint32_t idx = o->env.n_nodes++;
+        o->env.root[e] = idx;
+        o->old_unit[e] = (int32_t)e;
+        lie_update_copy_subtree(&c->env, c->nflags, rr[e], &o->env, o->flags, idx);
+    }
+    pthread_rwlock_unlock(&c->env_lock);
+    if (!ok)
+        old_trees_free(o);
+    return ok;
 }
 
 /* Build triangle t (m held on entry and exit): all its units, or those
@@ -548,11 +629,15 @@ static void build_tri(lie_ctor *c, uint32_t t)
     int some = c->some_tri[t];
     for (size_t e = 0; want && e < c->ne; e++)
         want[e] = !some || c->redo[(size_t)t * c->ne + e];
+    old_trees old;
+    memset(&old, 0, sizeof old);
+    int old_ok = want && (!some || old_trees_copy(c, t, want, &old));
     pthread_mutex_unlock(&c->m);
     lie_env_part *parts = calloc(c->ne + 1, sizeof *parts);
     size_t n_parts = 0;
+    uint64_t nodes = 0;
     lie_error err;
-    lie_status st = want && parts ? LIE_OK : lie_error_set(&err, LIE_ERR_NOMEM, c->s->path, "out of memory");
+    lie_status st = want && parts && old_ok ? LIE_OK : lie_error_set(&err, LIE_ERR_NOMEM, c->s->path, "out of memory");
     int interrupted = 0;
     for (size_t e = 0; st == LIE_OK && !interrupted && e < c->ne;) {
         if (!want[e]) {
@@ -563,14 +648,18 @@ static void build_tri(lie_ctor *c, uint32_t t)
         while (e1 < c->ne && want[e1])
             e1++;
         lie_build_stats bs;
-        st = lie_env_build_units(c->s, c->rt, &c->p, px ? px->px : NULL, (uint64_t)t * c->ne + e, e1 - e, &c->stop,
-                                 &parts[n_parts], &bs, &err);
+        lie_units_old from = {&old.env, old.old_unit ? old.old_unit + e : NULL, old.flags};
+        st = lie_env_build_units(c->s, c->rt, &c->p, px ? px->px : NULL, (uint64_t)t * c->ne + e, e1 - e,
+                                 old.old_unit ? &from : NULL, &c->stop, &parts[n_parts], &bs, &err);
         if (st == LIE_OK)
             n_parts++;
+        for (int d = 0; st == LIE_OK && d <= LIE_PATCH_MAX_DEPTH; d++)
+            nodes += bs.patches_per_depth[d];
         interrupted = st == LIE_OK && bs.units_interrupted > 0;
         e = e1;
     }
     free(want);
+    old_trees_free(&old);
     pthread_mutex_lock(&c->m);
     c->busy--;
     if (st == LIE_OK && !interrupted &&
@@ -587,6 +676,7 @@ static void build_tri(lie_ctor *c, uint32_t t)
             fail(c, &err); /* (interrupted: a hold stopped it, again later) */
         px_drop(px);
     } else {
+        c->nodes_built += nodes;
         for (size_t i = 0; i < n_parts; i++) {
             if (i > 0 && px)
                 px->refs++;
@@ -685,6 +775,8 @@ void lie_ctor_destroy(lie_ctor *c)
     free(c->views.cams);
     free(c->state);
     free(c->redo);
+    free(c->redo_root);
+    free(c->nflags);
     free(c->some_tri);
     free(c->order);
     free(c->samples);
@@ -808,10 +900,11 @@ lie_status lie_ctor_create(lie_scene *s, const lie_rt *rt, const lie_ctor_option
     c->env.root = malloc(sizeof *c->env.root * (n_units + 1));
     c->state = calloc((size_t)s->n_tris + 1, 1);
     c->redo = calloc(n_units + 1, 1);
+    c->redo_root = calloc(n_units + 1, sizeof *c->redo_root);
     c->some_tri = calloc((size_t)s->n_tris + 1, 1);
     c->tri_p = malloc(sizeof *c->tri_p * (3 * (size_t)s->n_tris + 1));
     c->em = malloc(sizeof *c->em * ((size_t)s->n_emitters + 1));
-    lie_status st = c->env.root && c->state && c->redo && c->some_tri && c->tri_p && c->em &&
+    lie_status st = c->env.root && c->state && c->redo && c->redo_root && c->some_tri && c->tri_p && c->em &&
                             reserve((void **)&c->env.nodes, &c->cap_nodes, 1, sizeof(lie_pnode)) &&
                             reserve((void **)&c->env.pool, &c->cap_pool, 1, sizeof(uint32_t))
                         ? LIE_OK
@@ -911,6 +1004,7 @@ void lie_ctor_get_stats(lie_ctor *c, lie_ctor_stats *st)
     st->units = (uint64_t)c->s->n_tris * c->ne;
     st->units_pending = c->pending * c->ne;
     st->units_built = c->units_built;
+    st->nodes_built = c->nodes_built;
     st->views = c->views.n_cams;
     st->sampling = c->want_set || c->resample;
     st->samples = c->samples;
@@ -948,6 +1042,7 @@ typedef struct build_job {
     pxref *px;
     lie_error err;
     _Atomic int failed;
+    _Atomic uint64_t nodes;
 } build_job;
 
 static void build_one(void *ctx, size_t item, int worker)
@@ -962,7 +1057,9 @@ static void build_one(void *ctx, size_t item, int worker)
     lie_build_stats bs;
     lie_error err;
     lie_status st = lie_env_build_units(c->s, c->rt, &c->p, j->px ? j->px->px : NULL, (uint64_t)t * c->ne, c->ne,
-                                        NULL, &part, &bs, &err);
+                                        NULL, NULL, &part, &bs, &err);
+    for (int d = 0; st == LIE_OK && d <= LIE_PATCH_MAX_DEPTH; d++)
+        atomic_fetch_add(&j->nodes, bs.patches_per_depth[d]);
     if (st == LIE_OK) {
         pthread_rwlock_wrlock(&c->env_lock);
         if (!land(c, &part))
@@ -1000,7 +1097,7 @@ lie_status lie_ctor_build(lie_ctor *c, const uint8_t *mask, const lie_camera *ca
             tris[n++] = t;
             set_state(c, t, TRI_BUSY);
         }
-    build_job j = {c, tris, c->px, {0}, 0};
+    build_job j = {c, tris, c->px, {0}, 0, 0};
     if (j.px)
         j.px->refs++;
     c->busy++;
@@ -1015,14 +1112,13 @@ lie_status lie_ctor_build(lie_ctor *c, const uint8_t *mask, const lie_camera *ca
     pthread_mutex_lock(&c->m);
     c->busy--;
     for (size_t i = 0; i < n; i++) {
-        if (st == LIE_OK) { /* every unit built: none left to redo */
-            memset(c->redo + (size_t)tris[i] * c->ne, 0, c->ne);
-            c->some_tri[tris[i]] = 0;
-        }
+        if (st == LIE_OK) /* every unit built: none left to redo */
+            redone(c, tris[i]);
         set_state(c, tris[i], st == LIE_OK ? TRI_BUILT : TRI_PENDING);
     }
     if (st == LIE_OK) {
         c->units_built += n * c->ne;
+        c->nodes_built += atomic_load(&j.nodes);
         sample_stats(c);
         atomic_fetch_add(&c->version, 1);
     }
@@ -1147,6 +1243,7 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
     }
     /* shadow rays start a little off the surface (lib/rt/rt.h): pad */
     float pad = lie_box3_is_empty(&all) ? 0.0f : 1e-3f * lie_v3_len(lie_v3_sub(all.hi, all.lo));
+    const lie_box3 moved_boxes[2] = {before, after}; /* the refinement's, as rst-update's (unpadded) */
     box_pad(&before, pad);
     box_pad(&after, pad);
     lie_box3 *cb = st == LIE_OK ? malloc(sizeof *cb * (c->ne + 1)) : NULL;
@@ -1172,20 +1269,28 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
      * (lie_rst_refine, as lib/update tightens the ray segment trees'
      * answer) keeps those whose segments can meet moved geometry.  The box
      * of a large emitter holds most of a room: the box test alone sent
-     * every unit of the view back. */
+     * every unit of the view back.  The refinement flags the nodes down
+     * each kept unit's tree that the moved geometry may reach: only those
+     * are recomputed (build_tri).  A unit an earlier edit sent back, not
+     * recomputed yet, is tested on its old tree (vroot: the roots the
+     * refinement sees), and keeps its earlier flags. */
+    size_t n_units = (size_t)s->n_tris * c->ne;
     uint8_t *flags = restart ? NULL : calloc((size_t)c->env.n_nodes + 1, 1);
+    uint32_t *vroot = flags ? malloc(sizeof *vroot * (n_units + 1)) : NULL;
     double *share = light_moved ? malloc(sizeof *share * (c->ne + 1)) : NULL;
-    if (light_moved && !share) {
-        free(flags); /* out of memory: everything goes again */
+    if ((light_moved && !share) || !vroot) {
+        free(flags); /* out of memory (or a restart): everything goes again */
         flags = NULL;
     }
+    for (size_t u = 0; flags && u < n_units; u++)
+        vroot[u] = c->env.root[u] ? c->env.root[u] : c->redo_root[u];
     uint64_t candidates = 0;
     for (uint32_t t = 0; flags && t < s->n_tris; t++) {
         if (moved[t] || !has_landed(c, t))
             continue;
         lie_box3 tb = tri_box(&s->tri_p[3 * (size_t)t]);
         for (size_t k = 0; k < c->ne; k++) {
-            uint32_t r = c->env.root[(size_t)t * c->ne + k];
+            uint32_t r = vroot[(size_t)t * c->ne + k];
             uint32_t cls = c->env.nodes[r].cls;
             /* as the trees leave them out (lib/rst): unlit stays unlit unless
              * its patch or emitter moves, an unbuilt unit stays unbuilt (the
@@ -1204,14 +1309,17 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
             candidates += (uint64_t)meets;
         }
     }
-    const lie_box3 moved_boxes[2] = {before, after};
     int n_moved_boxes = 0;
     lie_box3 mb[2];
     for (int i = 0; i < 2; i++)
         if (!lie_box3_is_empty(&moved_boxes[i]))
             mb[n_moved_boxes++] = moved_boxes[i];
+    lie_env view = c->env;
+    view.root = vroot;
     if (flags && candidates)
-        lie_rst_refine(s, &c->env, mb, n_moved_boxes, flags, 0);
+        lie_rst_refine(s, &view, mb, n_moved_boxes, flags, 0);
+    for (size_t i = 0; flags && i < c->n_nflags; i++)
+        flags[i] |= c->nflags[i];
     /* a triangle moved (or everything: restart) goes again whole; one
      * with units the refinement kept goes again in those units only, the
      * others staying landed (units are independent: lib/lie/lie.h) */
@@ -1235,13 +1343,16 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
         int any = 0;
         for (size_t k = 0; k < c->ne; k++) {
             size_t u = (size_t)t * c->ne + k;
-            uint32_t r = c->env.root[u];
-            int again = r && (flags[r] || cl_moved[k]);
-            if (r && !again && decide)
-                again = (c->env.nodes[r].cls != LIE_CLASS_NONE) != lie_unit_pays(&c->p, c->px->px, t, share[k]);
-            if (again) {
+            uint32_t r = vroot[u];
+            /* built afresh: its emitter moved, or the cost model's decision
+             * turned; else recomputed where flagged */
+            int afresh = r && cl_moved[k];
+            if (r && !afresh && decide)
+                afresh = (c->env.nodes[r].cls != LIE_CLASS_NONE) != lie_unit_pays(&c->p, c->px->px, t, share[k]);
+            if (r && (afresh || flags[r])) {
                 c->env.root[u] = 0;
                 c->redo[u] = 1;
+                c->redo_root[u] = afresh ? 0 : r;
                 any = 1;
             }
         }
@@ -1250,7 +1361,10 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
             set_state(c, t, TRI_PENDING);
         }
     }
-    free(flags);
+    free(c->nflags);
+    c->nflags = flags;
+    c->n_nflags = flags ? c->env.n_nodes : 0;
+    free(vroot);
     free(share);
     free(cl_moved);
     c->env.scene_hash = s->hash;

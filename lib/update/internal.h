@@ -63,6 +63,16 @@ void lie_update_drop_answers(lie_update *u);
  * the caller frees. */
 lie_box3 *lie_update_node_boxes(const lie_scene *s);
 
+/* The nodes and pool entries of node n of env and its subtree. */
+void lie_update_subtree_size(const lie_env *env, uint32_t n, uint32_t *nodes, uint32_t *pool);
+/* Copy node `from` of env and its subtree to node idx of w (w->n_nodes and
+ * w->n_pool are where its children and lists go, w's arrays large enough:
+ * lie_update_subtree_size), in the order lib/lie's assembly lays a unit out
+ * (children appended as their parent is visited, depth first), and each
+ * node's flag from flags to wf. */
+void lie_update_copy_subtree(const lie_env *env, const uint8_t *flags, uint32_t from, lie_env *w, uint8_t *wf,
+                             uint32_t idx);
+
 /* Are the subtrees at node a of A and node b of B identical? */
 int lie_update_same_subtree(const lie_env *A, uint32_t a, const lie_env *B, uint32_t b);
 

@@ -192,21 +192,18 @@ static lie_status flag_nodes(lie_update *u)
     return LIE_OK;
 }
 
-static void subtree_size(const lie_env *env, uint32_t n, uint32_t *nodes, uint32_t *pool)
+void lie_update_subtree_size(const lie_env *env, uint32_t n, uint32_t *nodes, uint32_t *pool)
 {
     const lie_pnode *x = &env->nodes[n];
     ++*nodes;
     if (x->cls == LIE_CLASS_PARTIAL && !x->child)
         *pool += x->count;
     for (uint32_t k = 0; x->child && k < 4; k++)
-        subtree_size(env, x->child + k, nodes, pool);
+        lie_update_subtree_size(env, x->child + k, nodes, pool);
 }
 
-/* Copy committed node `from` and its subtree to node idx of w, in the
- * order lib/lie's assembly lays a unit out (children appended as their
- * parent is visited, depth first), with its flag. */
-static void copy_subtree(const lie_env *env, const uint8_t *flags, uint32_t from, lie_env *w, uint8_t *wf,
-                         uint32_t idx)
+void lie_update_copy_subtree(const lie_env *env, const uint8_t *flags, uint32_t from, lie_env *w, uint8_t *wf,
+                             uint32_t idx)
 {
     lie_pnode x = env->nodes[from];
     wf[idx] = flags[from];
@@ -216,7 +213,7 @@ static void copy_subtree(const lie_env *env, const uint8_t *flags, uint32_t from
         x.child = first;
         w->nodes[idx] = x;
         for (uint32_t k = 0; k < 4; k++)
-            copy_subtree(env, flags, oc + k, w, wf, first + k);
+            lie_update_copy_subtree(env, flags, oc + k, w, wf, first + k);
         return;
     }
     if (x.cls == LIE_CLASS_PARTIAL) {
@@ -247,7 +244,7 @@ static lie_status make_work(lie_update *u)
             used_none |= !r || r->cls == LIE_CLASS_NONE;
             continue;
         }
-        subtree_size(env, env->root[u->old_unit[k]], &a, &b);
+        lie_update_subtree_size(env, env->root[u->old_unit[k]], &a, &b);
         nodes += a;
         pool += b;
     }
@@ -286,7 +283,7 @@ static lie_status make_work(lie_update *u)
             uint32_t idx = w->n_nodes++;
             w->root[k] = idx;
             uint32_t from = env->root[u->old_unit[k]];
-            copy_subtree(env, u->flags, from, w, u->work_flags, idx);
+            lie_update_copy_subtree(env, u->flags, from, w, u->work_flags, idx);
             u->pending[k] = u->flags[from];
         }
         u->n_pending += u->pending[k] != 0;

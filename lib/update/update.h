@@ -253,6 +253,10 @@ typedef struct lie_ctor_sample {
 } lie_ctor_sample;
 typedef struct lie_ctor_stats {
     uint64_t units, units_pending, units_built;
+    /* patch-tree nodes the builders computed: after an edit, only the
+     * nodes it reached, the rest of a unit sent back being copied (as
+     * lie_update_stats.nodes_recomputed counts them) */
+    uint64_t nodes_built;
     int views;
     int sampling;      /* a view or an edit is being sampled: more units may be pending */
     const lie_ctor_sample *samples; /* valid until the next call on c */

@@ -11,6 +11,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -265,9 +266,172 @@ static void test_edits_send_back_units_not_triangles(void **state)
     close_fixture(&f);
 }
 
+/* A floor 8 x 8 under a square light, with nine small blockers between
+ * them, each a node of its own: the floor's patch trees split deep along
+ * the nine shadows, and moving one blocker reaches a corner of them. */
+static lie_scene *blockers_scene(void)
+{
+    lie_scene *s = lie_scene_new("blockers");
+    lie_material white = lie_material_default();
+    white.metallic = 0.0f;
+    int mw = lie_scene_add_material(s, &white);
+    lie_material two = white;
+    two.double_sided = 1;
+    int mb = lie_scene_add_material(s, &two);
+    lie_material light = white;
+    light.base_color[0] = light.base_color[1] = light.base_color[2] = 0.0f;
+    light.emissive[0] = light.emissive[1] = light.emissive[2] = 5.0f;
+    int ml = lie_scene_add_material(s, &light);
+    uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
+    float fl[12] = {-4, 0, -4, -4, 0, 4, 4, 0, 4, 4, 0, -4};
+    float li[12] = {-0.5f, 3, -0.5f, 0.5f, 3, -0.5f, 0.5f, 3, 0.5f, -0.5f, 3, 0.5f};
+    lie_scene_add_node(s, "Floor", -1, NULL, lie_scene_add_mesh(s, "Floor", fl, NULL, NULL, 4, idx, 2, mw), -1, -1);
+    lie_scene_add_node(s, "Light", -1, NULL, lie_scene_add_mesh(s, "Light", li, NULL, NULL, 4, idx, 2, ml), -1, -1);
+    for (int i = 0; i < 9; i++) {
+        float x = -1.2f + 1.2f * (float)(i % 3), z = -1.2f + 1.2f * (float)(i / 3), r = 0.2f;
+        float q[12] = {x - r, 1, z - r, x - r, 1, z + r, x + r, 1, z + r, x + r, 1, z - r};
+        char name[16];
+        snprintf(name, sizeof name, "B%d", i);
+        lie_scene_add_node(s, name, -1, NULL, lie_scene_add_mesh(s, name, q, NULL, NULL, 4, idx, 2, mb), -1, -1);
+    }
+    lie_error err;
+    assert_int_equal(lie_scene_flatten(s, &err), LIE_OK);
+    assert_int_equal(s->n_emitters, 1);
+    return s;
+}
+
+static lie_build_params blockers_params(void)
+{
+    lie_build_params p = lie_build_params_default();
+    p.min_patch = 1e-4f;
+    p.max_blockers = 1;
+    p.split_gain = 0.0f;
+    return p;
+}
+
+static lie_edit *parse_edit(const char *text)
+{
+    lie_edit *e = NULL;
+    lie_error err;
+    assert_int_equal(lie_edit_parse((const unsigned char *)text, strlen(text), "e.yaml", &e, &err), LIE_OK);
+    return e;
+}
+
+/* What rst-update recomputes for edits texts[n_pre, n) of a whole build of
+ * the scene after texts[0, n_pre): the nodes, and the env after them. */
+static uint64_t update_nodes(const char *const *texts, int n_pre, int n, lie_env **after)
+{
+    lie_error err;
+    lie_scene *s = blockers_scene();
+    for (int i = 0; i < n_pre; i++) {
+        lie_edit *e = parse_edit(texts[i]);
+        assert_int_equal(lie_edit_apply(s, e, NULL, NULL, &err), LIE_OK);
+        lie_edit_destroy(e);
+    }
+    lie_rt *rt = NULL;
+    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
+    lie_build_params p = blockers_params();
+    lie_cache *c = calloc(1, sizeof *c);
+    assert_non_null(c);
+    c->scene_path = strdup("blockers");
+    c->scene_hash = s->hash;
+    assert_int_equal(lie_cache_set_state(c, s, &err), LIE_OK);
+    assert_int_equal(lie_env_build(s, rt, &p, NULL, &c->env, NULL, &err), LIE_OK);
+    lie_edit *e[4];
+    for (int i = n_pre; i < n; i++)
+        e[i - n_pre] = parse_edit(texts[i]);
+    lie_update_stats st;
+    assert_int_equal(lie_update_apply(c, s, (const lie_edit *const *)e, n - n_pre, NULL, &st, &err), LIE_OK);
+    for (int i = n_pre; i < n; i++)
+        lie_edit_destroy(e[i - n_pre]);
+    *after = c->env;
+    c->env = NULL;
+    lie_cache_destroy(c);
+    lie_rt_destroy(rt);
+    lie_scene_destroy(s);
+    return st.nodes_recomputed;
+}
+
+/* The nodes of triangle t's units in env. */
+static uint64_t tri_nodes(const lie_env *env, uint32_t t, uint32_t node)
+{
+    if (node == UINT32_MAX) {
+        uint64_t n = 0;
+        for (int k = 0; k < env->n_clusters; k++)
+            n += tri_nodes(env, t, env->root[(size_t)t * (size_t)env->n_clusters + (size_t)k]);
+        return n;
+    }
+    uint64_t n = 1;
+    for (uint32_t k = 0; env->nodes[node].child && k < 4; k++)
+        n += tri_nodes(env, t, env->nodes[node].child + k);
+    return n;
+}
+
+/* After a drag the constructor recomputes the nodes of the units it sends
+ * back that the moved geometry may reach, and copies the rest, as
+ * rst-update does: the very nodes rst-update recomputes, far fewer than
+ * the sent-back floor's trees hold; so too for two edits made while the
+ * first one's units are still pending (held).  Each time the saved env is
+ * the edited scene's build, byte for byte. */
+static void test_a_drag_recomputes_the_nodes_it_reaches(void **state)
+{
+    (void)state;
+    lie_error err;
+    fixture f;
+    memset(&f, 0, sizeof f);
+    f.s = blockers_scene();
+    assert_int_equal(lie_rt_create(f.s, &f.rt, &err), LIE_OK);
+    f.co = lie_ctor_options_default();
+    f.co.params = blockers_params();
+    f.co.whole = 1;
+    f.co.threads = 2;
+    lie_ctor *c = NULL;
+    assert_int_equal(lie_ctor_create(f.s, f.rt, &f.co, NULL, &c, &err), LIE_OK);
+    assert_int_equal(lie_ctor_wait(c, -1.0, &err), 1);
+    lie_ctor_stats st;
+    lie_ctor_get_stats(c, &st);
+    uint64_t nodes0 = st.nodes_built, units0 = st.units_built;
+    static const char *const drags[3] = {"- move: {node: B0, by: [-0.1, 0, 0.05]}\n",
+                                         "- move: {node: B8, by: [0.05, 0, 0.1]}\n",
+                                         "- move: {node: B0, by: [0.05, 0, -0.1]}\n"};
+    ctor_edit(c, &f, drags[0]);
+    assert_int_equal(lie_ctor_wait(c, -1.0, &err), 1);
+    lie_ctor_get_stats(c, &st);
+    lie_env *want = NULL, *got = saved(c, f.s);
+    uint64_t rst_nodes = update_nodes(drags, 0, 1, &want);
+    assert_true(same_env(got, want));
+    assert_true(st.units_built > units0);
+    assert_int_equal(st.nodes_built - nodes0, rst_nodes);
+    /* the floor's units went back (the blocker shadows them), and most of
+     * their nodes were copied */
+    uint64_t floor_nodes = tri_nodes(want, 0, UINT32_MAX) + tri_nodes(want, 1, UINT32_MAX);
+    assert_true(floor_nodes > 100);
+    assert_true(4 * (st.nodes_built - nodes0) < floor_nodes);
+    lie_env_destroy(got);
+    lie_env_destroy(want);
+    /* two more edits while the units of the first wait (held): their
+     * nodes are those of both */
+    nodes0 = st.nodes_built;
+    lie_ctor_hold(c);
+    ctor_edit(c, &f, drags[1]);
+    ctor_edit(c, &f, drags[2]);
+    lie_ctor_release(c);
+    assert_int_equal(lie_ctor_wait(c, -1.0, &err), 1);
+    lie_ctor_get_stats(c, &st);
+    got = saved(c, f.s);
+    rst_nodes = update_nodes(drags, 1, 3, &want);
+    assert_true(same_env(got, want));
+    assert_int_equal(st.nodes_built - nodes0, rst_nodes);
+    lie_env_destroy(got);
+    lie_env_destroy(want);
+    lie_ctor_destroy(c);
+    close_fixture(&f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_a_drag_recomputes_the_nodes_it_reaches),
         cmocka_unit_test(test_edits_send_back_units_not_triangles),
         cmocka_unit_test(test_two_views_end_in_one_build_for_both),
         cmocka_unit_test(test_held_and_manual_constructors),

@@ -143,9 +143,11 @@ static void print_ctor_json(FILE *fp, session *S)
         return;
     lie_ctor_stats cs;
     lie_ctor_get_stats(c, &cs);
-    fprintf(fp, ",\"units\":%llu,\"units_pending\":%llu,\"units_built\":%llu,\"views\":%d,\"units_over_time\":[",
+    fprintf(fp,
+            ",\"units\":%llu,\"units_pending\":%llu,\"units_built\":%llu,\"nodes_built\":%llu,\"views\":%d,"
+            "\"units_over_time\":[",
             (unsigned long long)cs.units, (unsigned long long)cs.units_pending, (unsigned long long)cs.units_built,
-            cs.views);
+            (unsigned long long)cs.nodes_built, cs.views);
     for (size_t i = 0; i < cs.n_samples; i++)
         fprintf(fp, "%s[%.3f,%llu]", i ? "," : "", cs.samples[i].seconds, (unsigned long long)cs.samples[i].units);
     fprintf(fp, "]");
