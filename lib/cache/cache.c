@@ -254,6 +254,7 @@ static lie_status encode(const lie_cache *c, const char *name, unsigned char **d
     lie_cache_put_u32(p + 40, lie_cache_f32_bits(env->params.ns_blocker));
     lie_cache_put_u32(p + 44, lie_cache_f32_bits(env->params.ns_ray));
     lie_cache_put_u32(p + 48, env->params.complex_predict);
+    lie_cache_put_u32(p + 52, env->params.whole_pixels);
 
     /* EDITS */
     p = buf + off[S_EDITS];

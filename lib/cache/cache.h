@@ -20,7 +20,7 @@
 extern "C" {
 #endif
 
-#define LIE_CACHE_VERSION 6u
+#define LIE_CACHE_VERSION 7u
 /* ROOTS entries from version 6 that name no node: the unit is one lone
  * leaf (lie_pnode_lone), unlit or none, which the reader shares. */
 #define LIE_CACHE_ROOT_LONE_UNLIT 0xFFFFFFFFu

@@ -145,6 +145,7 @@ static lie_status parse_params(const unsigned char *p, uint64_t size, uint32_t v
     const uint32_t want = version == 1   ? LIE_CACHE_PARAMS_SIZE_V1
                           : version == 2 ? LIE_CACHE_PARAMS_SIZE_V2
                           : version <= 5 ? LIE_CACHE_PARAMS_SIZE_V5
+                          : version == 6 ? LIE_CACHE_PARAMS_SIZE_V6
                                          : LIE_CACHE_PARAMS_SIZE;
     if (size != want)
         return FAIL("section PARAMS: %llu bytes, expected %u", (ull)size, want);
@@ -171,6 +172,8 @@ static lie_status parse_params(const unsigned char *p, uint64_t size, uint32_t v
     bp->ns_ray = version >= 3 ? lie_cache_bits_f32(lie_cache_get_u32(p + 44)) : d.ns_ray;
     /* older caches predicted nothing: every unit was built */
     bp->complex_predict = version >= 6 ? lie_cache_get_u32(p + 48) : 0u;
+    /* older whole builds had no model: every unit was built */
+    bp->whole_pixels = version >= 7 ? lie_cache_get_u32(p + 52) : 0u;
     lie_error perr;
     if (lie_build_params_check(bp, &perr) != LIE_OK)
         return FAIL("section PARAMS: %s", perr.msg);

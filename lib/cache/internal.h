@@ -13,7 +13,8 @@
 #define LIE_CACHE_HEADER_SIZE 32u
 #define LIE_CACHE_ENTRY_SIZE 32u
 #define LIE_CACHE_META_FIXED 48u
-#define LIE_CACHE_PARAMS_SIZE 52u    /* version 6; versions 3 to 5: 48 (no complex_predict); 2: 28 (no cost model); 1: 24 */
+#define LIE_CACHE_PARAMS_SIZE 56u    /* version 7; 6: 52 (no whole_pixels); 3 to 5: 48 (no complex_predict); 2: 28 (no cost model); 1: 24 */
+#define LIE_CACHE_PARAMS_SIZE_V6 52u
 #define LIE_CACHE_PARAMS_SIZE_V5 48u
 #define LIE_CACHE_PARAMS_SIZE_V2 28u
 #define LIE_CACHE_PARAMS_SIZE_V1 24u

@@ -123,6 +123,9 @@ static lie_status run_build(lie_env *env, const lie_env *old, const lie_scene *s
     c.node_flags = node_flags;
     c.tri_mask = tri_mask;
     c.pix = px;
+    /* a whole build's model: pixels estimated by area (lie_whole_pixels) */
+    if (!px && env->params.frames && env->params.whole_pixels)
+        c.whole_area = lie_whole_area(s);
     c.stop = stop;
     c.audit_complex = audit;
     /* the triangles holding units [unit_lo, unit_hi) */
@@ -544,7 +547,7 @@ static lie_status resume_check(const lie_env *r, const lie_scene *s, const lie_b
     const lie_build_params *q = &r->params;
     if (q->samples != p->samples || q->max_samples != p->max_samples || q->max_blockers != p->max_blockers ||
         q->complex_cap != p->complex_cap || q->min_patch != p->min_patch || q->split_gain != p->split_gain ||
-        q->mode != p->mode || q->complex_predict != p->complex_predict)
+        q->mode != p->mode || q->complex_predict != p->complex_predict || q->whole_pixels != p->whole_pixels)
         return lie_error_set(err, LIE_ERR_ARG, s->path,
                              "the partial build to resume was made with other build parameters");
     return LIE_OK;

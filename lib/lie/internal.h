@@ -60,6 +60,8 @@ typedef struct build_ctx {
     const uint8_t *tri_mask;   /* build only these triangles (NULL: all) */
     const lie_pixels *pix;     /* views: build only triangles with hits, as fine as their pixels
                                   need (NULL: all, as fine as the lists need) */
+    double whole_area;         /* no views: lie_whole_area when the whole build's model decides
+                                  (p->frames and p->whole_pixels), else 0 */
     uint64_t unit_lo, unit_hi; /* build only units [unit_lo, unit_hi) ... */
     uint32_t tri_lo;           /* ... of triangles tri_lo + item (out[item]) */
     unit_buf *out;        /* per triangle: its units, in emitter order, each contiguous */

@@ -74,6 +74,12 @@ typedef struct lie_build_params {
     float ns_segment;       /* build: one sampled shadow segment, in ns */
     float ns_blocker;       /* render: one blocker-list triangle test, in ns */
     float ns_ray;           /* render: one Embree shadow ray (complex and unbuilt pairs), in ns */
+    /* A whole build (no views) has no pixels: it assumes each of the
+     * frames shows this many pixels spread over the scene's surface in
+     * proportion to area (lie_whole_pixels), and decides units and splits
+     * by the model as a view build does.  0: no model, every unit built,
+     * patches as fine as their lists need (as before cache format 7). */
+    uint32_t whole_pixels;
 } lie_build_params;
 
 #define LIE_SAMPLES_DEFAULT 128u
@@ -87,6 +93,8 @@ typedef struct lie_build_params {
  * (docs/measurements.md, "Complex units predicted") */
 #define LIE_COMPLEX_PREDICT_DEFAULT 0u
 #define LIE_MODEL_LIGHT_SAMPLES_DEFAULT 100u
+/* The frames a whole build assumes: --view-size's default image */
+#define LIE_WHOLE_PIXELS_DEFAULT (512u * 512u)
 /* Measured on museum3 at 512x512 (CPU time per event; bench/build.sh
  * prints the measured values beside these).  A blocker test is an
  * effective figure, per light sample and list entry: the renderer answers
@@ -174,6 +182,11 @@ typedef struct lie_build_stats {
      * (half the parent's list), and as the children's lists give it */
     double split_saving_predicted_ns;
     double split_saving_measured_ns;
+    /* a whole build's model (lie_whole_pixels): the shadow-ray time one of
+     * its assumed frames saves with the units built, against Embree, in
+     * CPU ns: each leaf's pixels (its share by area of its triangle's) x
+     * the unit's share of the light samples x (a ray less the leaf's cost) */
+    double frame_saving_ns;
     double seconds;
     /* the parallel phase: workers, their summed and largest CPU seconds (each
      * thread's own clock, so other processes do not count), and the wall
@@ -328,6 +341,25 @@ void lie_unit_shares(const lie_scene *s, uint32_t tri, float far, double *share)
  * left unbuilt and the renderer answers it with Embree.  Always 1 without
  * views or with frames 0. */
 int lie_unit_pays(const lie_build_params *p, const lie_pixels *px, uint32_t tri, double share);
+/* The same rule for a unit whose triangle `pixels` pixels see per frame. */
+int lie_unit_pays_pixels(const lie_build_params *p, double pixels, double share);
+
+/* ---- whole builds: pixels estimated from area ----------------------------
+ *
+ * A build without views cannot count pixels.  It assumes that each of the
+ * frames it serves shows p->whole_pixels pixels spread over the scene's
+ * surface in proportion to area: triangle t gets whole_pixels x area(t) /
+ * lie_whole_area(s) per frame, a patch of it its share by area.  The
+ * surface is rounded up to a power of two, so an edit rarely changes it;
+ * when it does, rst-update rebuilds every unit (lib/update/mark.c). */
+double lie_whole_area(const lie_scene *s);
+/* Pixels per frame a whole build with p assumes triangle tri gets (0:
+ * no model: frames or whole_pixels is 0).  `area`: lie_whole_area(s). */
+double lie_whole_pixels(const lie_scene *s, const lie_build_params *p, double area, uint32_t tri);
+/* Whether no unit of triangle tri can pay, whatever its share: then a
+ * unit is built only where its emitter cannot reach (unlit), and the
+ * shares need not be computed (the same decisions: a share is at most 1). */
+int lie_unit_none_pays(const lie_build_params *p, double pixels);
 
 /* Builds for views: as lie_env_build_masked with the triangles px sees (no
  * px: all), and, where px is not NULL, patches only as fine as the cost

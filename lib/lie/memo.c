@@ -191,7 +191,7 @@ lie_status lie_memo_precompute(build_ctx *c, int threads, size_t *n_memo)
             const memo_entry m = c->memo[i];
             uint32_t child = m.old == MEMO_NO_OLD ? 0 : old->nodes[m.old].child;
             if (!lie_subdiv_splits(c, m.tri, m.path, m.e, m.cls, m.list, m.n_list) ||
-                (c->pix && !lie_subdiv_pixels_pay(c, m.tri, m.path, m.cls, m.n_list, m.quality)))
+                (lie_subdiv_modelled(c) && !lie_subdiv_pixels_pay(c, m.tri, m.path, m.cls, m.n_list, m.quality)))
                 continue;
             /* the children build_node will compute: flagged old ones, or
              * all four when the node had none (unflagged ones are copied) */

@@ -28,6 +28,7 @@ lie_build_params lie_build_params_default(void)
         .ns_segment = LIE_NS_SEGMENT_DEFAULT,
         .ns_blocker = LIE_NS_BLOCKER_DEFAULT,
         .ns_ray = LIE_NS_RAY_DEFAULT,
+        .whole_pixels = LIE_WHOLE_PIXELS_DEFAULT,
     };
 }
 
@@ -48,6 +49,8 @@ lie_status lie_build_params_check(const lie_build_params *p, lie_error *err)
     if (!(p->ns_segment > 0.0f && p->ns_segment <= 1e9f) || !(p->ns_blocker > 0.0f && p->ns_blocker <= 1e9f) ||
         !(p->ns_ray > 0.0f && p->ns_ray <= 1e9f))
         return lie_error_set(err, LIE_ERR_ARG, NULL, "the cost model's times must be in (0, 1e9] ns");
+    if (p->whole_pixels > (1u << 28))
+        return lie_error_set(err, LIE_ERR_ARG, NULL, "whole-pixels must be in 0..%u", 1u << 28);
     if (p->complex_predict > 1)
         return lie_error_set(err, LIE_ERR_ARG, NULL, "complex-predict must be 0 or 1");
     if (p->mode != LIE_BLOCKERS_SAMPLED && p->mode != LIE_BLOCKERS_CONSERVATIVE)
@@ -89,6 +92,7 @@ void lie_stats_merge(lie_build_stats *dst, const lie_build_stats *src)
     dst->complex_predicted_measured += src->complex_predicted_measured;
     dst->split_saving_predicted_ns += src->split_saving_predicted_ns;
     dst->split_saving_measured_ns += src->split_saving_measured_ns;
+    dst->frame_saving_ns += src->frame_saving_ns;
 }
 
 static void stats_walk(const lie_env *env, uint32_t idx, int depth, lie_build_stats *st)

@@ -5,6 +5,7 @@
  * predictions a build can be checked against (lib/lie/lie.h). */
 #include "lie/internal.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -163,13 +164,45 @@ void lie_unit_shares(const lie_scene *s, uint32_t tri, float far, double *share)
             share[c] = total > 0.0 ? share[c] / total : 0.0;
 }
 
-int lie_unit_pays(const lie_build_params *p, const lie_pixels *px, uint32_t tri, double share)
+int lie_unit_pays_pixels(const lie_build_params *p, double pixels, double share)
 {
-    if (!px || p->frames == 0 || share < 0.0)
+    if (p->frames == 0 || share < 0.0)
         return 1; /* no model, or an unlit unit: built at no cost */
-    double pixels = (double)lie_pixels_hits(px, tri, lie_patch_root()) / (double)px->rays_per_pixel;
     double saving = (double)p->frames * pixels * (double)p->light_samples * share * (double)p->ns_ray;
     return saving >= (double)p->samples * (double)p->ns_segment;
+}
+
+int lie_unit_pays(const lie_build_params *p, const lie_pixels *px, uint32_t tri, double share)
+{
+    if (!px)
+        return 1; /* no views */
+    return lie_unit_pays_pixels(p, (double)lie_pixels_hits(px, tri, lie_patch_root()) / (double)px->rays_per_pixel,
+                                share);
+}
+
+int lie_unit_none_pays(const lie_build_params *p, double pixels)
+{
+    /* rounding is monotonic, so a share s <= 1 never saves more than 1 */
+    return p->frames != 0 && !lie_unit_pays_pixels(p, pixels, 1.0);
+}
+
+double lie_whole_area(const lie_scene *s)
+{
+    double a = 0.0;
+    for (uint32_t t = 0; t < s->n_tris; t++)
+        a += (double)s->tri_area[t];
+    if (!(a > 0.0) || !isfinite(a))
+        return 1.0;
+    int e;
+    double m = frexp(a, &e); /* a = m 2^e, m in [0.5, 1) */
+    return m == 0.5 ? a : ldexp(1.0, e);
+}
+
+double lie_whole_pixels(const lie_scene *s, const lie_build_params *p, double area, uint32_t tri)
+{
+    if (!p->frames || !p->whole_pixels || tri >= s->n_tris)
+        return 0.0;
+    return (double)p->whole_pixels * (double)s->tri_area[tri] / area;
 }
 
 void lie_env_predict(const lie_env *env, const lie_scene *s, const lie_pixels *px, lie_prediction *pred)

@@ -10,6 +10,7 @@
 #include "lie/pair.h"
 #include "lie/sample.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -101,12 +102,23 @@ static double predicted_saving_ns(const build_ctx *c, double pixels, lie_class c
  * segments as the node took.  Pixels grow with views, never shrink, so a
  * node this lets split still splits when a view is added (lie-build
  * --into relies on it, tools/lie-build). */
+int lie_subdiv_modelled(const build_ctx *c) { return c->pix || c->whole_area > 0.0; }
+
+double lie_subdiv_pixels(const build_ctx *c, uint32_t tri, lie_patch_path path)
+{
+    if (c->pix)
+        return (double)lie_pixels_hits(c->pix, tri, path) / (double)c->pix->rays_per_pixel;
+    if (c->whole_area > 0.0) /* a patch of depth d holds 4^-d of its triangle's area */
+        return ldexp(lie_whole_pixels(c->s, c->p, c->whole_area, tri), -2 * path.depth);
+    return 0.0;
+}
+
 int lie_subdiv_pixels_pay(const build_ctx *c, uint32_t tri, lie_patch_path path, lie_class cls, size_t n_list,
                       uint32_t quality)
 {
     if (c->p->frames == 0)
         return 1; /* --frames 0: the views choose units, not patches */
-    double pixels = (double)lie_pixels_hits(c->pix, tri, path) / (double)c->pix->rays_per_pixel;
+    double pixels = lie_subdiv_pixels(c, tri, path);
     double segs = (double)(quality > c->p->samples ? quality : c->p->samples);
     return (double)c->p->frames * predicted_saving_ns(c, pixels, cls, n_list) > 4.0 * segs * (double)c->p->ns_segment;
 }
@@ -396,7 +408,7 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
             nc.cls = LIE_CLASS_COMPLEX;
         }
     }
-    if (splits && c->pix && !lie_subdiv_pixels_pay(c, tri, path, nc.cls, n_list, nc.quality)) {
+    if (splits && lie_subdiv_modelled(c) && !lie_subdiv_pixels_pay(c, tri, path, nc.cls, n_list, nc.quality)) {
         /* too few pixels see the patch for a split to pay: a leaf, with the
          * exact list (a sampled one may miss small blockers of a large
          * patch) where a list is cheaper than an Embree ray */
@@ -473,8 +485,8 @@ static void build_node(const build_ctx *c, worker *w, unit_buf *u, uint32_t idx,
         }
         if (pays && !w->nomem) {
             w->st.splits_kept++;
-            if (c->pix) {
-                double pixels = (double)lie_pixels_hits(c->pix, tri, path) / (double)c->pix->rays_per_pixel;
+            if (lie_subdiv_modelled(c)) {
+                double pixels = lie_subdiv_pixels(c, tri, path);
                 double before = lie_cost_list_ns(c->p, nc.cls, n_list), after = 0.0;
                 for (int k = 0; k < 4; k++)
                     after += 0.25 * kid_ns[k];
@@ -612,20 +624,32 @@ static const double *unit_shares(const build_ctx *c, worker *w, uint32_t tri)
     return w->share;
 }
 
+/* How the cost model decides the units of the triangle at hand: their
+ * shares (NULL: no model), or, where not even a unit with all of the
+ * light could pay (lie_unit_none_pays), none_pays and no shares. */
+typedef struct unit_model {
+    const double *share;
+    double pixels; /* per frame, the triangle's (lie_subdiv_pixels) */
+    int none_pays;
+} unit_model;
+
 /* Whether the cost model leaves unit (tri, e) to Embree, counted by
  * reason: outside the views, or too little of the budget's light samples
- * to pay for its build (lie_unit_pays). */
-static int left_to_embree(const build_ctx *c, worker *w, uint32_t tri, const double *share, int e)
+ * to pay for its build (lie_unit_pays_pixels).  A unit its emitter cannot
+ * reach is unlit and always built (it costs nothing). */
+static int left_to_embree(const build_ctx *c, worker *w, uint32_t tri, int two_sided, const unit_model *m, int e)
 {
     if (!lie_subdiv_seen(c, tri)) {
         w->st.units_unseen += c->pix != NULL;
         return 1;
     }
-    if (share && !lie_unit_pays(c->p, c->pix, tri, share[e])) {
-        w->st.units_unpaid++;
-        return 1;
-    }
-    return 0;
+    int unpaid = 0;
+    if (m->none_pays)
+        unpaid = lie_cluster_can_reach(c->s, e, tri, &c->s->tri_p[3 * (size_t)tri], c->s->tri_ng[tri], two_sided);
+    else if (m->share)
+        unpaid = !lie_unit_pays_pixels(c->p, m->pixels, m->share[e]);
+    w->st.units_unpaid += (uint64_t)unpaid;
+    return unpaid;
 }
 
 /* An update's triangle whose every unit continues an old one that no edit
@@ -666,6 +690,32 @@ static void count_complex(const build_ctx *c, worker *w, const unit_buf *u, uint
     w->st.complex_predicted_measured += (uint64_t)(all && w->root_predicted && !c->p->complex_predict);
 }
 
+/* lie_build_stats.frame_saving_ns of the subtree of u's node idx, whose
+ * patch `pixels` pixels see, each casting `rays` shadow rays to the unit's
+ * cluster. */
+static double leaf_saving(const build_ctx *c, const unit_buf *u, uint32_t idx, double pixels, double rays)
+{
+    const lie_pnode *x = &u->nodes[idx];
+    if (x->child) {
+        double sum = 0.0;
+        for (uint32_t k = 0; k < 4; k++)
+            sum += leaf_saving(c, u, x->child + k, 0.25 * pixels, rays);
+        return sum;
+    }
+    if (x->cls == LIE_CLASS_UNLIT)
+        return 0.0; /* no ray either way */
+    return pixels * rays * ((double)c->p->ns_ray - lie_cost_list_ns(c->p, (lie_class)x->cls, x->count));
+}
+
+/* A whole build's prediction for the unit just built into `root`. */
+static void predict_unit(const build_ctx *c, worker *w, const unit_buf *u, uint32_t root, const unit_model *m,
+                         size_t e)
+{
+    if (c->whole_area > 0.0 && m->share && m->share[e] > 0.0 && !w->nomem)
+        w->st.frame_saving_ns +=
+            leaf_saving(c, u, root, m->pixels, (double)c->p->light_samples * m->share[e]);
+}
+
 /* A unit built into node `root` that came out one lone leaf gives its
  * node back: it takes the env's shared leaf (lie_pnode_lone). */
 static void share_lone(unit_buf *u, worker *w, uint32_t root, size_t e)
@@ -695,17 +745,22 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
         return;
     }
     int two_sided = lie_pair_two_sided(s, tri);
-    /* the model's shares, where it decides (views and frames) */
-    const double *share = NULL;
-    if (c->pix && c->p->frames && lie_subdiv_seen(c, tri) && !(share = unit_shares(c, w, tri)))
-        return;
+    /* the model's shares, where it decides (views or a whole build's
+     * estimate, and frames) */
+    unit_model m = {NULL, 0.0, 0};
+    if (lie_subdiv_modelled(c) && c->p->frames && lie_subdiv_seen(c, tri)) {
+        m.pixels = lie_subdiv_pixels(c, tri, lie_patch_root());
+        m.none_pays = lie_unit_none_pays(c->p, m.pixels);
+        if (!m.none_pays && !(m.share = unit_shares(c, w, tri)))
+            return;
+    }
     for (size_t e = 0; e < ne; e++) {
         size_t unit = (size_t)tri * ne + e;
         if (unit < c->unit_lo || unit >= c->unit_hi)
             continue; /* lie_env_build_range: another part's */
         int32_t ou = lie_ctx_old_unit(c, unit);
         int64_t old = ou >= 0 ? (int64_t)c->old->root[ou] : -1;
-        if (left_to_embree(c, w, tri, share, (int)e)) {
+        if (left_to_embree(c, w, tri, two_sided, &m, (int)e)) {
             u->roots[e] = LIE_ROOT_LONE_NONE; /* outside the views, or cannot pay: not built */
             w->st.pairs[LIE_CLASS_NONE]++;
             continue;
@@ -719,8 +774,10 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
         w->root_predicted = 0;
         if (!c->stop || copy) {
             build_node(c, w, u, (uint32_t)root, tri, lie_patch_root(), (int)e, two_sided, NULL, 0, old, NULL);
-            if (!copy && !w->nomem)
+            if (!copy && !w->nomem) {
                 count_complex(c, w, u, (uint32_t)root);
+                predict_unit(c, w, u, (uint32_t)root, &m, e);
+            }
             share_lone(u, w, (uint32_t)root, e);
             continue;
         }
@@ -733,8 +790,10 @@ void lie_subdiv_triangle(void *ctx, size_t item, int worker_id)
         w->stopped = 0;
         build_node(c, w, u, (uint32_t)root, tri, lie_patch_root(), (int)e, two_sided, NULL, 0, old, NULL);
         if (!w->stopped || w->nomem) {
-            if (!w->nomem)
+            if (!w->nomem) {
                 count_complex(c, w, u, (uint32_t)root);
+                predict_unit(c, w, u, (uint32_t)root, &m, e);
+            }
             share_lone(u, w, (uint32_t)root, e);
             continue;
         }

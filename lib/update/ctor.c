@@ -118,6 +118,7 @@ struct lie_ctor {
     int n_em;
     uint32_t n_tris;
     float max_tri_area, ray_far;
+    double whole_area;      /* lie_whole_area: a whole build's model reads it */
     pthread_t *tids;
     int n_threads;
 };
@@ -744,6 +745,10 @@ static void *worker_main(void *arg)
 
 /* ---- life ----------------------------------------------------------------------- */
 
+/* Whether units are decided by a whole build's model (lie_whole_pixels):
+ * no views, and the parameters ask for it. */
+static int whole_model(const lie_ctor *c) { return !c->views_mode && c->p.frames && c->p.whole_pixels; }
+
 static void keep_geometry(lie_ctor *c)
 {
     memcpy(c->tri_p, c->s->tri_p, sizeof *c->tri_p * 3 * (size_t)c->s->n_tris);
@@ -753,6 +758,7 @@ static void keep_geometry(lie_ctor *c)
     c->n_tris = c->s->n_tris;
     c->max_tri_area = c->s->max_tri_area;
     c->ray_far = lie_pair_ray_far(c->s);
+    c->whole_area = lie_whole_area(c->s);
 }
 
 void lie_ctor_destroy(lie_ctor *c)
@@ -1200,7 +1206,8 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
     lie_scene *s = c->s;
     c->rt = rt;
     int restart = !geometry_only || s->n_tris != c->n_tris || (size_t)s->n_clusters != c->ne ||
-                  s->n_emitters != c->n_em || s->max_tri_area != c->max_tri_area || lie_pair_ray_far(s) != c->ray_far;
+                  s->n_emitters != c->n_em || s->max_tri_area != c->max_tri_area || lie_pair_ray_far(s) != c->ray_far ||
+                  (whole_model(c) && lie_whole_area(s) != c->whole_area);
     lie_status st = LIE_OK;
     if (restart && (s->n_tris != c->n_tris || (size_t)s->n_clusters != c->ne)) {
         pthread_mutex_unlock(&c->m);
@@ -1323,6 +1330,7 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
     /* a triangle moved (or everything: restart) goes again whole; one
      * with units the refinement kept goes again in those units only, the
      * others staying landed (units are independent: lib/lie/lie.h) */
+    const double area = whole_model(c) ? lie_whole_area(s) : 0.0; /* the whole build's model reads it */
     for (uint32_t t = 0; t < s->n_tris; t++) {
         if (restart || moved[t] || !flags) {
             int was_built = c->state[t] == TRI_BUILT;
@@ -1337,9 +1345,13 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
          * every emitter's light at its triangle (lie_unit_shares): when an
          * emitter moved, a unit whose decision turns goes again, as
          * rst-update decides it anew (lib/update/mark.c) */
-        int decide = light_moved && share && c->views_mode && c->px;
-        if (decide)
+        int decide = light_moved && share && ((c->views_mode && c->px) || whole_model(c));
+        double pixels = 0.0;
+        if (decide) {
+            pixels = c->px ? (double)lie_pixels_hits(c->px->px, t, lie_patch_root()) / (double)c->px->px->rays_per_pixel
+                           : lie_whole_pixels(s, &c->p, area, t);
             lie_unit_shares(s, t, lie_pair_ray_far(s), share);
+        }
         int any = 0;
         for (size_t k = 0; k < c->ne; k++) {
             size_t u = (size_t)t * c->ne + k;
@@ -1348,7 +1360,7 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
              * turned; else recomputed where flagged */
             int afresh = r && cl_moved[k];
             if (r && !afresh && decide)
-                afresh = (c->env.nodes[r].cls != LIE_CLASS_NONE) != lie_unit_pays(&c->p, c->px->px, t, share[k]);
+                afresh = (c->env.nodes[r].cls != LIE_CLASS_NONE) != lie_unit_pays_pixels(&c->p, pixels, share[k]);
             if (r && (afresh || flags[r])) {
                 c->env.root[u] = 0;
                 c->redo[u] = 1;

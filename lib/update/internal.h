@@ -18,6 +18,7 @@ struct lie_update {
     double rst_seconds;
     uint32_t base_tris;
     float base_max_area;
+    double base_area;         /* lie_whole_area of the committed scene */
     float base_far;           /* lie_pair_ray_far of the committed scene */
     uint64_t base_light;      /* lie_scene_light_digest of the committed scene */
     lie_pixels *base_px;      /* a cache built for views: their pixels on the committed scene */

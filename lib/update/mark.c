@@ -107,15 +107,20 @@ static lie_status map_units(lie_update *u)
         cmap[k] = emap[e] < 0 || (far_changed && at_infinity) ? -1 : ofirst[emap[e]] + (k - s->emitters[e].first_cluster);
     }
     const size_t old_nc = (size_t)u->cache->env->n_clusters;
-    int everything = u->opt.full || !(s->max_tri_area == u->base_max_area) || lie_cache_rules_old(c);
-    /* The cost model's decision to build a unit of a view-built cache reads
-     * every emitter's light at the triangle (lie_unit_shares): when the
-     * light changed, a unit whose decision it turned is built afresh (or
-     * left unbuilt), the others kept. */
     const lie_env *old_env = u->cache->env;
+    /* A whole build's model (no views) reads the scene's surface, rounded to
+     * a power of two (lie_whole_pixels): when that changes, every unit may */
+    const int whole_model = !u->px && old_env->params.frames && old_env->params.whole_pixels;
+    int everything = u->opt.full || !(s->max_tri_area == u->base_max_area) || lie_cache_rules_old(c) ||
+                     (whole_model && lie_whole_area(s) != u->base_area);
+    /* The cost model's decision to build a unit of a view-built cache (or
+     * of a whole build's) reads every emitter's light at the triangle
+     * (lie_unit_shares): when the light changed, a unit whose decision it
+     * turned is built afresh (or left unbuilt), the others kept. */
+    const double area = whole_model ? lie_whole_area(s) : 0.0;
     double *share = NULL;
-    if (u->px && !everything && old_env->params.frames && lie_scene_light_digest(s) != u->base_light &&
-        !(share = malloc(sizeof *share * ((size_t)s->n_clusters + 1)))) {
+    if ((u->px || whole_model) && !everything && old_env->params.frames &&
+        lie_scene_light_digest(s) != u->base_light && !(share = malloc(sizeof *share * ((size_t)s->n_clusters + 1)))) {
         free(moved);
         free(emap);
         free(cmap);
@@ -131,9 +136,13 @@ static lie_status map_units(lie_update *u)
             patch_moved = 1;
             u->st.units_views += (uint64_t)s->n_clusters;
         }
-        int decide = share && !patch_moved && u->px->first[t + 1] > u->px->first[t];
-        if (decide)
+        int decide = share && !patch_moved && (!u->px || u->px->first[t + 1] > u->px->first[t]);
+        double pixels = 0.0;
+        if (decide) {
+            pixels = u->px ? (double)lie_pixels_hits(u->px, t, lie_patch_root()) / (double)u->px->rays_per_pixel
+                           : lie_whole_pixels(s, &old_env->params, area, t);
             lie_unit_shares(s, t, far, share);
+        }
         for (int k = 0; k < s->n_clusters; k++) {
             size_t unit = (size_t)t * (size_t)s->n_clusters + (size_t)k;
             u->old_unit[unit] = everything || patch_moved || cmap[k] < 0
@@ -141,7 +150,7 @@ static lie_status map_units(lie_update *u)
                                     : (int32_t)((size_t)t * old_nc + (size_t)cmap[k]);
             if (decide && u->old_unit[unit] >= 0) {
                 int built = old_env->nodes[old_env->root[u->old_unit[unit]]].cls != LIE_CLASS_NONE;
-                if (built != lie_unit_pays(&old_env->params, u->px, t, share[k])) {
+                if (built != lie_unit_pays_pixels(&old_env->params, pixels, share[k])) {
                     u->old_unit[unit] = -1;
                     u->st.units_views++;
                 }

@@ -53,6 +53,7 @@ lie_status lie_update_create(lie_cache *cache, lie_scene *scene, const lie_updat
     u->opt = opt ? *opt : lie_update_options_default();
     u->base_tris = scene->n_tris;
     u->base_max_area = scene->max_tri_area;
+    u->base_area = lie_whole_area(scene);
     u->base_far = lie_pair_ray_far(scene);
     u->base_light = lie_scene_light_digest(scene);
     if (!u->opt.full && build_trees(u, err) != LIE_OK) {
@@ -257,6 +258,7 @@ static lie_status commit(lie_update *u, lie_error *err)
     drop_edits(u);
     u->base_tris = s->n_tris;
     u->base_max_area = s->max_tri_area;
+    u->base_area = lie_whole_area(s);
     u->base_far = lie_pair_ray_far(s);
     u->base_light = lie_scene_light_digest(s);
     u->rst_stale = 1;

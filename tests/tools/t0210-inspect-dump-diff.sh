@@ -23,10 +23,10 @@ if [ ! -s "$TMP/err" ]; then ok "dump: nothing on stderr"; else not_ok "dump wro
 expect_same "$TMP/a.dump" "$TMP/a2.dump" "dumps of caches built with 1 and 2 threads are identical"
 "$I" dump - <"$TMP/a.lie" >"$TMP/stdin.dump"
 expect_same "$TMP/a.dump" "$TMP/stdin.dump" "dump of stdin = dump of the file (the cache's name is not in the dump)"
-if head -1 "$TMP/a.dump" | grep -qx 'lie-inspect-dump 1' && grep -qx 'format-version 6' "$TMP/a.dump" &&
+if head -1 "$TMP/a.dump" | grep -qx 'lie-inspect-dump 1' && grep -qx 'format-version 7' "$TMP/a.dump" &&
     grep -qx "scene-path $S/cornell.gltf" "$TMP/a.dump" && grep -Eqx 'scene-hash [0-9a-f]{16}' "$TMP/a.dump" &&
     grep -qx 'param samples 8' "$TMP/a.dump" && grep -qx 'param min-patch 0.00999999978' "$TMP/a.dump" &&
-    grep -qx 'edits 0' "$TMP/a.dump" && grep -Eqx 'emitter 0 area node [0-9]+ first-tri [0-9]+ tris 2' "$TMP/a.dump"; then
+    grep -qx 'param whole-pixels 262144' "$TMP/a.dump" && grep -qx 'edits 0' "$TMP/a.dump" && grep -Eqx 'emitter 0 area node [0-9]+ first-tri [0-9]+ tris 2' "$TMP/a.dump"; then
     ok "dump header: version, scene, hashes, parameters (%.9g), edits, emitters"; else not_ok "dump header"; head -20 "$TMP/a.dump" | sed 's/^/# /'; fi
 nodes=$(sed -n 's/^nodes //p' "$TMP/a.dump")
 lines=$(grep -Ec '^[0-9]+(/[0-3]+)? [0-9]+ [a-z]+ ' "$TMP/a.dump")

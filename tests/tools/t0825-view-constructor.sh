@@ -124,8 +124,9 @@ expect_rc 0 "SIGTERM: the saved cache is valid"
 mkdir -p "$TMP/edits" "$TMP/assets" "$TMP/elsewhere" "$TMP/saved"
 cp "$S/cornell.gltf" "$S/cornell.bin" "$TMP/assets/"
 printf '%s\n' '- add: {file: ../assets/cornell.gltf, node: TallBlock, as: Tower, transform: {translation: [0.5, 0, 1.0], scale: [0.5, 0.5, 0.5]}}' >"$TMP/edits/add.yaml"
-"$B/lie-build" "$M1" --edit "$TMP/edits/add.yaml" --min-patch 1e-5 --threads 1 -q -o "$TMP/addref.lie"
-(cd "$TMP" && env --default-signal=INT "$B/lie-build" "$M1" --edit edits/add.yaml --min-patch 1e-5 --threads 1 \
+# (--frames 0: every unit built, a build long enough for the signal to land in)
+"$B/lie-build" "$M1" --edit "$TMP/edits/add.yaml" --min-patch 1e-5 --frames 0 --threads 1 -q -o "$TMP/addref.lie"
+(cd "$TMP" && env --default-signal=INT "$B/lie-build" "$M1" --edit edits/add.yaml --min-patch 1e-5 --frames 0 --threads 1 \
     --partial -q -o addpart.lie 2>/dev/null & pid=$!; sleep 0.4; kill -INT $pid 2>/dev/null; wait $pid)
 if "$B/lie-inspect" summary "$TMP/addpart.lie" | grep -q '^partial  *yes'; then
     printf 'pause\nquit\n' >"$TMP/pauseq.txt"

@@ -149,7 +149,7 @@ static void assemble(const sect *s, int n, unsigned char **out, size_t *size)
     unsigned char *b = calloc(1, total);
     assert_non_null(b);
     memcpy(b, "LIECACHE", 8);
-    put32(b + 8, 6);
+    put32(b + 8, 7);
     put32(b + 20, (uint32_t)n);
     put64(b + 24, total);
     for (int i = 0; i < n; i++) {
@@ -266,7 +266,7 @@ static void spec_sections_as(const lie_cache *c, int how, sect s[N_SECT])
     put32(s[META].data + 36, env->n_pool);
     put32(s[META].data + 40, (uint32_t)pl);
     memcpy(s[META].data + 48, c->scene_path, pl);
-    s[PARM] = (sect){id4("PARM"), calloc(1, 52), 52};
+    s[PARM] = (sect){id4("PARM"), calloc(1, 56), 56};
     put32(s[PARM].data, env->params.samples);
     put32(s[PARM].data + 4, env->params.max_samples);
     put32(s[PARM].data + 8, env->params.max_blockers);
@@ -286,6 +286,7 @@ static void spec_sections_as(const lie_cache *c, int how, sect s[N_SECT])
         put32(s[PARM].data + 36 + 4 * k, sg);
     }
     put32(s[PARM].data + 48, env->params.complex_predict);
+    put32(s[PARM].data + 52, env->params.whole_pixels);
     size_t es = 4;
     for (int i = 0; i < c->n_edits; i++)
         es += 8 + strlen(c->edits[i].name) + c->edits[i].size;
@@ -793,7 +794,7 @@ static void test_newer_version_is_unsupported(void **state)
      * invariant trailing checksum must hold */
     memset(a + 12, 0xAB, na - 20);
     reseal(a, na);
-    expect_reject(a, na, LIE_ERR_UNSUPPORTED, "version 7");
+    expect_reject(a, na, LIE_ERR_UNSUPPORTED, "version 8");
     free(a);
     encode(c, &a, &na);
     put32(a + 8, 0);
@@ -807,8 +808,10 @@ static void test_newer_version_is_unsupported(void **state)
  * (no tags in ROOTS): they read; version 4 says its units follow older
  * rules (an update recomputes them all, lib/update), version 5 and a cache
  * this library wrote do not; and either encodes again as this library
- * writes the same trees.  A tag in an older file is a root past the nodes. */
-static void test_versions_4_and_5_read_and_encode_as_version_6(void **state)
+ * writes the same trees.  A tag in an older file is a root past the nodes.
+ * Version 6 is version 7 without PARAMS' whole_pixels: it reads as 0 (no
+ * model: a whole build of version 6 built every unit) and encodes again. */
+static void test_versions_4_to_6_read_and_encode_as_version_7(void **state)
 {
     (void)state;
     lie_cache *c = small_cache(), *d = NULL;
@@ -816,6 +819,7 @@ static void test_versions_4_and_5_read_and_encode_as_version_6(void **state)
     size_t na, nb, n6;
     lie_error err;
     c->env->params.complex_predict = 0; /* what an older file reads as */
+    c->env->params.whole_pixels = 0;
     encode(c, &v6, &n6);
     assert_int_equal(lie_cache_decode(v6, n6, "t.lie", &d, &err), LIE_OK);
     assert_int_equal(d->version, LIE_CACHE_VERSION);
@@ -842,6 +846,23 @@ static void test_versions_4_and_5_read_and_encode_as_version_6(void **state)
     }
     free(a);
     free_sections(s, N_SECT);
+    /* version 6: version 7's trees, PARAMS 52 bytes */
+    sect s6[N_SECT];
+    spec_sections(c, s6);
+    s6[PARM].size = 52;
+    assemble(s6, N_SECT, &a, &na);
+    put32(a + 8, 6);
+    reseal(a, na);
+    assert_int_equal(lie_cache_decode(a, na, "t.lie", &d, &err), LIE_OK);
+    assert_int_equal(d->env->params.whole_pixels, 0);
+    assert_false(lie_cache_rules_old(d));
+    encode(d, &b, &nb);
+    assert_int_equal(nb, n6);
+    assert_memory_equal(b, v6, n6);
+    free(b);
+    lie_cache_destroy(d);
+    free(a);
+    free_sections(s6, N_SECT);
     /* a version 6 tag read as version 5 */
     size_t units = (size_t)c->n_tris * (size_t)c->env->n_clusters, tagged = units;
     for (size_t u = 0; u < units && tagged == units; u++)
@@ -1397,7 +1418,7 @@ int main(void)
         cmocka_unit_test(test_version_2_reads_with_the_default_cost_model),
         cmocka_unit_test(test_views_round_trip_and_bad_views_are_rejected),
         cmocka_unit_test(test_newer_version_is_unsupported),
-        cmocka_unit_test(test_versions_4_and_5_read_and_encode_as_version_6),
+        cmocka_unit_test(test_versions_4_to_6_read_and_encode_as_version_7),
         cmocka_unit_test(test_version_3_reads_with_one_cluster_each),
         cmocka_unit_test(test_unknown_required_flag_is_unsupported_optional_ignored),
         cmocka_unit_test(test_unknown_sections_are_skipped_and_order_is_free),

@@ -251,6 +251,7 @@ static void test_lie_quad_between_floor_and_light_is_the_only_blocker(void **sta
     p.min_patch = 2e-4f; /* patches small enough to lie whole in the umbra (|x|, |z| < 0.1) */
     p.max_blockers = 0; /* split any list of two, to get small patches */
     p.split_gain = 0.0f; /* the paper's rule: split wherever a list is too long */
+    p.whole_pixels = 0;  /* and no pixel rule (lie_whole_pixels) */
     lie_env *env = build(s, &rt, p);
     occ_check c = {s, 0, 0, 0, 0};
     for (uint32_t t = 0; t < 2; t++)
@@ -475,6 +476,7 @@ static void test_lie_subdivision_stops_at_min_patch(void **state)
     lie_build_params p = lie_build_params_default();
     p.max_blockers = 0; /* split every partial patch, as far as allowed */
     p.split_gain = 0.0f;
+    p.whole_pixels = 0; /* no pixel rule: as far as the lists need */
     p.samples = 16;
     p.max_samples = 32;
     const float sizes[] = {1e-1f, 1e-2f, 2e-3f};

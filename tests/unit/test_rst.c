@@ -92,6 +92,7 @@ static int setup(void **state)
     p.samples = 32;
     p.max_samples = 64;
     p.max_blockers = 2;
+    p.whole_pixels = 0; /* every unit built, as fine as its lists need: trees to walk */
     lie_build_stats st;
     assert_int_equal(lie_env_build(f->s, f->rt, &p, NULL, &f->env, &st, &err), LIE_OK);
     lie_rst_stats rs;

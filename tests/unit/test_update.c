@@ -25,8 +25,9 @@ typedef struct base {
     int n_pre;
     lie_blocker_mode mode;
     int predict; /* complex units predicted, with a complex cap low enough for cornell to have some */
+    uint32_t whole_pixels; /* the whole build's model (lie_whole_pixels); 0: the default */
 } base;
-static const base CORNELL = {NULL, 0, LIE_BLOCKERS_SAMPLED, 0};
+static const base CORNELL = {NULL, 0, LIE_BLOCKERS_SAMPLED, 0, 0};
 
 static lie_build_params params(const base *b)
 {
@@ -39,6 +40,8 @@ static lie_build_params params(const base *b)
         p.complex_cap = 0;
         p.max_blockers = 0;
     }
+    if (b->whole_pixels)
+        p.whole_pixels = b->whole_pixels;
     return p;
 }
 
@@ -221,7 +224,7 @@ static void test_update_equals_rebuild_with_complex_units_predicted(void **state
 {
     (void)state;
     for (int m = 0; m < 2; m++) {
-        const base b = {NULL, 0, m ? LIE_BLOCKERS_CONSERVATIVE : LIE_BLOCKERS_SAMPLED, 1};
+        const base b = {NULL, 0, m ? LIE_BLOCKERS_CONSERVATIVE : LIE_BLOCKERS_SAMPLED, 1, 0};
         for (int i = 0; i < 6; i++)
             check_update_on(&b, &OPS[i], 1, 0, NULL);
     }
@@ -313,12 +316,12 @@ static void test_update_equals_rebuild_when_emitters_are_renumbered(void **state
         "- set-emission: {node: BackWall, strength: 0}\n",
     };
     for (int m = 0; m < 2; m++) {
-        const base b = {NULL, 0, m ? LIE_BLOCKERS_CONSERVATIVE : LIE_BLOCKERS_SAMPLED, 0};
+        const base b = {NULL, 0, m ? LIE_BLOCKERS_CONSERVATIVE : LIE_BLOCKERS_SAMPLED, 0, 0};
         for (int i = 0; i < 3; i++)
             check_update_on(&b, &ON[i], 1, 0, NULL);
         check_update_on(&b, ON, 4, 7, NULL); /* on, more before it, the first off again */
         /* a base with the back wall lit: turning it off renumbers the light */
-        const base lit = {ON, 1, b.mode, 0};
+        const base lit = {ON, 1, b.mode, 0, 0};
         check_update_on(&lit, &ON[3], 1, 0, NULL);
     }
 }
@@ -344,7 +347,7 @@ static void test_update_equals_rebuild_when_scene_wide_sizes_change(void **state
     };
     for (int m = 0; m < 2; m++) {
         const lie_blocker_mode mode = m ? LIE_BLOCKERS_CONSERVATIVE : LIE_BLOCKERS_SAMPLED;
-        const base open = {SUN, 2, mode, 0}, closed = {NULL, 0, mode, 0};
+        const base open = {SUN, 2, mode, 0, 0}, closed = {NULL, 0, mode, 0, 0};
         for (int i = 0; i < 5; i++) {
             check_update_on(&open, &GROW[i], 1, 0, NULL);
             if (i < 3)
@@ -352,6 +355,64 @@ static void test_update_equals_rebuild_when_scene_wide_sizes_change(void **state
         }
         check_update_on(&open, GROW, 3, 9, NULL);
     }
+}
+
+/* A whole build's cost model (lie_whole_pixels) with frames of few pixels:
+ * the units whose share of the light cannot pay are left unbuilt, and
+ * patches split only where their pixels pay.  An edit of the light decides
+ * those units again, one that moves the scene's surface past a power of
+ * two rebuilds every unit: update equals rebuild either way; and the build
+ * is the same for any thread count. */
+static void test_update_equals_rebuild_under_the_whole_build_model(void **state)
+{
+    (void)state;
+    static const char *const SUN[2] = {
+        "- remove: {node: Ceiling}\n",
+        "- add: {file: ../data/gltf/lights_cameras.gltf, node: \"#3\", as: Sun,"
+        " transform: {rotation: [-0.3535534, 0.3535534, 0.1464466, 0.8535534]}}\n",
+    };
+    static const char *const MORE[4] = {
+        "- add: {file: cornell.gltf, node: ShortBlock, as: Far, transform: {translation: [9, 0, 0]}}\n",
+        "- scale: {node: TallBlock, by: [3, 1, 3]}\n",
+        "- set-emission: {node: Light, strength: 0.3}\n",
+        "- move: {node: Light, by: [0.1, 0, 0.05]}\n",
+    };
+    const base b = {SUN, 2, LIE_BLOCKERS_SAMPLED, 0, 3000};
+    lie_scene *s = load(&b);
+    lie_env *env = build(&b, s);
+    size_t units = (size_t)env->n_tris * (size_t)env->n_clusters, none = 0, built = 0;
+    for (size_t u = 0; u < units; u++) {
+        uint32_t cls = env->nodes[env->root[u]].cls;
+        none += cls == LIE_CLASS_NONE;
+        built += cls != LIE_CLASS_NONE && cls != LIE_CLASS_UNLIT;
+    }
+    assert_true(none > 0);  /* the model leaves some units to Embree ... */
+    assert_true(built > 0); /* ... and builds others */
+    lie_build_params p1 = params(&b);
+    p1.threads = 1;
+    lie_rt *rt = NULL;
+    lie_error err;
+    lie_env *one = NULL;
+    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
+    assert_int_equal(lie_env_build(s, rt, &p1, NULL, &one, NULL, &err), LIE_OK);
+    assert_env_equal(env, one);
+    lie_env_destroy(one);
+    lie_rt_destroy(rt);
+    lie_env_destroy(env);
+    /* one of the edits moves the surface past a power of two */
+    int area_changed = 0;
+    for (int i = 0; i < 2; i++) {
+        lie_scene *e = load(&b);
+        apply(e, &MORE[i], 1);
+        area_changed |= lie_whole_area(e) != lie_whole_area(s);
+        lie_scene_destroy(e);
+    }
+    assert_true(area_changed);
+    lie_scene_destroy(s);
+    for (int i = 0; i < 8; i++)
+        check_update_on(&b, &OPS[i], 1, 0, NULL);
+    for (int i = 0; i < 4; i++)
+        check_update_on(&b, &MORE[i], 1, 0, NULL);
 }
 
 /* A cache read from a file older than LIE_CACHE_RULES_VERSION holds units
@@ -522,6 +583,7 @@ int main(void)
         cmocka_unit_test(test_update_of_several_files_equals_rebuild),
         cmocka_unit_test(test_update_equals_rebuild_when_emitters_are_renumbered),
         cmocka_unit_test(test_update_equals_rebuild_when_scene_wide_sizes_change),
+        cmocka_unit_test(test_update_equals_rebuild_under_the_whole_build_model),
         cmocka_unit_test(test_update_of_an_older_cache_rebuilds_every_unit),
         cmocka_unit_test(test_update_edits_while_pending_and_after_commit),
         cmocka_unit_test(test_update_snapshots_never_show_a_changed_answer),

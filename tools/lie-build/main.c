@@ -52,19 +52,22 @@ static void usage(FILE *fp)
             "      --path PATH.yaml  build only the patches seen from the frames of this camera\n"
             "                        path (formats/camera-path.md), as --view does for one camera\n"
             "      --view-size WxH   the image the views are sampled at (default 512x512); its\n"
-            "                        pixels decide how fine the views' patches get (§4.3.3)\n"
+            "                        pixels decide how fine the views' patches get (§4.3.3).\n"
+            "                        Without views, the image of the frames a whole build\n"
+            "                        assumes, its pixels spread over the scene's surface by area\n"
             "      --into CACHE      add the units more views need to CACHE, a cache built for\n"
             "                        views: units already built are kept (or refined where the\n"
             "                        new pixels make a split pay), and the result is the cache\n"
             "                        one build for all the views gives.  CACHE's parameters,\n"
             "                        scene (SCENE overrides its path) and view size are used;\n"
             "                        written back to CACHE unless -o\n"
-            "    The cost model (views only: a unit, and a split, must save more render\n"
-            "    time over the frames than it costs to build, else it is left to Embree;\n"
+            "    The cost model (a unit, and a split, must save more render time over the\n"
+            "    frames than it costs to build, else it is left to Embree; pixels are the\n"
+            "    views', or without views --view-size's spread over the surface by area;\n"
             "    --stats shows its predictions):\n"
             "      --frames N        frames the cache will serve (default %u; 0: no pixel\n"
             "                        rule, every seen unit built, patches as fine as their\n"
-            "                        lists need)\n"
+            "                        lists need: a whole build then builds every unit)\n"
             "      --light-samples N light samples per pixel in them, shared among the\n"
             "                        emitters by their unshadowed light (default %u)\n"
             "      --cost S,B,R      ns per build segment, per blocker test, per Embree shadow\n"
@@ -281,6 +284,11 @@ static int check_operands(build_job *j, int argc, char **argv)
         if (!j->output)
             return usage_error("%s", "missing -o CACHE");
     }
+    /* a whole build's model assumes frames of --view-size's pixels (a view
+     * build keeps the default, which its model does not read, as lie-view's
+     * constructor does) */
+    if (!j->into && !j->resume_file && !j->n_views && !j->path_file)
+        j->bp.whole_pixels = (uint32_t)j->view_w * (uint32_t)j->view_h;
     if (j->bp.max_samples < j->bp.samples)
         j->bp.max_samples = j->bp.samples; /* --samples above the default cap: one round */
     j->input = optind < argc ? argv[optind] : NULL;

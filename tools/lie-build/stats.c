@@ -27,6 +27,9 @@ typedef struct summary {
     /* with views: what a frame of them saves (full visibility's shadow CPU
      * time less the cache's) and the frames the build takes to pay back */
     double saving, break_even;
+    /* a whole build's model (lie_whole_pixels): the pixels of its assumed
+     * frames; what one of them saves, predicted, and the break-even */
+    uint32_t whole_pixels;
     size_t bytes;
     int audit;                    /* --complex-predict audit */
 } summary;
@@ -81,6 +84,11 @@ static void print_json(FILE *fp, const summary *m)
         fprintf(fp, ",\"units_unseen\":%llu,\"units_unpaid\":%llu,\"saving_s_per_frame_predicted\":%.6f,"
                     "\"break_even_frames_predicted\":%.3f",
                 (unsigned long long)m->st->units_unseen, (unsigned long long)m->st->units_unpaid, m->saving,
+                isfinite(m->break_even) ? m->break_even : -1.0);
+    if (m->whole_pixels)
+        fprintf(fp, ",\"whole_pixels\":%u,\"units_unpaid\":%llu,\"saving_s_per_frame_predicted\":%.6f,"
+                    "\"break_even_frames_predicted\":%.3f",
+                m->whole_pixels, (unsigned long long)m->st->units_unpaid, m->saving,
                 isfinite(m->break_even) ? m->break_even : -1.0);
     fprintf(fp, "}");
     fprintf(fp,
@@ -158,6 +166,11 @@ static void print_text(const char *prog, const summary *m)
                         "saves %.4f CPU s predicted, the build pays back in %.1f frames\n",
                 (unsigned long long)m->st->units_unseen, (unsigned long long)m->st->units_unpaid, m->saving,
                 m->break_even);
+    if (m->whole_pixels)
+        fprintf(stderr, "  units left to Embree: %llu whose light cannot pay for a build in frames of %u pixels "
+                        "spread over the surface by area; such a frame saves %.4f CPU s predicted, the build "
+                        "pays back in %.1f frames\n",
+                (unsigned long long)m->st->units_unpaid, m->whole_pixels, m->saving, m->break_even);
     if (m->as)
         fprintf(stderr, "  into: %llu units kept, %llu refined, %llu new; %llu nodes recomputed\n",
                 (unsigned long long)m->as->units_kept, (unsigned long long)m->as->units_refined,
@@ -183,10 +196,15 @@ lie_status job_print_stats(const lie_cli *cli, build_job *j, double cpu_build, c
         m.patches += st->patches_per_depth[d];
     m.mean = st->pairs[LIE_CLASS_PARTIAL] ? (double)st->blocker_total / (double)st->pairs[LIE_CLASS_PARTIAL] : 0.0;
     m.model_build = 1e-9 * (double)st->segments * (double)j->env->params.ns_segment;
-    if (m.pred) {
-        m.saving = 1e-9 * (prediction.full_ns - prediction.lie_ns);
-        m.break_even = m.saving > 0.0 ? m.model_build / m.saving : INFINITY;
+    const lie_build_params *bp = &j->env->params;
+    if (!j->px && !j->into && bp->frames && bp->whole_pixels) {
+        m.whole_pixels = bp->whole_pixels;
+        m.saving = 1e-9 * st->frame_saving_ns;
     }
+    if (m.pred)
+        m.saving = 1e-9 * (prediction.full_ns - prediction.lie_ns);
+    if (m.pred || m.whole_pixels)
+        m.break_even = m.saving > 0.0 ? m.model_build / m.saving : INFINITY;
     m.sp = 1e-9 * st->split_saving_predicted_ns;
     m.sm = 1e-9 * st->split_saving_measured_ns;
     if (cli->stats == 2) {

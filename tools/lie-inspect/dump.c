@@ -61,6 +61,7 @@ static void header_text(const lie_cache *c, uint64_t n_nodes, uint64_t n_leaves)
     printf("param light-samples %u\n", p->light_samples);
     printf("param cost-ns %.9g %.9g %.9g\n", (double)p->ns_segment, (double)p->ns_blocker, (double)p->ns_ray);
     printf("param complex-predict %u\n", p->complex_predict);
+    printf("param whole-pixels %u\n", p->whole_pixels);
     const lie_cache_views *v = &c->views;
     printf("views %d %dx%d depth %d\n", v->n_cams, v->width, v->height, v->max_depth);
     for (int i = 0; i < v->n_cams; i++) {
@@ -96,10 +97,10 @@ static void header_json(const lie_cache *c, uint64_t n_nodes, uint64_t n_leaves)
            (unsigned long long)c->scene_hash, (unsigned long long)c->state_hash, c->n_tris, c->n_emitters);
     printf(",\"params\":{\"samples\":%u,\"max_samples\":%u,\"max_blockers\":%u,\"complex_cap\":%u,"
            "\"min_patch\":%.9g,\"split_gain\":%.9g,\"blockers\":\"%s\",\"frames\":%u,\"light_samples\":%u,"
-           "\"cost_ns\":[%.9g,%.9g,%.9g],\"complex_predict\":%u},\"views\":%d",
+           "\"cost_ns\":[%.9g,%.9g,%.9g],\"complex_predict\":%u,\"whole_pixels\":%u},\"views\":%d",
            p->samples, p->max_samples, p->max_blockers, p->complex_cap, (double)p->min_patch, (double)p->split_gain,
            inspect_mode_name(p->mode), p->frames, p->light_samples, (double)p->ns_segment, (double)p->ns_blocker,
-           (double)p->ns_ray, p->complex_predict, c->views.n_cams);
+           (double)p->ns_ray, p->complex_predict, p->whole_pixels, c->views.n_cams);
     printf(",\"edits\":[");
     for (int i = 0; i < c->n_edits; i++) {
         printf("%s{\"name\":", i ? "," : "");

@@ -117,9 +117,9 @@ static void summary_text(const char *path, const inspect_cache *l, const lie_bui
     char mp[32];
     inspect_fmt_float(p->min_patch, mp, sizeof mp);
     printf("parameters      samples %u, max-samples %u, max-blockers %u, complex-cap %u, min-patch %s, "
-           "split-gain %.9g, blockers %s, complex-predict %s\n",
+           "split-gain %.9g, blockers %s, complex-predict %s, whole-pixels %u\n",
            p->samples, p->max_samples, p->max_blockers, p->complex_cap, mp, (double)p->split_gain,
-           inspect_mode_name(p->mode), p->complex_predict ? "on" : "off");
+           inspect_mode_name(p->mode), p->complex_predict ? "on" : "off", p->whole_pixels);
     printf("triangles       %u\n", c->n_tris);
     printf("emitters        %d (%d area, %d point, %d directional)\n", c->n_emitters, by_type[0], by_type[1],
            by_type[2]);
