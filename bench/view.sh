@@ -74,7 +74,12 @@ echo "bench-view: wrote out/bench-view.json"
 fi
 
 # The asynchronous constructor (§4.3.1) on third-party scenes opened as
-# glTF (../shared/scenes): the time to the first image; the full frame's
+# glTF (../shared/scenes): the time to the first frame ("first": lie-view's
+# first_frame_ms, from the start of its main to the present of the first
+# whole image the window shows, of any level: the coarsest, a quarter of
+# the resolution each way and a tenth of the light samples, shaded with
+# lights prepared without the textured emitters' distributions, which are
+# prepared beside it for the finer levels); the full frame's
 # time first (every shadow ray Embree's: the constructor paused until
 # then) and once the constructor has
 # caught up with the view (CATCHUP seconds at most; "pending" says what it

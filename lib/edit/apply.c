@@ -164,7 +164,17 @@ static lie_status add_from(lie_scene *s, const lie_scene *src, int src_node, con
         for (int i = 0; i < src->n_textures; i++) {
             lie_texture t = src->textures[i];
             t.image = -1; /* its file's image stays with its file: written as decoded */
-            t.rgba = dup_mem(t.rgba, sizeof(float) * 4 * (size_t)t.width * (size_t)t.height);
+            /* as floats: written back as PNG codes (lib/export) from them */
+            size_t n = (size_t)t.width * (size_t)t.height;
+            if (t.rgba || !lie_texture_has_texels(&t)) {
+                t.rgba = dup_mem(t.rgba, sizeof(float) * 4 * n);
+            } else {
+                t.rgba = malloc(sizeof(float) * 4 * n);
+                for (size_t k = 0; t.rgba && k < n; k++)
+                    lie_texture_texel(&src->textures[i], k, t.rgba + 4 * k);
+            }
+            t.codes = NULL;
+            t.code_value[0] = t.code_value[1] = NULL;
             if (!t.rgba) {
                 free(sub);
                 return lie_error_set(err, LIE_ERR_NOMEM, file, "out of memory");

@@ -50,20 +50,25 @@ void encode_texture(const lie_texture &t, bool srgb, CodeTables &tables, Png &ou
     out.width = t.width;
     out.height = t.height;
     bool opaque = true;
-    for (size_t i = 0; i < n; i++)
-        opaque = opaque && t.rgba[4 * i + 3] == 1.0f;
+    float px[4];
+    for (size_t i = 0; i < n; i++) {
+        lie_texture_texel(&t, i, px);
+        opaque = opaque && px[3] == 1.0f;
+    }
     out.channels = opaque ? 3 : 4;
     size_t nc = size_t(out.channels);
     for (int sixteen = 0; sixteen < 2; sixteen++) {
         const std::vector<float> &col = tables.get(sixteen, srgb), &alpha = tables.get(sixteen, false);
         std::vector<uint16_t> codes(n * nc);
         bool all_exact = true;
-        for (size_t i = 0; i < n; i++)
+        for (size_t i = 0; i < n; i++) {
+            lie_texture_texel(&t, i, px);
             for (size_t c = 0; c < nc; c++) {
                 bool exact;
-                codes[i * nc + c] = uint16_t(nearest_code(c < 3 ? col : alpha, t.rgba[4 * i + c], &exact));
+                codes[i * nc + c] = uint16_t(nearest_code(c < 3 ? col : alpha, px[c], &exact));
                 all_exact = all_exact && exact;
             }
+        }
         if (!sixteen && !all_exact)
             continue;
         out.bits = sixteen ? 16 : 8;

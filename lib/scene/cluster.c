@@ -84,7 +84,7 @@ static lie_box3 vertex_box(const lie_scene *s, const uint32_t *tris, uint32_t n)
  * triangle's texture-space bounding box, wrapped as the sampler wraps. */
 static int tri_dark(const lie_scene *s, const lie_material *m, const lie_texture *t, uint32_t g)
 {
-    if (!t->rgba || t->width <= 0 || t->height <= 0)
+    if (!lie_texture_has_texels(t))
         return 0;
     float u[3], v[3];
     const float B[3][2] = {{0.0f, 0.0f}, {1.0f, 0.0f}, {0.0f, 1.0f}};
@@ -112,7 +112,8 @@ static int tri_dark(const lie_scene *s, const lie_material *m, const lie_texture
         for (double x = x0; x <= x1; x += 1.0) {
             int i = lie_texture_wrap_index((long long)x, w, t->wrap_s);
             int j = lie_texture_wrap_index((long long)y, h, t->wrap_t);
-            const float *p = t->rgba + ((size_t)j * (size_t)w + (size_t)i) * 4;
+            float p[4];
+            lie_texture_texel(t, (size_t)j * (size_t)w + (size_t)i, p);
             if (!(p[0] <= 0.0f && p[1] <= 0.0f && p[2] <= 0.0f))
                 return 0;
         }

@@ -15,8 +15,7 @@
  *   gltf_mesh.cpp     accessors, checked whole before any read, and meshes;
  *   gltf_import.cpp   materials and textures, nodes, cameras, lights, the
  *                     document, and lie_gltf_import;
- *   gltf_texture.cpp  the textures' pixels: the images materials use
- *                     decoded, and converted to float, on every core;
+ *   gltf_texture.cpp  the images materials use, decoded on every core;
  *   gltf_anim.cpp     skins and animations.
  * The exporter is lib/export, above lib/image, whose PNG encoder it uses.
  *
@@ -43,8 +42,8 @@
 
 namespace lie_gltf {
 
-/* Largest decoded image, in pixels (8192 x 8192); it becomes 16 bytes a
- * pixel as linear float RGBA. */
+/* Largest decoded image, in pixels (8192 x 8192); a texture keeps it as 4
+ * or 8 bytes a pixel (RGBA codes, lie_texture). */
 const uint64_t MAX_IMAGE_PIXELS = uint64_t(1) << 26;
 
 /* extensionsRequired we honour; any other required extension is refused. */
@@ -138,7 +137,7 @@ struct Decoded {
  * keeps its failure reason per thread). */
 void decode_image(const tinygltf::Image &meta, int index, const std::vector<unsigned char> &bytes, Decoded *out);
 
-/* ---- gltf_texture.cpp: textures' pixels on every core -------------------- */
+/* ---- gltf_texture.cpp: the images materials use, decoded on every core --- */
 
 /* The glTF images the materials' texture slots name, those the importer
  * reads (base colour, metallic-roughness, emissive, normal, transmission),
@@ -152,16 +151,6 @@ std::vector<int> material_images(const tinygltf::Model &m);
  * first uses it, as if decoded there. */
 void decode_images(const tinygltf::Model &m, const std::map<int, std::vector<unsigned char>> &encoded,
                    const std::vector<int> &images, std::map<int, Decoded> &decoded, int threads);
-/* A texture whose linear float RGBA pixels are still to be filled from an
- * image's codes: colour through the sRGB transfer function when srgb
- * (IEC 61966-2-1, lie_texture_code_value), alpha always linear. */
-struct Conversion {
-    float *rgba;
-    const Decoded *img;
-    bool srgb;
-};
-/* Fill every texture of `jobs`, in bands of rows on `threads` workers. */
-void convert_textures(const std::vector<Conversion> &jobs, int threads);
 
 /* ---- gltf_check.cpp: the file ------------------------------------------- */
 

@@ -24,7 +24,7 @@ struct Import {
     const std::map<int, std::vector<unsigned char>> &encoded; /* from load_model: images' bytes */
     std::map<int, Decoded> decoded;  /* those decoded so far (decode_images, decode_image) */
     std::set<int> used;              /* images a texture was made from so far */
-    std::vector<Conversion> pending; /* textures whose pixels are still to fill (convert_textures) */
+    std::map<int, int> codes_of;     /* glTF image -> the texture that took its decoded codes */
     std::map<int, int> texture_of; /* glTF texture * 2 + srgb -> s->textures index */
     std::map<int, int> image_of;   /* glTF image -> s->images index */
     std::set<int> warned;          /* images warned about */
@@ -138,14 +138,14 @@ int texture_for(Import &im, int ti, bool srgb, const std::string &what)
     }
     if (im.warned.count(tex.source))
         return -1; /* no texture: the slot keeps its factor */
-    if (!img.pixels || img.width <= 0 || img.height <= 0) {
+    if ((!img.pixels && !im.codes_of.count(tex.source)) || img.width <= 0 || img.height <= 0) {
         auto e = im.image_errors.find(tex.source);
         if (e != im.image_errors.end())
             fail(LIE_ERR_IO, "%s %s", iw.c_str(), e->second.c_str());
         fail(LIE_ERR_FORMAT, "%s has no decoded pixels", iw.c_str());
     }
     size_t bytes = img.bits == 8 ? 1 : img.bits == 16 ? 2 : 0;
-    if (!bytes || img.component < 1 || img.component > 4)
+    if (!bytes || img.component != 4) /* decode_image expands every image to RGBA */
         fail(LIE_ERR_UNSUPPORTED, "%s: %d-bit, %d-channel images are not supported", iw.c_str(), img.bits,
              img.component);
     size_t w = size_t(img.width), h = size_t(img.height);
@@ -163,20 +163,33 @@ int texture_for(Import &im, int ti, bool srgb, const std::string &what)
         wt = wrap_mode(sm.wrapT, sw);
     }
 
-    float *rgba = alloc_array<float>(w * h * 4); /* w * h <= MAX_IMAGE_PIXELS */
+    /* the texels as stb decoded them (lie_texture_texel reads them through
+     * the tables): the first texture of an image takes stb's buffer, a
+     * second (the other colour space, another sampler) a copy */
     lie_texture &t = im.s->textures[im.s->n_textures];
     t.width = int(w);
     t.height = int(h);
-    t.rgba = rgba;
     t.wrap_s = ws;
     t.wrap_t = wt;
     t.image = -1;
+    t.code_bits = img.bits;
     int index = im.s->n_textures++;
+    size_t levels = bytes == 1 ? 256 : 65536, size = w * h * 4 * bytes;
+    for (int k = 0; k < 2; k++) { /* colour through the sRGB transfer function when asked, alpha always linear */
+        t.code_value[k] = alloc_array<float>(levels);
+        for (size_t i = 0; i < levels; i++)
+            t.code_value[k][i] = lie_texture_code_value(i, levels, k == 0 && srgb);
+    }
+    auto owner = im.codes_of.find(tex.source);
+    if (owner == im.codes_of.end()) {
+        t.codes = dec->second.pixels.release();
+        im.codes_of[tex.source] = index;
+    } else {
+        t.codes = alloc_array<unsigned char>(size);
+        memcpy(t.codes, im.s->textures[owner->second].codes, size);
+    }
     t.image = keep_image(im, tex.source);
     im.texture_of[ti * 2 + srgb] = index;
-    /* its pixels once every material is read: all textures at once, on
-     * every core (convert_textures) */
-    im.pending.push_back(Conversion{rgba, &img, srgb});
     return index;
 }
 
@@ -788,11 +801,10 @@ extern "C" lie_status lie_gltf_import(lie_scene *s, const char *path, const lie_
         s->n_warnings = 0;
         Import im{model, s, image_errors, encoded, {}, {}, {}, {}, {}, {}};
         /* the images the materials use, decoded at once on every core
-         * (stb's decoders are the larger part of loading a textured scene),
-         * then the materials, then the textures' float pixels */
+         * (stb's decoders are most of loading a textured scene), then the
+         * materials, whose textures take the decoded codes */
         decode_images(model, encoded, material_images(model), im.decoded, o.threads);
         import_materials(im);
-        convert_textures(im.pending, o.threads);
         im.decoded.clear();
         import_cameras(model, s);
         import_lights(model, s);

@@ -114,7 +114,7 @@ void lie_scene_destroy(lie_scene *s)
         free(s->materials[i].name);
     free(s->materials);
     for (int i = 0; i < s->n_textures; i++)
-        free(s->textures[i].rgba);
+        lie_texture_free(&s->textures[i]);
     free(s->textures);
     for (int i = 0; i < s->n_images; i++) {
         free(s->images[i].bytes);
@@ -610,7 +610,20 @@ static void hash_world(lie_scene *s, lie_hasher *h)
         const lie_texture *t = &s->textures[i];
         int32_t d[4] = {t->width, t->height, (int32_t)t->wrap_s, (int32_t)t->wrap_t};
         lie_hasher_update(h, d, sizeof d);
-        lie_hasher_update(h, t->rgba, sizeof(float) * 4 * (size_t)t->width * (size_t)t->height);
+        size_t texels = (size_t)t->width * (size_t)t->height;
+        if (t->rgba || !lie_texture_has_texels(t)) {
+            lie_hasher_update(h, t->rgba, sizeof(float) * 4 * texels);
+            continue;
+        }
+        /* the same bytes as the floats would be, a run of texels at a
+         * time (the digest does not depend on how the input is cut) */
+        float run[4 * 1024];
+        for (size_t i0 = 0; i0 < texels; i0 += 1024) {
+            size_t k = texels - i0 < 1024 ? texels - i0 : 1024;
+            for (size_t j = 0; j < k; j++)
+                lie_texture_texel(t, i0 + j, run + 4 * j);
+            lie_hasher_update(h, run, sizeof(float) * 4 * k);
+        }
     }
     lie_hasher_update(h, &ne, sizeof ne);
     for (int i = 0; i < s->n_emitters; i++) {

@@ -29,13 +29,45 @@ extern "C" {
 
 typedef enum lie_wrap { LIE_WRAP_REPEAT = 0, LIE_WRAP_CLAMP = 1, LIE_WRAP_MIRROR = 2 } lie_wrap;
 
-/* A decoded texture: linear RGBA floats, row 0 at v = 0 (glTF's top). */
+/* A decoded texture, row 0 at v = 0 (glTF's top): linear RGBA floats, or
+ * the image's codes and the linear value of each code.  The importer keeps
+ * codes (8 or 16 bits, 4 a texel): a 2048 x 2048 image is then 16 MB, not
+ * the 64 MB of floats whose page faults were most of loading a textured
+ * scene.  Read texels with lie_texture_texel: the values are the same
+ * floats either way. */
 typedef struct lie_texture {
     int width, height;
-    float *rgba;  /* width * height * 4 */
+    float *rgba;  /* width * height * 4, or NULL when `codes` holds the texels */
     lie_wrap wrap_s, wrap_t;
     int image;    /* the lie_scene.images entry it was decoded from, or -1 (made in memory) */
+    void *codes;  /* width * height * 4 codes of code_bits (16: two bytes, low first), or NULL */
+    int code_bits;            /* 8 or 16 */
+    float *code_value[2];     /* per code: colour (through the sRGB curve for an sRGB slot), alpha (linear) */
 } lie_texture;
+
+/* Texel i (row-major) as linear RGBA floats. */
+static inline void lie_texture_texel(const lie_texture *t, size_t i, float out[4])
+{
+    if (t->rgba) {
+        const float *p = t->rgba + 4 * i;
+        out[0] = p[0], out[1] = p[1], out[2] = p[2], out[3] = p[3];
+    } else if (t->code_bits == 8) {
+        const unsigned char *c = (const unsigned char *)t->codes + 4 * i;
+        out[0] = t->code_value[0][c[0]], out[1] = t->code_value[0][c[1]], out[2] = t->code_value[0][c[2]];
+        out[3] = t->code_value[1][c[3]];
+    } else {
+        const unsigned char *c = (const unsigned char *)t->codes + 8 * i;
+        for (int k = 0; k < 4; k++)
+            out[k] = t->code_value[k == 3][(size_t)c[2 * k] | (size_t)c[2 * k + 1] << 8];
+    }
+}
+/* Whether t has texels (its size and pixels). */
+static inline int lie_texture_has_texels(const lie_texture *t)
+{
+    return t && (t->rgba || (t->codes && t->code_value[0] && t->code_value[1])) && t->width > 0 && t->height > 0;
+}
+/* Free t's texels (not t). */
+void lie_texture_free(lie_texture *t);
 
 /* An image as the file held it, kept so that lib/export writes it back
  * byte for byte (a JPEG stays that JPEG). */

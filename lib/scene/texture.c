@@ -9,6 +9,7 @@
 #include "scene/scene.h"
 
 #include <math.h>
+#include <stdlib.h>
 
 /* Reduce a coordinate to the range where the wrap repeats, so the texel
  * positions below stay small integers even for u = 1e9. */
@@ -47,9 +48,20 @@ int lie_texture_wrap_index(long long i, int n, lie_wrap wrap)
     }
 }
 
+void lie_texture_free(lie_texture *t)
+{
+    free(t->rgba);
+    free(t->codes); /* libstb's buffer (stbi_image_free is free: its default STBI_FREE), or a copy */
+    free(t->code_value[0]);
+    free(t->code_value[1]);
+    t->rgba = NULL;
+    t->codes = NULL;
+    t->code_value[0] = t->code_value[1] = NULL;
+}
+
 void lie_texture_sample(const lie_texture *t, float u, float v, float rgba[4])
 {
-    if (!t || !t->rgba || t->width <= 0 || t->height <= 0) {
+    if (!lie_texture_has_texels(t)) {
         rgba[0] = rgba[1] = rgba[2] = rgba[3] = 1.0f;
         return;
     }
@@ -61,10 +73,11 @@ void lie_texture_sample(const lie_texture *t, float u, float v, float rgba[4])
     int x0 = (int)x0f, y0 = (int)y0f;
     int xa = lie_texture_wrap_index(x0, w, t->wrap_s), xb = lie_texture_wrap_index(x0 + 1, w, t->wrap_s);
     int ya = lie_texture_wrap_index(y0, h, t->wrap_t), yb = lie_texture_wrap_index(y0 + 1, h, t->wrap_t);
-    const float *p00 = t->rgba + ((size_t)ya * (size_t)w + (size_t)xa) * 4;
-    const float *p10 = t->rgba + ((size_t)ya * (size_t)w + (size_t)xb) * 4;
-    const float *p01 = t->rgba + ((size_t)yb * (size_t)w + (size_t)xa) * 4;
-    const float *p11 = t->rgba + ((size_t)yb * (size_t)w + (size_t)xb) * 4;
+    float p00[4], p10[4], p01[4], p11[4];
+    lie_texture_texel(t, (size_t)ya * (size_t)w + (size_t)xa, p00);
+    lie_texture_texel(t, (size_t)ya * (size_t)w + (size_t)xb, p10);
+    lie_texture_texel(t, (size_t)yb * (size_t)w + (size_t)xa, p01);
+    lie_texture_texel(t, (size_t)yb * (size_t)w + (size_t)xb, p11);
     for (int c = 0; c < 4; c++) {
         float top = p00[c] + fx * (p10[c] - p00[c]);
         float bottom = p01[c] + fx * (p11[c] - p01[c]);

@@ -458,7 +458,10 @@ static void lights_free(int n, lie_texlight **texlights, lie_polylight **poly)
     free(texlights);
 }
 
-lie_status lie_lights_create(const lie_scene *s, const lie_render_options *opt, lie_lights **out, lie_error *err)
+/* lie_lights_create, and without the textured emitters' distributions
+ * (textured 0: lie_lights_create_untextured). */
+static lie_status lights_make(const lie_scene *s, const lie_render_options *opt, int textured, lie_lights **out,
+                              lie_error *err)
 {
     *out = NULL;
     const char *path = s->path ? s->path : "";
@@ -479,7 +482,7 @@ lie_status lie_lights_create(const lie_scene *s, const lie_render_options *opt, 
     lie_status st = LIE_OK;
     if (sampler) {
         l->texlights = calloc((size_t)ne + 1, sizeof *l->texlights);
-        st = l->texlights ? lie_texlight_create_all(s, l->texlights, opt->threads) : LIE_ERR_NOMEM;
+        st = !l->texlights ? LIE_ERR_NOMEM : textured ? lie_texlight_create_all(s, l->texlights, opt->threads) : LIE_OK;
         float *scale = malloc(sizeof *scale * ((size_t)ne + 1));
         lie_light_bounds *eb = NULL;
         st = st == LIE_OK && !scale ? LIE_ERR_NOMEM : st;
@@ -504,6 +507,20 @@ lie_status lie_lights_create(const lie_scene *s, const lie_render_options *opt, 
     }
     *out = l;
     return LIE_OK;
+}
+
+lie_status lie_lights_create(const lie_scene *s, const lie_render_options *opt, lie_lights **out, lie_error *err)
+{
+    return lights_make(s, opt, 1, out, err);
+}
+
+lie_status lie_lights_create_untextured(const lie_scene *s, const lie_render_options *opt, lie_lights **out,
+                                        lie_error *err)
+{
+    /* every texlight NULL: the groups weigh and sample those emitters'
+     * triangles by area (lightgroup.c), the samples read the texture for
+     * their light (emitter_area.c), as for an emitter without one */
+    return lights_make(s, opt, 0, out, err);
 }
 
 void lie_lights_destroy(lie_lights *l)

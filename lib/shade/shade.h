@@ -296,6 +296,16 @@ lie_render_options lie_render_options_default(void);
  * lacks.  The images are the same with or without it. */
 typedef struct lie_lights lie_lights;
 lie_status lie_lights_create(const lie_scene *s, const lie_render_options *opt, lie_lights **out, lie_error *err);
+/* The same without the textured emitters' distributions, which read every
+ * texel of their emissive textures (bedroom_corner's lamp: most of
+ * preparing its lights): such an emitter's samples are spread by area, as
+ * an untextured emitter's, and carry the texture's light.  Images made
+ * with it are right on average but noisier where the texture is dark in
+ * places, and are not lie_render's: a progressive viewer shows its first,
+ * coarse images with it while lie_lights_create prepares the lights of
+ * its refined frames. */
+lie_status lie_lights_create_untextured(const lie_scene *s, const lie_render_options *opt, lie_lights **out,
+                                        lie_error *err);
 void lie_lights_destroy(lie_lights *l);
 /* Whether l was made for s as it is now. */
 int lie_lights_fit(const lie_lights *l, const lie_scene *s);

@@ -75,7 +75,8 @@ static int pyramid_make(const lie_texture *t, const float rad[3], max_pyramid *m
     if (!l0)
         return 0;
     for (size_t i = 0; i < (size_t)w * (size_t)h; i++) {
-        const float *px = t->rgba + 4 * i;
+        float px[4];
+        lie_texture_texel(t, i, px);
         /* a NaN texel is dark, as a negative one */
         const float c[3] = {rad[0] * (px[0] > 0.0f ? px[0] : 0.0f), rad[1] * (px[1] > 0.0f ? px[1] : 0.0f),
                             rad[2] * (px[2] > 0.0f ? px[2] : 0.0f)};
@@ -158,7 +159,7 @@ static const lie_texture *texture_of(const lie_scene *s, int e, const lie_materi
         return NULL;
     *mat = lie_scene_material(s, s->tri_material[em->first_tri]);
     int k = (*mat)->emissive_tex;
-    if (k < 0 || k >= s->n_textures || !s->textures[k].rgba || s->textures[k].width <= 0 || s->textures[k].height <= 0)
+    if (k < 0 || k >= s->n_textures || !lie_texture_has_texels(&s->textures[k]))
         return NULL;
     return &s->textures[k];
 }

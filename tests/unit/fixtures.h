@@ -132,6 +132,19 @@ static inline void assert_env_equal(const lie_env *a, const lie_env *b)
         assert_memory_equal(a->pool, b->pool, sizeof(uint32_t) * a->n_pool);
 }
 
+/* Two textures hold the same texels (as floats: codes or floats alike). */
+static inline void assert_texels_equal(const lie_texture *a, const lie_texture *b)
+{
+    assert_int_equal(a->width, b->width);
+    assert_int_equal(a->height, b->height);
+    for (size_t i = 0; i < (size_t)a->width * (size_t)a->height; i++) {
+        float x[4], y[4];
+        lie_texture_texel(a, i, x);
+        lie_texture_texel(b, i, y);
+        assert_memory_equal(x, y, sizeof x);
+    }
+}
+
 /* A square emitter of side a centred at (0, h, 0), facing down (or both
  * ways), then the blocker triangles tris[0..n) (9 floats each). */
 static inline lie_scene *square_light_and_blockers(float a, float h, int two_sided, const float *tris, int n)

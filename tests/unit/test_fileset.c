@@ -16,6 +16,7 @@
 
 #include <cmocka.h>
 
+#include "fixtures.h"
 #include "scene/scene.h"
 
 #define SCENES TEST_SCENES "/"
@@ -106,8 +107,7 @@ static void expect_load_from_memory(const char *path, int n_files)
     assert_true(a->hash == b->hash);
     assert_int_equal(a->n_textures, b->n_textures);
     for (int t = 0; t < a->n_textures; t++)
-        assert_memory_equal(a->textures[t].rgba, b->textures[t].rgba,
-                            sizeof(float) * 4 * (size_t)a->textures[t].width * (size_t)a->textures[t].height);
+        assert_texels_equal(&a->textures[t], &b->textures[t]);
     lie_file_set_destroy(so.files);
     lie_scene_destroy(b);
     lie_scene_destroy(a);

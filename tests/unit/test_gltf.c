@@ -510,11 +510,60 @@ static void test_gltf_vertex_colors_multiply_base_color(void **state)
     lie_scene_destroy(s);
 }
 
+/* A texture kept as an image's codes (8 and 16 bits, the importer's) reads
+ * as the floats of its code values: the same samples as the float texture
+ * of those values. */
+static void test_texture_codes_read_as_their_values(void **state)
+{
+    (void)state;
+    for (int bits = 8; bits <= 16; bits += 8) {
+        const size_t levels = bits == 8 ? 256 : 65536;
+        float *value[2] = {malloc(sizeof(float) * levels), malloc(sizeof(float) * levels)};
+        assert_non_null(value[0]);
+        assert_non_null(value[1]);
+        for (size_t i = 0; i < levels; i++) {
+            value[0][i] = lie_texture_code_value(i, levels, 1);
+            value[1][i] = lie_texture_code_value(i, levels, 0);
+        }
+        /* 3 x 2 texels of codes spread over the range, alpha apart */
+        unsigned char codes[3 * 2 * 4 * 2];
+        float px[3 * 2 * 4];
+        for (size_t i = 0; i < 3 * 2 * 4; i++) {
+            size_t code = (i * 7919 + 13) % levels;
+            if (bits == 8)
+                codes[i] = (unsigned char)code;
+            else
+                codes[2 * i] = (unsigned char)(code & 255), codes[2 * i + 1] = (unsigned char)(code >> 8);
+            px[i] = value[i % 4 == 3][code];
+        }
+        lie_texture c = {.width = 3, .height = 2, .wrap_s = LIE_WRAP_REPEAT, .wrap_t = LIE_WRAP_MIRROR, .image = -1,
+                         .codes = codes, .code_bits = bits, .code_value = {value[0], value[1]}};
+        lie_texture f = {.width = 3, .height = 2, .rgba = px, .wrap_s = LIE_WRAP_REPEAT, .wrap_t = LIE_WRAP_MIRROR,
+                         .image = -1};
+        assert_true(lie_texture_has_texels(&c));
+        for (int k = 0; k < 6; k++) {
+            float a[4], b[4];
+            lie_texture_texel(&c, (size_t)k, a);
+            lie_texture_texel(&f, (size_t)k, b);
+            assert_memory_equal(a, b, sizeof a);
+        }
+        for (float u = -1.3f; u < 2.0f; u += 0.17f) {
+            float a[4], b[4];
+            lie_texture_sample(&c, u, 0.61f * u + 0.2f, a);
+            lie_texture_sample(&f, u, 0.61f * u + 0.2f, b);
+            assert_memory_equal(a, b, sizeof a);
+        }
+        free(value[0]);
+        free(value[1]);
+    }
+}
+
 static void test_texture_sample_wraps_and_blends(void **state)
 {
     (void)state;
     float px[2 * 1 * 4] = {0, 0, 0, 1, 1, 1, 1, 1}; /* 2x1: black, white */
-    lie_texture t = {2, 1, px, LIE_WRAP_REPEAT, LIE_WRAP_REPEAT, -1};
+    lie_texture t = {.width = 2, .height = 1, .rgba = px, .wrap_s = LIE_WRAP_REPEAT, .wrap_t = LIE_WRAP_REPEAT,
+                     .image = -1};
     float c[4];
     lie_texture_sample(&t, 0.25f, 0.5f, c); /* texel centre */
     assert_near(c[0], 0.0, 1e-6);
@@ -885,6 +934,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_gltf_second_texcoord_set_per_slot),
         cmocka_unit_test(test_gltf_vertex_colors_multiply_base_color),
         cmocka_unit_test(test_texture_sample_wraps_and_blends),
+        cmocka_unit_test(test_texture_codes_read_as_their_values),
         cmocka_unit_test(test_gltf_lights_and_cameras_read_with_defaults),
         cmocka_unit_test(test_gltf_sparse_accessor_substitutes_values),
         cmocka_unit_test(test_gltf_morph_targets_applied_with_default_weights),

@@ -114,7 +114,8 @@ static double quadrature(const lie_scene *s, float px, float pz, int k)
 }
 
 /* One pixel looking straight down at floor point (px, 0, pz). */
-static float render_point(const lie_scene *s, float px, float pz, lie_light_sampler_kind k, int n, uint64_t seed)
+static float render_point_with(const lie_scene *s, float px, float pz, lie_light_sampler_kind k, int n,
+                               uint64_t seed, const lie_lights *lights)
 {
     lie_error err;
     lie_rt *rt = NULL;
@@ -128,12 +129,18 @@ static float render_point(const lie_scene *s, float px, float pz, lie_light_samp
     lie_render_options o = test_render_options(1, 1, n, 1);
     o.sampler = k;
     o.seed = seed;
+    o.lights = lights;
     lie_frame *f = NULL;
     assert_int_equal(lie_render(s, rt, &cam, &o, &f, NULL, &err), LIE_OK);
     float g = f->rgb[1];
     lie_frame_destroy(f);
     lie_rt_destroy(rt);
     return g;
+}
+
+static float render_point(const lie_scene *s, float px, float pz, lie_light_sampler_kind k, int n, uint64_t seed)
+{
+    return render_point_with(s, px, pz, k, n, seed, NULL);
 }
 
 static void flatten(lie_scene *s)
@@ -251,6 +258,43 @@ static void test_one_lit_texel_matches_quadrature(void **state)
     const double want = quadrature(s, 0.2f, 0.3f, 256);
     double v = render_point(s, 0.2f, 0.3f, LIE_SAMPLER_TREE, 4096, 3);
     assert_true(fabs(v - want) <= 0.01 * want);
+    lie_scene_destroy(s);
+}
+
+/* Lights prepared without the textured emitters' distributions
+ * (lie_lights_create_untextured, a viewer's first images): the emitter's
+ * samples spread by area carry its texture's light, so the estimate is
+ * still the quadrature's; they fit the scene, and not after an edit. */
+static void test_untextured_lights_are_unbiased(void **state)
+{
+    (void)state;
+    lie_scene *s = floor_scene("untextured", 1.0f, 0);
+    s->textures = calloc(1, sizeof *s->textures);
+    assert_non_null(s->textures);
+    s->n_textures = 1;
+    lie_texture *t = &s->textures[0];
+    t->width = t->height = 16;
+    t->wrap_s = t->wrap_t = LIE_WRAP_CLAMP;
+    t->rgba = calloc(16 * 16 * 4, sizeof(float));
+    assert_non_null(t->rgba);
+    for (int i = 0; i < 256; i++)
+        for (int c = 0; c < 4; c++)
+            t->rgba[i * 4 + c] = (i / 16 + i % 16) % 3 == 0 ? 3.0f : 0.0f;
+    add_quad(s, "Panel", -1.0f, 1.0f, -1.0f, 1.0f, 1.0f, 1);
+    flatten(s);
+    assert_int_equal(s->n_emitters, 1);
+    lie_error err;
+    lie_render_options o = test_render_options(1, 1, 4096, 1);
+    lie_lights *l = NULL;
+    assert_int_equal(lie_lights_create_untextured(s, &o, &l, &err), LIE_OK);
+    assert_true(lie_lights_fit(l, s));
+    const double want = quadrature(s, 0.2f, 0.3f, 256);
+    double v = render_point_with(s, 0.2f, 0.3f, LIE_SAMPLER_TREE, 4096, 3, l);
+    assert_true(want > 0.0);
+    assert_true(fabs(v - want) <= 0.02 * want);
+    s->hash ^= 1; /* as after an edit */
+    assert_false(lie_lights_fit(l, s));
+    lie_lights_destroy(l);
     lie_scene_destroy(s);
 }
 
@@ -448,6 +492,7 @@ int main(void)
         cmocka_unit_test(test_render_options_of_an_older_size),
         cmocka_unit_test(test_point_lights_apart_from_the_budget),
         cmocka_unit_test(test_prepared_lights_give_the_same_image),
+        cmocka_unit_test(test_untextured_lights_are_unbiased),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -528,16 +528,18 @@ static void loop_step(session *S, drag_state *D, script_run *R, window *W, int *
     session_camera_update(S);
     view_render_request(S->r, &S->cam, S->mode, S->sel);
     view_render_fetch(S->r, W->image, &images, &S->level_pixels, &idle, &image_version);
-    if (images > 0 && S->first_image_ms < 0.0)
-        S->first_image_ms = 1e3 * (lie_time_now() - S->start_t);
     count_frames(S, images, image_version, idle);
-    look(S);
     memcpy(W->shown, W->image, sizeof *W->shown * (size_t)S->ro.width * (size_t)S->ro.height);
     if (S->overlay)
         draw_overlay(S, W->shown);
     SDL_UpdateTexture(W->tex, NULL, W->shown, S->ro.width * (int)sizeof *W->shown);
     SDL_RenderCopy(W->ren, W->tex, NULL, NULL);
     SDL_RenderPresent(W->ren);
+    /* the time to the first frame: from the start of main to the present
+     * of the first whole image, of any level (the coarsest, first) */
+    if (images > 0 && S->first_image_ms < 0.0)
+        S->first_image_ms = 1e3 * (lie_time_now() - S->start_t);
+    look(S);
 }
 
 /* The world opened, the start camera set: 0, or 1 after the error line. */

@@ -34,6 +34,11 @@ struct view_render {
     view_world *w;
     view_render_options o;
     lie_lights *lights; /* the render thread's, for the world's scene as it is (lie_lights_fit) */
+    lie_lights *quick;  /* the coarse levels' while the first are prepared (lie_lights_create_untextured) */
+    /* the scene's first lights, prepared beside the first images (m) */
+    pthread_t lights_tid;
+    int lights_started, lights_done;
+    lie_lights *first_lights;
     pthread_t tid;
     int started;
     pthread_mutex_t m;
@@ -156,6 +161,85 @@ static void note_time(view_render *r, int level, double t0, double t1, int clean
     t->pending = view_world_pending(r->w);
 }
 
+/* The options lights are prepared with: the full level's, whose frames
+ * must be lie-render's. */
+static lie_render_options lights_options(const view_render *r)
+{
+    lie_render_options o = lie_render_options_default();
+    o.light_samples = r->o.light_samples;
+    o.max_depth = r->o.max_depth;
+    o.threads = r->o.threads;
+    return o;
+}
+
+/* The first lights, beside the first images: the textured emitters'
+ * distributions read every texel of their textures (bedroom_corner's
+ * lamp: 0.1 to 0.2 s), which the first coarse images need not wait for. */
+static void *lights_main(void *arg)
+{
+    view_render *r = arg;
+    lie_render_options o = lights_options(r);
+    lie_lights *l = NULL;
+    lie_error err;
+    view_world_read_lock(r->w);
+    if (lie_lights_create(view_world_scene(r->w), &o, &l, &err) != LIE_OK)
+        l = NULL; /* the render thread prepares its own */
+    view_world_read_unlock(r->w);
+    pthread_mutex_lock(&r->m);
+    r->first_lights = l;
+    r->lights_done = 1;
+    pthread_cond_broadcast(&r->cv);
+    pthread_mutex_unlock(&r->m);
+    return NULL;
+}
+
+/* Before the full level (no lock held): the first lights done.  A band
+ * must not wait for them: it holds the world's read lock, which an edit
+ * waiting to write would keep the lights thread from taking. */
+static void wait_first_lights(view_render *r)
+{
+    pthread_mutex_lock(&r->m);
+    while (r->lights_started && !r->lights_done)
+        pthread_cond_wait(&r->cv, &r->m);
+    pthread_mutex_unlock(&r->m);
+}
+
+/* The lights a band of level lv uses (the world's read lock held): the
+ * scene's as it is, prepared with the full level's options; while the
+ * first are still being prepared, the coarse levels use the untextured
+ * ones.  NULL: each band prepares its own (out of memory). */
+static const lie_lights *band_lights(view_render *r, const lie_scene *s, int lv)
+{
+    if (lie_lights_fit(r->lights, s))
+        return r->lights;
+    pthread_mutex_lock(&r->m);
+    int done = !r->lights_started || r->lights_done;
+    lie_lights *first = r->first_lights;
+    r->first_lights = NULL;
+    pthread_mutex_unlock(&r->m);
+    if (first) {
+        lie_lights_destroy(r->lights);
+        r->lights = first;
+        if (lie_lights_fit(r->lights, s))
+            return r->lights;
+    }
+    lie_render_options o = lights_options(r);
+    lie_error err;
+    if (!done && lv < LEVELS - 1) {
+        if (!lie_lights_fit(r->quick, s)) {
+            lie_lights_destroy(r->quick);
+            if (lie_lights_create_untextured(s, &o, &r->quick, &err) != LIE_OK)
+                r->quick = NULL;
+        }
+        return r->quick;
+    }
+    /* the scene changed (an edit): prepared here, once per scene state */
+    lie_lights_destroy(r->lights);
+    if (lie_lights_create(s, &o, &r->lights, &err) != LIE_OK)
+        r->lights = NULL;
+    return r->lights;
+}
+
 /* The render thread: pick the level to draw (coarse while the view moves,
  * then finer), draw it band by band, publish each band.  One piece: the
  * generations it compares (camera, world version, units, forced redraws)
@@ -190,6 +274,8 @@ static void *render_main(void *arg)
         uint64_t version = view_world_version(r->w), units = view_world_units_version(r->w);
         int abandoned = 0;
         for (int lv = again ? LEVELS - 1 : 0; lv < LEVELS && !abandoned; lv++) {
+            if (lv == LEVELS - 1)
+                wait_first_lights(r);
             double t_level = lie_time_now();
             int div = level_div[lv];
             int lw = (r->o.width + div - 1) / div, lh = (r->o.height + div - 1) / div;
@@ -224,18 +310,7 @@ static void *render_main(void *arg)
                 view_world_read_lock(r->w);
                 view_world_sync_oracle(r->w);
                 const lie_scene *s = view_world_scene(r->w);
-                if (!ro.eye_only && !lie_lights_fit(r->lights, s)) {
-                    /* prepared once per scene state with the finest level's
-                     * options; a failure leaves each band to prepare its own */
-                    lie_render_options full = ro;
-                    full.light_samples = r->o.light_samples;
-                    lie_error lerr;
-                    lie_lights_destroy(r->lights);
-                    r->lights = NULL;
-                    if (lie_lights_create(s, &full, &r->lights, &lerr) != LIE_OK)
-                        r->lights = NULL;
-                }
-                ro.lights = r->lights;
+                ro.lights = ro.eye_only ? NULL : band_lights(r, s, lv);
                 ro.oracle = view_world_oracle(r->w);
                 ro.visibility = ro.oracle ? LIE_VIS_LIE : LIE_VIS_FULL;
                 lie_error err;
@@ -331,6 +406,11 @@ lie_status view_render_start(view_world *w, const view_render_options *opt, view
         view_render_stop(r);
         return lie_error_set(err, LIE_ERR_NOMEM, NULL, "out of memory for %dx%d frames", opt->width, opt->height);
     }
+    if (opt->light_samples > 0) {
+        /* off the first image's path (lights_main); without the thread, the
+         * render thread prepares them */
+        r->lights_started = pthread_create(&r->lights_tid, NULL, lights_main, r) == 0;
+    }
     if (pthread_create(&r->tid, NULL, render_main, r) != 0) {
         view_render_stop(r);
         return lie_error_set(err, LIE_ERR_NOMEM, NULL, "cannot start the render thread");
@@ -347,6 +427,10 @@ void view_render_stop(view_render *r)
     if (r->started) {
         view_thread_quit(&r->m, &r->cv, &r->quit, r->tid);
     }
+    if (r->lights_started)
+        pthread_join(r->lights_tid, NULL);
+    lie_lights_destroy(r->first_lights);
+    lie_lights_destroy(r->quick);
     for (int lv = 0; lv < LEVELS; lv++)
         for (int m = 0; m < 3; m++)
             lie_frame_destroy(r->level[lv][m]);
