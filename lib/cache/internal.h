@@ -96,4 +96,42 @@ const char *lie_cache_check_emitter(const lie_cache_emitter *e, uint32_t n_tris)
 #define LIE_CACHE_VIEW_MAX 16384
 const char *lie_cache_check_views(const lie_cache_views *v);
 
+
+/* ---- the writer's parts, shared by the encoder (cache.c) and the stream
+ * (stream.c) ---------------------------------------------------------------- */
+
+/* The sections in the order a writer writes them. */
+enum { S_META, S_PARAMS, S_EDITS, S_EMITTERS, S_ROOTS, S_NODES, S_POOL, S_VIEWS, S_COUNT };
+
+extern const uint32_t lie_cache_section_ids[S_COUNT]; /* their ids */
+
+/* The trees laid out in the file's canonical order (formats/lie-cache.md):
+ * each unit's tree from `src`, its lists from `src_pool`. */
+typedef struct lie_cache_tree_writer {
+    const lie_pnode *src;        /* the trees' nodes ... */
+    const uint32_t *src_pool;    /* ... and lists */
+    unsigned char *nodes, *pool; /* where node node_base and POOL entry pool_base go */
+    uint32_t node_base, pool_base;
+    uint32_t next_node, next_pool;
+} lie_cache_tree_writer;
+void lie_cache_write_tree(lie_cache_tree_writer *w, uint32_t from, uint32_t idx);
+/* The nodes and list entries of the tree from node `from`. */
+void lie_cache_tree_size(const lie_pnode *nodes, uint32_t from, uint64_t *n_nodes, uint64_t *n_pool);
+/* The ROOTS tag of a unit whose tree is one lone leaf, or 0. */
+uint32_t lie_cache_lone_tag(const lie_pnode *nodes, uint32_t root);
+/* Where each section goes (Layout), for trees of file_nodes nodes and
+ * file_pool list entries. */
+typedef struct lie_cache_layout {
+    uint64_t sz[S_COUNT], off[S_COUNT], total;
+    int n_sections;
+} lie_cache_layout;
+void lie_cache_lay_out(const lie_cache *c, uint64_t file_nodes, uint64_t file_pool, lie_cache_layout *L);
+/* The header and the section table, with the sections' checksums, at buf. */
+void lie_cache_put_header(unsigned char *buf, const lie_cache_layout *L, int partial, const uint64_t hash[S_COUNT]);
+/* The sections but ROOTS, NODES and POOL, at buf + L->off[k] (VIEWS at views). */
+void lie_cache_put_small(unsigned char *buf, unsigned char *views, const lie_cache *c, const lie_cache_layout *L,
+                         uint64_t file_nodes, uint64_t file_pool);
+/* What a reader would reject in the fields around the env's trees. */
+lie_status lie_cache_check_head(const lie_cache *c, const char *name, lie_error *err);
+
 #endif
