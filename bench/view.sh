@@ -6,9 +6,12 @@
 # level), the first image of an edit's world after each drag, and how long
 # the constructor takes to catch up after the last edit.  Writes
 # out/bench-view.json.  The figures depend on the load of the machine.
+# BIN (default bin) names the binaries: another build's, to compare two
+# side by side in one run.
 set -e
 cd "$(dirname "$0")/.."
 field() { sed -n "s/.*\"$1\":\([0-9.e+-]*\).*/\1/p"; }
+BIN=${BIN:-bin}
 SCENE=${SCENE:-tests/scenes/museum1.gltf}
 SIZE=${SIZE:-512x512}
 LIGHT_SAMPLES=${LIGHT_SAMPLES:-100}
@@ -19,7 +22,7 @@ TMP=$(mktemp -d); trap 'rm -rf "$TMP"' EXIT
 command -v xvfb-run >/dev/null || { echo "bench-view: xvfb-run is missing (make deps)" >&2; exit 1; }
 
 if [ "${PARTS:-all}" != ctor ]; then # PARTS=ctor: the constructor's part alone
-bin/lie-build "$SCENE" -q -o "$TMP/scene.lie"
+"$BIN"/lie-build "$SCENE" -q -o "$TMP/scene.lie"
 
 # orbit: STEPS steps of 3 degrees, each waiting for its first image
 {
@@ -30,7 +33,7 @@ bin/lie-build "$SCENE" -q -o "$TMP/scene.lie"
     echo "wait"
     echo "quit"
 } >"$TMP/orbit.txt"
-xvfb-run -a -s "-screen 0 1024x768x24" bin/lie-view "$TMP/scene.lie" --size "$SIZE" \
+xvfb-run -a -s "-screen 0 1024x768x24" "$BIN"/lie-view "$TMP/scene.lie" --size "$SIZE" \
     --light-samples "$LIGHT_SAMPLES" --script "$TMP/orbit.txt" -q --stats=json 2>"$TMP/orbit.json"
 
 # drags: DRAGS moves of the cube, a few frames apart, then wait for the constructor
@@ -43,7 +46,7 @@ xvfb-run -a -s "-screen 0 1024x768x24" bin/lie-view "$TMP/scene.lie" --size "$SI
     echo "frames 3"
     echo "quit"
 } >"$TMP/drag.txt"
-xvfb-run -a -s "-screen 0 1024x768x24" bin/lie-view "$TMP/scene.lie" --size "$SIZE" \
+xvfb-run -a -s "-screen 0 1024x768x24" "$BIN"/lie-view "$TMP/scene.lie" --size "$SIZE" \
     --light-samples "$LIGHT_SAMPLES" --script "$TMP/drag.txt" -q --stats=json 2>"$TMP/drag.json"
 
 fps=$(sed -n 's/.*"fps_mean":\([0-9.]*\).*/\1/p' "$TMP/orbit.json")
@@ -109,7 +112,7 @@ echo "$CSCENES" | while IFS='|' read -r name scene cam pick move; do
         fi
         echo "quit"
     } >"$TMP/c.txt"
-    xvfb-run -a -s "-screen 0 1024x768x24" bin/lie-view "$scene" --camera "$cam" --size "$CSIZE" \
+    xvfb-run -a -s "-screen 0 1024x768x24" "$BIN"/lie-view "$scene" --camera "$cam" --size "$CSIZE" \
         --light-samples "$CLS" --script "$TMP/c.txt" --record "$TMP/c.yaml" -q --stats=json 2>"$TMP/c.json"
     J="$TMP/c.json"
     first=$(field first_frame_ms <"$J"); f1=$(field full_frame_first_ms <"$J"); fa=$(field full_frame_after_ms <"$J")
@@ -119,9 +122,9 @@ echo "$CSCENES" | while IFS='|' read -r name scene cam pick move; do
     rst=""
     if [ -n "$pick" ] && [ -s "$TMP/c.yaml" ]; then
         vcam=$(sed -n 's/.*"camera":"\([^"]*\)".*/\1/p' "$J") # the viewer's, as it printed it
-        bin/lie-build "$scene" --view "${vcam:-$cam}" -q -o "$TMP/c.lie"
+        "$BIN"/lie-build "$scene" --view "${vcam:-$cam}" -q -o "$TMP/c.lie"
         t0=$(date +%s.%N)
-        bin/rst-update "$TMP/c.lie" "$TMP/c.yaml" -q -o "$TMP/c2.lie"
+        "$BIN"/rst-update "$TMP/c.lie" "$TMP/c.yaml" -q -o "$TMP/c2.lie"
         rst=$(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN { printf "%.0f", 1e3 * (b - a) }')
     fi
     printf '%-16s %8s %9s %9s %7s %9s %10s %10s\n' "$name" "${first:-?}" "${f1:-?}" "${fa:--}" "$ratio" "${pend:-?}" \

@@ -100,6 +100,27 @@ lie_status lie_cache_write_with_scene(const char *path, const lie_cache *c, cons
                                       const char *scene_out, const lie_gltf_export_options *scene_opt,
                                       size_t *bytes, lie_error *err);
 
+/* Writing a cache unit by unit, as a build makes them, holding 4 bytes a
+ * unit and one unit's tree (lib/cache/cache.c): open with the cache's
+ * fields (c->env gives the parameters and counts, its trees are not read),
+ * give every unit in unit order, close.  The file is written atomically at
+ * close, byte for byte what lie_cache_write gives the same cache with env's
+ * partial flag `partial`; until then nothing is at `path` (spills are
+ * unlinked temporaries).  "-" is stdout. */
+typedef struct lie_cache_stream lie_cache_stream;
+lie_status lie_cache_stream_open(const char *path, const lie_cache *c, lie_cache_stream **out, lie_error *err);
+/* The next unit: its tree from node `root` of `nodes` (children and lists
+ * index nodes and pool), or root a ROOTS tag (LIE_CACHE_ROOT_LONE_*). */
+lie_status lie_cache_stream_unit(lie_cache_stream *s, const lie_pnode *nodes, const uint32_t *pool, uint32_t root,
+                                 lie_error *err);
+/* The nodes and list entries written so far. */
+uint64_t lie_cache_stream_nodes(const lie_cache_stream *s);
+uint64_t lie_cache_stream_pool(const lie_cache_stream *s);
+/* Write the file (once every unit was given) and free s, whatever happens. */
+lie_status lie_cache_stream_close(lie_cache_stream *s, int partial, size_t *bytes, lie_error *err);
+/* Free s, writing nothing; NULL is fine. */
+void lie_cache_stream_abort(lie_cache_stream *s);
+
 /* Parse and validate a whole cache held in memory: magic, version, section
  * table, every size and offset, every checksum, then the structure (tree
  * links, classes, list ranges, triangle indices) — before trusting a byte.

@@ -100,8 +100,58 @@ static uint32_t *heaviest_first(const uint32_t *w, uint32_t n)
     return order;
 }
 
+/* lie_build_control.sink: triangle `item` of c->out (its units, or with
+ * `copied` the old env's) handed to the sink, in unit order. */
+static lie_status deliver(build_ctx *c, size_t item)
+{
+    const unit_buf *u = &c->out[item];
+    size_t ne = (size_t)c->s->n_clusters;
+    for (size_t e = 0; e < ne; e++) {
+        size_t unit = ((size_t)c->tri_lo + item) * ne + e;
+        if (unit < c->unit_lo || unit >= c->unit_hi)
+            continue;
+        lie_status st;
+        if (u->copied)
+            st = c->sink(c->sink_ctx, c->old->nodes, c->old->pool, c->old->root[lie_ctx_old_unit(c, unit)]);
+        else if (!u->roots)
+            st = LIE_ERR_NOMEM; /* its worker ran out (and fails the build) */
+        else
+            st = c->sink(c->sink_ctx, u->nodes, u->pool, u->roots[e]);
+        if (st != LIE_OK)
+            return st;
+    }
+    return LIE_OK;
+}
+
+/* lie_parallel_for body with a sink: build triangle `item`, then hand
+ * over every triangle done from the first not handed over yet, and free
+ * them: what is held is the triangles done beyond one still building. */
+static void sink_triangle(void *ctx, size_t item, int worker_id)
+{
+    build_ctx *c = ctx;
+    lie_subdiv_triangle(ctx, item, worker_id);
+    pthread_mutex_lock(&c->sink_m);
+    /* a worker out of memory or past the node budget left this triangle
+     * unfinished: the build fails, and nothing more is handed over */
+    if (c->workers[worker_id].nomem && c->sink_st == LIE_OK)
+        c->sink_st = LIE_ERR_NOMEM;
+    c->sink_done[item] = 1;
+    while (c->sink_next < c->sink_n && c->sink_done[c->sink_next]) {
+        unit_buf *u = &c->out[c->sink_next];
+        if (c->sink_st == LIE_OK)
+            c->sink_st = deliver(c, c->sink_next);
+        free(u->roots);
+        free(u->nodes);
+        free(u->pool);
+        memset(u, 0, sizeof *u);
+        c->sink_next++;
+    }
+    pthread_mutex_unlock(&c->sink_m);
+}
+
 /* Build (or, with a mask, rebuild some units of) every triangle, then
- * concatenate the per-triangle buffers in unit order.  `stop` (may be
+ * concatenate the per-triangle buffers in unit order (or, with a sink,
+ * hand them over in that order as they are done: lie_build_control.sink).  `stop` (may be
  * NULL) interrupts it: env->partial says whether a unit was left out.
  * An update continues the units of `old` (NULL: env itself, updated in
  * place): old_unit[unit - unit_lo] is the unit of old that unit continues,
@@ -109,10 +159,15 @@ static uint32_t *heaviest_first(const uint32_t *w, uint32_t n)
 static lie_status run_build(lie_env *env, const lie_env *old, const lie_scene *s, const lie_rt *rt,
                            const int32_t *old_unit, const uint8_t *node_flags, const uint8_t *tri_mask, const lie_pixels *px,
                            uint64_t unit_lo, uint64_t unit_hi, int threads, int memo, lie_progress *progress,
-                           const volatile sig_atomic_t *stop, int audit, lie_build_stats *stats)
+                           const volatile sig_atomic_t *stop, int audit, const lie_build_control *sink,
+                           lie_build_stats *stats)
 {
     build_ctx c;
     memset(&c, 0, sizeof c);
+    if (sink && sink->sink) {
+        c.sink = sink->sink;
+        c.sink_ctx = sink->sink_ctx;
+    }
     c.s = s;
     c.rt = rt;
     c.p = &env->params;
@@ -152,13 +207,28 @@ static lie_status run_build(lie_env *env, const lie_env *old, const lie_scene *s
     if (st == LIE_OK && memo && node_flags && old_unit && c.p->mode == LIE_BLOCKERS_SAMPLED)
         st = lie_memo_precompute(&c, threads, &n_memo);
     uint32_t *weight = st == LIE_OK ? build_weights(&c, n_items, ne) : NULL;
-    uint32_t *order = weight && threads > 1 ? heaviest_first(weight, n_items) : NULL;
+    /* the costliest first, unless units go to a sink, which takes them in
+     * order: then in order, so that few wait for one still building */
+    uint32_t *order = weight && threads > 1 && !c.sink ? heaviest_first(weight, n_items) : NULL;
+    if (c.sink) {
+        c.sink_n = n_items;
+        c.sink_done = calloc((size_t)n_items + 1, 1);
+        if (!c.sink_done)
+            st = LIE_ERR_NOMEM;
+        pthread_mutex_init(&c.sink_m, NULL);
+    }
     lie_parallel_report rep;
     memset(&rep, 0, sizeof rep);
     if (st == LIE_OK)
-        st = lie_parallel_for_ordered(n_items, threads, lie_subdiv_triangle, &c, order,
+        st = lie_parallel_for_ordered(n_items, threads, c.sink ? sink_triangle : lie_subdiv_triangle, &c, order,
                                       progress && progress->active ? weight : NULL,
                                       progress ? lie_progress_cb : NULL, progress, &rep);
+    if (c.sink) {
+        pthread_mutex_destroy(&c.sink_m);
+        free(c.sink_done);
+        if (st == LIE_OK && c.sink_next != c.sink_n)
+            st = LIE_ERR_NOMEM; /* a triangle was not done: only when a worker failed */
+    }
     free(order);
     free(weight);
     lie_memo_free(&c, n_memo);
@@ -176,7 +246,9 @@ static lie_status run_build(lie_env *env, const lie_env *old, const lie_scene *s
         stats->seconds_cpu_max += c.par_cpu_max + rep.cpu_max;
         stats->seconds_tail += c.par_tail + rep.tail;
     }
-    if (st == LIE_OK)
+    if (st == LIE_OK && c.sink)
+        st = c.sink_st;
+    else if (st == LIE_OK)
         st = assemble(env, c.old, c.out, c.tri_lo, n_items, s->n_clusters, old_unit, unit_lo, unit_hi, threads);
     if (st == LIE_OK && interrupted)
         env->partial = 1;
@@ -568,7 +640,18 @@ lie_status lie_env_build_with(const lie_scene *s, const lie_rt *rt, const lie_bu
     lie_env *env = calloc(1, sizeof *env);
     uint64_t n_units = (uint64_t)s->n_tris * (uint64_t)s->n_clusters;
     int32_t *old_unit = NULL;
-    if (env && ctl->resume) {
+    if (env && ctl->resume && ctl->sink) {
+        /* with a sink, the interrupted build's units are handed over from
+         * where they are (run_build's old): no copy of them is made */
+        const lie_env *r = ctl->resume;
+        old_unit = n_units < INT32_MAX ? malloc(sizeof *old_unit * ((size_t)n_units + 1)) : NULL;
+        if (!old_unit) {
+            free(env);
+            env = NULL;
+        }
+        for (uint64_t u = 0; old_unit && u < n_units; u++)
+            old_unit[u] = r->nodes[r->root[u]].cls == LIE_CLASS_NONE ? -1 : (int32_t)u;
+    } else if (env && ctl->resume) {
         /* a resume is an update that copies every unit the interrupted
          * build finished (copy_node lays it out as a build does) and builds
          * the others afresh: lie_env_update's old_unit, without flags */
@@ -596,8 +679,8 @@ lie_status lie_env_build_with(const lie_scene *s, const lie_rt *rt, const lie_bu
     lie_env_describe(env, s, p);
     if (stats)
         memset(stats, 0, sizeof *stats);
-    lie_status st = run_build(env, NULL, s, rt, old_unit, NULL, ctl->tri_mask, ctl->pixels, 0, n_units, p->threads, 0,
-                              ctl->progress, ctl->stop, ctl->audit_complex, stats);
+    lie_status st = run_build(env, ctl->sink ? ctl->resume : NULL, s, rt, old_unit, NULL, ctl->tri_mask, ctl->pixels, 0,
+                              n_units, p->threads, 0, ctl->progress, ctl->stop, ctl->audit_complex, ctl, stats);
     free(old_unit);
     if (st != LIE_OK) {
         lie_env_destroy(env);
@@ -690,7 +773,7 @@ static lie_status build_range(const lie_scene *s, const lie_rt *rt, const lie_bu
     if (n_units)
         st = run_build(&part, from ? from->env : NULL, s, rt, from ? from->old_unit : NULL,
                        from ? from->node_flags : NULL, tri_mask, px, first_unit, first_unit + n_units, p->threads, 0,
-                       NULL, stop, 0, stats);
+                       NULL, stop, 0, NULL, stats);
     if (st != LIE_OK) {
         free(part.root);
         free(part.nodes);
@@ -754,7 +837,7 @@ lie_status lie_build_update(lie_env *env, const lie_scene *s, const lie_rt *rt, 
     if (stats)
         memset(stats, 0, sizeof *stats);
     lie_status st = run_build(env, NULL, s, rt, old_unit, node_flags, NULL, px, 0,
-                              (uint64_t)s->n_tris * (uint64_t)s->n_clusters, threads, memo, NULL, NULL, 0, stats);
+                              (uint64_t)s->n_tris * (uint64_t)s->n_clusters, threads, memo, NULL, NULL, 0, NULL, stats);
     if (stats)
         stats->seconds = lie_time_now() - t0;
     if (st == LIE_ERR_LIMIT)

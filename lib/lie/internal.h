@@ -6,14 +6,15 @@
 
 #include "lie/lie.h"
 
+#include <pthread.h>
 #include <stdatomic.h>
 
 /* ---- per-unit output and per-worker scratch ----------------------------- */
 
 /* A unit_buf's root for a unit that is one lone leaf (lie_pnode_lone): it
  * holds no node, and assembly points it at the env's shared leaf. */
-#define LIE_ROOT_LONE_UNLIT 0xFFFFFFFFu
-#define LIE_ROOT_LONE_NONE 0xFFFFFFFEu
+#define LIE_ROOT_LONE_UNLIT LIE_UNIT_LONE_UNLIT
+#define LIE_ROOT_LONE_NONE LIE_UNIT_LONE_NONE
 
 typedef struct unit_buf {
     uint32_t *roots;      /* per emitter: the unit's root, local index, or LIE_ROOT_LONE_* */
@@ -77,6 +78,14 @@ typedef struct build_ctx {
     /* the parallel loops' CPU seconds so far (lie_parallel_report): summed
      * over workers, the busiest worker's per loop summed, idle tails */
     double par_cpu_sum, par_cpu_max, par_tail;
+    /* lie_build_control.sink: triangles done (sink_done), handed over in
+     * order from sink_next under sink_m, the first failure in sink_st */
+    lie_unit_sink_fn sink;
+    void *sink_ctx;
+    pthread_mutex_t sink_m;
+    uint8_t *sink_done;
+    size_t sink_next, sink_n;
+    lie_status sink_st;
     double *halton;       /* radical inverses in bases 2, 3, 5, 7 of 0..n_halton-1 */
     uint32_t n_halton;
 } build_ctx;

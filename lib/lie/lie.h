@@ -207,6 +207,17 @@ lie_status lie_env_build_masked(const lie_scene *s, const lie_rt *rt, const lie_
                                 const uint8_t *tri_mask, lie_progress *progress, lie_env **out,
                                 lie_build_stats *stats, lie_error *err);
 
+/* Where a build's units go as they are made (lie_build_control.sink), so
+ * that no build holds them all (lie-build writes them to the cache file,
+ * lie_cache_stream): called in unit order, from one thread at a time, with
+ * each unit's tree from node `root` of `nodes` (children and lists index
+ * nodes and pool, valid during the call only), or with root one of the
+ * tags below for a unit that is one lone leaf (lie_pnode_lone).  A status
+ * other than LIE_OK fails the build with it. */
+#define LIE_UNIT_LONE_UNLIT 0xFFFFFFFFu
+#define LIE_UNIT_LONE_NONE 0xFFFFFFFEu
+typedef lie_status (*lie_unit_sink_fn)(void *ctx, const lie_pnode *nodes, const uint32_t *pool, uint32_t root);
+
 /* How a build runs, beyond its parameters; zeroed means lie_env_build. */
 struct lie_pixels;
 typedef struct lie_build_control {
@@ -228,6 +239,12 @@ typedef struct lie_build_control {
      * what the prediction says beside what the build measures
      * (lie_build_stats.complex_predicted_measured). */
     int audit_complex;
+    /* Give every unit to sink (with sink_ctx) as its triangle is done, in
+     * unit order, and keep none: the env returned holds the parameters,
+     * counts and partial flag, and no trees (root, nodes and pool NULL).
+     * NULL: the env holds them all. */
+    lie_unit_sink_fn sink;
+    void *sink_ctx;
 } lie_build_control;
 lie_status lie_env_build_with(const lie_scene *s, const lie_rt *rt, const lie_build_params *p,
                               const lie_build_control *ctl, lie_env **out, lie_build_stats *stats, lie_error *err);

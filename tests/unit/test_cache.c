@@ -516,6 +516,93 @@ static void test_sections_lists_the_table_in_file_order(void **state)
     lie_cache_destroy(c);
 }
 
+static lie_status to_stream(void *ctx, const lie_pnode *nodes, const uint32_t *pool, uint32_t root)
+{
+    lie_error err;
+    return lie_cache_stream_unit(ctx, nodes, pool, root, &err);
+}
+
+/* The file at path, which must hold exactly `size` bytes equal to want. */
+static void assert_file_bytes(const char *path, const unsigned char *want, size_t size)
+{
+    unsigned char *got = NULL;
+    size_t n = 0;
+    lie_error err;
+    assert_int_equal(lie_read_file(path, &got, &n, &err), LIE_OK);
+    assert_int_equal(n, size);
+    assert_memory_equal(got, want, size);
+    free(got);
+}
+
+/* A cache streamed unit by unit (lie_cache_stream, as lie-build writes a
+ * whole build) is byte for byte the encoder's: from an env's units, with
+ * an edit log, partial or not; and straight from a build's sink, which
+ * hands units over in order as triangles are done, on two threads. */
+static void test_stream_gives_the_bytes_of_encode(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/lie-test-stream.XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    char path[256];
+    snprintf(path, sizeof path, "%s/s.lie", dir);
+    lie_scene *s = NULL;
+    lie_error err;
+    lie_scene_options so = lie_scene_options_default();
+    assert_int_equal(lie_scene_load(TEST_SCENES "/cornell.gltf", &so, &s, &err), LIE_OK);
+    lie_cache *c = cache_from_scene(s, TEST_SCENES "/cornell.gltf", LIE_BLOCKERS_SAMPLED);
+    static const char edit[] = "- move: {node: TallBlock, by: [0, 0, 0]}\n";
+    add_edit(c, "e.yaml", edit, sizeof edit - 1);
+    const size_t units = (size_t)c->n_tris * (size_t)c->env->n_clusters;
+    for (int partial = 0; partial < 2; partial++) {
+        c->env->partial = partial;
+        unsigned char *a;
+        size_t na, bytes = 0;
+        encode(c, &a, &na);
+        lie_cache_stream *st = NULL;
+        assert_int_equal(lie_cache_stream_open(path, c, &st, &err), LIE_OK);
+        for (size_t u = 0; u < units; u++)
+            assert_int_equal(lie_cache_stream_unit(st, c->env->nodes, c->env->pool, c->env->root[u], &err), LIE_OK);
+        assert_int_equal(lie_cache_stream_close(st, partial, &bytes, &err), LIE_OK);
+        assert_int_equal(bytes, na);
+        assert_file_bytes(path, a, na);
+        free(a);
+    }
+    c->env->partial = 0;
+    /* through a build's sink: the units of c's env again */
+    lie_rt *rt = NULL;
+    assert_int_equal(lie_rt_create(s, &rt, &err), LIE_OK);
+    lie_build_params p = c->env->params;
+    p.threads = 2;
+    lie_cache_stream *st = NULL;
+    assert_int_equal(lie_cache_stream_open(path, c, &st, &err), LIE_OK);
+    lie_build_control ctl;
+    memset(&ctl, 0, sizeof ctl);
+    ctl.sink = to_stream;
+    ctl.sink_ctx = st;
+    lie_env *built = NULL;
+    assert_int_equal(lie_env_build_with(s, rt, &p, &ctl, &built, NULL, &err), LIE_OK);
+    assert_null(built->root); /* the units went to the sink */
+    assert_int_equal(built->partial, 0);
+    size_t bytes = 0;
+    assert_int_equal(lie_cache_stream_close(st, built->partial, &bytes, &err), LIE_OK);
+    lie_env_destroy(built);
+    unsigned char *a;
+    size_t na;
+    encode(c, &a, &na);
+    assert_file_bytes(path, a, na);
+    free(a);
+    /* a stream given too few units writes nothing */
+    assert_int_equal(remove(path), 0);
+    assert_int_equal(lie_cache_stream_open(path, c, &st, &err), LIE_OK);
+    assert_int_equal(lie_cache_stream_unit(st, c->env->nodes, c->env->pool, c->env->root[0], &err), LIE_OK);
+    assert_int_equal(lie_cache_stream_close(st, 0, &bytes, &err), LIE_ERR_ARG);
+    assert_int_equal(access(path, F_OK), -1);
+    assert_int_equal(rmdir(dir), 0);
+    lie_rt_destroy(rt);
+    lie_cache_destroy(c);
+    lie_scene_destroy(s);
+}
+
 static void test_write_then_read_round_trips_and_leaves_no_temporary(void **state)
 {
     (void)state;
@@ -1419,6 +1506,7 @@ int main(void)
         cmocka_unit_test(test_views_round_trip_and_bad_views_are_rejected),
         cmocka_unit_test(test_newer_version_is_unsupported),
         cmocka_unit_test(test_versions_4_to_6_read_and_encode_as_version_7),
+        cmocka_unit_test(test_stream_gives_the_bytes_of_encode),
         cmocka_unit_test(test_version_3_reads_with_one_cluster_each),
         cmocka_unit_test(test_unknown_required_flag_is_unsupported_optional_ignored),
         cmocka_unit_test(test_unknown_sections_are_skipped_and_order_is_free),

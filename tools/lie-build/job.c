@@ -242,11 +242,85 @@ lie_status job_views(build_job *j)
     return rc;
 }
 
+/* The cache's fields around its env: provenance, edit log, state, views
+ * (j->head, j->log), made once. */
+static lie_status job_head(build_job *j)
+{
+    if (j->have_head)
+        return LIE_OK;
+    lie_cache *cache = &j->head;
+    memset(cache, 0, sizeof *cache);
+    cache->scene_path = (char *)j->input;
+    cache->scene_hash = j->old ? j->old->scene_hash : j->loaded_hash;
+    if (j->old) { /* the edit log goes on */
+        cache->edits = j->old->edits;
+        cache->n_edits = j->old->n_edits;
+    } else {
+        cache->edits = j->edit_log;
+        cache->n_edits = j->n_edits;
+    }
+    /* --edit's names (command-line arguments) relative to the cache's folder,
+     * where their `add` files resolve from (lie_cache_log_relative_to) */
+    if (!j->old && j->n_edits) {
+        j->log = calloc((size_t)j->n_edits, sizeof *j->log);
+        if (!j->log)
+            return lie_error_set(&j->err, LIE_ERR_NOMEM, j->output, "out of memory");
+        for (int i = 0; i < j->n_edits; i++) {
+            j->log[i] = j->edit_log[i];
+            j->log[i].name = strdup(j->edit_log[i].name);
+            if (!j->log[i].name)
+                j->log[i].name = j->edit_log[i].name; /* kept as given */
+        }
+        cache->edits = j->log;
+        lie_cache_log_relative_to(cache, 0, j->output);
+    }
+    cache->views = j->cv;
+    j->have_head = 1;
+    return lie_cache_set_state(cache, j->scene, &j->err);
+}
+
+static lie_status stream_unit(void *ctx, const lie_pnode *nodes, const uint32_t *pool, uint32_t root)
+{
+    build_job *j = ctx;
+    return lie_cache_stream_unit(j->stream, nodes, pool, root, &j->stream_err);
+}
+
+/* A whole build writes its units to the cache as they are made, so that
+ * it holds one unit per thread and the roots, not them all with the
+ * assembled env and the file's bytes (a view build keeps its env: --stats
+ * sets it against the views' pixels). */
+static lie_status open_stream(build_job *j, lie_build_control *ctl)
+{
+    if (j->px || j->into)
+        return LIE_OK;
+    lie_env desc;
+    memset(&desc, 0, sizeof desc);
+    desc.n_tris = j->scene->n_tris; /* what the build's env will say (its trees aside) */
+    desc.n_clusters = j->scene->n_clusters;
+    desc.params = j->bp;
+    desc.params.threads = 0;
+    desc.scene_hash = j->scene->hash;
+    lie_status st = job_head(j);
+    if (st != LIE_OK)
+        return st;
+    j->head.env = &desc;
+    st = lie_cache_stream_open(j->output, &j->head, &j->stream, &j->err);
+    j->head.env = NULL;
+    if (st != LIE_OK)
+        return st;
+    lie_error_clear(&j->stream_err);
+    ctl->sink = stream_unit;
+    ctl->sink_ctx = j;
+    return LIE_OK;
+}
+
 /* One process's build, stopped by a signal under --partial. */
 static lie_status build_here(build_job *j, lie_progress *progress)
 {
     lie_build_control ctl;
     memset(&ctl, 0, sizeof ctl);
+    if (open_stream(j, &ctl) != LIE_OK)
+        return j->err.status;
     ctl.pixels = j->px;
     ctl.progress = progress;
     ctl.resume = j->resume ? j->resume->env : NULL;
@@ -258,6 +332,12 @@ static lie_status build_here(build_job *j, lie_progress *progress)
     lie_status rc = lie_env_build_with(j->scene, j->rt, &j->bp, &ctl, &j->env, &j->st, &j->err);
     if (j->partial)
         stop_handlers(0, handlers); /* from here a signal aborts; the write's handler cleans up */
+    if (rc != LIE_OK && j->stream && j->stream_err.status != LIE_OK)
+        j->err = j->stream_err; /* the file's error, not the build's echo of it */
+    if (rc == LIE_OK && j->stream) { /* what the file holds, for --stats */
+        j->env->n_nodes = (uint32_t)lie_cache_stream_nodes(j->stream);
+        j->env->n_pool = (uint32_t)lie_cache_stream_pool(j->stream);
+    }
     return rc;
 }
 
@@ -282,48 +362,28 @@ lie_status job_build(build_job *j, lie_progress *progress)
 
 lie_status job_write(build_job *j)
 {
-    lie_cache cache;
-    memset(&cache, 0, sizeof cache);
-    cache.scene_path = (char *)j->input;
-    cache.scene_hash = j->old ? j->old->scene_hash : j->loaded_hash;
-    if (j->old) { /* the edit log goes on */
-        cache.edits = j->old->edits;
-        cache.n_edits = j->old->n_edits;
-    } else {
-        cache.edits = j->edit_log;
-        cache.n_edits = j->n_edits;
+    if (j->stream) {
+        lie_cache_stream *s = j->stream;
+        j->stream = NULL;
+        return lie_cache_stream_close(s, j->env->partial, &j->bytes, &j->err);
     }
-    /* --edit's names (command-line arguments) relative to the cache's folder,
-     * where their `add` files resolve from (lie_cache_log_relative_to) */
-    lie_cache_edit *log = NULL;
-    if (!j->old && j->n_edits) {
-        log = calloc((size_t)j->n_edits, sizeof *log);
-        if (!log)
-            return lie_error_set(&j->err, LIE_ERR_NOMEM, j->output, "out of memory");
-        for (int i = 0; i < j->n_edits; i++) {
-            log[i] = j->edit_log[i];
-            log[i].name = strdup(j->edit_log[i].name);
-            if (!log[i].name)
-                log[i].name = j->edit_log[i].name; /* kept as given */
-        }
-        cache.edits = log;
-        lie_cache_log_relative_to(&cache, 0, j->output);
-    }
-    lie_status rc = lie_cache_set_state(&cache, j->scene, &j->err);
-    cache.env = j->env;
-    cache.views = j->cv;
-    if (rc == LIE_OK)
-        rc = lie_cache_write(j->output, &cache, &j->bytes, &j->err);
-    for (int i = 0; log && i < j->n_edits; i++)
-        if (log[i].name != j->edit_log[i].name)
-            free(log[i].name);
-    free(log);
-    free(cache.emitters);
+    lie_status rc = job_head(j);
+    if (rc != LIE_OK)
+        return rc;
+    j->head.env = j->env;
+    rc = lie_cache_write(j->output, &j->head, &j->bytes, &j->err);
+    j->head.env = NULL;
     return rc;
 }
 
 void job_free(build_job *j)
 {
+    lie_cache_stream_abort(j->stream);
+    for (int i = 0; j->log && i < j->n_edits; i++)
+        if (j->log[i].name != j->edit_log[i].name)
+            free(j->log[i].name);
+    free(j->log);
+    free(j->head.emitters);
     free_edits(j->edit_log, j->n_edits);
     lie_cache_destroy(j->resume);
     lie_camera_path_destroy(j->cpath);

@@ -32,7 +32,15 @@ typedef struct build_job {
     lie_rt *rt;
     lie_cache_views cv;     /* the views the cache is built for */
     lie_pixels *px, *old_px; /* their pixels; with --into, the old views' alone */
-    lie_env *env;
+    lie_env *env;           /* streamed: its counts and flags, no trees */
+    /* a whole build in one process writes its units as they are made
+     * (lie_cache_stream): the cache's fields around them, kept until the
+     * stream is closed */
+    lie_cache_stream *stream;
+    lie_cache head;
+    lie_cache_edit *log;
+    int have_head;
+    lie_error stream_err;
     lie_build_stats st;
     lie_add_stats as;
     size_t bytes;

@@ -12,12 +12,13 @@
  * unit not yet landed is answered by Embree, so the image is the same,
  * only slower.  A view that moves uses every unit landed by its next
  * band.  A still view is already at full quality; its full frame is
- * rendered again over the one shown (no coarse levels) only when that
- * pays for the cores it takes from the constructor (landed_due): once the
- * constructor has caught up with the view, or when half of what was
- * pending has landed and the renderer has rested as long as its last full
- * frame took.  Redrawing on every landing kept both cores rendering the
- * same picture while the constructor's threads waited for them.  A full
+ * rendered again over the one shown (no coarse levels) once the
+ * constructor has caught up with the view (landed_due): the same picture,
+ * in the time the cache gives.  Before that a redraw would only take the
+ * cores from the constructor: redrawing on every landing kept both cores
+ * rendering the same picture while the constructor's threads waited for
+ * them, and one redraw when half had landed made a drag's catch-up on
+ * scifi_hallway a tenth longer (docs/measurements.md).  A full
  * frame during which no unit landed is *clean*: the frame lie-render
  * makes from a cache of what had landed; screenshots hold the constructor
  * and take one. */
@@ -134,22 +135,11 @@ static void mask_rows(view_render *r, const lie_scene *s, const lie_rt *rt, cons
         }
 }
 
-/* The last full frame: the units pending when it began, when it ended
- * and how long it took. */
-typedef struct last_full {
-    int64_t pending0;
-    double end, seconds;
-} last_full;
-
 /* Whether units landed since the shown full frame (units_seen) make it
  * worth rendering again (see the top of this file). */
-static int landed_due(view_render *r, uint64_t units_seen, const last_full *last)
+static int landed_due(view_render *r, uint64_t units_seen)
 {
-    if (view_world_units_version(r->w) == units_seen)
-        return 0;
-    int64_t pending = view_world_pending(r->w);
-    return pending == 0 ||
-           (2 * pending <= last->pending0 && lie_time_now() - last->end >= last->seconds);
+    return view_world_units_version(r->w) != units_seen && view_world_pending(r->w) == 0;
 }
 
 /* A full frame's time, kept for --stats (m held). */
@@ -263,11 +253,10 @@ static void *render_main(void *arg)
 {
     view_render *r = arg;
     uint64_t done_gen = 0, done_version = 0, done_units = 0, done_force = 0;
-    last_full last = {0, 0.0, 0.0};
     for (;;) {
         pthread_mutex_lock(&r->m);
         while (!r->quit && r->gen == done_gen && view_world_version(r->w) == done_version &&
-               !landed_due(r, done_units, &last) && r->force == done_force) {
+               !landed_due(r, done_units) && r->force == done_force) {
             struct timespec ts;
             clock_gettime(CLOCK_REALTIME, &ts);
             ts.tv_nsec += 10 * 1000 * 1000; /* the world's version is polled */
@@ -293,7 +282,6 @@ static void *render_main(void *arg)
             if (lv == LEVELS - 1)
                 wait_first_lights(r);
             double t_level = lie_time_now();
-            int64_t pending0 = lv == LEVELS - 1 ? view_world_pending(r->w) : 0;
             int div = level_div[lv];
             int lw = (r->o.width + div - 1) / div, lh = (r->o.height + div - 1) / div;
             lie_render_options ro = lie_render_options_default();
@@ -386,8 +374,6 @@ static void *render_main(void *arg)
             }
             double t_end = lie_time_now();
             note_time(r, lv, t_level, t_end, view_world_units_version(r->w) == units);
-            if (lv == LEVELS - 1)
-                last = (last_full){pending0, t_end, t_end - t_level};
             pthread_cond_broadcast(&r->cv);
             pthread_mutex_unlock(&r->m);
         }
