@@ -207,8 +207,12 @@ lie_status lie_scene_cluster(lie_scene *s)
         const lie_texture *tex =
             mat->emissive_tex >= 0 && mat->emissive_tex < s->n_textures ? &s->textures[mat->emissive_tex] : NULL;
         uint32_t n_dark = 0, n_lit = 0;
-        for (uint32_t k = 0; k < em->n_tris; k++)
-            n_dark += tex && tri_dark(s, mat, tex, em->first_tri + k);
+        for (uint32_t k = 0; k < em->n_tris; k++) {
+            int dark = tex && tri_dark(s, mat, tex, em->first_tri + k);
+            n_dark += (uint32_t)dark;
+            if (!CLUSTER_DARK_SPLIT && !dark)
+                break; /* one lit triangle and none is dark (below): the rest need not be read */
+        }
         if (!CLUSTER_DARK_SPLIT && n_dark < em->n_tris)
             n_dark = 0; /* dark only as a whole */
         for (uint32_t k = 0, d = 0; k < em->n_tris; k++) {

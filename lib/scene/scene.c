@@ -620,8 +620,7 @@ static void hash_world(lie_scene *s, lie_hasher *h)
         float run[4 * 1024];
         for (size_t i0 = 0; i0 < texels; i0 += 1024) {
             size_t k = texels - i0 < 1024 ? texels - i0 : 1024;
-            for (size_t j = 0; j < k; j++)
-                lie_texture_texel(t, i0 + j, run + 4 * j);
+            lie_texture_texels(t, i0, k, run);
             lie_hasher_update(h, run, sizeof(float) * 4 * k);
         }
     }

@@ -61,6 +61,8 @@ static inline void lie_texture_texel(const lie_texture *t, size_t i, float out[4
             out[k] = t->code_value[k == 3][(size_t)c[2 * k] | (size_t)c[2 * k + 1] << 8];
     }
 }
+/* Texels [first, first + n) as linear RGBA floats, 4 a texel into out. */
+void lie_texture_texels(const lie_texture *t, size_t first, size_t n, float *out);
 /* Whether t has texels (its size and pixels). */
 static inline int lie_texture_has_texels(const lie_texture *t)
 {

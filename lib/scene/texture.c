@@ -10,6 +10,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* Reduce a coordinate to the range where the wrap repeats, so the texel
  * positions below stay small integers even for u = 1e9. */
@@ -57,6 +58,25 @@ void lie_texture_free(lie_texture *t)
     t->rgba = NULL;
     t->codes = NULL;
     t->code_value[0] = t->code_value[1] = NULL;
+}
+
+void lie_texture_texels(const lie_texture *t, size_t first, size_t n, float *out)
+{
+    /* a run at a time, each representation its own loop (the scene's hash
+     * reads every texel at every flatten) */
+    if (t->rgba) {
+        memcpy(out, t->rgba + 4 * first, sizeof(float) * 4 * n);
+    } else if (t->code_bits == 8) {
+        const unsigned char *c = (const unsigned char *)t->codes + 4 * first;
+        const float *col = t->code_value[0], *alpha = t->code_value[1];
+        for (size_t i = 0; i < n; i++, c += 4, out += 4) {
+            out[0] = col[c[0]], out[1] = col[c[1]], out[2] = col[c[2]];
+            out[3] = alpha[c[3]];
+        }
+    } else {
+        for (size_t i = 0; i < n; i++)
+            lie_texture_texel(t, first + i, out + 4 * i);
+    }
 }
 
 void lie_texture_sample(const lie_texture *t, float u, float v, float rgba[4])

@@ -1218,11 +1218,17 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
     /* the moved geometry, before and after, and its size for the padding */
     lie_box3 before = lie_box3_empty(), after = lie_box3_empty(), all = lie_box3_empty();
     uint8_t *moved = calloc((size_t)s->n_tris + 1, 1);
+    /* and per glTF node, before and after: the boxes rst-update refines
+     * with (lib/update/update.c, apply_edit), tighter than their union
+     * when a group of nodes moves */
+    lie_box3 *nb = malloc(sizeof *nb * (2 * (size_t)s->n_nodes + 1));
+    for (int i = 0; nb && i < 2 * s->n_nodes; i++)
+        nb[i] = lie_box3_empty();
     /* clusters of an emitter the edit moved (or changed): every unit of
      * them goes again, as rst-update builds them afresh (lib/update/mark.c) */
     uint8_t *cl_moved = calloc(c->ne + 1, 1);
     int light_moved = 0;
-    if (!moved || !cl_moved)
+    if (!moved || !cl_moved || !nb)
         st = lie_error_set(err, LIE_ERR_NOMEM, s->path, "out of memory");
     for (int e = 0; st == LIE_OK && !restart && e < s->n_emitters; e++)
         if (!same_emitter(&c->em[e], &s->emitters[e])) {
@@ -1237,9 +1243,12 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
         if (memcmp(a, b, sizeof *a * 3) == 0)
             continue;
         moved[t] = 1;
+        int node = s->instances[s->tri_instance[t]].node;
         for (int q = 0; q < 3; q++) {
             lie_box3_grow(&before, a[q]);
             lie_box3_grow(&after, b[q]);
+            lie_box3_grow(&nb[2 * node], a[q]);
+            lie_box3_grow(&nb[2 * node + 1], b[q]);
         }
         if (s->tri_emitter && s->tri_emitter[t] >= 0) { /* an emitter moved: every unit of it */
             const lie_emitter *em = &s->emitters[s->tri_emitter[t]];
@@ -1250,7 +1259,6 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
     }
     /* shadow rays start a little off the surface (lib/rt/rt.h): pad */
     float pad = lie_box3_is_empty(&all) ? 0.0f : 1e-3f * lie_v3_len(lie_v3_sub(all.hi, all.lo));
-    const lie_box3 moved_boxes[2] = {before, after}; /* the refinement's, as rst-update's (unpadded) */
     box_pad(&before, pad);
     box_pad(&after, pad);
     lie_box3 *cb = st == LIE_OK ? malloc(sizeof *cb * (c->ne + 1)) : NULL;
@@ -1262,6 +1270,7 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
         free(moved);
         free(cl_moved);
         free(cb);
+        free(nb);
         fail(c, err);
         pthread_mutex_unlock(&c->m);
         return st;
@@ -1316,15 +1325,15 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
             candidates += (uint64_t)meets;
         }
     }
+    /* the refinement's boxes: the moved nodes', unpadded, as rst-update's */
     int n_moved_boxes = 0;
-    lie_box3 mb[2];
-    for (int i = 0; i < 2; i++)
-        if (!lie_box3_is_empty(&moved_boxes[i]))
-            mb[n_moved_boxes++] = moved_boxes[i];
+    for (int i = 0; i < 2 * s->n_nodes; i++)
+        if (!lie_box3_is_empty(&nb[i]))
+            nb[n_moved_boxes++] = nb[i];
     lie_env view = c->env;
     view.root = vroot;
     if (flags && candidates)
-        lie_rst_refine(s, &view, mb, n_moved_boxes, flags, 0);
+        lie_rst_refine(s, &view, nb, n_moved_boxes, flags, 0);
     for (size_t i = 0; flags && i < c->n_nflags; i++)
         flags[i] |= c->nflags[i];
     /* a triangle moved (or everything: restart) goes again whole; one
@@ -1390,6 +1399,7 @@ lie_status lie_ctor_edited(lie_ctor *c, const lie_rt *rt, int geometry_only, lie
     atomic_fetch_add(&c->version, 1);
     free(moved);
     free(cb);
+    free(nb);
     pthread_mutex_unlock(&c->m);
     return LIE_OK;
 }

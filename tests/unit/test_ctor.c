@@ -392,7 +392,8 @@ static void test_a_drag_recomputes_the_nodes_it_reaches(void **state)
     lie_ctor_get_stats(c, &st);
     uint64_t nodes0 = st.nodes_built, units0 = st.units_built;
     static const char *const drags[3] = {"- move: {node: B0, by: [-0.1, 0, 0.05]}\n",
-                                         "- move: {node: B8, by: [0.05, 0, 0.1]}\n",
+                                         "- move: {node: B8, by: [0.05, 0, 0.1]}\n"
+                                         "- move: {node: B2, by: [0, 0, 0.1]}\n",
                                          "- move: {node: B0, by: [0.05, 0, -0.1]}\n"};
     ctor_edit(c, &f, drags[0]);
     assert_int_equal(lie_ctor_wait(c, -1.0, &err), 1);
@@ -409,8 +410,8 @@ static void test_a_drag_recomputes_the_nodes_it_reaches(void **state)
     assert_true(4 * (st.nodes_built - nodes0) < floor_nodes);
     lie_env_destroy(got);
     lie_env_destroy(want);
-    /* two more edits while the units of the first wait (held): their
-     * nodes are those of both */
+    /* two more edits while the units of the first wait (held), one of
+     * them moving two nodes: their nodes are those of both */
     nodes0 = st.nodes_built;
     lie_ctor_hold(c);
     ctor_edit(c, &f, drags[1]);

@@ -227,6 +227,11 @@ static const lie_lights *band_lights(view_render *r, const lie_scene *s, int lv)
     lie_error err;
     if (!done && lv < LEVELS - 1) {
         if (!lie_lights_fit(r->quick, s)) {
+            /* with the finer coarse level's samples: the closed forms
+             * only where a coarse level uses them (scifi_hallway's 632
+             * convex pieces are not made twice at 32 light samples) */
+            int n = r->o.light_samples / level_ls_div[LEVELS - 2];
+            o.light_samples = n > 0 ? n : 1;
             lie_lights_destroy(r->quick);
             if (lie_lights_create_untextured(s, &o, &r->quick, &err) != LIE_OK)
                 r->quick = NULL;
