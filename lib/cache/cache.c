@@ -197,6 +197,8 @@ void lie_cache_lay_out(const lie_cache *c, uint64_t file_nodes, uint64_t file_po
         L->off[k] = pos;
         pos = lie_cache_align8(pos + L->sz[k]);
     }
+    for (int k = L->n_sections; k < S_COUNT; k++)
+        L->off[k] = 0; /* absent: no offset to compute from */
     L->total = pos + 8;
 }
 
@@ -322,7 +324,7 @@ static lie_status encode(const lie_cache *c, const char *name, unsigned char **d
     if (!buf)
         return lie_error_set(err, LIE_ERR_NOMEM, name, "out of memory for a %llu-byte cache",
                              (unsigned long long)L.total);
-    lie_cache_put_small(buf, buf + L.off[S_VIEWS], c, &L, file_nodes, file_pool);
+    lie_cache_put_small(buf, L.n_sections > S_VIEWS ? buf + L.off[S_VIEWS] : NULL, c, &L, file_nodes, file_pool);
 
     /* ROOTS, NODES, POOL */
     unsigned char *p = buf + L.off[S_ROOTS];
