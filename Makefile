@@ -3,9 +3,9 @@
 # see README.md.  Objects go to build/<variant>/, binaries to bin/.
 #
 #   make            build bin/lie-render (and the other tools as they land)
-#   make deps       install the Debian packages this project needs (only missing ones)
+#   make deps       install the Debian packages and the npm checks this project needs (only missing ones)
 #   make demo       deps + build + render tests/scenes/museum1.gltf to out/
-#   make test       unit tests, tool tests, then the same under ASan+UBSan
+#   make test       deps + unit tests, tool tests, then the same under ASan+UBSan
 #   make bench      benchmarks (prints ratios measured side by side, writes JSON)
 #   make scenes     regenerate the bundled scenes under tests/scenes/
 #   make fuzz       run every fuzz target for a bounded time (clang, libFuzzer)
