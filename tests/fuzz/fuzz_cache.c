@@ -48,12 +48,21 @@ static void fc_reseal(unsigned char *b, size_t size)
     fc_put64(b + size - 8, lie_hash_bytes(b, size - 8, 0));
 }
 
-/* Every node reachable from the roots, in pre-order, as a reader would. */
-static uint64_t fc_walk(const lie_env *env, uint32_t node, int depth)
+/* The nodes reachable from the roots, in pre-order, as a reader would,
+ * each counted once: only a lone leaf (lie_pnode_lone, formats/lie-cache.md:
+ * the reader shares one among the units that are one unlit or unbuilt
+ * leaf) may be reached from more than one root. */
+static uint64_t fc_walk(const lie_env *env, uint32_t node, int depth, unsigned char *seen)
 {
     const lie_pnode *n = &env->nodes[node];
-    if (depth > LIE_PATCH_MAX_DEPTH)
+    if (depth > LIE_PATCH_MAX_DEPTH || node >= env->n_nodes)
         abort();
+    if (seen[node]) {
+        if (depth > 0 || !lie_pnode_lone(n))
+            abort();
+        return 0;
+    }
+    seen[node] = 1;
     uint64_t count = 1;
     if (n->cls == LIE_CLASS_PARTIAL && !n->child)
         for (uint32_t k = 0; k < n->count; k++)
@@ -61,7 +70,7 @@ static uint64_t fc_walk(const lie_env *env, uint32_t node, int depth)
                 abort();
     if (n->child)
         for (uint32_t c = 0; c < 4; c++)
-            count += fc_walk(env, n->child + c, depth + 1);
+            count += fc_walk(env, n->child + c, depth + 1, seen);
     return count;
 }
 
@@ -81,8 +90,12 @@ static void fc_check(const unsigned char *data, size_t size)
     lie_build_stats st;
     lie_env_stats(c->env, &st);
     uint64_t nodes = 0;
+    unsigned char *seen = calloc(c->env->n_nodes + 1, 1);
+    if (!seen)
+        abort();
     for (size_t u = 0; u < (size_t)c->env->n_tris * (size_t)c->env->n_clusters; u++)
-        nodes += fc_walk(c->env, c->env->root[u], 0);
+        nodes += fc_walk(c->env, c->env->root[u], 0, seen);
+    free(seen);
     if (nodes != c->env->n_nodes)
         abort();
     unsigned char *a = NULL, *b = NULL;
