@@ -3,8 +3,8 @@
  * (lib/scene/gltf.h).
  *
  * Decoding a textured scene's images is most of its loading: bedroom_corner
- * (../shared/scenes) has six 2048 x 2048 images, which stb decodes on one
- * core each.  Each image is decoded by one worker from its own bytes, so
+ * (docs/measurements.md, "The viewer's first frame") has six 2048 x 2048
+ * images, which stb decodes on one core each.  Each image is decoded by one worker from its own bytes, so
  * the pixels do not depend on the thread count (CONTRIBUTING.md,
  * Determinism); the textures keep the codes (lie_texture_texel). */
 #include "scene/gltf.h"
