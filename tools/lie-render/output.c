@@ -214,8 +214,8 @@ lie_status print_stats(const lie_cli *cli, const run_stats *r, const lie_scene *
                 exact_name(ro), pairs[0], pairs[1], pairs[2], pairs[3], pairs[4], pairs[5], pairs[7], pairs[6],
                 lie_light_sampler_name(ro->sampler));
         if (rs->pairs_unbuilt)
-            fprintf(stderr, "  not built in the cache (lie-build --view/--path): %llu pairs at %llu shading points, "
-                            "answered by Embree\n",
+            fprintf(stderr, "  not built in the cache (outside its views, or left by the cost model): %llu pairs at "
+                            "%llu shading points, answered by Embree\n",
                     (unsigned long long)rs->pairs_unbuilt, (unsigned long long)rs->points_unbuilt);
         if (ro->timers)
             fprintf(stderr,
