@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "lie.h"
+#include "fixtures.h"
 
 static int same_env(const lie_env *a, const lie_env *b)
 {
@@ -272,16 +273,8 @@ static void test_edits_send_back_units_not_triangles(void **state)
 static lie_scene *blockers_scene(void)
 {
     lie_scene *s = lie_scene_new("blockers");
-    lie_material white = lie_material_default();
-    white.metallic = 0.0f;
-    int mw = lie_scene_add_material(s, &white);
-    lie_material two = white;
-    two.double_sided = 1;
-    int mb = lie_scene_add_material(s, &two);
-    lie_material light = white;
-    light.base_color[0] = light.base_color[1] = light.base_color[2] = 0.0f;
-    light.emissive[0] = light.emissive[1] = light.emissive[2] = 5.0f;
-    int ml = lie_scene_add_material(s, &light);
+    int mw = test_material(s, 1.0f, 0.0f, 0), mb = test_material(s, 1.0f, 0.0f, 1);
+    int ml = test_material(s, 0.0f, 5.0f, 0);
     uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
     float fl[12] = {-4, 0, -4, -4, 0, 4, 4, 0, 4, 4, 0, -4};
     float li[12] = {-0.5f, 3, -0.5f, 0.5f, 3, -0.5f, 0.5f, 3, 0.5f, -0.5f, 3, 0.5f};

@@ -77,6 +77,21 @@ static void add_quad(lie_scene *s, const char *name, float x0, float x1, float z
     add_quad_m(s, name, x0, x1, z0, z1, h, nq, 1);
 }
 
+/* s's one texture, n x n float RGBA texels, all 0, wrapped by `wrap`:
+ * its texels to fill in. */
+static float *one_texture(lie_scene *s, int n, lie_wrap wrap)
+{
+    s->textures = calloc(1, sizeof *s->textures);
+    assert_non_null(s->textures);
+    s->n_textures = 1;
+    lie_texture *t = &s->textures[0];
+    t->width = t->height = n;
+    t->wrap_s = t->wrap_t = wrap;
+    t->rgba = calloc((size_t)n * n * 4, sizeof(float));
+    assert_non_null(t->rgba);
+    return t->rgba;
+}
+
 /* The light a Lambert floor point at (px, 0, pz) of albedo 0.5 reflects
  * from the down-facing emitters of s, by midpoint quadrature over each of
  * their triangles (k x k cells of the unit square lie_sample_triangle
@@ -221,16 +236,9 @@ static void test_one_lit_texel_matches_quadrature(void **state)
 {
     (void)state;
     lie_scene *s = floor_scene("texel", 1.0f, 0);
-    s->textures = calloc(1, sizeof *s->textures);
-    assert_non_null(s->textures);
-    s->n_textures = 1;
-    lie_texture *t = &s->textures[0];
-    t->width = t->height = 64;
-    t->wrap_s = t->wrap_t = LIE_WRAP_CLAMP;
-    t->rgba = calloc(64 * 64 * 4, sizeof(float));
-    assert_non_null(t->rgba);
+    float *rgba = one_texture(s, 64, LIE_WRAP_CLAMP);
     for (int c = 0; c < 4; c++)
-        t->rgba[(37 * 64 + 21) * 4 + c] = 50.0f;
+        rgba[(37 * 64 + 21) * 4 + c] = 50.0f;
     add_quad(s, "Panel", -1.0f, 1.0f, -1.0f, 1.0f, 1.0f, 1);
     flatten(s);
     assert_int_equal(s->n_emitters, 1);
@@ -269,17 +277,10 @@ static void test_untextured_lights_are_unbiased(void **state)
 {
     (void)state;
     lie_scene *s = floor_scene("untextured", 1.0f, 0);
-    s->textures = calloc(1, sizeof *s->textures);
-    assert_non_null(s->textures);
-    s->n_textures = 1;
-    lie_texture *t = &s->textures[0];
-    t->width = t->height = 16;
-    t->wrap_s = t->wrap_t = LIE_WRAP_CLAMP;
-    t->rgba = calloc(16 * 16 * 4, sizeof(float));
-    assert_non_null(t->rgba);
+    float *rgba = one_texture(s, 16, LIE_WRAP_CLAMP);
     for (int i = 0; i < 256; i++)
         for (int c = 0; c < 4; c++)
-            t->rgba[i * 4 + c] = (i / 16 + i % 16) % 3 == 0 ? 3.0f : 0.0f;
+            rgba[i * 4 + c] = (i / 16 + i % 16) % 3 == 0 ? 3.0f : 0.0f;
     add_quad(s, "Panel", -1.0f, 1.0f, -1.0f, 1.0f, 1.0f, 1);
     flatten(s);
     assert_int_equal(s->n_emitters, 1);
@@ -435,17 +436,10 @@ static void test_prepared_lights_give_the_same_image(void **state)
 {
     (void)state;
     lie_scene *s = floor_scene("prepared", 2.0f, 0);
-    s->textures = calloc(1, sizeof *s->textures);
-    assert_non_null(s->textures);
-    s->n_textures = 1;
-    lie_texture *t = &s->textures[0];
-    t->width = t->height = 8;
-    t->wrap_s = t->wrap_t = LIE_WRAP_REPEAT;
-    t->rgba = calloc(8 * 8 * 4, sizeof(float));
-    assert_non_null(t->rgba);
+    float *rgba = one_texture(s, 8, LIE_WRAP_REPEAT);
     for (int i = 0; i < 64; i += 3)
         for (int c = 0; c < 4; c++)
-            t->rgba[i * 4 + c] = (float)(i % 5);
+            rgba[i * 4 + c] = (float)(i % 5);
     add_quad(s, "Panel", -1.0f, 1.0f, -1.0f, 1.0f, 1.5f, 4);
     flatten(s);
     lie_error err;
